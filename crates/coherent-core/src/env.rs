@@ -1,0 +1,95 @@
+//! The `Environment` interface planners talk to, and the symbolic environment that runs
+//! the rules. A physical world or a real-robot bridge implements the same trait.
+
+use std::sync::Arc;
+
+use crate::error::Result;
+use crate::feasibility::{self, Infeasible};
+use crate::graph::{NodeId, State};
+use crate::rules::{self, Observation};
+use crate::task::Task;
+
+/// What one `step` did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Outcome {
+    /// Why the action was not executed; `None` when it was.
+    pub infeasible: Option<Infeasible>,
+    /// Whether the goal holds after the step.
+    pub done: bool,
+}
+
+impl Outcome {
+    pub fn executed(&self) -> bool {
+        self.infeasible.is_none()
+    }
+}
+
+/// A world that robots observe and act in, one action of one robot at a time.
+pub trait Environment {
+    fn task(&self) -> &Task;
+    /// The current symbolic state.
+    fn state(&self) -> &State;
+    fn observe(&self, robot: NodeId) -> Result<Observation>;
+    /// The action strings `robot` may use now.
+    fn actions(&self, robot: NodeId) -> Result<Vec<String>>;
+    /// Checks and, when feasible, executes `action`. An infeasible action is not an
+    /// error: the outcome says why. An unknown robot is.
+    fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome>;
+    fn goal_satisfied(&self) -> bool;
+    /// Back to the task's initial state.
+    fn reset(&mut self);
+}
+
+/// The rules of SEMANTICS.md, nothing else.
+#[derive(Clone, Debug)]
+pub struct SymbolicEnv {
+    task: Arc<Task>,
+    state: State,
+}
+
+impl SymbolicEnv {
+    pub fn new(task: Arc<Task>) -> SymbolicEnv {
+        let state = task.init.clone();
+        SymbolicEnv { task, state }
+    }
+}
+
+impl Environment for SymbolicEnv {
+    fn task(&self) -> &Task {
+        &self.task
+    }
+
+    fn state(&self) -> &State {
+        &self.state
+    }
+
+    fn observe(&self, robot: NodeId) -> Result<Observation> {
+        let r = self.task.robot_by_id(robot)?;
+        Ok(rules::observe(&self.task, &self.state, r.node))
+    }
+
+    fn actions(&self, robot: NodeId) -> Result<Vec<String>> {
+        let r = self.task.robot_by_id(robot)?;
+        Ok(rules::actions(&self.task, &self.state, r).iter().map(|a| a.render(&self.task)).collect())
+    }
+
+    fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome> {
+        let r = self.task.robot_by_id(robot)?;
+        let infeasible = match feasibility::check(&self.task, &self.state, r, action) {
+            Ok(a) => {
+                rules::apply(&self.task, &mut self.state, r, a);
+                None
+            }
+            Err(why) => Some(why),
+        };
+        Ok(Outcome { infeasible, done: self.goal_satisfied() })
+    }
+
+    fn goal_satisfied(&self) -> bool {
+        self.task.goal_satisfied(&self.state)
+    }
+
+    fn reset(&mut self) {
+        self.state = self.task.init.clone();
+    }
+}

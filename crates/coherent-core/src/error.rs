@@ -1,0 +1,84 @@
+//! The one error type of `coherent-core`. Every message about input names the file,
+//! the JSON path and the offending value.
+
+use std::fmt;
+
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum Error {
+    /// A file or folder could not be read or written.
+    #[error("{file}: {message}")]
+    Io { file: String, message: String },
+    /// Input that does not follow the format: bad JSON, unknown ids, duplicates...
+    #[error("{file}: {path}: {message}")]
+    Malformed { file: String, path: JsonPath, message: String },
+    /// A robot id that is not a robot of the task.
+    #[error("{0}")]
+    UnknownRobot(String),
+    /// An action string that does not follow the grammar `[verb] <name>(id)`.
+    #[error("cannot parse action {action:?}: {reason}")]
+    BadAction { action: String, reason: String },
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A JSON path in the `$.a[3].b` notation.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct JsonPath(String);
+
+impl JsonPath {
+    pub fn root() -> JsonPath {
+        JsonPath::default()
+    }
+    pub fn key(&self, key: &str) -> JsonPath {
+        JsonPath(format!("{}.{key}", self.0))
+    }
+    pub fn index(&self, i: usize) -> JsonPath {
+        JsonPath(format!("{}[{i}]", self.0))
+    }
+    /// Joins a path reported by `serde_path_to_error` (`a[3].b`, or `.` for the root).
+    pub fn join(&self, rest: &str) -> JsonPath {
+        match rest {
+            "" | "." => self.clone(),
+            r if r.starts_with('[') => JsonPath(format!("{}{r}", self.0)),
+            r => JsonPath(format!("{}.{r}", self.0)),
+        }
+    }
+}
+
+impl fmt::Display for JsonPath {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "${}", self.0)
+    }
+}
+
+/// Where in which file a value was read: builds [`Error::Malformed`] in one line.
+#[derive(Clone, Debug)]
+pub(crate) struct Site<'a> {
+    pub file: &'a str,
+    pub path: JsonPath,
+}
+
+impl<'a> Site<'a> {
+    pub fn new(file: &'a str, path: JsonPath) -> Site<'a> {
+        Site { file, path }
+    }
+    pub fn key(&self, key: &str) -> Site<'a> {
+        Site { file: self.file, path: self.path.key(key) }
+    }
+    pub fn index(&self, i: usize) -> Site<'a> {
+        Site { file: self.file, path: self.path.index(i) }
+    }
+    pub fn error(&self, message: impl Into<String>) -> Error {
+        Error::Malformed { file: self.file.to_owned(), path: self.path.clone(), message: message.into() }
+    }
+}
+
+/// Returns early with a [`Error::Malformed`] at `site` when `cond` fails.
+macro_rules! ensure {
+    ($cond:expr, $site:expr, $($msg:tt)+) => {
+        if !$cond {
+            return Err($site.error(format!($($msg)+)));
+        }
+    };
+}
+pub(crate) use ensure;

@@ -1,0 +1,221 @@
+//! The scene graph: nodes with dense indices, packed edges, and the compact, hashable
+//! [`State`] that search works on.
+
+use std::fmt;
+
+use crate::vocab::{PropSet, Relation, StateSet};
+
+/// A node's id as written in a task file (`"id": 22`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct NodeId(pub i64);
+
+impl fmt::Display for NodeId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.0)
+    }
+}
+
+/// A node's dense index inside one task (0..number of nodes).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Idx(pub u16);
+
+impl Idx {
+    pub fn get(self) -> usize {
+        self.0 as usize
+    }
+}
+
+/// Most nodes a task may have: edges pack two indices of 14 bits.
+pub const MAX_NODES: usize = 1 << 14;
+
+/// What a node is to the rules, from its `category` (and `class_name` for robots).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum NodeKind {
+    Room,
+    Floor,
+    Door,
+    Robot(RobotKind),
+    /// A quadrotor's basket (`AgentTool`).
+    Tool,
+    Object,
+}
+
+/// The three robot types of the benchmark.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum RobotKind {
+    Quadrotor,
+    RobotDog,
+    RobotArm,
+}
+
+impl RobotKind {
+    pub const ALL: [RobotKind; 3] = [RobotKind::Quadrotor, RobotKind::RobotDog, RobotKind::RobotArm];
+
+    /// The `class_name` of this robot type in task files.
+    pub fn class_name(self) -> &'static str {
+        match self {
+            RobotKind::Quadrotor => "quadrotor",
+            RobotKind::RobotDog => "robot dog",
+            RobotKind::RobotArm => "robot arm",
+        }
+    }
+
+    pub fn from_class_name(name: &str) -> Option<RobotKind> {
+        RobotKind::ALL.into_iter().find(|k| k.class_name() == name)
+    }
+}
+
+impl fmt::Display for RobotKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.class_name())
+    }
+}
+
+/// The static part of a node; its states and `ON_HIGH_SURFACE` live in [`State`].
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Node {
+    pub id: NodeId,
+    pub category: String,
+    pub class_name: String,
+    pub prefab_name: String,
+    pub kind: NodeKind,
+    /// Properties as read from the file; `ON_HIGH_SURFACE` changes while running, so the
+    /// current value is [`State::on_high_surface`].
+    pub properties: PropSet,
+}
+
+impl Node {
+    /// `<class_name>(id)`, as in action strings and goals.
+    pub fn label(&self) -> String {
+        format!("<{}>({})", self.class_name, self.id)
+    }
+}
+
+/// One directed edge, packed as `from << 17 | relation << 14 | to` so that a sorted
+/// edge list groups each node's outgoing edges by relation.
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Edge(u32);
+
+impl Edge {
+    pub fn new(from: Idx, rel: Relation, to: Idx) -> Edge {
+        Edge((from.0 as u32) << 17 | (rel as u32) << 14 | to.0 as u32)
+    }
+    pub fn from(self) -> Idx {
+        Idx((self.0 >> 17) as u16)
+    }
+    pub fn rel(self) -> Relation {
+        Relation::from_bits(self.0 >> 14 & 0b111)
+    }
+    pub fn to(self) -> Idx {
+        Idx((self.0 & 0x3fff) as u16)
+    }
+}
+
+impl fmt::Debug for Edge {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}-{}->{}", self.from().0, self.rel(), self.to().0)
+    }
+}
+
+/// Everything that changes while a task runs: node states, `ON_HIGH_SURFACE`, edges.
+/// Small, cheap to clone and hash: the planner stores one per visited state.
+#[derive(Clone, PartialEq, Eq, Hash)]
+pub struct State {
+    states: Box<[StateSet]>,
+    high: Box<[u64]>,
+    /// Sorted and free of duplicates: edges are a set.
+    edges: Vec<Edge>,
+}
+
+impl State {
+    pub(crate) fn new(states: Vec<StateSet>, high: Vec<bool>, mut edges: Vec<Edge>) -> State {
+        let mut bits = vec![0u64; high.len().div_ceil(64)];
+        for (i, h) in high.iter().enumerate() {
+            if *h {
+                bits[i / 64] |= 1 << (i % 64);
+            }
+        }
+        edges.sort_unstable();
+        edges.dedup();
+        State { states: states.into_boxed_slice(), high: bits.into_boxed_slice(), edges }
+    }
+
+    pub fn states(&self, n: Idx) -> StateSet {
+        self.states[n.get()]
+    }
+
+    pub(crate) fn set_states(&mut self, n: Idx, s: StateSet) {
+        self.states[n.get()] = s;
+    }
+
+    /// Whether node `n` currently has the `ON_HIGH_SURFACE` property.
+    pub fn on_high_surface(&self, n: Idx) -> bool {
+        self.high[n.get() / 64] >> (n.get() % 64) & 1 == 1
+    }
+
+    pub(crate) fn set_on_high_surface(&mut self, n: Idx, on: bool) {
+        let (w, b) = (n.get() / 64, n.get() % 64);
+        if on {
+            self.high[w] |= 1 << b;
+        } else {
+            self.high[w] &= !(1 << b);
+        }
+    }
+
+    /// All edges, sorted by source node, then relation, then target.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// Outgoing edges of `n`.
+    pub fn out(&self, n: Idx) -> &[Edge] {
+        let lo = self.edges.partition_point(|e| e.from() < n);
+        let hi = lo + self.edges[lo..].partition_point(|e| e.from() == n);
+        &self.edges[lo..hi]
+    }
+
+    /// Targets of `n`'s edges with relation `rel`.
+    pub fn targets(&self, n: Idx, rel: Relation) -> impl Iterator<Item = Idx> + '_ {
+        self.out(n).iter().filter(move |e| e.rel() == rel).map(|e| e.to())
+    }
+
+    /// The first target of `n`'s `rel` edges, if any.
+    pub fn target(&self, n: Idx, rel: Relation) -> Option<Idx> {
+        self.targets(n, rel).next()
+    }
+
+    /// Sources of `rel` edges pointing at `n`.
+    pub fn sources(&self, rel: Relation, n: Idx) -> impl Iterator<Item = Idx> + '_ {
+        self.edges.iter().filter(move |e| e.rel() == rel && e.to() == n).map(|e| e.from())
+    }
+
+    pub fn has(&self, e: Edge) -> bool {
+        self.edges.binary_search(&e).is_ok()
+    }
+
+    pub(crate) fn add(&mut self, e: Edge) {
+        if let Err(at) = self.edges.binary_search(&e) {
+            self.edges.insert(at, e);
+        }
+    }
+
+    pub(crate) fn remove(&mut self, e: Edge) {
+        if let Ok(at) = self.edges.binary_search(&e) {
+            self.edges.remove(at);
+        }
+    }
+
+    /// Removes every outgoing edge of `n` with relation `rel`.
+    pub(crate) fn remove_out(&mut self, n: Idx, rel: Relation) {
+        self.edges.retain(|e| !(e.from() == n && e.rel() == rel));
+    }
+}
+
+impl fmt::Debug for State {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("State")
+            .field("states", &self.states)
+            .field("edges", &self.edges)
+            .finish()
+    }
+}

@@ -1,0 +1,32 @@
+//! `coherent-core`: the world of the COHERENT benchmark (Liu et al.) and its exact rules.
+//!
+//! A [`Task`] is read from the paper's original files ([`original`]) or from our own
+//! format ([`native`]). [`rules`] gives observations, action lists and transitions,
+//! [`feasibility`] says why an action cannot be done, [`planner`] finds shortest plans
+//! and task types, [`validate`] lists semantic problems, and [`Environment`] is what
+//! planners and physics plug into.
+
+pub mod action;
+pub mod env;
+pub mod error;
+pub mod feasibility;
+pub mod graph;
+pub mod load;
+pub mod native;
+pub mod original;
+pub mod planner;
+pub mod rules;
+pub mod task;
+pub mod validate;
+pub mod vocab;
+
+pub use action::{Action, ParsedAction, Verb};
+pub use env::{Environment, Outcome, SymbolicEnv};
+pub use error::{Error, JsonPath, Result};
+pub use feasibility::{Infeasible, Reason};
+pub use graph::{Edge, Idx, Node, NodeId, NodeKind, RobotKind, State};
+pub use load::{load_tasks, read_tasks};
+pub use planner::{Analysis, Limits, Step, TaskType};
+pub use rules::Observation;
+pub use task::{GoalPredicate, RawGraph, Robot, RuleSet, Task, TaskMeta};
+pub use vocab::{PropSet, Relation, StateSet};

@@ -1,0 +1,126 @@
+//! Reading task files and folders in either format, with errors that name the file,
+//! the JSON path and the value.
+
+use std::path::{Path, PathBuf};
+
+use serde::de::DeserializeOwned;
+use serde_json::Value;
+
+use crate::error::{Error, Result, Site};
+use crate::task::Task;
+
+/// Every task found at `path` (a file of either format, or a folder searched for
+/// `*.json` files, recursively, in name order). The outer result fails when a file
+/// cannot be read or is not JSON; each inner result is one task, so that a malformed
+/// task is reported without hiding the rest.
+pub fn read_tasks(path: &Path) -> Result<Vec<Result<Task>>> {
+    let mut out = Vec::new();
+    for file in task_files(path)? {
+        out.extend(read_file(&file)?);
+    }
+    Ok(out)
+}
+
+/// Every task at `path`, or the first error.
+pub fn load_tasks(path: &Path) -> Result<Vec<Task>> {
+    read_tasks(path)?.into_iter().collect()
+}
+
+/// The JSON files at `path`: the file itself, or a folder's `*.json` files, recursively.
+pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
+    let meta = std::fs::metadata(path).map_err(|e| io_error(path, &e))?;
+    if !meta.is_dir() {
+        return Ok(vec![path.to_owned()]);
+    }
+    let mut files = Vec::new();
+    let mut stack = vec![path.to_owned()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).map_err(|e| io_error(&dir, &e))? {
+            let entry = entry.map_err(|e| io_error(&dir, &e))?;
+            let p = entry.path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if p.extension().is_some_and(|e| e == "json") {
+                files.push(p);
+            }
+        }
+    }
+    files.sort();
+    if files.is_empty() {
+        return Err(Error::Io {
+            file: path.display().to_string(),
+            message: "folder holds no .json task files".to_owned(),
+        });
+    }
+    Ok(files)
+}
+
+/// The tasks of one file: a list (original format) or an object (native format).
+pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
+    let file = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| io_error(path, &e))?;
+    let value: Value = serde_json::from_str(&text).map_err(|e| Error::Malformed {
+        file: file.clone(),
+        path: crate::JsonPath::root(),
+        message: format!("invalid JSON at line {} column {}: {e}", e.line(), e.column()),
+    })?;
+    let scene = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    read_value(&file, &scene, &value)
+}
+
+/// The tasks of an already parsed JSON document; `scene` names the scene of an
+/// original-format list (its file stem).
+pub fn read_value(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>> {
+    match value {
+        Value::Array(_) => crate::original::read(file, scene, value),
+        Value::Object(map) if map.contains_key("format") => Ok(vec![crate::native::read(file, value)]),
+        other => Err(Error::Malformed {
+            file: file.to_owned(),
+            path: crate::JsonPath::root(),
+            message: format!(
+                "expected a list of tasks (original format) or an object with \"format\": \"{}\", found {}",
+                crate::native::FORMAT,
+                describe(other)
+            ),
+        }),
+    }
+}
+
+/// Deserializes `value`, reporting the exact path of a field that does not fit.
+pub(crate) fn from_value<T: DeserializeOwned>(value: &Value, site: &Site<'_>) -> Result<T> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = site.path.join(&e.path().to_string());
+        let found = lookup(value, e.path()).map(|v| format!(" (found {})", describe(v)));
+        Error::Malformed {
+            file: site.file.to_owned(),
+            path,
+            message: format!("{}{}", e.inner(), found.unwrap_or_default()),
+        }
+    })
+}
+
+fn lookup<'v>(value: &'v Value, path: &serde_path_to_error::Path) -> Option<&'v Value> {
+    use serde_path_to_error::Segment;
+    path.iter().try_fold(value, |v, seg| match seg {
+        Segment::Seq { index } => v.get(index),
+        Segment::Map { key } => v.get(key),
+        Segment::Enum { .. } | Segment::Unknown => Some(v),
+    })
+}
+
+/// A short description of a JSON value for error messages: its text when short.
+pub(crate) fn describe(value: &Value) -> String {
+    let text = value.to_string();
+    if text.len() <= 60 {
+        return text;
+    }
+    match value {
+        Value::Array(a) => format!("a list of {} items", a.len()),
+        Value::Object(o) => format!("an object with {} keys", o.len()),
+        _ => format!("{}...", text.chars().take(57).collect::<String>()),
+    }
+}
+
+fn io_error(path: &Path, e: &std::io::Error) -> Error {
+    Error::Io { file: path.display().to_string(), message: e.to_string() }
+}

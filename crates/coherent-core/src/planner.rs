@@ -1,0 +1,306 @@
+//! The optimal planner: breadth-first search over the full state, one robot acting per
+//! step, with duplicate detection on the compact [`State`]. Breadth-first order makes
+//! the first plan found a shortest one. Also the task type (the fewest robot types
+//! with which the goal is reachable) and the reason a task cannot be solved.
+
+use std::time::{Duration, Instant};
+
+use indexmap::IndexSet;
+use rustc_hash::FxBuildHasher;
+
+use crate::action::Action;
+use crate::graph::{Idx, NodeKind, RobotKind, State};
+use crate::rules;
+use crate::task::{GoalPredicate, Robot, Task, predicate_holds};
+use crate::vocab::{PropSet, Relation};
+
+/// One step of a plan: which robot does what.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    pub robot: Idx,
+    pub action: Action,
+}
+
+/// Bounds on one search.
+#[derive(Clone, Copy, Debug)]
+pub struct Limits {
+    /// Stop after this many distinct states; the answer is then "unknown", not "unsolvable".
+    pub max_states: usize,
+}
+
+impl Default for Limits {
+    fn default() -> Limits {
+        Limits { max_states: 5_000_000 }
+    }
+}
+
+/// The result of one breadth-first search.
+#[derive(Clone, Debug)]
+pub struct Search {
+    /// A shortest plan, if the goal is reachable.
+    pub plan: Option<Vec<Step>>,
+    /// States taken off the queue and expanded.
+    pub states_expanded: usize,
+    /// Whether the search hit [`Limits::max_states`] before it could finish.
+    pub truncated: bool,
+}
+
+/// Breadth-first search for a shortest plan reaching `goal` with only `robots` acting.
+pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Limits) -> Search {
+    let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
+    if holds(&task.init) {
+        return Search { plan: Some(Vec::new()), states_expanded: 0, truncated: false };
+    }
+    let mut seen: IndexSet<State, FxBuildHasher> = IndexSet::default();
+    // parent[i] = (index of the state it came from, the step taken), for states 1..
+    let mut parent: Vec<(u32, Step)> = Vec::new();
+    seen.insert(task.init.clone());
+    let mut next = 0usize;
+    while next < seen.len() {
+        let state = seen[next].clone();
+        for &robot in robots {
+            for action in rules::actions(task, &state, robot) {
+                let mut child = state.clone();
+                rules::apply(task, &mut child, robot, action);
+                let step = Step { robot: robot.node, action };
+                let done = holds(&child);
+                if seen.insert(child) {
+                    parent.push((next as u32, step));
+                    if done {
+                        let plan = unwind(&parent, seen.len() - 1);
+                        return Search { plan: Some(plan), states_expanded: next + 1, truncated: false };
+                    }
+                    if seen.len() >= limits.max_states {
+                        return Search { plan: None, states_expanded: next + 1, truncated: true };
+                    }
+                }
+            }
+        }
+        next += 1;
+    }
+    Search { plan: None, states_expanded: next, truncated: false }
+}
+
+fn unwind(parent: &[(u32, Step)], mut at: usize) -> Vec<Step> {
+    let mut plan = Vec::new();
+    while at > 0 {
+        let (from, step) = parent[at - 1];
+        plan.push(step);
+        at = from as usize;
+    }
+    plan.reverse();
+    plan
+}
+
+/// Mono, dual or trio: how many robot types the goal needs at the fewest.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TaskType {
+    Mono,
+    Dual,
+    Trio,
+}
+
+impl TaskType {
+    pub fn name(self) -> &'static str {
+        match self {
+            TaskType::Mono => "mono",
+            TaskType::Dual => "dual",
+            TaskType::Trio => "trio",
+        }
+    }
+}
+
+/// Everything the planner says about a task.
+#[derive(Clone, Debug)]
+pub struct Analysis {
+    /// A shortest plan with the whole team, if one exists.
+    pub plan: Option<Vec<Step>>,
+    pub task_type: Option<TaskType>,
+    /// Why there is no plan (None when there is one).
+    pub reason: Option<String>,
+    /// States expanded by the search with the whole team.
+    pub states_expanded: usize,
+    pub elapsed: Duration,
+}
+
+impl Analysis {
+    /// The analysis as one line of `coherent plan --json`: `scene`, `task_id`,
+    /// `gt_steps`, `optimal_steps`, `solvable`, `reason`, `task_type`, `plan` (list of
+    /// `{"robot", "action"}`), `states_expanded`, `elapsed_ms`.
+    pub fn to_json(&self, task: &Task) -> serde_json::Value {
+        let plan: Vec<serde_json::Value> = self
+            .plan
+            .iter()
+            .flatten()
+            .map(|s| serde_json::json!({"robot": task.id(s.robot).0, "action": s.action.render(task)}))
+            .collect();
+        serde_json::json!({
+            "scene": task.meta.scene,
+            "task_id": task.meta.task_id,
+            "gt_steps": task.meta.gt_steps,
+            "optimal_steps": self.plan.as_ref().map(Vec::len),
+            "solvable": self.plan.is_some(),
+            "reason": self.reason,
+            "task_type": self.task_type.map(TaskType::name),
+            "plan": plan,
+            "states_expanded": self.states_expanded,
+            "elapsed_ms": (self.elapsed.as_secs_f64() * 1e6).round() / 1e3,
+        })
+    }
+}
+
+/// Plans `task` optimally, finds its type, or says why it cannot be solved.
+pub fn analyse(task: &Task, limits: Limits) -> Analysis {
+    let start = Instant::now();
+    let obstacles: Vec<String> = task
+        .goal
+        .iter()
+        .filter(|p| !predicate_holds(&task.init, p))
+        .filter_map(|p| static_obstacle(task, p).map(|why| format!("{}: {why}", task.predicate_label(p))))
+        .collect();
+    if !obstacles.is_empty() {
+        return Analysis {
+            plan: None,
+            task_type: None,
+            reason: Some(obstacles.join("; ")),
+            states_expanded: 0,
+            elapsed: start.elapsed(),
+        };
+    }
+    let full = search(task, &task.robots, &task.goal, limits);
+    let (task_type, reason) = match &full.plan {
+        Some(_) => (task_type(task, limits), None),
+        None => (None, Some(why_unsolvable(task, &full, limits))),
+    };
+    Analysis {
+        plan: full.plan,
+        task_type,
+        reason,
+        states_expanded: full.states_expanded,
+        elapsed: start.elapsed(),
+    }
+}
+
+/// The fewest robot types with which the goal is reachable; none when the goal already
+/// holds at the start.
+fn task_type(task: &Task, limits: Limits) -> Option<TaskType> {
+    if task.goal_satisfied(&task.init) {
+        return None;
+    }
+    let kinds: Vec<RobotKind> = RobotKind::ALL
+        .into_iter()
+        .filter(|k| task.robots.iter().any(|r| r.kind == *k))
+        .collect();
+    for size in 1..=kinds.len() {
+        for subset in subsets(&kinds, size) {
+            let team: Vec<Robot> = task.robots.iter().copied().filter(|r| subset.contains(&r.kind)).collect();
+            if search(task, &team, &task.goal, limits).plan.is_some() {
+                return Some([TaskType::Mono, TaskType::Dual, TaskType::Trio][size - 1]);
+            }
+        }
+    }
+    None
+}
+
+fn subsets(kinds: &[RobotKind], size: usize) -> Vec<Vec<RobotKind>> {
+    (0u32..1 << kinds.len())
+        .filter(|m| m.count_ones() as usize == size)
+        .map(|m| kinds.iter().enumerate().filter(|(i, _)| m >> i & 1 == 1).map(|(_, k)| *k).collect())
+        .collect()
+}
+
+fn why_unsolvable(task: &Task, full: &Search, limits: Limits) -> String {
+    if full.truncated {
+        return format!(
+            "search stopped at the limit of {} states without reaching the goal; raise the limit to decide",
+            limits.max_states
+        );
+    }
+    let mut reasons = Vec::new();
+    if reasons.is_empty() {
+        let alone: Vec<String> = task
+            .goal
+            .iter()
+            .filter(|p| search(task, &task.robots, std::slice::from_ref(p), limits).plan.is_none())
+            .map(|p| task.predicate_label(p))
+            .collect();
+        reasons.push(if alone.is_empty() {
+            format!(
+                "each goal predicate is reachable alone but not all together (searched all {} reachable states)",
+                full.states_expanded
+            )
+        } else {
+            format!(
+                "no sequence of actions makes {} hold (searched all reachable states)",
+                alone.join(" and ")
+            )
+        });
+    }
+    reasons.join("; ")
+}
+
+/// A reason visible without search why predicate `p` can never come to hold.
+pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
+    let (x, y) = (task.node(p.subject), task.node(p.target));
+    let has = |n: Idx, prop: PropSet| task.node(n).properties.contains(prop);
+    if p.count != 1 {
+        return None;
+    }
+    if p.subject == p.target {
+        return Some(format!("{} cannot be {} itself", x.label(), p.relation.name()));
+    }
+    let never_moves = |what: &str| Some(format!("{} is {what} and never moves", x.label()));
+    match x.kind {
+        NodeKind::Room | NodeKind::Floor | NodeKind::Door => never_moves("part of the building"),
+        NodeKind::Robot(RobotKind::RobotArm) => never_moves("a fixed robot arm"),
+        NodeKind::Robot(RobotKind::RobotDog) => match (p.relation, y.kind) {
+            (Relation::On, NodeKind::Floor) | (Relation::Inside, NodeKind::Room) => None,
+            _ => Some(format!(
+                "a robot dog only ever stands ON a floor and INSIDE a room, and {} is neither target",
+                y.label()
+            )),
+        },
+        NodeKind::Robot(RobotKind::Quadrotor) | NodeKind::Tool => match p.relation {
+            Relation::On if has(p.target, PropSet::LANDABLE) => None,
+            Relation::On => Some(format!(
+                "{} is not LANDABLE, and the quadrotor and its basket only come to rest on landable surfaces",
+                y.label()
+            )),
+            _ => Some(format!("{} never goes INSIDE anything but a room", x.label())),
+        },
+        NodeKind::Object => {
+            if !has(p.subject, PropSet::GRABABLE) {
+                return Some(format!("{} is not GRABABLE, so no robot can move it", x.label()));
+            }
+            match p.relation {
+                Relation::Inside if !has(p.target, PropSet::CONTAINERS) => Some(format!(
+                    "{} has no CONTAINERS property, so nothing can be put inside it",
+                    y.label()
+                )),
+                Relation::Inside
+                    if !task.init.states(p.target).is_open()
+                        && !task.init.states(p.target).contains(crate::StateSet::CLOSED) =>
+                {
+                    Some(format!("{} is neither open nor closed, so it can never be opened", y.label()))
+                }
+                Relation::On if !has(p.target, PropSet::SURFACES) => {
+                    Some(format!("{} is not a surface (no SURFACES property)", y.label()))
+                }
+                _ => None,
+            }
+        }
+    }
+}
+
+/// Replays `plan` through the rules from the initial state: the state after each
+/// step, or the index and reason of the first step that is not allowed.
+pub fn replay(task: &Task, plan: &[Step]) -> Result<State, (usize, String)> {
+    let mut s = task.init.clone();
+    for (i, step) in plan.iter().enumerate() {
+        let robot = task.robot(step.robot).copied().ok_or((i, "not a robot".to_owned()))?;
+        let text = step.action.render(task);
+        let action = crate::feasibility::check(task, &s, robot, &text).map_err(|e| (i, e.message))?;
+        rules::apply(task, &mut s, robot, action);
+    }
+    Ok(s)
+}

@@ -1,0 +1,410 @@
+//! A task: the scene graph at the start, the robots, the goal and what is known of the
+//! ground truth. Both file formats (the paper's and ours) build a [`Task`] through
+//! [`Task::build`], so structural checks live in one place.
+
+use rustc_hash::FxHashMap;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, Site, ensure};
+use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, RobotKind, State};
+use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
+
+/// A node as written in a task file (the original format's field names).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RawNode {
+    pub id: i64,
+    pub category: String,
+    pub class_name: String,
+    #[serde(default)]
+    pub prefab_name: String,
+    #[serde(default)]
+    pub properties: Vec<String>,
+    #[serde(default)]
+    pub states: Vec<String>,
+}
+
+/// An edge as written in a task file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RawEdge {
+    pub from_id: i64,
+    pub to_id: i64,
+    pub relation_type: String,
+}
+
+/// A scene graph as written in a task file: `{"nodes": [...], "edges": [...]}`.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct RawGraph {
+    pub nodes: Vec<RawNode>,
+    pub edges: Vec<RawEdge>,
+}
+
+/// One goal predicate: `count` edges `(subject, relation, target)` must exist
+/// (`on_<a>(i)_<b>(j)` / `inside_<a>(i)_<b>(j)` in the original format).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct GoalPredicate {
+    pub relation: Relation,
+    pub subject: Idx,
+    pub target: Idx,
+    pub count: u32,
+}
+
+/// Which rules a task runs under. Imported original tasks run under the compatible
+/// rules of SEMANTICS.md.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RuleSet {
+    #[default]
+    Compatible,
+}
+
+/// Where an imported task came from, kept so that export gives back the original fields.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Source {
+    /// Always `coherent-original` for now.
+    pub format: String,
+    /// The file name it was read from.
+    pub file: String,
+    /// The task's position in that file's list.
+    pub index: usize,
+    /// The original `env_id` field, kept verbatim (it is unreliable: the scene comes
+    /// from the file name).
+    pub env_id: serde_json::Value,
+}
+
+/// A robot of the team.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Robot {
+    pub node: Idx,
+    pub kind: RobotKind,
+}
+
+/// Everything about a task that is not the graph, as read by a format.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TaskMeta {
+    pub scene: String,
+    pub task_id: i64,
+    pub name: String,
+    pub instruction: String,
+    pub gt_steps: Option<u32>,
+    pub rules: RuleSet,
+    pub geometry: Option<serde_json::Value>,
+    pub source: Option<Source>,
+}
+
+/// A goal predicate before ids are resolved, with the site it was read from.
+#[derive(Clone, Debug)]
+pub(crate) struct RawPredicate<'a> {
+    pub relation: Relation,
+    pub subject: i64,
+    pub target: i64,
+    pub count: u32,
+    pub site: Site<'a>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Task {
+    pub meta: TaskMeta,
+    pub nodes: Vec<Node>,
+    pub vocab: Vocabulary,
+    pub goal: Vec<GoalPredicate>,
+    pub robots: Vec<Robot>,
+    /// The state at the start.
+    pub init: State,
+    /// Initial edges in file order. The order matters to one rule: grabbing removes the
+    /// object's *first* ON/INSIDE edge.
+    pub init_edges: Vec<Edge>,
+    index: FxHashMap<NodeId, Idx>,
+    /// `(door, room)` for every `LEADING TO` edge of the initial graph.
+    doors: Vec<(Idx, Idx)>,
+    /// Each room's floor (a `Floor` node `INSIDE` it), if it has one.
+    floors: FxHashMap<Idx, Idx>,
+    /// Each quadrotor's basket (target of its `WITH` edge), if it has one.
+    baskets: FxHashMap<Idx, Idx>,
+    rooms: Vec<Idx>,
+}
+
+impl Task {
+    /// Builds a task from a graph as written in a file; `site` is where the graph was read.
+    pub(crate) fn build(
+        meta: TaskMeta,
+        graph: &RawGraph,
+        goal: &[RawPredicate<'_>],
+        site: &Site<'_>,
+    ) -> Result<Task> {
+        let nodes_site = site.key("nodes");
+        ensure!(
+            graph.nodes.len() <= MAX_NODES,
+            nodes_site,
+            "{} nodes: at most {MAX_NODES} are supported",
+            graph.nodes.len()
+        );
+        let mut vocab = Vocabulary::default();
+        let mut index = FxHashMap::default();
+        let mut nodes = Vec::with_capacity(graph.nodes.len());
+        let mut states = Vec::with_capacity(graph.nodes.len());
+        let mut high = Vec::with_capacity(graph.nodes.len());
+        for (i, raw) in graph.nodes.iter().enumerate() {
+            let at = nodes_site.index(i);
+            if let Some(first) = index.insert(NodeId(raw.id), Idx(i as u16)) {
+                return Err(at.key("id").error(format!(
+                    "duplicate node id {} (also the id of nodes[{}], {:?}; this one is {:?})",
+                    raw.id,
+                    first.0,
+                    graph.nodes[first.get()].class_name,
+                    raw.class_name
+                )));
+            }
+            let kind = node_kind(raw, &at)?;
+            let mut properties = PropSet::NONE;
+            for (j, name) in raw.properties.iter().enumerate() {
+                let bit = vocab.property(name).ok_or_else(|| {
+                    at.key("properties").index(j).error(format!(
+                        "property {name:?}: too many distinct unknown property names (at most {})",
+                        64 - PropSet::KNOWN.len()
+                    ))
+                })?;
+                properties = properties | bit;
+            }
+            let mut set = StateSet::NONE;
+            for (j, name) in raw.states.iter().enumerate() {
+                let bit = vocab.state(name).ok_or_else(|| {
+                    at.key("states").index(j).error(format!(
+                        "state {name:?}: too many distinct unknown state names (at most {})",
+                        32 - StateSet::KNOWN.len()
+                    ))
+                })?;
+                set = set | bit;
+            }
+            states.push(set);
+            high.push(properties.contains(PropSet::ON_HIGH_SURFACE));
+            nodes.push(Node {
+                id: NodeId(raw.id),
+                category: raw.category.clone(),
+                class_name: raw.class_name.clone(),
+                prefab_name: raw.prefab_name.clone(),
+                kind,
+                properties,
+            });
+        }
+
+        let edges_site = site.key("edges");
+        let resolve = |id: i64, at: Site<'_>| {
+            index.get(&NodeId(id)).copied().ok_or_else(|| at.error(format!("unknown node id {id}")))
+        };
+        let mut init_edges = Vec::with_capacity(graph.edges.len());
+        for (i, raw) in graph.edges.iter().enumerate() {
+            let at = edges_site.index(i);
+            let from = resolve(raw.from_id, at.key("from_id"))?;
+            let to = resolve(raw.to_id, at.key("to_id"))?;
+            let rel = Relation::from_name(&raw.relation_type).ok_or_else(|| {
+                at.key("relation_type").error(format!(
+                    "unknown relation {:?} (known: {})",
+                    raw.relation_type,
+                    Relation::ALL.map(Relation::name).join(", ")
+                ))
+            })?;
+            init_edges.push(Edge::new(from, rel, to));
+        }
+        let init = State::new(states, high, init_edges.clone());
+
+        let mut predicates = Vec::with_capacity(goal.len());
+        for p in goal {
+            predicates.push(GoalPredicate {
+                relation: p.relation,
+                subject: resolve(p.subject, p.site.clone())?,
+                target: resolve(p.target, p.site.clone())?,
+                count: p.count,
+            });
+        }
+
+        let robots = nodes
+            .iter()
+            .enumerate()
+            .filter_map(|(i, n)| match n.kind {
+                NodeKind::Robot(kind) => Some(Robot { node: Idx(i as u16), kind }),
+                _ => None,
+            })
+            .collect();
+        let rooms: Vec<Idx> = (0..nodes.len())
+            .map(|i| Idx(i as u16))
+            .filter(|&i| nodes[i.get()].kind == NodeKind::Room)
+            .collect();
+        let mut doors = Vec::new();
+        let mut floors = FxHashMap::default();
+        let mut baskets = FxHashMap::default();
+        for e in &init_edges {
+            match e.rel() {
+                Relation::LeadingTo => doors.push((e.from(), e.to())),
+                Relation::Inside
+                    if nodes[e.from().get()].kind == NodeKind::Floor
+                        && nodes[e.to().get()].kind == NodeKind::Room =>
+                {
+                    floors.entry(e.to()).or_insert(e.from());
+                }
+                Relation::With => {
+                    baskets.entry(e.from()).or_insert(e.to());
+                }
+                _ => {}
+            }
+        }
+        Ok(Task {
+            meta,
+            nodes,
+            vocab,
+            goal: predicates,
+            robots,
+            init,
+            init_edges,
+            index,
+            doors,
+            floors,
+            baskets,
+            rooms,
+        })
+    }
+
+    pub fn node(&self, n: Idx) -> &Node {
+        &self.nodes[n.get()]
+    }
+
+    /// The dense index of the node with file id `id`.
+    pub fn idx(&self, id: NodeId) -> Option<Idx> {
+        self.index.get(&id).copied()
+    }
+
+    pub fn id(&self, n: Idx) -> NodeId {
+        self.nodes[n.get()].id
+    }
+
+    pub fn robot(&self, n: Idx) -> Option<&Robot> {
+        self.robots.iter().find(|r| r.node == n)
+    }
+
+    /// The robot with file id `id`, or an error naming the robots there are.
+    pub fn robot_by_id(&self, id: NodeId) -> Result<Robot> {
+        self.idx(id).and_then(|i| self.robot(i)).copied().ok_or_else(|| {
+            let known: Vec<String> = self
+                .robots
+                .iter()
+                .map(|r| format!("{} ({})", self.id(r.node), r.kind))
+                .collect();
+            crate::Error::UnknownRobot(format!(
+                "{id} is not a robot of task {}/{}; its robots are {}",
+                self.meta.scene,
+                self.meta.task_id,
+                known.join(", ")
+            ))
+        })
+    }
+
+    /// `(door, room)` pairs of the initial graph's `LEADING TO` edges.
+    pub fn doors(&self) -> &[(Idx, Idx)] {
+        &self.doors
+    }
+
+    pub fn rooms(&self) -> &[Idx] {
+        &self.rooms
+    }
+
+    pub fn floor_of(&self, room: Idx) -> Option<Idx> {
+        self.floors.get(&room).copied()
+    }
+
+    pub fn basket_of(&self, quadrotor: Idx) -> Option<Idx> {
+        self.baskets.get(&quadrotor).copied()
+    }
+
+    /// Whether `n` has property `p` in state `s` (`ON_HIGH_SURFACE` is dynamic).
+    pub fn has(&self, s: &State, n: Idx, p: PropSet) -> bool {
+        if p == PropSet::ON_HIGH_SURFACE {
+            s.on_high_surface(n)
+        } else {
+            self.nodes[n.get()].properties.contains(p)
+        }
+    }
+
+    /// The node's current properties, `ON_HIGH_SURFACE` included when it holds.
+    pub fn properties(&self, s: &State, n: Idx) -> PropSet {
+        let p = self.nodes[n.get()].properties.without(PropSet::ON_HIGH_SURFACE);
+        if s.on_high_surface(n) { p | PropSet::ON_HIGH_SURFACE } else { p }
+    }
+
+    /// The goal test of SEMANTICS.md section 5: for every predicate, the number of
+    /// matching edges equals its count (edges form a set, so that number is 0 or 1).
+    pub fn goal_satisfied(&self, s: &State) -> bool {
+        self.goal.iter().all(|p| predicate_holds(s, p))
+    }
+
+    /// A predicate in the original format's notation, `on_<apple>(3)_<table>(5)`.
+    pub fn predicate_label(&self, p: &GoalPredicate) -> String {
+        let rel = match p.relation {
+            Relation::Inside => "inside",
+            _ => "on",
+        };
+        format!("{rel}_{}_{}", self.node(p.subject).label(), self.node(p.target).label())
+    }
+
+    /// The graph of state `s` in the original format's field names.
+    pub fn raw_graph(&self, s: &State) -> RawGraph {
+        let all: Vec<Idx> = (0..self.nodes.len()).map(|i| Idx(i as u16)).collect();
+        self.raw_subgraph(s, &all, s.edges())
+    }
+
+    /// Nodes `nodes` (with their properties and states in `s`) and `edges`, in the
+    /// original format's field names: how observations and exports are written.
+    pub fn raw_subgraph(&self, s: &State, nodes: &[Idx], edges: &[Edge]) -> RawGraph {
+        let nodes = nodes
+            .iter()
+            .map(|&i| {
+                let n = self.node(i);
+                RawNode {
+                    id: n.id.0,
+                    category: n.category.clone(),
+                    class_name: n.class_name.clone(),
+                    prefab_name: n.prefab_name.clone(),
+                    properties: self.vocab.property_names(self.properties(s, i)),
+                    states: self.vocab.state_names(s.states(i)),
+                }
+            })
+            .collect();
+        let edges = edges
+            .iter()
+            .map(|e| RawEdge {
+                from_id: self.id(e.from()).0,
+                to_id: self.id(e.to()).0,
+                relation_type: e.rel().name().to_owned(),
+            })
+            .collect();
+        RawGraph { nodes, edges }
+    }
+
+    /// The initial graph as read, edges in file order: what both exporters write.
+    pub fn initial_raw_graph(&self) -> RawGraph {
+        let all: Vec<Idx> = (0..self.nodes.len()).map(|i| Idx(i as u16)).collect();
+        self.raw_subgraph(&self.init, &all, &self.init_edges)
+    }
+}
+
+pub(crate) fn predicate_holds(s: &State, p: &GoalPredicate) -> bool {
+    u32::from(s.has(Edge::new(p.subject, p.relation, p.target))) == p.count
+}
+
+fn node_kind(raw: &RawNode, at: &Site<'_>) -> Result<NodeKind> {
+    Ok(match raw.category.as_str() {
+        "Rooms" => NodeKind::Room,
+        "Floor" => NodeKind::Floor,
+        "Doors" | "Door" => NodeKind::Door,
+        "AgentTool" => NodeKind::Tool,
+        "Agents" => NodeKind::Robot(RobotKind::from_class_name(&raw.class_name).ok_or_else(
+            || {
+                at.key("class_name").error(format!(
+                    "unknown robot class {:?} (known: {})",
+                    raw.class_name,
+                    RobotKind::ALL.map(RobotKind::class_name).join(", ")
+                ))
+            },
+        )?),
+        _ => NodeKind::Object,
+    })
+}
