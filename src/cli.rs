@@ -1,0 +1,196 @@
+//! The `coherent` command line: `validate`, `import`, `plan`. One implementation serves
+//! the `coherent` binary and the console script that `pip install` puts on the PATH.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use clap::{Parser, Subcommand};
+use coherent_core::planner::{self, Analysis, Limits};
+use coherent_core::{Error, Task, load, native, validate};
+
+#[derive(Parser)]
+#[command(name = "coherent", version, about = "Heterogeneous multi-robot task planning with LLMs (COHERENT)")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
+    Validate {
+        /// Original env files, native task files or folders of them.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Most states one search may visit.
+        #[arg(long, default_value_t = Limits::default().max_states)]
+        max_states: usize,
+    },
+    /// Convert original env files into native task files, one per task.
+    Import {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Folder to write `<scene>/task-<id>.json` into.
+        #[arg(short, long)]
+        out: PathBuf,
+    },
+    /// Plan optimally: shortest plan, task type, or why a task cannot be solved.
+    Plan {
+        /// An original env file, a native task file or a folder of them.
+        file: PathBuf,
+        /// Only these task ids (repeatable).
+        #[arg(long = "task")]
+        tasks: Vec<i64>,
+        /// One JSON object per task per line.
+        #[arg(long)]
+        json: bool,
+        /// Most states one search may visit.
+        #[arg(long, default_value_t = Limits::default().max_states)]
+        max_states: usize,
+    },
+}
+
+/// Runs the command line `args` (program name first) and returns the exit status:
+/// 0 success, 1 semantic problems found, 2 malformed input or a usage error.
+pub fn run<I, T>(args: I) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let cli = match Cli::try_parse_from(args) {
+        Ok(cli) => cli,
+        Err(e) => {
+            let _ = e.print();
+            return if e.use_stderr() { 2 } else { 0 };
+        }
+    };
+    let result = match cli.command {
+        Command::Validate { files, max_states } => validate_files(&files, Limits { max_states }),
+        Command::Import { files, out } => import(&files, &out),
+        Command::Plan { file, tasks, json, max_states } => plan(&file, &tasks, json, Limits { max_states }),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e}");
+            2
+        }
+    }
+}
+
+/// Tasks of every file; malformed ones are reported on stderr and counted.
+fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
+    let mut tasks = Vec::new();
+    for path in files {
+        match load::read_tasks(path) {
+            Ok(results) => {
+                for r in results {
+                    match r {
+                        Ok(t) => tasks.push(t),
+                        Err(e) => {
+                            *malformed += 1;
+                            eprintln!("error: {e}");
+                        }
+                    }
+                }
+            }
+            Err(e) => {
+                *malformed += 1;
+                eprintln!("error: {e}");
+            }
+        }
+    }
+    tasks
+}
+
+fn task_name(t: &Task) -> String {
+    let file = t.meta.source.as_ref().map(|s| format!(" ({})", s.file)).unwrap_or_default();
+    format!("{} task {}{file}", t.meta.scene, t.meta.task_id)
+}
+
+fn validate_files(files: &[PathBuf], limits: Limits) -> Result<u8, Error> {
+    let mut malformed = 0;
+    let tasks = read_all(files, &mut malformed);
+    let mut with_problems = 0;
+    for t in &tasks {
+        let analysis = planner::analyse(t, limits);
+        let found = validate::findings(t, &analysis);
+        if !found.is_empty() {
+            with_problems += 1;
+        }
+        for f in found {
+            println!("{}: {f}", task_name(t));
+        }
+    }
+    println!(
+        "{} tasks read: {} clean, {with_problems} with semantic problems, {malformed} malformed",
+        tasks.len() + malformed,
+        tasks.len() - with_problems
+    );
+    Ok(if malformed > 0 { 2 } else if with_problems > 0 { 1 } else { 0 })
+}
+
+fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
+    let mut malformed = 0;
+    let tasks = read_all(files, &mut malformed);
+    for t in &tasks {
+        let dir = out.join(&t.meta.scene);
+        let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
+        let io = |e: std::io::Error| Error::Io { file: path.display().to_string(), message: e.to_string() };
+        std::fs::create_dir_all(&dir).map_err(io)?;
+        let text = serde_json::to_string_pretty(&native::to_value(t)).expect("JSON values always serialize");
+        std::fs::write(&path, text + "\n").map_err(io)?;
+    }
+    println!("wrote {} native task files to {}", tasks.len(), out.display());
+    Ok(if malformed > 0 { 2 } else { 0 })
+}
+
+fn plan(file: &Path, only: &[i64], as_json: bool, limits: Limits) -> Result<u8, Error> {
+    let mut malformed = 0;
+    let mut tasks = read_all(&[file.to_owned()], &mut malformed);
+    if !only.is_empty() {
+        tasks.retain(|t| only.contains(&t.meta.task_id));
+        if let Some(missing) = only.iter().find(|id| !tasks.iter().any(|t| t.meta.task_id == **id)) {
+            return Err(Error::Io {
+                file: file.display().to_string(),
+                message: format!("no task with task_id {missing}"),
+            });
+        }
+    }
+    let stdout = std::io::stdout();
+    let mut out = stdout.lock();
+    let mut total_ms = 0.0;
+    for t in &tasks {
+        let analysis = planner::analyse(t, limits);
+        total_ms += analysis.elapsed.as_secs_f64() * 1e3;
+        let line = if as_json { analysis.to_json(t).to_string() } else { plan_text(t, &analysis) };
+        // A closed pipe (e.g. `| head`) ends the listing quietly.
+        if writeln!(out, "{line}").is_err() {
+            return Ok(0);
+        }
+    }
+    if !as_json {
+        let _ = writeln!(out, "{} tasks planned in {:.1} ms", tasks.len(), total_ms);
+    }
+    Ok(if malformed > 0 { 2 } else { 0 })
+}
+
+fn plan_text(t: &Task, a: &Analysis) -> String {
+    let gt = t.meta.gt_steps.map(|g| g.to_string()).unwrap_or_else(|| "-".to_owned());
+    let head = format!("{} task {}", t.meta.scene, t.meta.task_id);
+    match &a.plan {
+        None => format!("{head}: unsolvable: {}", a.reason.as_deref().unwrap_or("")),
+        Some(plan) => {
+            let steps: Vec<String> =
+                plan.iter().map(|s| format!("  {:>4}  {}", t.id(s.robot), s.action.render(t))).collect();
+            format!(
+                "{head}: {} steps (gt {gt}), {}, {} states, {:.1} ms\n{}",
+                plan.len(),
+                a.task_type.map(|k| k.name()).unwrap_or("no robot needed"),
+                a.states_expanded,
+                a.elapsed.as_secs_f64() * 1e3,
+                steps.join("\n")
+            )
+        }
+    }
+}
