@@ -9,7 +9,11 @@ use coherent_core::planner::{self, Analysis, Limits};
 use coherent_core::{Error, Task, load, native, validate};
 
 #[derive(Parser)]
-#[command(name = "coherent", version, about = "Heterogeneous multi-robot task planning with LLMs (COHERENT)")]
+#[command(
+    name = "coherent",
+    version,
+    about = "Heterogeneous multi-robot task planning with LLMs (COHERENT)"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -67,7 +71,12 @@ where
     let result = match cli.command {
         Command::Validate { files, max_states } => validate_files(&files, Limits { max_states }),
         Command::Import { files, out } => import(&files, &out),
-        Command::Plan { file, tasks, json, max_states } => plan(&file, &tasks, json, Limits { max_states }),
+        Command::Plan {
+            file,
+            tasks,
+            json,
+            max_states,
+        } => plan(&file, &tasks, json, Limits { max_states }),
     };
     match result {
         Ok(code) => code,
@@ -104,7 +113,12 @@ fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
 }
 
 fn task_name(t: &Task) -> String {
-    let file = t.meta.source.as_ref().map(|s| format!(" ({})", s.file)).unwrap_or_default();
+    let file = t
+        .meta
+        .source
+        .as_ref()
+        .map(|s| format!(" ({})", s.file))
+        .unwrap_or_default();
     format!("{} task {}{file}", t.meta.scene, t.meta.task_id)
 }
 
@@ -127,7 +141,13 @@ fn validate_files(files: &[PathBuf], limits: Limits) -> Result<u8, Error> {
         tasks.len() + malformed,
         tasks.len() - with_problems
     );
-    Ok(if malformed > 0 { 2 } else if with_problems > 0 { 1 } else { 0 })
+    Ok(if malformed > 0 {
+        2
+    } else if with_problems > 0 {
+        1
+    } else {
+        0
+    })
 }
 
 fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
@@ -136,12 +156,20 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
     for t in &tasks {
         let dir = out.join(&t.meta.scene);
         let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
-        let io = |e: std::io::Error| Error::Io { file: path.display().to_string(), message: e.to_string() };
+        let io = |e: std::io::Error| Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        };
         std::fs::create_dir_all(&dir).map_err(io)?;
-        let text = serde_json::to_string_pretty(&native::to_value(t)).expect("JSON values always serialize");
+        let text = serde_json::to_string_pretty(&native::to_value(t))
+            .expect("JSON values always serialize");
         std::fs::write(&path, text + "\n").map_err(io)?;
     }
-    println!("wrote {} native task files to {}", tasks.len(), out.display());
+    println!(
+        "wrote {} native task files to {}",
+        tasks.len(),
+        out.display()
+    );
     Ok(if malformed > 0 { 2 } else { 0 })
 }
 
@@ -150,7 +178,10 @@ fn plan(file: &Path, only: &[i64], as_json: bool, limits: Limits) -> Result<u8, 
     let mut tasks = read_all(&[file.to_owned()], &mut malformed);
     if !only.is_empty() {
         tasks.retain(|t| only.contains(&t.meta.task_id));
-        if let Some(missing) = only.iter().find(|id| !tasks.iter().any(|t| t.meta.task_id == **id)) {
+        if let Some(missing) = only
+            .iter()
+            .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
+        {
             return Err(Error::Io {
                 file: file.display().to_string(),
                 message: format!("no task with task_id {missing}"),
@@ -163,7 +194,11 @@ fn plan(file: &Path, only: &[i64], as_json: bool, limits: Limits) -> Result<u8, 
     for t in &tasks {
         let analysis = planner::analyse(t, limits);
         total_ms += analysis.elapsed.as_secs_f64() * 1e3;
-        let line = if as_json { analysis.to_json(t).to_string() } else { plan_text(t, &analysis) };
+        let line = if as_json {
+            analysis.to_json(t).to_string()
+        } else {
+            plan_text(t, &analysis)
+        };
         // A closed pipe (e.g. `| head`) ends the listing quietly.
         if writeln!(out, "{line}").is_err() {
             return Ok(0);
@@ -176,13 +211,19 @@ fn plan(file: &Path, only: &[i64], as_json: bool, limits: Limits) -> Result<u8, 
 }
 
 fn plan_text(t: &Task, a: &Analysis) -> String {
-    let gt = t.meta.gt_steps.map(|g| g.to_string()).unwrap_or_else(|| "-".to_owned());
+    let gt = t
+        .meta
+        .gt_steps
+        .map(|g| g.to_string())
+        .unwrap_or_else(|| "-".to_owned());
     let head = format!("{} task {}", t.meta.scene, t.meta.task_id);
     match &a.plan {
         None => format!("{head}: unsolvable: {}", a.reason.as_deref().unwrap_or("")),
         Some(plan) => {
-            let steps: Vec<String> =
-                plan.iter().map(|s| format!("  {:>4}  {}", t.id(s.robot), s.action.render(t))).collect();
+            let steps: Vec<String> = plan
+                .iter()
+                .map(|s| format!("  {:>4}  {}", t.id(s.robot), s.action.render(t)))
+                .collect();
             format!(
                 "{head}: {} steps (gt {gt}), {}, {} states, {:.1} ms\n{}",
                 plan.len(),

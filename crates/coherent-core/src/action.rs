@@ -71,7 +71,13 @@ impl Verb {
                 Verb::PutOn,
                 Verb::MoveTowards,
             ],
-            RobotKind::RobotArm => &[Verb::Open, Verb::Close, Verb::Grab, Verb::PutInto, Verb::PutOn],
+            RobotKind::RobotArm => &[
+                Verb::Open,
+                Verb::Close,
+                Verb::Grab,
+                Verb::PutInto,
+                Verb::PutOn,
+            ],
         }
     }
 }
@@ -93,10 +99,18 @@ pub struct Action {
 
 impl Action {
     pub fn new(verb: Verb, object: Idx) -> Action {
-        Action { verb, object, target: None }
+        Action {
+            verb,
+            object,
+            target: None,
+        }
     }
     pub fn with_target(verb: Verb, object: Idx, target: Idx) -> Action {
-        Action { verb, object, target: Some(target) }
+        Action {
+            verb,
+            object,
+            target: Some(target),
+        }
     }
 
     /// The action string, e.g. `[puton] <apple>(3) on <table>(5)`.
@@ -142,14 +156,19 @@ impl fmt::Display for ParsedAction {
 
 /// Parses an action string. Surrounding white space is ignored; nothing else is.
 pub fn parse(text: &str) -> Result<ParsedAction> {
-    parse_inner(text.trim()).map_err(|reason| Error::BadAction { action: text.to_owned(), reason })
+    parse_inner(text.trim()).map_err(|reason| Error::BadAction {
+        action: text.to_owned(),
+        reason,
+    })
 }
 
 fn parse_inner(s: &str) -> std::result::Result<ParsedAction, String> {
     if s.is_empty() {
         return Err("empty action".to_owned());
     }
-    let rest = s.strip_prefix('[').ok_or("an action starts with [verb], e.g. [grab] <apple>(3)")?;
+    let rest = s
+        .strip_prefix('[')
+        .ok_or("an action starts with [verb], e.g. [grab] <apple>(3)")?;
     let close = rest.find(']').ok_or("missing ']' after the verb")?;
     let word = &rest[..close];
     let verb = Verb::from_name(word).ok_or_else(|| {
@@ -171,14 +190,19 @@ fn parse_inner(s: &str) -> std::result::Result<ParsedAction, String> {
                 .and_then(|r| r.strip_prefix(prep))
                 .and_then(|r| r.strip_prefix(' '))
                 .ok_or_else(|| format!("[{verb}] needs \" {prep} <name>(id)\" after {object}"))?;
-            let (target, rest) = mention(after).map_err(|why| format!("target of [{verb}]: {why}"))?;
+            let (target, rest) =
+                mention(after).map_err(|why| format!("target of [{verb}]: {why}"))?;
             if !rest.is_empty() {
                 return Err(format!("unexpected text after {target}: {rest:?}"));
             }
             Some(target)
         }
     };
-    Ok(ParsedAction { verb, object, target })
+    Ok(ParsedAction {
+        verb,
+        object,
+        target,
+    })
 }
 
 /// `<name>(id)` at the start of `s`, and the rest of `s`.
@@ -189,9 +213,19 @@ fn mention(s: &str) -> std::result::Result<(Mention, &str), String> {
     if name.is_empty() {
         return Err("empty name in <>".to_owned());
     }
-    let rest = s[close + 1..].strip_prefix('(').ok_or("expected (id) after the name")?;
+    let rest = s[close + 1..]
+        .strip_prefix('(')
+        .ok_or("expected (id) after the name")?;
     let end = rest.find(')').ok_or("missing ')' after the id")?;
     let digits = &rest[..end];
-    let id = digits.parse::<i64>().map_err(|_| format!("id {digits:?} is not an integer"))?;
-    Ok((Mention { name: name.to_owned(), id: NodeId(id) }, &rest[end + 1..]))
+    let id = digits
+        .parse::<i64>()
+        .map_err(|_| format!("id {digits:?} is not an integer"))?;
+    Ok((
+        Mention {
+            name: name.to_owned(),
+            id: NodeId(id),
+        },
+        &rest[end + 1..],
+    ))
 }

@@ -70,7 +70,10 @@ impl Environment for SymbolicEnv {
 
     fn actions(&self, robot: NodeId) -> Result<Vec<String>> {
         let r = self.task.robot_by_id(robot)?;
-        Ok(rules::actions(&self.task, &self.state, r).iter().map(|a| a.render(&self.task)).collect())
+        Ok(rules::actions(&self.task, &self.state, r)
+            .iter()
+            .map(|a| a.render(&self.task))
+            .collect())
     }
 
     fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome> {
@@ -82,7 +85,10 @@ impl Environment for SymbolicEnv {
             }
             Err(why) => Some(why),
         };
-        Ok(Outcome { infeasible, done: self.goal_satisfied() })
+        Ok(Outcome {
+            infeasible,
+            done: self.goal_satisfied(),
+        })
     }
 
     fn goal_satisfied(&self) -> bool {

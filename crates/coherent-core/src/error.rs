@@ -10,7 +10,11 @@ pub enum Error {
     Io { file: String, message: String },
     /// Input that does not follow the format: bad JSON, unknown ids, duplicates...
     #[error("{file}: {path}: {message}")]
-    Malformed { file: String, path: JsonPath, message: String },
+    Malformed {
+        file: String,
+        path: JsonPath,
+        message: String,
+    },
     /// A robot id that is not a robot of the task.
     #[error("{0}")]
     UnknownRobot(String),
@@ -63,13 +67,23 @@ impl<'a> Site<'a> {
         Site { file, path }
     }
     pub fn key(&self, key: &str) -> Site<'a> {
-        Site { file: self.file, path: self.path.key(key) }
+        Site {
+            file: self.file,
+            path: self.path.key(key),
+        }
     }
     pub fn index(&self, i: usize) -> Site<'a> {
-        Site { file: self.file, path: self.path.index(i) }
+        Site {
+            file: self.file,
+            path: self.path.index(i),
+        }
     }
     pub fn error(&self, message: impl Into<String>) -> Error {
-        Error::Malformed { file: self.file.to_owned(), path: self.path.clone(), message: message.into() }
+        Error::Malformed {
+            file: self.file.to_owned(),
+            path: self.path.clone(),
+            message: message.into(),
+        }
     }
 }
 

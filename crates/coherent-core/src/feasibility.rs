@@ -86,7 +86,10 @@ fn no(reason: Reason, message: String) -> Infeasible {
 /// list, otherwise why not.
 pub fn check(task: &Task, s: &State, robot: Robot, text: &str) -> Result<Action, Infeasible> {
     let parsed = action::parse(text).map_err(|e| match e {
-        crate::Error::BadAction { reason, .. } => no(Reason::Unparsable, format!("cannot parse {text:?}: {reason}")),
+        crate::Error::BadAction { reason, .. } => no(
+            Reason::Unparsable,
+            format!("cannot parse {text:?}: {reason}"),
+        ),
         other => no(Reason::Unparsable, other.to_string()),
     })?;
     let me = task.node(robot.node).label();
@@ -97,13 +100,25 @@ pub fn check(task: &Task, s: &State, robot: Robot, text: &str) -> Result<Action,
                 "{me} is a {} and cannot [{}]; its verbs are {}",
                 robot.kind,
                 parsed.verb,
-                Verb::of(robot.kind).iter().map(|v| format!("[{v}]")).collect::<Vec<_>>().join(", ")
+                Verb::of(robot.kind)
+                    .iter()
+                    .map(|v| format!("[{v}]"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             ),
         ));
     }
     let object = resolve(task, &parsed.object)?;
-    let target = parsed.target.as_ref().map(|t| resolve(task, t)).transpose()?;
-    let action = Action { verb: parsed.verb, object, target };
+    let target = parsed
+        .target
+        .as_ref()
+        .map(|t| resolve(task, t))
+        .transpose()?;
+    let action = Action {
+        verb: parsed.verb,
+        object,
+        target,
+    };
     if rules::actions(task, s, robot).contains(&action) {
         return Ok(action);
     }
@@ -111,9 +126,12 @@ pub fn check(task: &Task, s: &State, robot: Robot, text: &str) -> Result<Action,
 }
 
 fn resolve(task: &Task, m: &Mention) -> Result<Idx, Infeasible> {
-    let n = task
-        .idx(m.id)
-        .ok_or_else(|| no(Reason::NoSuchNode, format!("there is no node with id {} (in {m})", m.id)))?;
+    let n = task.idx(m.id).ok_or_else(|| {
+        no(
+            Reason::NoSuchNode,
+            format!("there is no node with id {} (in {m})", m.id),
+        )
+    })?;
     let node = task.node(n);
     if node.class_name != m.name {
         return Err(no(
@@ -162,20 +180,31 @@ impl Diag<'_, '_> {
         self.label(self.v.robot.node)
     }
     fn room_label(&self) -> String {
-        self.v.room.map(|r| self.label(r)).unwrap_or_else(|| "no room".to_owned())
+        self.v
+            .room
+            .map(|r| self.label(r))
+            .unwrap_or_else(|| "no room".to_owned())
     }
 
     fn in_view(&self, n: Idx) -> Option<Infeasible> {
         (!self.v.sees(n)).then(|| {
             no(
                 Reason::NotInView,
-                format!("{} is not in view of {} (in {})", self.label(n), self.me(), self.room_label()),
+                format!(
+                    "{} is not in view of {} (in {})",
+                    self.label(n),
+                    self.me(),
+                    self.room_label()
+                ),
             )
         })
     }
 
     fn placed(&self) -> Option<Infeasible> {
-        self.v.room.is_none().then(|| no(Reason::Misplaced, format!("{} is in no room", self.me())))
+        self.v
+            .room
+            .is_none()
+            .then(|| no(Reason::Misplaced, format!("{} is in no room", self.me())))
     }
 
     /// Moving into a neighbouring room: a door must lead there and be open.
@@ -184,13 +213,25 @@ impl Diag<'_, '_> {
             return Some(p);
         }
         if Some(room) == self.v.room {
-            return Some(no(Reason::AlreadyThere, format!("{} is already in {}", self.me(), self.label(room))));
+            return Some(no(
+                Reason::AlreadyThere,
+                format!("{} is already in {}", self.me(), self.label(room)),
+            ));
         }
-        let doors: Vec<Idx> = self.v.next_rooms().filter(|&(r, _)| r == room).map(|(_, d)| d).collect();
+        let doors: Vec<Idx> = self
+            .v
+            .next_rooms()
+            .filter(|&(r, _)| r == room)
+            .map(|(_, d)| d)
+            .collect();
         if doors.is_empty() {
             return Some(no(
                 Reason::NoDoor,
-                format!("no door connects {} and {}", self.room_label(), self.label(room)),
+                format!(
+                    "no door connects {} and {}",
+                    self.room_label(),
+                    self.label(room)
+                ),
             ));
         }
         if doors.iter().all(|&d| !self.v.states(d).is_open()) {
@@ -218,8 +259,15 @@ impl Diag<'_, '_> {
     }
 
     fn not_flying(&self) -> Infeasible {
-        let on = self.v.own(Relation::On).map(|s| format!(" on {}", self.label(s))).unwrap_or_default();
-        no(Reason::NotFlying, format!("{} has landed{on}; it must take off first", self.me()))
+        let on = self
+            .v
+            .own(Relation::On)
+            .map(|s| format!(" on {}", self.label(s)))
+            .unwrap_or_default();
+        no(
+            Reason::NotFlying,
+            format!("{} has landed{on}; it must take off first", self.me()),
+        )
     }
 
     fn not_above(&self, s: Idx) -> Infeasible {
@@ -229,7 +277,11 @@ impl Diag<'_, '_> {
         };
         no(
             Reason::NotAbove,
-            format!("{} {above}, not above {}; it must move towards it first", self.me(), self.label(s)),
+            format!(
+                "{} {above}, not above {}; it must move towards it first",
+                self.me(),
+                self.label(s)
+            ),
         )
     }
 
@@ -237,7 +289,10 @@ impl Diag<'_, '_> {
         (!self.v.has(s, PropSet::LANDABLE)).then(|| {
             no(
                 Reason::NotLandable,
-                format!("{} is not LANDABLE: a quadrotor can only land on landable surfaces", self.label(s)),
+                format!(
+                    "{} is not LANDABLE: a quadrotor can only land on landable surfaces",
+                    self.label(s)
+                ),
             )
         })
     }
@@ -245,10 +300,16 @@ impl Diag<'_, '_> {
     fn takeoff_from(&self, s: Idx) -> Option<Infeasible> {
         let v = self.v;
         if !v.states(v.robot.node).contains(StateSet::LAND) {
-            return Some(no(Reason::NotLanded, format!("{} is already flying", self.me())));
+            return Some(no(
+                Reason::NotLanded,
+                format!("{} is already flying", self.me()),
+            ));
         }
         (v.own(Relation::On) != Some(s)).then(|| {
-            let on = v.own(Relation::On).map(|o| self.label(o)).unwrap_or_else(|| "nothing".to_owned());
+            let on = v
+                .own(Relation::On)
+                .map(|o| self.label(o))
+                .unwrap_or_else(|| "nothing".to_owned());
             no(
                 Reason::NotOnSurface,
                 format!("{} is on {on}, not on {}", self.me(), self.label(s)),
@@ -264,20 +325,26 @@ impl Diag<'_, '_> {
         if v.kind(x) == NodeKind::Room {
             return self.to_room(x);
         }
-        self.in_view(x).or_else(|| self.landable(x)).or_else(|| match v.above() {
-            None => Some(no(
-                Reason::NotAbove,
-                format!(
-                    "{} is not above a landable surface, so it can only move to another room",
-                    self.me()
-                ),
-            )),
-            Some(a) if a == x => Some(no(
-                Reason::AlreadyThere,
-                format!("{} is already above {}; it can land on it", self.me(), self.label(x)),
-            )),
-            Some(_) => None,
-        })
+        self.in_view(x)
+            .or_else(|| self.landable(x))
+            .or_else(|| match v.above() {
+                None => Some(no(
+                    Reason::NotAbove,
+                    format!(
+                        "{} is not above a landable surface, so it can only move to another room",
+                        self.me()
+                    ),
+                )),
+                Some(a) if a == x => Some(no(
+                    Reason::AlreadyThere,
+                    format!(
+                        "{} is already above {}; it can land on it",
+                        self.me(),
+                        self.label(x)
+                    ),
+                )),
+                Some(_) => None,
+            })
     }
 
     fn walk_towards(&self, x: Idx) -> Option<Infeasible> {
@@ -289,7 +356,10 @@ impl Diag<'_, '_> {
             return Some(e);
         }
         if v.holding == Some(x) {
-            return Some(no(Reason::AlreadyThere, format!("{} already holds {}", self.me(), self.label(x))));
+            return Some(no(
+                Reason::AlreadyThere,
+                format!("{} already holds {}", self.me(), self.label(x)),
+            ));
         }
         if matches!(v.kind(x), NodeKind::Robot(_) | NodeKind::Floor) {
             return Some(no(
@@ -304,7 +374,10 @@ impl Diag<'_, '_> {
             return Some(e);
         }
         v.close_to(x).then(|| {
-            no(Reason::AlreadyThere, format!("{} is already close to {}", self.me(), self.label(x)))
+            no(
+                Reason::AlreadyThere,
+                format!("{} is already close to {}", self.me(), self.label(x)),
+            )
         })
     }
 
@@ -314,13 +387,19 @@ impl Diag<'_, '_> {
         if v.has(x, PropSet::HIGH_HEIGHT) {
             return Some(no(
                 Reason::TooHigh,
-                format!("{} is a high surface (HIGH_HEIGHT), out of the robot dog's reach", self.label(x)),
+                format!(
+                    "{} is a high surface (HIGH_HEIGHT), out of the robot dog's reach",
+                    self.label(x)
+                ),
             ));
         }
         v.has(x, PropSet::ON_HIGH_SURFACE).then(|| {
             no(
                 Reason::TooHigh,
-                format!("{} is on a high surface (ON_HIGH_SURFACE), out of the robot dog's reach", self.label(x)),
+                format!(
+                    "{} is on a high surface (ON_HIGH_SURFACE), out of the robot dog's reach",
+                    self.label(x)
+                ),
             )
         })
     }
@@ -332,7 +411,10 @@ impl Diag<'_, '_> {
             RobotKind::RobotArm => {
                 let on_surface = v.own(Relation::On);
                 if on_surface.is_none() {
-                    return Some(no(Reason::Misplaced, format!("{} stands on no surface", self.me())));
+                    return Some(no(
+                        Reason::Misplaced,
+                        format!("{} stands on no surface", self.me()),
+                    ));
                 }
                 (!v.arm_reach().contains(&x)).then(|| {
                     let surface = on_surface.map(|s| self.label(s)).unwrap_or_default();
@@ -350,7 +432,11 @@ impl Diag<'_, '_> {
                 self.too_high(x).unwrap_or_else(|| {
                     no(
                         Reason::NotClose,
-                        format!("{} is not close enough to {}; it must move towards it first", self.me(), self.label(x)),
+                        format!(
+                            "{} is not close enough to {}; it must move towards it first",
+                            self.me(),
+                            self.label(x)
+                        ),
                     )
                 })
             }),
@@ -361,7 +447,11 @@ impl Diag<'_, '_> {
         self.v.holding.map(|h| {
             no(
                 Reason::HandFull,
-                format!("{} is holding {}; its hand must be empty", self.me(), self.label(h)),
+                format!(
+                    "{} is holding {}; its hand must be empty",
+                    self.me(),
+                    self.label(h)
+                ),
             )
         })
     }
@@ -372,44 +462,66 @@ impl Diag<'_, '_> {
             return Some(e);
         }
         let door = v.kind(x) == NodeKind::Door;
-        if !v.has(x, PropSet::CONTAINERS) && !(door && v.robot.kind == RobotKind::RobotDog) {
-            let what = if door { "a robot arm cannot open or close doors".to_owned() } else {
-                format!("{} is not a container{}", self.label(x), if v.robot.kind == RobotKind::RobotDog { " or a door" } else { "" })
+        let dog = v.robot.kind == RobotKind::RobotDog;
+        if !v.has(x, PropSet::CONTAINERS) && (!door || !dog) {
+            let what = match (door, dog) {
+                (true, _) => "a robot arm cannot open or close doors".to_owned(),
+                (false, true) => format!("{} is neither a container nor a door", self.label(x)),
+                (false, false) => format!("{} is not a container", self.label(x)),
             };
             return Some(no(Reason::NotOpenable, what));
         }
         let states = v.states(x);
         let state_problem = match verb {
-            Verb::Open if states.is_open() => {
-                Some(no(Reason::AlreadyOpen, format!("{} is already open", self.label(x))))
-            }
+            Verb::Open if states.is_open() => Some(no(
+                Reason::AlreadyOpen,
+                format!("{} is already open", self.label(x)),
+            )),
             Verb::Close if states.contains(StateSet::OPEN_FOREVER) => Some(no(
                 Reason::AlwaysOpen,
-                format!("{} is always open (OPEN_FOREVER) and cannot be closed", self.label(x)),
+                format!(
+                    "{} is always open (OPEN_FOREVER) and cannot be closed",
+                    self.label(x)
+                ),
             )),
-            Verb::Close if states.contains(StateSet::CLOSED) => {
-                Some(no(Reason::AlreadyClosed, format!("{} is already closed", self.label(x))))
-            }
+            Verb::Close if states.contains(StateSet::CLOSED) => Some(no(
+                Reason::AlreadyClosed,
+                format!("{} is already closed", self.label(x)),
+            )),
             Verb::Open if !states.contains(StateSet::CLOSED) => Some(self.stateless(x)),
             Verb::Close if !states.contains(StateSet::OPEN) => Some(self.stateless(x)),
             _ => None,
         };
-        state_problem.or_else(|| self.within_reach(x)).or_else(|| self.hand_free())
+        state_problem
+            .or_else(|| self.within_reach(x))
+            .or_else(|| self.hand_free())
     }
 
     fn stateless(&self, x: Idx) -> Infeasible {
-        no(Reason::NotOpenable, format!("{} is neither OPEN nor CLOSED, so it cannot be opened or closed", self.label(x)))
+        no(
+            Reason::NotOpenable,
+            format!(
+                "{} is neither OPEN nor CLOSED, so it cannot be opened or closed",
+                self.label(x)
+            ),
+        )
     }
 
     fn grab(&self, x: Idx) -> Option<Infeasible> {
         let v = self.v;
         if v.holding == Some(x) {
-            return Some(no(Reason::HandFull, format!("{} already holds {}", self.me(), self.label(x))));
+            return Some(no(
+                Reason::HandFull,
+                format!("{} already holds {}", self.me(), self.label(x)),
+            ));
         }
         self.in_view(x)
             .or_else(|| {
                 (!v.has(x, PropSet::GRABABLE)).then(|| {
-                    no(Reason::NotGrabable, format!("{} is not GRABABLE", self.label(x)))
+                    no(
+                        Reason::NotGrabable,
+                        format!("{} is not GRABABLE", self.label(x)),
+                    )
                 })
             })
             .or_else(|| self.within_reach(x))
@@ -424,13 +536,22 @@ impl Diag<'_, '_> {
             None => {
                 return Some(no(
                     Reason::HandEmpty,
-                    format!("{} is not holding anything; it must grab {} first", self.me(), self.label(x)),
+                    format!(
+                        "{} is not holding anything; it must grab {} first",
+                        self.me(),
+                        self.label(x)
+                    ),
                 ));
             }
             Some(h) if h != x => {
                 return Some(no(
                     Reason::NotHolding,
-                    format!("{} is holding {}, not {}", self.me(), self.label(h), self.label(x)),
+                    format!(
+                        "{} is holding {}, not {}",
+                        self.me(),
+                        self.label(h),
+                        self.label(x)
+                    ),
                 ));
             }
             Some(_) => {}
@@ -440,22 +561,36 @@ impl Diag<'_, '_> {
         }
         let kind_problem = if a.verb == Verb::PutInto {
             if !v.has(t, PropSet::CONTAINERS) {
-                Some(no(Reason::NotContainer, format!("{} is not a container", self.label(t))))
+                Some(no(
+                    Reason::NotContainer,
+                    format!("{} is not a container", self.label(t)),
+                ))
             } else if !v.states(t).is_open() {
-                Some(no(Reason::ContainerClosed, format!("{} is closed; it must be opened first", self.label(t))))
+                Some(no(
+                    Reason::ContainerClosed,
+                    format!("{} is closed; it must be opened first", self.label(t)),
+                ))
             } else {
                 None
             }
         } else {
-            (!v.has(t, PropSet::SURFACES))
-                .then(|| no(Reason::NotSurface, format!("{} is not a surface", self.label(t))))
+            (!v.has(t, PropSet::SURFACES)).then(|| {
+                no(
+                    Reason::NotSurface,
+                    format!("{} is not a surface", self.label(t)),
+                )
+            })
         };
         kind_problem.or_else(|| {
             // The arm may always put down on its own surface.
             let own_surface = v.robot.kind == RobotKind::RobotArm
                 && a.verb == Verb::PutOn
                 && v.own(Relation::On) == Some(t);
-            if own_surface { None } else { self.within_reach(t) }
+            if own_surface {
+                None
+            } else {
+                self.within_reach(t)
+            }
         })
     }
 }

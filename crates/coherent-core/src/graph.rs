@@ -49,7 +49,11 @@ pub enum RobotKind {
 }
 
 impl RobotKind {
-    pub const ALL: [RobotKind; 3] = [RobotKind::Quadrotor, RobotKind::RobotDog, RobotKind::RobotArm];
+    pub const ALL: [RobotKind; 3] = [
+        RobotKind::Quadrotor,
+        RobotKind::RobotDog,
+        RobotKind::RobotArm,
+    ];
 
     /// The `class_name` of this robot type in task files.
     pub fn class_name(self) -> &'static str {
@@ -93,7 +97,8 @@ impl Node {
 
 /// One directed edge, packed as `from << 17 | relation << 14 | to` so that a sorted
 /// edge list groups each node's outgoing edges by relation.
-#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(transparent)]
 pub struct Edge(u32);
 
 impl Edge {
@@ -118,65 +123,95 @@ impl fmt::Debug for Edge {
 }
 
 /// Everything that changes while a task runs: node states, `ON_HIGH_SURFACE`, edges.
-/// Small, cheap to clone and hash: the planner stores one per visited state.
-#[derive(Clone, PartialEq, Eq, Hash)]
+/// One allocation, cheap to clone and hash: the planner stores one per visited state.
+///
+/// Layout of `data`: `[n, states of the n nodes, ON_HIGH_SURFACE bits in ceil(n/32)
+/// words, edges (sorted, no duplicates: edges are a set)]`.
+#[derive(PartialEq, Eq, Hash)]
 pub struct State {
-    states: Box<[StateSet]>,
-    high: Box<[u64]>,
-    /// Sorted and free of duplicates: edges are a set.
-    edges: Vec<Edge>,
+    data: Vec<u32>,
+}
+
+impl Clone for State {
+    fn clone(&self) -> State {
+        // Room for a few more edges, so that applying an action rarely reallocates.
+        let mut data = Vec::with_capacity(self.data.len() + 4);
+        data.extend_from_slice(&self.data);
+        State { data }
+    }
+
+    fn clone_from(&mut self, source: &State) {
+        self.data.clear();
+        self.data.extend_from_slice(&source.data);
+    }
 }
 
 impl State {
     pub(crate) fn new(states: Vec<StateSet>, high: Vec<bool>, mut edges: Vec<Edge>) -> State {
-        let mut bits = vec![0u64; high.len().div_ceil(64)];
-        for (i, h) in high.iter().enumerate() {
-            if *h {
-                bits[i / 64] |= 1 << (i % 64);
-            }
-        }
+        let n = states.len();
+        let mut data = Vec::with_capacity(1 + n + n.div_ceil(32) + edges.len());
+        data.push(n as u32);
+        data.extend(states.iter().map(|s| s.0));
+        data.extend(std::iter::repeat_n(0, n.div_ceil(32)));
         edges.sort_unstable();
         edges.dedup();
-        State { states: states.into_boxed_slice(), high: bits.into_boxed_slice(), edges }
+        data.extend(edges.iter().map(|e| e.0));
+        let mut state = State { data };
+        for (i, h) in high.iter().enumerate() {
+            state.set_on_high_surface(Idx(i as u16), *h);
+        }
+        state
+    }
+
+    fn nodes(&self) -> usize {
+        self.data[0] as usize
+    }
+
+    fn edges_start(&self) -> usize {
+        1 + self.nodes() + self.nodes().div_ceil(32)
     }
 
     pub fn states(&self, n: Idx) -> StateSet {
-        self.states[n.get()]
+        StateSet(self.data[1 + n.get()])
     }
 
     pub(crate) fn set_states(&mut self, n: Idx, s: StateSet) {
-        self.states[n.get()] = s;
+        self.data[1 + n.get()] = s.0;
     }
 
     /// Whether node `n` currently has the `ON_HIGH_SURFACE` property.
     pub fn on_high_surface(&self, n: Idx) -> bool {
-        self.high[n.get() / 64] >> (n.get() % 64) & 1 == 1
+        self.data[1 + self.nodes() + n.get() / 32] >> (n.get() % 32) & 1 == 1
     }
 
     pub(crate) fn set_on_high_surface(&mut self, n: Idx, on: bool) {
-        let (w, b) = (n.get() / 64, n.get() % 64);
+        let w = 1 + self.nodes() + n.get() / 32;
+        let bit = 1 << (n.get() % 32);
         if on {
-            self.high[w] |= 1 << b;
+            self.data[w] |= bit;
         } else {
-            self.high[w] &= !(1 << b);
+            self.data[w] &= !bit;
         }
     }
 
     /// All edges, sorted by source node, then relation, then target.
     pub fn edges(&self) -> &[Edge] {
-        &self.edges
+        bytemuck::cast_slice(&self.data[self.edges_start()..])
     }
 
     /// Outgoing edges of `n`.
     pub fn out(&self, n: Idx) -> &[Edge] {
-        let lo = self.edges.partition_point(|e| e.from() < n);
-        let hi = lo + self.edges[lo..].partition_point(|e| e.from() == n);
-        &self.edges[lo..hi]
+        let edges = self.edges();
+        let lo = edges.partition_point(|e| e.from() < n);
+        let hi = lo + edges[lo..].partition_point(|e| e.from() == n);
+        &edges[lo..hi]
     }
-
     /// Targets of `n`'s edges with relation `rel`.
     pub fn targets(&self, n: Idx, rel: Relation) -> impl Iterator<Item = Idx> + '_ {
-        self.out(n).iter().filter(move |e| e.rel() == rel).map(|e| e.to())
+        self.out(n)
+            .iter()
+            .filter(move |e| e.rel() == rel)
+            .map(|e| e.to())
     }
 
     /// The first target of `n`'s `rel` edges, if any.
@@ -186,36 +221,53 @@ impl State {
 
     /// Sources of `rel` edges pointing at `n`.
     pub fn sources(&self, rel: Relation, n: Idx) -> impl Iterator<Item = Idx> + '_ {
-        self.edges.iter().filter(move |e| e.rel() == rel && e.to() == n).map(|e| e.from())
+        self.edges()
+            .iter()
+            .filter(move |e| e.rel() == rel && e.to() == n)
+            .map(|e| e.from())
     }
 
     pub fn has(&self, e: Edge) -> bool {
-        self.edges.binary_search(&e).is_ok()
+        self.edges().binary_search(&e).is_ok()
     }
 
     pub(crate) fn add(&mut self, e: Edge) {
-        if let Err(at) = self.edges.binary_search(&e) {
-            self.edges.insert(at, e);
+        if let Err(at) = self.edges().binary_search(&e) {
+            let at = self.edges_start() + at;
+            self.data.insert(at, e.0);
         }
     }
 
     pub(crate) fn remove(&mut self, e: Edge) {
-        if let Ok(at) = self.edges.binary_search(&e) {
-            self.edges.remove(at);
+        if let Ok(at) = self.edges().binary_search(&e) {
+            let at = self.edges_start() + at;
+            self.data.remove(at);
         }
     }
 
     /// Removes every outgoing edge of `n` with relation `rel`.
     pub(crate) fn remove_out(&mut self, n: Idx, rel: Relation) {
-        self.edges.retain(|e| !(e.from() == n && e.rel() == rel));
+        let start = self.edges_start();
+        let mut keep = start;
+        for i in start..self.data.len() {
+            let e = Edge(self.data[i]);
+            if !(e.from() == n && e.rel() == rel) {
+                self.data[keep] = self.data[i];
+                keep += 1;
+            }
+        }
+        self.data.truncate(keep);
     }
 }
 
 impl fmt::Debug for State {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let states: Vec<StateSet> = (0..self.nodes())
+            .map(|i| self.states(Idx(i as u16)))
+            .collect();
         f.debug_struct("State")
-            .field("states", &self.states)
-            .field("edges", &self.edges)
+            .field("states", &states)
+            .field("edges", &self.edges())
             .finish()
     }
 }

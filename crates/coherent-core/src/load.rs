@@ -62,9 +62,16 @@ pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
     let value: Value = serde_json::from_str(&text).map_err(|e| Error::Malformed {
         file: file.clone(),
         path: crate::JsonPath::root(),
-        message: format!("invalid JSON at line {} column {}: {e}", e.line(), e.column()),
+        message: format!(
+            "invalid JSON at line {} column {}: {e}",
+            e.line(),
+            e.column()
+        ),
     })?;
-    let scene = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let scene = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     read_value(&file, &scene, &value)
 }
 
@@ -73,7 +80,9 @@ pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
 pub fn read_value(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>> {
     match value {
         Value::Array(_) => crate::original::read(file, scene, value),
-        Value::Object(map) if map.contains_key("format") => Ok(vec![crate::native::read(file, value)]),
+        Value::Object(map) if map.contains_key("format") => {
+            Ok(vec![crate::native::read(file, value)])
+        }
         other => Err(Error::Malformed {
             file: file.to_owned(),
             path: crate::JsonPath::root(),
@@ -122,5 +131,8 @@ pub(crate) fn describe(value: &Value) -> String {
 }
 
 fn io_error(path: &Path, e: &std::io::Error) -> Error {
-    Error::Io { file: path.display().to_string(), message: e.to_string() }
+    Error::Io {
+        file: path.display().to_string(),
+        message: e.to_string(),
+    }
 }

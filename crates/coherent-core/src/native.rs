@@ -92,12 +92,18 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
             "ON" => Relation::On,
             "INSIDE" => Relation::Inside,
             other => {
-                return Err(site
-                    .key("relation")
-                    .error(format!("goal relation {other:?}: expected \"ON\" or \"INSIDE\"")));
+                return Err(site.key("relation").error(format!(
+                    "goal relation {other:?}: expected \"ON\" or \"INSIDE\""
+                )));
             }
         };
-        goal.push(RawPredicate { relation, subject: p.subject, target: p.target, count: p.count, site });
+        goal.push(RawPredicate {
+            relation,
+            subject: p.subject,
+            target: p.target,
+            count: p.count,
+            site,
+        });
     }
     let meta = TaskMeta {
         scene: raw.scene,
@@ -173,7 +179,10 @@ pub fn to_value(task: &Task) -> Value {
         robots: task
             .robots
             .iter()
-            .map(|r| NativeRobot { id: task.id(r.node).0, kind: r.kind.class_name().to_owned() })
+            .map(|r| NativeRobot {
+                id: task.id(r.node).0,
+                kind: r.kind.class_name().to_owned(),
+            })
             .collect(),
         graph: task.initial_raw_graph(),
         geometry: task.meta.geometry.clone(),

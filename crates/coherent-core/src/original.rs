@@ -53,7 +53,13 @@ fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>)
         let site = goal_site.key(key);
         let (relation, subject, target) = parse_goal_key(key).map_err(|why| site.error(why))?;
         let count = goal_count(value, &site)?;
-        goal.push(RawPredicate { relation, subject, target, count, site });
+        goal.push(RawPredicate {
+            relation,
+            subject,
+            target,
+            count,
+            site,
+        });
     }
     let gt_site = at.key("ground_truth_step_num");
     ensure!(
@@ -80,7 +86,12 @@ fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>)
         gt_steps: raw.ground_truth_step_num.first().copied(),
         rules: RuleSet::Compatible,
         geometry: None,
-        source: Some(Source { format: FORMAT.to_owned(), file: file_name, index, env_id: raw.env_id }),
+        source: Some(Source {
+            format: FORMAT.to_owned(),
+            file: file_name,
+            index,
+            env_id: raw.env_id,
+        }),
     };
     Task::build(meta, &raw.init_graph, &goal, &at.key("init_graph"))
 }
@@ -92,14 +103,18 @@ fn goal_count(value: &Value, site: &Site<'_>) -> Result<u32> {
         _ => None,
     };
     count.and_then(|n| u32::try_from(n).ok()).ok_or_else(|| {
-        site.error(format!("expected [count, []] with a count >= 0, found {value}"))
+        site.error(format!(
+            "expected [count, []] with a count >= 0, found {value}"
+        ))
     })
 }
 
 /// Parses `on_<name>(id)_<name>(id)` or `inside_<name>(id)_<name>(id)`.
 pub fn parse_goal_key(key: &str) -> std::result::Result<(Relation, i64, i64), String> {
     let bad = || {
-        format!("goal {key:?} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)")
+        format!(
+            "goal {key:?} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)"
+        )
     };
     let (relation, rest) = if let Some(rest) = key.strip_prefix("on_") {
         (Relation::On, rest)
@@ -137,7 +152,12 @@ pub fn to_value(task: &Task) -> Value {
     let out = OriginalTask {
         task_id: task.meta.task_id,
         task_name: task.meta.name.clone(),
-        env_id: task.meta.source.as_ref().map(|s| s.env_id.clone()).unwrap_or(Value::Null),
+        env_id: task
+            .meta
+            .source
+            .as_ref()
+            .map(|s| s.env_id.clone())
+            .unwrap_or(Value::Null),
         init_graph: task.initial_raw_graph(),
         task_goal: goal,
         ground_truth_step_num: task.meta.gt_steps.into_iter().collect(),

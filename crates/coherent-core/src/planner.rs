@@ -5,7 +5,9 @@
 
 use std::time::{Duration, Instant};
 
-use indexmap::IndexSet;
+use std::hash::BuildHasher;
+
+use hashbrown::HashTable;
 use rustc_hash::FxBuildHasher;
 
 use crate::action::Action;
@@ -30,7 +32,9 @@ pub struct Limits {
 
 impl Default for Limits {
     fn default() -> Limits {
-        Limits { max_states: 5_000_000 }
+        Limits {
+            max_states: 5_000_000,
+        }
     }
 }
 
@@ -49,36 +53,68 @@ pub struct Search {
 pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Limits) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
     if holds(&task.init) {
-        return Search { plan: Some(Vec::new()), states_expanded: 0, truncated: false };
+        return Search {
+            plan: Some(Vec::new()),
+            states_expanded: 0,
+            truncated: false,
+        };
     }
-    let mut seen: IndexSet<State, FxBuildHasher> = IndexSet::default();
-    // parent[i] = (index of the state it came from, the step taken), for states 1..
+    // Visited states in discovery order (which is also the BFS queue), with their
+    // hashes, and a table of indices into them: each child is hashed once, and only a
+    // new one is copied out of the reused buffer.
+    let hasher = FxBuildHasher;
+    let mut states: Vec<State> = vec![task.init.clone()];
+    let mut hashes: Vec<u64> = vec![hasher.hash_one(&task.init)];
+    let mut table: HashTable<u32> = HashTable::new();
+    table.insert_unique(hashes[0], 0, |&i| hashes[i as usize]);
+    // parent[i - 1] = (index of the state state i came from, the step taken)
     let mut parent: Vec<(u32, Step)> = Vec::new();
-    seen.insert(task.init.clone());
+    let mut child = task.init.clone();
     let mut next = 0usize;
-    while next < seen.len() {
-        let state = seen[next].clone();
+    while next < states.len() {
         for &robot in robots {
-            for action in rules::actions(task, &state, robot) {
-                let mut child = state.clone();
+            for action in rules::actions(task, &states[next], robot) {
+                child.clone_from(&states[next]);
                 rules::apply(task, &mut child, robot, action);
-                let step = Step { robot: robot.node, action };
-                let done = holds(&child);
-                if seen.insert(child) {
-                    parent.push((next as u32, step));
-                    if done {
-                        let plan = unwind(&parent, seen.len() - 1);
-                        return Search { plan: Some(plan), states_expanded: next + 1, truncated: false };
-                    }
-                    if seen.len() >= limits.max_states {
-                        return Search { plan: None, states_expanded: next + 1, truncated: true };
-                    }
+                let hash = hasher.hash_one(&child);
+                if table.find(hash, |&i| states[i as usize] == child).is_some() {
+                    continue;
+                }
+                let index = states.len() as u32;
+                table.insert_unique(hash, index, |&i| hashes[i as usize]);
+                states.push(child.clone());
+                hashes.push(hash);
+                parent.push((
+                    next as u32,
+                    Step {
+                        robot: robot.node,
+                        action,
+                    },
+                ));
+                if holds(&child) {
+                    let plan = unwind(&parent, index as usize);
+                    return Search {
+                        plan: Some(plan),
+                        states_expanded: next + 1,
+                        truncated: false,
+                    };
+                }
+                if states.len() >= limits.max_states {
+                    return Search {
+                        plan: None,
+                        states_expanded: next + 1,
+                        truncated: true,
+                    };
                 }
             }
         }
         next += 1;
     }
-    Search { plan: None, states_expanded: next, truncated: false }
+    Search {
+        plan: None,
+        states_expanded: next,
+        truncated: false,
+    }
 }
 
 fn unwind(parent: &[(u32, Step)], mut at: usize) -> Vec<Step> {
@@ -156,7 +192,9 @@ pub fn analyse(task: &Task, limits: Limits) -> Analysis {
         .goal
         .iter()
         .filter(|p| !predicate_holds(&task.init, p))
-        .filter_map(|p| static_obstacle(task, p).map(|why| format!("{}: {why}", task.predicate_label(p))))
+        .filter_map(|p| {
+            static_obstacle(task, p).map(|why| format!("{}: {why}", task.predicate_label(p)))
+        })
         .collect();
     if !obstacles.is_empty() {
         return Analysis {
@@ -169,7 +207,7 @@ pub fn analyse(task: &Task, limits: Limits) -> Analysis {
     }
     let full = search(task, &task.robots, &task.goal, limits);
     let (task_type, reason) = match &full.plan {
-        Some(_) => (task_type(task, limits), None),
+        Some(plan) => (task_type(task, plan, limits), None),
         None => (None, Some(why_unsolvable(task, &full, limits))),
     };
     Analysis {
@@ -182,33 +220,60 @@ pub fn analyse(task: &Task, limits: Limits) -> Analysis {
 }
 
 /// The fewest robot types with which the goal is reachable; none when the goal already
-/// holds at the start.
-fn task_type(task: &Task, limits: Limits) -> Option<TaskType> {
-    if task.goal_satisfied(&task.init) {
+/// holds at the start. The types used by `plan` (a shortest plan of the whole team)
+/// bound the answer, so only smaller teams are searched.
+fn task_type(task: &Task, plan: &[Step], limits: Limits) -> Option<TaskType> {
+    const TYPES: [TaskType; 3] = [TaskType::Mono, TaskType::Dual, TaskType::Trio];
+    let mut used: Vec<RobotKind> = plan
+        .iter()
+        .filter_map(|s| task.robot(s.robot).map(|r| r.kind))
+        .collect();
+    used.sort();
+    used.dedup();
+    if used.is_empty() {
         return None;
     }
     let kinds: Vec<RobotKind> = RobotKind::ALL
         .into_iter()
         .filter(|k| task.robots.iter().any(|r| r.kind == *k))
         .collect();
-    for size in 1..=kinds.len() {
+    for size in 1..used.len() {
         for subset in subsets(&kinds, size) {
-            let team: Vec<Robot> = task.robots.iter().copied().filter(|r| subset.contains(&r.kind)).collect();
-            if search(task, &team, &task.goal, limits).plan.is_some() {
-                return Some([TaskType::Mono, TaskType::Dual, TaskType::Trio][size - 1]);
+            let team: Vec<Robot> = task
+                .robots
+                .iter()
+                .copied()
+                .filter(|r| subset.contains(&r.kind))
+                .collect();
+            let found = search(task, &team, &task.goal, limits);
+            if found.plan.is_some() {
+                return Some(TYPES[size - 1]);
+            }
+            // A smaller team might still succeed beyond the limit: undecided.
+            if found.truncated {
+                return None;
             }
         }
     }
-    None
+    Some(TYPES[used.len() - 1])
 }
 
 fn subsets(kinds: &[RobotKind], size: usize) -> Vec<Vec<RobotKind>> {
     (0u32..1 << kinds.len())
         .filter(|m| m.count_ones() as usize == size)
-        .map(|m| kinds.iter().enumerate().filter(|(i, _)| m >> i & 1 == 1).map(|(_, k)| *k).collect())
+        .map(|m| {
+            kinds
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| m >> i & 1 == 1)
+                .map(|(_, k)| *k)
+                .collect()
+        })
         .collect()
 }
 
+/// Why an exhaustive search found no plan: which predicates cannot be reached even
+/// alone, or that they cannot be reached together.
 fn why_unsolvable(task: &Task, full: &Search, limits: Limits) -> String {
     if full.truncated {
         return format!(
@@ -216,27 +281,27 @@ fn why_unsolvable(task: &Task, full: &Search, limits: Limits) -> String {
             limits.max_states
         );
     }
-    let mut reasons = Vec::new();
-    if reasons.is_empty() {
-        let alone: Vec<String> = task
-            .goal
-            .iter()
-            .filter(|p| search(task, &task.robots, std::slice::from_ref(p), limits).plan.is_none())
-            .map(|p| task.predicate_label(p))
-            .collect();
-        reasons.push(if alone.is_empty() {
-            format!(
-                "each goal predicate is reachable alone but not all together (searched all {} reachable states)",
-                full.states_expanded
-            )
-        } else {
-            format!(
-                "no sequence of actions makes {} hold (searched all reachable states)",
-                alone.join(" and ")
-            )
-        });
+    let alone: Vec<String> = task
+        .goal
+        .iter()
+        .filter(|p| {
+            search(task, &task.robots, std::slice::from_ref(p), limits)
+                .plan
+                .is_none()
+        })
+        .map(|p| task.predicate_label(p))
+        .collect();
+    if alone.is_empty() {
+        format!(
+            "each goal predicate is reachable alone but not all together (searched all {} reachable states)",
+            full.states_expanded
+        )
+    } else {
+        format!(
+            "no sequence of actions makes {} hold (searched all reachable states)",
+            alone.join(" and ")
+        )
     }
-    reasons.join("; ")
 }
 
 /// A reason visible without search why predicate `p` can never come to hold.
@@ -247,7 +312,11 @@ pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
         return None;
     }
     if p.subject == p.target {
-        return Some(format!("{} cannot be {} itself", x.label(), p.relation.name()));
+        return Some(format!(
+            "{} cannot be {} itself",
+            x.label(),
+            p.relation.name()
+        ));
     }
     let never_moves = |what: &str| Some(format!("{} is {what} and never moves", x.label()));
     match x.kind {
@@ -266,11 +335,17 @@ pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
                 "{} is not LANDABLE, and the quadrotor and its basket only come to rest on landable surfaces",
                 y.label()
             )),
-            _ => Some(format!("{} never goes INSIDE anything but a room", x.label())),
+            _ => Some(format!(
+                "{} never goes INSIDE anything but a room",
+                x.label()
+            )),
         },
         NodeKind::Object => {
             if !has(p.subject, PropSet::GRABABLE) {
-                return Some(format!("{} is not GRABABLE, so no robot can move it", x.label()));
+                return Some(format!(
+                    "{} is not GRABABLE, so no robot can move it",
+                    x.label()
+                ));
             }
             match p.relation {
                 Relation::Inside if !has(p.target, PropSet::CONTAINERS) => Some(format!(
@@ -281,11 +356,15 @@ pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
                     if !task.init.states(p.target).is_open()
                         && !task.init.states(p.target).contains(crate::StateSet::CLOSED) =>
                 {
-                    Some(format!("{} is neither open nor closed, so it can never be opened", y.label()))
+                    Some(format!(
+                        "{} is neither open nor closed, so it can never be opened",
+                        y.label()
+                    ))
                 }
-                Relation::On if !has(p.target, PropSet::SURFACES) => {
-                    Some(format!("{} is not a surface (no SURFACES property)", y.label()))
-                }
+                Relation::On if !has(p.target, PropSet::SURFACES) => Some(format!(
+                    "{} is not a surface (no SURFACES property)",
+                    y.label()
+                )),
                 _ => None,
             }
         }
@@ -297,9 +376,13 @@ pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
 pub fn replay(task: &Task, plan: &[Step]) -> Result<State, (usize, String)> {
     let mut s = task.init.clone();
     for (i, step) in plan.iter().enumerate() {
-        let robot = task.robot(step.robot).copied().ok_or((i, "not a robot".to_owned()))?;
+        let robot = task
+            .robot(step.robot)
+            .copied()
+            .ok_or((i, "not a robot".to_owned()))?;
         let text = step.action.render(task);
-        let action = crate::feasibility::check(task, &s, robot, &text).map_err(|e| (i, e.message))?;
+        let action =
+            crate::feasibility::check(task, &s, robot, &text).map_err(|e| (i, e.message))?;
         rules::apply(task, &mut s, robot, action);
     }
     Ok(s)

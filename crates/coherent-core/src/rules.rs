@@ -29,7 +29,9 @@ impl NodeSet {
     }
     pub fn iter(&self) -> impl Iterator<Item = Idx> + '_ {
         self.0.iter().enumerate().flat_map(|(w, &word)| {
-            (0..64).filter(move |b| word >> b & 1 == 1).map(move |b| Idx((w * 64 + b) as u16))
+            (0..64)
+                .filter(move |b| word >> b & 1 == 1)
+                .map(move |b| Idx((w * 64 + b) as u16))
         })
     }
 }
@@ -45,7 +47,8 @@ pub struct Observation {
 
 /// The room `n` is in: the target of its `INSIDE` edge that is a room.
 pub fn room_of(task: &Task, s: &State, n: Idx) -> Option<Idx> {
-    s.targets(n, Relation::Inside).find(|&t| task.node(t).kind == NodeKind::Room)
+    s.targets(n, Relation::Inside)
+        .find(|&t| task.node(t).kind == NodeKind::Room)
 }
 
 /// The visible set of SEMANTICS.md section 2.
@@ -111,7 +114,12 @@ pub fn observe(task: &Task, s: &State, robot: Idx) -> Observation {
     Observation {
         room: room_of(task, s, robot),
         nodes: v.iter().collect(),
-        edges: s.edges().iter().copied().filter(|e| v.contains(e.from()) && v.contains(e.to())).collect(),
+        edges: s
+            .edges()
+            .iter()
+            .copied()
+            .filter(|e| v.contains(e.from()) && v.contains(e.to()))
+            .collect(),
     }
 }
 
@@ -128,8 +136,17 @@ pub(crate) struct View<'a> {
 impl<'a> View<'a> {
     pub fn new(task: &'a Task, s: &'a State, robot: Robot) -> View<'a> {
         let visible = visible(task, s, robot.node);
-        let holding = s.targets(robot.node, Relation::Hold).find(|&h| visible.contains(h));
-        View { task, s, robot, room: room_of(task, s, robot.node), visible, holding }
+        let holding = s
+            .targets(robot.node, Relation::Hold)
+            .find(|&h| visible.contains(h));
+        View {
+            task,
+            s,
+            robot,
+            room: room_of(task, s, robot.node),
+            visible,
+            holding,
+        }
     }
 
     pub fn sees(&self, n: Idx) -> bool {
@@ -155,7 +172,9 @@ impl<'a> View<'a> {
 
     /// Targets of the robot's observed `CLOSE` edges.
     pub fn reachable(&self) -> impl Iterator<Item = Idx> + '_ {
-        self.s.targets(self.robot.node, Relation::Close).filter(|&t| self.sees(t))
+        self.s
+            .targets(self.robot.node, Relation::Close)
+            .filter(|&t| self.sees(t))
     }
 
     pub fn close_to(&self, n: Idx) -> bool {
@@ -164,7 +183,8 @@ impl<'a> View<'a> {
 
     /// The quadrotor's `ABOVE` target, when it is a landable surface.
     pub fn above(&self) -> Option<Idx> {
-        self.own(Relation::Above).filter(|&t| self.has(t, PropSet::LANDABLE))
+        self.own(Relation::Above)
+            .filter(|&t| self.has(t, PropSet::LANDABLE))
     }
 
     /// `(room, door)` for each visible door and each room it leads to other than ours.
@@ -176,7 +196,9 @@ impl<'a> View<'a> {
 
     /// Rooms reachable now through an open door.
     pub fn open_next_rooms(&self) -> impl Iterator<Item = Idx> + '_ {
-        self.next_rooms().filter(|&(_, door)| self.states(door).is_open()).map(|(room, _)| room)
+        self.next_rooms()
+            .filter(|&(_, door)| self.states(door).is_open())
+            .map(|(room, _)| room)
     }
 
     /// What the robot dog may move towards (`unreached` of SEMANTICS.md section 3).
@@ -184,7 +206,10 @@ impl<'a> View<'a> {
         self.sees(n)
             && Some(n) != self.holding
             && !self.close_to(n)
-            && !matches!(self.kind(n), NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor)
+            && !matches!(
+                self.kind(n),
+                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
+            )
             && !self.has(n, PropSet::HIGH_HEIGHT)
             && !self.has(n, PropSet::ON_HIGH_SURFACE)
     }
@@ -199,7 +224,9 @@ impl<'a> View<'a> {
                 reach.push(n);
             }
         };
-        let Some(surface) = self.own(Relation::On) else { return reach };
+        let Some(surface) = self.own(Relation::On) else {
+            return reach;
+        };
         for x in self.s.sources(Relation::On, surface) {
             if x != self.robot.node && self.sees(x) {
                 add(x, &mut reach);
@@ -243,9 +270,14 @@ pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
         RobotKind::RobotDog => dog_actions(&view, &mut out),
         RobotKind::RobotArm => arm_actions(&view, &mut out),
     }
-    let mut seen = rustc_hash::FxHashSet::default();
-    out.retain(|a| seen.insert(*a));
-    out
+    // Lists are short: a quadratic pass beats hashing.
+    let mut unique = Vec::with_capacity(out.len());
+    for a in out {
+        if !unique.contains(&a) {
+            unique.push(a);
+        }
+    }
+    unique
 }
 
 fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
@@ -259,7 +291,10 @@ fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
                 }
             }
         }
-        out.extend(v.open_next_rooms().map(|room| Action::new(Verb::MoveTowards, room)));
+        out.extend(
+            v.open_next_rooms()
+                .map(|room| Action::new(Verb::MoveTowards, room)),
+        );
     }
     if me.contains(StateSet::LAND)
         && let Some(surface) = v.own(Relation::On)
@@ -304,7 +339,10 @@ fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
             out.push(Action::new(Verb::MoveTowards, n));
         }
     }
-    out.extend(v.open_next_rooms().map(|room| Action::new(Verb::MoveTowards, room)));
+    out.extend(
+        v.open_next_rooms()
+            .map(|room| Action::new(Verb::MoveTowards, room)),
+    );
 }
 
 fn arm_actions(v: &View<'_>, out: &mut Vec<Action>) {
@@ -345,7 +383,9 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
                     .edges()
                     .iter()
                     .copied()
-                    .filter(|e| e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
+                    .filter(|e| {
+                        e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to()))
+                    })
                     .collect();
                 for e in close {
                     s.remove(e);
@@ -374,7 +414,11 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
             }
         }
         (kind, Verb::PutInto | Verb::PutOn) => {
-            let rel = if a.verb == Verb::PutInto { Relation::Inside } else { Relation::On };
+            let rel = if a.verb == Verb::PutInto {
+                Relation::Inside
+            } else {
+                Relation::On
+            };
             s.remove(Edge::new(me, Relation::Hold, x));
             if let Some(t) = a.target {
                 s.add(Edge::new(x, rel, t));
@@ -403,7 +447,10 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
 }
 
 fn move_to_room(task: &Task, s: &mut State, me: Idx, room: Idx) {
-    let old: Vec<Idx> = s.targets(me, Relation::Inside).filter(|&t| task.node(t).kind == NodeKind::Room).collect();
+    let old: Vec<Idx> = s
+        .targets(me, Relation::Inside)
+        .filter(|&t| task.node(t).kind == NodeKind::Room)
+        .collect();
     for r in old {
         s.remove(Edge::new(me, Relation::Inside, r));
     }
@@ -443,7 +490,14 @@ fn set_basket_high(s: &mut State, basket: Idx, on: bool) {
 /// `x`'s first ON/INSIDE edge: edges of the initial graph in file order come first,
 /// edges added while running after them.
 fn first_location(task: &Task, s: &State, x: Idx) -> Option<Edge> {
-    s.out(x).iter().copied().filter(|e| e.rel().is_location()).min_by_key(|e| {
-        task.init_edges.iter().position(|i| i == e).unwrap_or(usize::MAX)
-    })
+    s.out(x)
+        .iter()
+        .copied()
+        .filter(|e| e.rel().is_location())
+        .min_by_key(|e| {
+            task.init_edges
+                .iter()
+                .position(|i| i == e)
+                .unwrap_or(usize::MAX)
+        })
 }

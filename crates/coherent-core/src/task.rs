@@ -190,7 +190,10 @@ impl Task {
 
         let edges_site = site.key("edges");
         let resolve = |id: i64, at: Site<'_>| {
-            index.get(&NodeId(id)).copied().ok_or_else(|| at.error(format!("unknown node id {id}")))
+            index
+                .get(&NodeId(id))
+                .copied()
+                .ok_or_else(|| at.error(format!("unknown node id {id}")))
         };
         let mut init_edges = Vec::with_capacity(graph.edges.len());
         for (i, raw) in graph.edges.iter().enumerate() {
@@ -222,7 +225,10 @@ impl Task {
             .iter()
             .enumerate()
             .filter_map(|(i, n)| match n.kind {
-                NodeKind::Robot(kind) => Some(Robot { node: Idx(i as u16), kind }),
+                NodeKind::Robot(kind) => Some(Robot {
+                    node: Idx(i as u16),
+                    kind,
+                }),
                 _ => None,
             })
             .collect();
@@ -283,19 +289,22 @@ impl Task {
 
     /// The robot with file id `id`, or an error naming the robots there are.
     pub fn robot_by_id(&self, id: NodeId) -> Result<Robot> {
-        self.idx(id).and_then(|i| self.robot(i)).copied().ok_or_else(|| {
-            let known: Vec<String> = self
-                .robots
-                .iter()
-                .map(|r| format!("{} ({})", self.id(r.node), r.kind))
-                .collect();
-            crate::Error::UnknownRobot(format!(
-                "{id} is not a robot of task {}/{}; its robots are {}",
-                self.meta.scene,
-                self.meta.task_id,
-                known.join(", ")
-            ))
-        })
+        self.idx(id)
+            .and_then(|i| self.robot(i))
+            .copied()
+            .ok_or_else(|| {
+                let known: Vec<String> = self
+                    .robots
+                    .iter()
+                    .map(|r| format!("{} ({})", self.id(r.node), r.kind))
+                    .collect();
+                crate::Error::UnknownRobot(format!(
+                    "{id} is not a robot of task {}/{}; its robots are {}",
+                    self.meta.scene,
+                    self.meta.task_id,
+                    known.join(", ")
+                ))
+            })
     }
 
     /// `(door, room)` pairs of the initial graph's `LEADING TO` edges.
@@ -326,8 +335,14 @@ impl Task {
 
     /// The node's current properties, `ON_HIGH_SURFACE` included when it holds.
     pub fn properties(&self, s: &State, n: Idx) -> PropSet {
-        let p = self.nodes[n.get()].properties.without(PropSet::ON_HIGH_SURFACE);
-        if s.on_high_surface(n) { p | PropSet::ON_HIGH_SURFACE } else { p }
+        let p = self.nodes[n.get()]
+            .properties
+            .without(PropSet::ON_HIGH_SURFACE);
+        if s.on_high_surface(n) {
+            p | PropSet::ON_HIGH_SURFACE
+        } else {
+            p
+        }
     }
 
     /// The goal test of SEMANTICS.md section 5: for every predicate, the number of
@@ -342,7 +357,11 @@ impl Task {
             Relation::Inside => "inside",
             _ => "on",
         };
-        format!("{rel}_{}_{}", self.node(p.subject).label(), self.node(p.target).label())
+        format!(
+            "{rel}_{}_{}",
+            self.node(p.subject).label(),
+            self.node(p.target).label()
+        )
     }
 
     /// The graph of state `s` in the original format's field names.
@@ -396,15 +415,15 @@ fn node_kind(raw: &RawNode, at: &Site<'_>) -> Result<NodeKind> {
         "Floor" => NodeKind::Floor,
         "Doors" | "Door" => NodeKind::Door,
         "AgentTool" => NodeKind::Tool,
-        "Agents" => NodeKind::Robot(RobotKind::from_class_name(&raw.class_name).ok_or_else(
-            || {
+        "Agents" => {
+            NodeKind::Robot(RobotKind::from_class_name(&raw.class_name).ok_or_else(|| {
                 at.key("class_name").error(format!(
                     "unknown robot class {:?} (known: {})",
                     raw.class_name,
                     RobotKind::ALL.map(RobotKind::class_name).join(", ")
                 ))
-            },
-        )?),
+            })?)
+        }
         _ => NodeKind::Object,
     })
 }

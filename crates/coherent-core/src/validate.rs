@@ -14,7 +14,10 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
         out.push("the goal is empty".to_owned());
     } else if task.goal.iter().all(|p| predicate_holds(&task.init, p)) {
         let labels: Vec<String> = task.goal.iter().map(|p| task.predicate_label(p)).collect();
-        out.push(format!("the goal already holds at the start: {}", labels.join(", ")));
+        out.push(format!(
+            "the goal already holds at the start: {}",
+            labels.join(", ")
+        ));
     }
     if let Some(reason) = &analysis.reason {
         out.push(format!("the goal cannot be reached: {reason}"));
@@ -28,12 +31,19 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
         ));
     }
     for (i, node) in task.nodes.iter().enumerate() {
-        out.extend(role_contradictions(task, Idx(i as u16)).into_iter().map(|m| format!("{}: {m}", node.label())));
+        out.extend(
+            role_contradictions(task, Idx(i as u16))
+                .into_iter()
+                .map(|m| format!("{}: {m}", node.label())),
+        );
     }
     let listed = task.init_edges.len();
     let distinct = task.init.edges().len();
     if listed != distinct {
-        out.push(format!("{} edges are listed more than once", listed - distinct));
+        out.push(format!(
+            "{} edges are listed more than once",
+            listed - distinct
+        ));
     }
     out
 }
@@ -53,12 +63,16 @@ fn role_contradictions(task: &Task, n: Idx) -> Vec<String> {
             out.push("a room or door that is GRABABLE".to_owned());
         }
         NodeKind::Room if task.floor_of(n).is_none() => {
-            out.push("a room with no floor: robots moving there have nothing to stand on".to_owned());
+            out.push(
+                "a room with no floor: robots moving there have nothing to stand on".to_owned(),
+            );
         }
         NodeKind::Door => {
             let rooms = task.doors().iter().filter(|(d, _)| *d == n).count();
             if rooms != 2 {
-                out.push(format!("a door must lead to 2 rooms, this one leads to {rooms}"));
+                out.push(format!(
+                    "a door must lead to 2 rooms, this one leads to {rooms}"
+                ));
             }
         }
         NodeKind::Floor if !props.contains(PropSet::SURFACES) => {
@@ -68,9 +82,14 @@ fn role_contradictions(task: &Task, n: Idx) -> Vec<String> {
             if props.contains(PropSet::GRABABLE) {
                 out.push("a robot that is GRABABLE".to_owned());
             }
-            let rooms = s.targets(n, Relation::Inside).filter(|&t| task.node(t).kind == NodeKind::Room).count();
+            let rooms = s
+                .targets(n, Relation::Inside)
+                .filter(|&t| task.node(t).kind == NodeKind::Room)
+                .count();
             if rooms != 1 || room_of(task, s, n).is_none() {
-                out.push(format!("a robot must be INSIDE exactly one room, this one is in {rooms}"));
+                out.push(format!(
+                    "a robot must be INSIDE exactly one room, this one is in {rooms}"
+                ));
             }
             match kind {
                 RobotKind::Quadrotor => {
@@ -79,10 +98,15 @@ fn role_contradictions(task: &Task, n: Idx) -> Vec<String> {
                     }
                     let st = s.states(n);
                     if !st.intersects(StateSet::LAND | StateSet::FLYING) {
-                        out.push("a quadrotor that is neither LAND nor FLYING can never act".to_owned());
+                        out.push(
+                            "a quadrotor that is neither LAND nor FLYING can never act".to_owned(),
+                        );
                     }
                     if st.contains(StateSet::LAND) && s.target(n, Relation::On).is_none() {
-                        out.push("a quadrotor in state LAND that is ON nothing can never take off".to_owned());
+                        out.push(
+                            "a quadrotor in state LAND that is ON nothing can never take off"
+                                .to_owned(),
+                        );
                     }
                 }
                 RobotKind::RobotArm if s.target(n, Relation::On).is_none() => {
@@ -102,7 +126,9 @@ fn role_contradictions(task: &Task, n: Idx) -> Vec<String> {
         _ => {}
     }
     if props.contains(PropSet::CAN_OPEN)
-        && !s.states(n).intersects(StateSet::OPEN | StateSet::CLOSED | StateSet::OPEN_FOREVER)
+        && !s
+            .states(n)
+            .intersects(StateSet::OPEN | StateSet::CLOSED | StateSet::OPEN_FOREVER)
     {
         out.push("CAN_OPEN, but neither OPEN, CLOSED nor OPEN_FOREVER".to_owned());
     }

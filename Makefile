@@ -1,0 +1,30 @@
+# The commands README.md and .ci/run use. `make test` is the whole test suite.
+PYTHON ?= python3
+VENV ?= .venv
+BIN := $(VENV)/bin
+
+.PHONY: test lint rust-test py-test venv demo bench-build
+
+test: lint rust-test py-test
+
+lint:
+	cargo fmt --all --check
+	cargo clippy --workspace --all-targets -- -D warnings
+
+# coherent-py links against libpython only when loaded by Python: its tests are pytest's.
+rust-test:
+	cargo test --workspace --exclude coherent-py
+
+venv:
+	$(PYTHON) -m venv $(VENV)
+	$(BIN)/pip install --quiet --upgrade pip
+	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
+
+# Builds the wheel with maturin, installs it into the venv, runs pytest.
+py-test: venv
+	$(BIN)/pip install --quiet --force-reinstall --no-deps .
+	$(BIN)/pytest -q
+
+demo: venv
+	$(BIN)/pip install --quiet .
+	$(BIN)/coherent plan examples/tasks/demo.json
