@@ -153,9 +153,19 @@ fn validate_files(files: &[PathBuf], limits: Limits) -> Result<u8, Error> {
 fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
     let mut malformed = 0;
     let tasks = read_all(files, &mut malformed);
+    let mut written = std::collections::HashSet::new();
     for t in &tasks {
         let dir = out.join(&t.meta.scene);
         let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
+        if !written.insert(path.clone()) {
+            return Err(Error::Io {
+                file: path.display().to_string(),
+                message: format!(
+                    "two tasks map to this file (scene {:?}, task_id {}); import them into different folders",
+                    t.meta.scene, t.meta.task_id
+                ),
+            });
+        }
         let io = |e: std::io::Error| Error::Io {
             file: path.display().to_string(),
             message: e.to_string(),

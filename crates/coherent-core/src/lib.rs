@@ -15,6 +15,7 @@ pub mod load;
 pub mod native;
 pub mod original;
 pub mod planner;
+pub mod relaxed;
 pub mod rules;
 pub mod task;
 pub mod validate;

@@ -34,7 +34,7 @@ struct NativeTask {
     robots: Vec<NativeRobot>,
     graph: RawGraph,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    geometry: Option<Value>,
+    geometry: Option<serde_json::Map<String, Value>>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     source: Option<Source>,
 }
@@ -99,10 +99,9 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
         };
         goal.push(RawPredicate {
             relation,
-            subject: p.subject,
-            target: p.target,
+            subject: (p.subject, site.key("subject")),
+            target: (p.target, site.key("target")),
             count: p.count,
-            site,
         });
     }
     let meta = TaskMeta {
@@ -124,6 +123,12 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
 fn check_robots(task: &Task, robots: &[NativeRobot], site: &Site<'_>) -> Result<()> {
     for (i, r) in robots.iter().enumerate() {
         let at = site.index(i);
+        if let Some(first) = robots[..i].iter().position(|o| o.id == r.id) {
+            return Err(at.key("id").error(format!(
+                "robot {} is listed twice (also robots[{first}])",
+                r.id
+            )));
+        }
         let node = task.idx(crate::NodeId(r.id)).map(|n| task.node(n));
         let Some(node) = node else {
             return Err(at.key("id").error(format!("unknown node id {}", r.id)));

@@ -55,10 +55,9 @@ fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>)
         let count = goal_count(value, &site)?;
         goal.push(RawPredicate {
             relation,
-            subject,
-            target,
+            subject: (subject, site.clone()),
+            target: (target, site),
             count,
-            site,
         });
     }
     let gt_site = at.key("ground_truth_step_num");

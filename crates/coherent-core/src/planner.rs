@@ -49,7 +49,10 @@ pub struct Search {
     pub truncated: bool,
 }
 
-/// Breadth-first search for a shortest plan reaching `goal` with only `robots` acting.
+/// A* search for a shortest plan reaching `goal` with only `robots` acting, with the
+/// admissible and consistent heuristic [`lower_bound`] and duplicate detection on the
+/// compact state. States are expanded in order of `f = g + h` (a bucket queue, deepest
+/// first among equals); with `h = 0` this is breadth-first search.
 pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Limits) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
     if holds(&task.init) {
@@ -59,68 +62,171 @@ pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Lim
             truncated: false,
         };
     }
-    // Visited states in discovery order (which is also the BFS queue), with their
-    // hashes, and a table of indices into them: each child is hashed once, and only a
-    // new one is copied out of the reused buffer.
+    // Every state seen, by index: the state, its hash, its best known cost g and its
+    // heuristic h, whether it was expanded, and how it was first reached. A hash table
+    // of indices finds duplicates; each child is built in one reused buffer, hashed
+    // once, and copied out only when it is new.
     let hasher = FxBuildHasher;
     let mut states: Vec<State> = vec![task.init.clone()];
     let mut hashes: Vec<u64> = vec![hasher.hash_one(&task.init)];
+    let mut g: Vec<u16> = vec![0];
+    let mut h: Vec<u16> = vec![lower_bound(task, &task.init, goal)];
+    let mut closed: Vec<bool> = vec![false];
+    let mut parent: Vec<(u32, Option<Step>)> = vec![(0, None)];
     let mut table: HashTable<u32> = HashTable::new();
     table.insert_unique(hashes[0], 0, |&i| hashes[i as usize]);
-    // parent[i - 1] = (index of the state state i came from, the step taken)
-    let mut parent: Vec<(u32, Step)> = Vec::new();
+    let mut buckets: Vec<Vec<u32>> = Vec::new();
+    push(&mut buckets, usize::from(h[0]), 0);
     let mut child = task.init.clone();
-    let mut next = 0usize;
-    while next < states.len() {
+    let mut expanded = 0usize;
+    let mut f = 0usize;
+    while f < buckets.len() {
+        let Some(i) = buckets[f].pop() else {
+            f += 1;
+            continue;
+        };
+        let i = i as usize;
+        if closed[i] || usize::from(g[i] + h[i]) != f {
+            continue; // expanded already, or re-queued with a better cost
+        }
+        closed[i] = true;
+        expanded += 1;
+        if holds(&states[i]) {
+            return Search {
+                plan: Some(unwind(&parent, i)),
+                states_expanded: expanded,
+                truncated: false,
+            };
+        }
+        let gc = g[i] + 1;
         for &robot in robots {
-            for action in rules::actions(task, &states[next], robot) {
-                child.clone_from(&states[next]);
+            for action in rules::actions(task, &states[i], robot) {
+                child.clone_from(&states[i]);
                 rules::apply(task, &mut child, robot, action);
+                let step = Some(Step {
+                    robot: robot.node,
+                    action,
+                });
                 let hash = hasher.hash_one(&child);
-                if table.find(hash, |&i| states[i as usize] == child).is_some() {
-                    continue;
-                }
-                let index = states.len() as u32;
-                table.insert_unique(hash, index, |&i| hashes[i as usize]);
-                states.push(child.clone());
-                hashes.push(hash);
-                parent.push((
-                    next as u32,
-                    Step {
-                        robot: robot.node,
-                        action,
-                    },
-                ));
-                if holds(&child) {
-                    let plan = unwind(&parent, index as usize);
+                let c = match table.find(hash, |&j| states[j as usize] == child) {
+                    Some(&j) => {
+                        let j = j as usize;
+                        if closed[j] || g[j] <= gc {
+                            continue;
+                        }
+                        g[j] = gc;
+                        parent[j] = (i as u32, step);
+                        j
+                    }
+                    None => {
+                        let j = states.len();
+                        table.insert_unique(hash, j as u32, |&k| hashes[k as usize]);
+                        h.push(lower_bound(task, &child, goal));
+                        states.push(child.clone());
+                        hashes.push(hash);
+                        g.push(gc);
+                        closed.push(false);
+                        parent.push((i as u32, step));
+                        j
+                    }
+                };
+                // A goal at cost f cannot be beaten: every open state has f' >= f.
+                if usize::from(gc) <= f && h[c] == 0 && holds(&states[c]) {
                     return Search {
-                        plan: Some(plan),
-                        states_expanded: next + 1,
+                        plan: Some(unwind(&parent, c)),
+                        states_expanded: expanded,
                         truncated: false,
                     };
                 }
+                push(&mut buckets, usize::from(gc + h[c]), c as u32);
                 if states.len() >= limits.max_states {
                     return Search {
                         plan: None,
-                        states_expanded: next + 1,
+                        states_expanded: expanded,
                         truncated: true,
                     };
                 }
             }
         }
-        next += 1;
     }
     Search {
         plan: None,
-        states_expanded: next,
+        states_expanded: expanded,
         truncated: false,
     }
 }
 
-fn unwind(parent: &[(u32, Step)], mut at: usize) -> Vec<Step> {
+fn push(buckets: &mut Vec<Vec<u32>>, f: usize, i: u32) {
+    if buckets.len() <= f {
+        buckets.resize_with(f + 1, Vec::new);
+    }
+    buckets[f].push(i);
+}
+
+/// A lower bound on the steps still needed to reach `goal` from `s`, admissible and
+/// consistent (one action lowers it by at most one). Each goal subject not yet in place
+/// needs actions of its own: an object a grab (unless held) and a put; the quadrotor
+/// (and its basket, which only moves with it) a take-off (unless flying), a move
+/// (unless above the target) and a landing; the robot dog a move. Per subject the
+/// largest need counts, and the needs of different subjects add up.
+pub fn lower_bound(task: &Task, s: &State, goal: &[GoalPredicate]) -> u16 {
+    // (subject whose actions are counted, need); a basket counts as its quadrotor.
+    let mut needs: Vec<(Idx, u16)> = Vec::new();
+    for p in goal
+        .iter()
+        .filter(|p| p.count == 1 && !predicate_holds(s, p))
+    {
+        let x = p.subject;
+        let (who, need) = match task.node(x).kind {
+            NodeKind::Object => (
+                x,
+                if s.sources(Relation::Hold, x).next().is_some() {
+                    1
+                } else {
+                    2
+                },
+            ),
+            NodeKind::Robot(RobotKind::RobotDog) => (x, 1),
+            NodeKind::Robot(RobotKind::Quadrotor) => (x, flight_need(s, x, p)),
+            NodeKind::Tool => match task
+                .robots
+                .iter()
+                .find(|r| task.basket_of(r.node) == Some(x))
+            {
+                Some(q) => (q.node, flight_need(s, q.node, p)),
+                None => continue,
+            },
+            _ => continue,
+        };
+        match needs.iter_mut().find(|(w, _)| *w == who) {
+            Some((_, n)) => *n = (*n).max(need),
+            None => needs.push((who, need)),
+        }
+    }
+    needs.iter().map(|(_, n)| n).sum()
+}
+
+/// Actions quadrotor `q` needs before predicate `p` (about it or its basket) holds.
+fn flight_need(s: &State, q: Idx, p: &GoalPredicate) -> u16 {
+    let flying = s.states(q).contains(crate::StateSet::FLYING);
+    match p.relation {
+        // Into another room: one move, after a take-off.
+        Relation::Inside => {
+            if flying {
+                1
+            } else {
+                2
+            }
+        }
+        _ if flying && s.has(crate::Edge::new(q, Relation::Above, p.target)) => 1,
+        _ if flying => 2,
+        _ => 3,
+    }
+}
+
+fn unwind(parent: &[(u32, Option<Step>)], mut at: usize) -> Vec<Step> {
     let mut plan = Vec::new();
-    while at > 0 {
-        let (from, step) = parent[at - 1];
+    while let (from, Some(step)) = parent[at] {
         plan.push(step);
         at = from as usize;
     }
@@ -239,6 +345,10 @@ fn task_type(task: &Task, plan: &[Step], limits: Limits) -> Option<TaskType> {
         .collect();
     for size in 1..used.len() {
         for subset in subsets(&kinds, size) {
+            // A sound over-approximation rules most small teams out without a search.
+            if !crate::relaxed::may_reach(task, &subset, &task.goal) {
+                continue;
+            }
             let team: Vec<Robot> = task
                 .robots
                 .iter()
@@ -308,8 +418,14 @@ fn why_unsolvable(task: &Task, full: &Search, limits: Limits) -> String {
 pub fn static_obstacle(task: &Task, p: &GoalPredicate) -> Option<String> {
     let (x, y) = (task.node(p.subject), task.node(p.target));
     let has = |n: Idx, prop: PropSet| task.node(n).properties.contains(prop);
-    if p.count != 1 {
-        return None;
+    match p.count {
+        0 => return None,
+        1 => {}
+        n => {
+            return Some(format!(
+                "asks for {n} such edges, but edges form a set: at most one can exist"
+            ));
+        }
     }
     if p.subject == p.target {
         return Some(format!(

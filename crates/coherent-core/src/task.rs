@@ -11,6 +11,7 @@ use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
 /// A node as written in a task file (the original format's field names).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RawNode {
     pub id: i64,
     pub category: String,
@@ -25,6 +26,7 @@ pub struct RawNode {
 
 /// An edge as written in a task file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RawEdge {
     pub from_id: i64,
     pub to_id: i64,
@@ -33,6 +35,7 @@ pub struct RawEdge {
 
 /// A scene graph as written in a task file: `{"nodes": [...], "edges": [...]}`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct RawGraph {
     pub nodes: Vec<RawNode>,
     pub edges: Vec<RawEdge>,
@@ -88,18 +91,18 @@ pub struct TaskMeta {
     pub instruction: String,
     pub gt_steps: Option<u32>,
     pub rules: RuleSet,
-    pub geometry: Option<serde_json::Value>,
+    /// Geometry for the physics (rooms, furniture, robot specs); kept as read.
+    pub geometry: Option<serde_json::Map<String, serde_json::Value>>,
     pub source: Option<Source>,
 }
 
-/// A goal predicate before ids are resolved, with the site it was read from.
+/// A goal predicate before ids are resolved, with where each id was read.
 #[derive(Clone, Debug)]
 pub(crate) struct RawPredicate<'a> {
     pub relation: Relation,
-    pub subject: i64,
-    pub target: i64,
+    pub subject: (i64, Site<'a>),
+    pub target: (i64, Site<'a>),
     pub count: u32,
-    pub site: Site<'a>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -212,11 +215,18 @@ impl Task {
         let init = State::new(states, high, init_edges.clone());
 
         let mut predicates = Vec::with_capacity(goal.len());
+        let resolve_goal = |(id, at): &(i64, Site<'_>)| {
+            index.get(&NodeId(*id)).copied().ok_or_else(|| {
+                at.error(format!(
+                    "the goal names node {id}, which is not in the graph"
+                ))
+            })
+        };
         for p in goal {
             predicates.push(GoalPredicate {
                 relation: p.relation,
-                subject: resolve(p.subject, p.site.clone())?,
-                target: resolve(p.target, p.site.clone())?,
+                subject: resolve_goal(&p.subject)?,
+                target: resolve_goal(&p.target)?,
                 count: p.count,
             });
         }

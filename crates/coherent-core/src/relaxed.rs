@@ -1,0 +1,337 @@
+//! A relaxed reachability analysis: an over-approximation of where things can ever be
+//! when only some robot types act. Facts are only ever added (nothing is deleted,
+//! visibility and hand capacity are ignored), so every fact of every reachable state is
+//! derived. When a goal predicate is not derived, no plan of that team can reach it,
+//! which rules out teams without searching their (often huge) state spaces.
+
+use crate::graph::{Idx, NodeKind, RobotKind};
+use crate::task::{GoalPredicate, Task};
+use crate::vocab::{PropSet, Relation, StateSet};
+
+/// Whether every goal predicate of `goal` might hold with only robots of `kinds` acting.
+/// `false` is a proof that the team cannot reach the goal; `true` proves nothing.
+pub fn may_reach(task: &Task, kinds: &[RobotKind], goal: &[GoalPredicate]) -> bool {
+    let facts = Facts::derive(task, kinds);
+    goal.iter()
+        .all(|p| p.count != 1 || facts.at(p.subject, p.relation, p.target))
+}
+
+struct Facts {
+    n: usize,
+    /// at[x][p]: bit 0 = x may be ON p, bit 1 = x may be INSIDE p.
+    at: Vec<u8>,
+    in_room: Vec<bool>,
+    low: Vec<bool>,
+    /// basket_low_at[b * n + y]: basket `b` may rest on `y` without ON_HIGH_SURFACE.
+    /// Landing sets the flag from the surface's height, so a basket on a high surface
+    /// is always high; only its initial place can differ.
+    basket_low_at: Vec<bool>,
+    open: Vec<bool>,
+    dog_close: Vec<bool>,
+    /// held[x]: a robot of the team (dog or some arm) may hold x.
+    dog_holds: Vec<bool>,
+    arm_holds: Vec<bool>,
+    dog_room: Vec<bool>,
+    quad_room: Vec<bool>,
+}
+
+impl Facts {
+    fn derive(task: &Task, kinds: &[RobotKind]) -> Facts {
+        let n = task.nodes.len();
+        let s = &task.init;
+        let mut f = Facts {
+            n,
+            at: vec![0; n * n],
+            in_room: vec![false; n * n],
+            low: (0..n).map(|i| !s.on_high_surface(Idx(i as u16))).collect(),
+            basket_low_at: vec![false; n * n],
+            open: (0..n).map(|i| s.states(Idx(i as u16)).is_open()).collect(),
+            dog_close: vec![false; n],
+            dog_holds: vec![false; n],
+            arm_holds: vec![false; n * n],
+            dog_room: vec![false; n],
+            quad_room: vec![false; n],
+        };
+        for e in s.edges() {
+            if e.rel().is_location() {
+                f.add_at(e.from(), e.rel(), e.to());
+                if task.node(e.from()).kind == NodeKind::Tool && f.low[e.from().get()] {
+                    f.basket_low_at[e.from().get() * n + e.to().get()] = true;
+                }
+            }
+        }
+        let dog = kinds.contains(&RobotKind::RobotDog);
+        let quad = kinds.contains(&RobotKind::Quadrotor);
+        let robots_of = |k: RobotKind| {
+            task.robots
+                .iter()
+                .filter(move |r| r.kind == k)
+                .map(|r| r.node)
+        };
+        for r in &task.robots {
+            if let Some(room) = crate::rules::room_of(task, s, r.node) {
+                match r.kind {
+                    RobotKind::RobotDog => f.dog_room[room.get()] = true,
+                    RobotKind::Quadrotor => f.quad_room[room.get()] = true,
+                    RobotKind::RobotArm => {}
+                }
+            }
+        }
+        let has = |x: usize, p: PropSet| task.nodes[x].properties.contains(p);
+        let kind = |x: usize| task.nodes[x].kind;
+        let mut changed = true;
+        while changed {
+            changed = false;
+            // Rooms: a node is in a room if it is INSIDE it, on or in something that is,
+            // or a door leading there; the basket wherever its quadrotor may fly.
+            for x in 0..n {
+                for p in 0..n {
+                    if f.at[x * n + p] == 0 {
+                        continue;
+                    }
+                    for r in task.rooms() {
+                        let r = r.get();
+                        if (p == r || f.in_room[p * n + r]) && !f.in_room[x * n + r] {
+                            f.in_room[x * n + r] = true;
+                            changed = true;
+                        }
+                    }
+                }
+            }
+            for &(door, room) in task.doors() {
+                changed |= set(&mut f.in_room, door.get() * n + room.get());
+            }
+            // Moving between rooms through doors that are or may become open (only the
+            // robot dog opens doors).
+            for &(door, room) in task.doors() {
+                let d = door.get();
+                if dog && s.states(door).contains(StateSet::CLOSED) && f.dog_room[room.get()] {
+                    changed |= set(&mut f.open, d);
+                }
+                if !f.open[d] {
+                    continue;
+                }
+                for &(door2, other) in task.doors() {
+                    if door2 != door || other == room {
+                        continue;
+                    }
+                    if dog && f.dog_room[room.get()] {
+                        changed |= set(&mut f.dog_room, other.get());
+                    }
+                    if quad && f.quad_room[room.get()] {
+                        changed |= set(&mut f.quad_room, other.get());
+                    }
+                }
+            }
+            for &r in task.rooms() {
+                let r = r.get();
+                for q in robots_of(RobotKind::Quadrotor) {
+                    if quad && f.quad_room[r] {
+                        changed |= f.add_at(q, Relation::Inside, Idx(r as u16));
+                        if let Some(b) = task.basket_of(q) {
+                            changed |= set(&mut f.in_room, b.get() * n + r);
+                        }
+                    }
+                }
+                for d in robots_of(RobotKind::RobotDog) {
+                    if dog && f.dog_room[r] {
+                        changed |= f.add_at(d, Relation::Inside, Idx(r as u16));
+                        if let Some(floor) = task.floor_of(Idx(r as u16)) {
+                            changed |= f.add_at(d, Relation::On, floor);
+                        }
+                    }
+                }
+            }
+            if quad {
+                changed |= f.fly(task);
+            }
+            if dog {
+                changed |= f.dog(task, &has, &kind);
+            }
+            for a in robots_of(RobotKind::RobotArm).filter(|_| kinds.contains(&RobotKind::RobotArm))
+            {
+                changed |= f.arm(task, a, &has);
+            }
+        }
+        f
+    }
+
+    fn at(&self, x: Idx, rel: Relation, p: Idx) -> bool {
+        self.at[x.get() * self.n + p.get()] & bit(rel) != 0
+    }
+
+    fn add_at(&mut self, x: Idx, rel: Relation, p: Idx) -> bool {
+        let cell = &mut self.at[x.get() * self.n + p.get()];
+        let new = *cell & bit(rel) == 0;
+        *cell |= bit(rel);
+        new
+    }
+
+    fn may_be_in_room_of_dog(&self, x: usize) -> bool {
+        (0..self.n).any(|r| self.dog_room[r] && self.in_room[x * self.n + r])
+    }
+
+    /// The quadrotor lands on landable surfaces of the rooms it may reach; what is in
+    /// its basket loses ON_HIGH_SURFACE when it lands on a low surface.
+    fn fly(&mut self, task: &Task) -> bool {
+        let n = self.n;
+        let mut changed = false;
+        for r in task
+            .robots
+            .iter()
+            .filter(|r| r.kind == RobotKind::Quadrotor)
+        {
+            for s in 0..n {
+                let landable = task.nodes[s].properties.contains(PropSet::LANDABLE);
+                let reachable =
+                    (0..n).any(|room| self.quad_room[room] && self.in_room[s * n + room]);
+                if !landable || !reachable {
+                    continue;
+                }
+                changed |= self.add_at(r.node, Relation::On, Idx(s as u16));
+                let Some(b) = task.basket_of(r.node) else {
+                    continue;
+                };
+                changed |= self.add_at(b, Relation::On, Idx(s as u16));
+                if task.nodes[s].properties.contains(PropSet::LOW_HEIGHT) {
+                    changed |= set(&mut self.basket_low_at, b.get() * n + s);
+                    changed |= set(&mut self.low, b.get());
+                    for x in 0..n {
+                        if self.at[x * n + b.get()] & bit(Relation::Inside) != 0 {
+                            changed |= set(&mut self.low, x);
+                        }
+                    }
+                }
+            }
+        }
+        changed
+    }
+
+    fn dog(
+        &mut self,
+        task: &Task,
+        has: &dyn Fn(usize, PropSet) -> bool,
+        kind: &dyn Fn(usize) -> NodeKind,
+    ) -> bool {
+        let n = self.n;
+        let mut changed = false;
+        for x in 0..n {
+            let approachable = !matches!(
+                kind(x),
+                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
+            ) && !has(x, PropSet::HIGH_HEIGHT)
+                && self.low[x]
+                && self.may_be_in_room_of_dog(x);
+            if !approachable {
+                continue;
+            }
+            changed |= set(&mut self.dog_close, x);
+            for y in 0..n {
+                let on_x = self.at[y * n + x] & bit(Relation::On) != 0;
+                let in_x = self.at[y * n + x] & bit(Relation::Inside) != 0;
+                let open_container = has(x, PropSet::CONTAINERS) && self.open[x];
+                let surface = has(x, PropSet::SURFACES) && kind(x) != NodeKind::Floor;
+                if (in_x && open_container) || (on_x && surface) {
+                    changed |= set(&mut self.dog_close, y);
+                }
+                // Approaching a basket brings the dog close to where it rests, but only
+                // where it can rest without ON_HIGH_SURFACE.
+                let place_ok = kind(x) != NodeKind::Tool || self.basket_low_at[x * n + y];
+                if self.at[x * n + y] != 0 && kind(y) != NodeKind::Floor && place_ok {
+                    changed |= set(&mut self.dog_close, y);
+                }
+            }
+        }
+        for x in 0..n {
+            if !self.dog_close[x] {
+                continue;
+            }
+            if has(x, PropSet::GRABABLE) {
+                changed |= set(&mut self.dog_holds, x);
+            }
+            let openable = has(x, PropSet::CONTAINERS) || kind(x) == NodeKind::Door;
+            if openable && task.init.states(Idx(x as u16)).contains(StateSet::CLOSED) {
+                changed |= set(&mut self.open, x);
+            }
+        }
+        for h in 0..n {
+            if !self.dog_holds[h] {
+                continue;
+            }
+            for t in 0..n {
+                if !self.dog_close[t] || t == h {
+                    continue;
+                }
+                if has(t, PropSet::CONTAINERS) && self.open[t] {
+                    changed |= self.add_at(Idx(h as u16), Relation::Inside, Idx(t as u16));
+                }
+                if has(t, PropSet::SURFACES) {
+                    changed |= self.add_at(Idx(h as u16), Relation::On, Idx(t as u16));
+                }
+            }
+        }
+        changed
+    }
+
+    fn arm(&mut self, task: &Task, arm: Idx, has: &dyn Fn(usize, PropSet) -> bool) -> bool {
+        let n = self.n;
+        let mut changed = false;
+        let surfaces: Vec<usize> = (0..n)
+            .filter(|&s| self.at[arm.get() * n + s] & bit(Relation::On) != 0)
+            .collect();
+        let mut reach = vec![false; n];
+        for &s in &surfaces {
+            for (x, r) in reach.iter_mut().enumerate() {
+                *r |= x != arm.get() && self.at[x * n + s] & bit(Relation::On) != 0;
+            }
+        }
+        let mut grew = true;
+        while grew {
+            grew = false;
+            for y in 0..n {
+                if !reach[y] && (0..n).any(|z| reach[z] && self.at[y * n + z] != 0) {
+                    reach[y] = true;
+                    grew = true;
+                }
+            }
+        }
+        let reached: Vec<usize> = (0..n).filter(|&x| reach[x]).collect();
+        for &x in &reached {
+            if has(x, PropSet::GRABABLE) {
+                changed |= set(&mut self.arm_holds, arm.get() * n + x);
+            }
+            if has(x, PropSet::CONTAINERS)
+                && task.init.states(Idx(x as u16)).contains(StateSet::CLOSED)
+            {
+                changed |= set(&mut self.open, x);
+            }
+        }
+        for h in 0..n {
+            if !self.arm_holds[arm.get() * n + h] {
+                continue;
+            }
+            for &s in &surfaces {
+                changed |= self.add_at(Idx(h as u16), Relation::On, Idx(s as u16));
+            }
+            for &t in reached.iter().filter(|&&t| t != h) {
+                if has(t, PropSet::CONTAINERS) && self.open[t] {
+                    changed |= self.add_at(Idx(h as u16), Relation::Inside, Idx(t as u16));
+                }
+                if has(t, PropSet::SURFACES) {
+                    changed |= self.add_at(Idx(h as u16), Relation::On, Idx(t as u16));
+                }
+            }
+        }
+        changed
+    }
+}
+
+fn bit(rel: Relation) -> u8 {
+    if rel == Relation::Inside { 2 } else { 1 }
+}
+
+fn set(v: &mut [bool], i: usize) -> bool {
+    let new = !v[i];
+    v[i] = true;
+    new
+}

@@ -1,0 +1,62 @@
+"""Shared fixtures. The paper's released tasks live beside the repository, in
+`<repo>/../shared/coherent-original/env` (CI clones the repository with shared/ beside
+the checkout); COHERENT_ORIGINAL_ENV points elsewhere."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sysconfig
+from pathlib import Path
+
+import pytest
+
+import coherent
+
+REPO = Path(__file__).resolve().parents[2]
+ENV_DIR = Path(os.environ.get("COHERENT_ORIGINAL_ENV", REPO.parent / "shared" / "coherent-original" / "env"))
+ENV0 = ENV_DIR / "env0.json"
+
+# Task 0 of env0: quadrotor 22 flies from the child room to the kitchen table.
+TASK0_PLAN = [
+    (22, "[takeoff_from] <childroom floor>(3)"),
+    (22, "[movetowards] <livingroom>(4)"),
+    (22, "[movetowards] <kitchen>(6)"),
+    (22, "[movetowards] <high kitchen table>(35)"),
+    (22, "[land_on] <high kitchen table>(35)"),
+]
+
+
+@pytest.fixture(scope="session")
+def env0_path() -> Path:
+    if not ENV0.is_file():
+        pytest.fail(
+            f"{ENV0} not found: the original COHERENT tasks belong in <repo>/../shared/coherent-original/env "
+            "(or set COHERENT_ORIGINAL_ENV)"
+        )
+    return ENV0
+
+
+@pytest.fixture(scope="session")
+def env0_tasks(env0_path: Path) -> list[coherent.Task]:
+    return coherent.load_tasks(env0_path)
+
+
+@pytest.fixture()
+def task0(env0_tasks: list[coherent.Task]) -> coherent.Task:
+    return env0_tasks[0]
+
+
+@pytest.fixture()
+def task1(env0_tasks: list[coherent.Task]) -> coherent.Task:
+    return env0_tasks[1]
+
+
+@pytest.fixture(scope="session")
+def coherent_exe() -> str:
+    """The `coherent` console script of the environment running the tests: beside this
+    interpreter's scripts even when that folder is not on PATH (`.venv/bin/pytest`)."""
+    exe = shutil.which("coherent", path=sysconfig.get_path("scripts")) or shutil.which("coherent")
+    if exe is None:
+        pytest.fail("no `coherent` command: `pip install .` installs it as a console script")
+    return exe

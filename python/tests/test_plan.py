@@ -1,0 +1,142 @@
+"""plan, validate and parse_action."""
+
+from __future__ import annotations
+
+import inspect
+import json
+import os
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+import coherent
+from conftest import TASK0_PLAN
+
+PLAN_KEYS = {
+    "scene", "task_id", "gt_steps", "optimal_steps", "solvable", "reason",
+    "task_type", "plan", "states_expanded", "elapsed_ms",
+}  # fmt: skip
+
+
+def test_plan(task0: coherent.Task) -> None:
+    result = coherent.plan(task0)
+    assert set(result) == PLAN_KEYS
+    assert result["scene"] == "env0" and result["task_id"] == 0
+    assert result["solvable"] is True and result["reason"] is None
+    assert result["optimal_steps"] == result["gt_steps"] == 5
+    assert result["task_type"] == "mono"
+    assert [(s["robot"], s["action"]) for s in result["plan"]] == TASK0_PLAN
+    assert result["states_expanded"] > 0
+    assert isinstance(result["elapsed_ms"], float)
+
+
+def test_plan_equals_the_cli_json(env0_path: Path, task1: coherent.Task) -> None:
+    out = subprocess.run(
+        [sys.executable, "-m", "coherent._cli", "plan", str(env0_path), "--task", "1", "--json"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    from_cli = json.loads(out.stdout)
+    from_py = dict(coherent.plan(task1))
+    from_cli.pop("elapsed_ms")
+    from_py.pop("elapsed_ms")
+    assert from_py == from_cli
+
+
+def test_plan_stops_at_the_state_limit(task0: coherent.Task) -> None:
+    result = coherent.plan(task0, max_states=3)
+    assert result["solvable"] is False
+    assert result["optimal_steps"] is None and result["plan"] == []
+    assert result["reason"] is not None and "limit of 3 states" in result["reason"]
+    assert coherent.plan(task0, 3)["reason"] == result["reason"]  # positional too
+
+
+def test_plan_rejects_negative_limit(task0: coherent.Task) -> None:
+    with pytest.raises(OverflowError):
+        coherent.plan(task0, max_states=-1)
+
+
+def test_plan_needs_a_task() -> None:
+    with pytest.raises(TypeError):
+        coherent.plan("env0.json")  # type: ignore[arg-type]
+
+
+def test_validate_clean_task(task0: coherent.Task) -> None:
+    assert coherent.validate(task0) == []
+
+
+def test_validate_reports_problems(task0: coherent.Task) -> None:
+    findings = coherent.validate(task0, max_states=3)
+    assert len(findings) == 1
+    assert findings[0].startswith("the goal cannot be reached: search stopped at the limit of 3 states")
+
+
+def test_parse_action() -> None:
+    assert coherent.parse_action("[grab] <apple>(3)") == {
+        "verb": "grab",
+        "object": {"name": "apple", "id": 3},
+        "target": None,
+    }
+    assert coherent.parse_action("  [putinto] <apple>(3) into <fridge>(7) ") == {
+        "verb": "putinto",
+        "object": {"name": "apple", "id": 3},
+        "target": {"name": "fridge", "id": 7},
+    }
+    assert coherent.parse_action("[land_on] <high kitchen table>(35)")["object"] == {
+        "name": "high kitchen table",
+        "id": 35,
+    }
+
+
+@pytest.mark.parametrize(
+    ("text", "reason"),
+    [
+        ("", "empty action"),
+        ("grab apple", "starts with [verb]"),
+        ("[fly] <apple>(3)", 'unknown verb "fly"'),
+        ("[grab] <apple>(x)", 'id "x" is not an integer'),
+        ("[puton] <apple>(3)", '"puton" needs|needs " on <name>(id)"'),
+        ("[grab] <apple>(3) now", "unexpected text"),
+    ],
+)
+def test_parse_action_errors(text: str, reason: str) -> None:
+    with pytest.raises(coherent.ActionParseError) as info:
+        coherent.parse_action(text)
+    assert any(r in info.value.reason for r in reason.split("|")), info.value.reason
+    assert info.value.action == text
+    assert isinstance(info.value, ValueError)
+    assert isinstance(info.value, coherent.CoherentError)
+
+
+def _interrupt_soon(delay: float) -> threading.Timer:
+    timer = threading.Timer(delay, os.kill, (os.getpid(), signal.SIGINT))
+    timer.start()
+    return timer
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to oneself is POSIX")
+def test_plan_is_interruptible(env0_tasks: list[coherent.Task]) -> None:
+    # env0 task 19 takes some 20 s to analyse in a release build (its task type needs
+    # exhaustive searches); Ctrl-C must not wait for that. Should the planner ever get
+    # that fast, pick a slower task: this test needs one that outlasts the delay.
+    timer = _interrupt_soon(0.3)
+    start = time.monotonic()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            coherent.plan(env0_tasks[19])
+    finally:
+        timer.cancel()
+    assert time.monotonic() - start < 3
+
+
+def test_default_limit_is_the_cli_default(capfd: pytest.CaptureFixture[str]) -> None:
+    assert coherent.cli_main(["coherent", "plan", "--help"]) == 0
+    usage = capfd.readouterr().out
+    for function in (coherent.plan, coherent.validate):
+        default = inspect.signature(function).parameters["max_states"].default
+        assert f"[default: {default}]" in usage

@@ -1,0 +1,391 @@
+//! The `coherent` command line, run as a separate process: exit codes, messages and
+//! the JSON that `plan --json` prints.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+
+fn env_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/coherent-original/env")
+}
+
+fn env_file(n: usize) -> PathBuf {
+    env_dir().join(format!("env{n}.json"))
+}
+
+fn coherent(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args(args)
+        .output()
+        .expect("the coherent binary runs")
+}
+
+fn code(out: &Output) -> i32 {
+    out.status
+        .code()
+        .expect("exited with a status, not a signal")
+}
+
+fn stdout(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn show(out: &Output) -> String {
+    format!(
+        "status {:?}\n--- stdout\n{}--- stderr\n{}",
+        out.status,
+        stdout(out),
+        stderr(out)
+    )
+}
+
+/// A temporary folder, removed when dropped.
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(test: &str) -> TempDir {
+        let dir = std::env::temp_dir().join(format!("coherent-cli-{}-{test}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).expect("temporary folder can be created");
+        TempDir(dir)
+    }
+
+    fn path(&self) -> &Path {
+        &self.0
+    }
+
+    fn write_json(&self, name: &str, value: &Value) -> PathBuf {
+        let path = self.0.join(name);
+        let text = serde_json::to_string_pretty(value).expect("JSON serializes");
+        std::fs::write(&path, text).expect("temporary file can be written");
+        path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// The released tasks of `env<n>.json`.
+fn original_list(n: usize) -> Vec<Value> {
+    let text = std::fs::read_to_string(env_file(n)).expect("benchmark file is readable");
+    match serde_json::from_str(&text).expect("benchmark file is JSON") {
+        Value::Array(items) => items,
+        other => panic!("not a list: {other}"),
+    }
+}
+
+fn arg(p: &Path) -> &str {
+    p.to_str().expect("a UTF-8 path")
+}
+
+/// `validate` over the four files reads all 82 tasks. env3's task 18 is malformed, so
+/// the exit status is 2 and stderr names the file and the JSON path; the semantic
+/// problems of the released files are named on stdout with their reasons.
+#[test]
+fn validate_four_files_names_every_problem_of_the_released_benchmark() {
+    let files: Vec<PathBuf> = (0..4).map(env_file).collect();
+    let mut args = vec!["validate"];
+    args.extend(files.iter().map(|f| arg(f)));
+    let out = coherent(&args);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    let err = stderr(&out);
+    let env3 = env_file(3).display().to_string();
+    assert!(
+        err.contains(&format!(
+            "{env3}: $[18].init_graph.nodes[25].id: duplicate node id 24"
+        )),
+        "{}",
+        show(&out)
+    );
+    assert_eq!(
+        err.lines().filter(|l| l.starts_with("error:")).count(),
+        1,
+        "{}",
+        show(&out)
+    );
+    let text = stdout(&out);
+    assert!(
+        text.contains(
+            "env3 task 0 (env3.json): the goal cannot be reached: \
+             inside_<paper cup>(23)_<trash can>(25): <trash can>(25) has no CONTAINERS property"
+        ),
+        "{}",
+        show(&out)
+    );
+    assert!(
+        text.contains(
+            "env1 task 6 (env1.json): ground truth says 7 steps, but the shortest plan takes 8"
+        ),
+        "{}",
+        show(&out)
+    );
+    assert!(
+        text.contains("82 tasks read: 79 clean, 2 with semantic problems, 1 malformed"),
+        "{}",
+        show(&out)
+    );
+}
+
+#[test]
+fn validate_malformed_env3_alone_exits_2() {
+    let out = coherent(&["validate", "--max-states", "2000", arg(&env_file(3))]);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(
+        stderr(&out).contains("$[18].init_graph.nodes[25].id"),
+        "{}",
+        show(&out)
+    );
+    assert!(stdout(&out).contains("20 tasks read:"), "{}", show(&out));
+}
+
+#[test]
+fn validate_clean_single_task_exits_0() {
+    let dir = TempDir::new("clean");
+    let task = original_list(0).swap_remove(0);
+    let file = dir.write_json("env0.json", &json!([task]));
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    assert!(
+        stdout(&out).contains("1 tasks read: 1 clean, 0 with semantic problems, 0 malformed"),
+        "{}",
+        show(&out)
+    );
+    assert!(stderr(&out).is_empty(), "{}", show(&out));
+}
+
+#[test]
+fn validate_goal_already_holding_exits_1() {
+    let dir = TempDir::new("holds");
+    let mut task = original_list(0).swap_remove(0);
+    // The quadrotor starts ON the childroom floor (edge 22 -ON-> 3).
+    let starts_there = task["init_graph"]["edges"]
+        .as_array()
+        .expect("edges")
+        .iter()
+        .any(|e| *e == json!({"from_id": 22, "to_id": 3, "relation_type": "ON"}));
+    assert!(starts_there);
+    task["task_goal"] = json!({"on_<quadrotor>(22)_<childroom floor>(3)": [1, []]});
+    let file = dir.write_json("env0.json", &json!([task]));
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 1, "{}", show(&out));
+    let text = stdout(&out);
+    assert!(text.contains("already holds"), "{}", show(&out));
+    assert!(
+        text.contains("on_<quadrotor>(22)_<childroom floor>(3)"),
+        "{}",
+        show(&out)
+    );
+    assert!(text.contains("1 with semantic problems"), "{}", show(&out));
+}
+
+#[test]
+fn validate_unsolvable_task_exits_1_and_says_why() {
+    // env3 task 0: the goal container (trash can) is no container.
+    let dir = TempDir::new("unsolvable");
+    let task = original_list(3).swap_remove(0);
+    let file = dir.write_json("env3.json", &json!([task]));
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 1, "{}", show(&out));
+    assert!(stdout(&out).contains("CONTAINERS"), "{}", show(&out));
+}
+
+/// Drops `elapsed_ms`, the one field that differs from run to run.
+fn without_elapsed(line: &str) -> Value {
+    let mut v: Value =
+        serde_json::from_str(line).unwrap_or_else(|e| panic!("not JSON ({e}): {line}"));
+    let obj = v.as_object_mut().expect("each line is an object");
+    assert!(
+        obj.remove("elapsed_ms").is_some_and(|t| t.is_number()),
+        "{line}"
+    );
+    v
+}
+
+/// `import` writes one native file per task; `plan` over the folder of native files
+/// prints the same JSON lines as over the original file (the whole of env0).
+#[test]
+fn import_then_plan_native_folder_equals_plan_original() {
+    let dir = TempDir::new("import");
+    let tasks: Vec<Value> = original_list(0);
+    let ids: Vec<i64> = tasks
+        .iter()
+        .map(|t| t["task_id"].as_i64().expect("task_id"))
+        .collect();
+    let file = dir.write_json("env0.json", &Value::Array(tasks));
+    let out_dir = dir.path().join("native");
+
+    let out = coherent(&["import", arg(&file), "-o", arg(&out_dir)]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    assert!(
+        stdout(&out).contains("wrote 21 native task files"),
+        "{}",
+        show(&out)
+    );
+    let mut written: Vec<PathBuf> = std::fs::read_dir(out_dir.join("env0"))
+        .expect("import made <out>/env0")
+        .map(|e| e.expect("a folder entry").path())
+        .collect();
+    written.sort();
+    let expected: Vec<PathBuf> = ids
+        .iter()
+        .map(|id| out_dir.join("env0").join(format!("task-{id:03}.json")))
+        .collect();
+    assert_eq!(written, expected);
+    for path in &written {
+        let v: Value = serde_json::from_str(&std::fs::read_to_string(path).expect("readable"))
+            .expect("native files are JSON");
+        assert_eq!(v["format"], "coherent-task", "{}", path.display());
+        assert_eq!(v["scene"], "env0", "{}", path.display());
+    }
+
+    // The native files validate like the original.
+    let out = coherent(&["validate", arg(&out_dir)]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+
+    let from_original = coherent(&["plan", arg(&file), "--json"]);
+    assert_eq!(code(&from_original), 0, "{}", show(&from_original));
+    let from_native = coherent(&["plan", arg(&out_dir), "--json"]);
+    assert_eq!(code(&from_native), 0, "{}", show(&from_native));
+    let a: Vec<Value> = stdout(&from_original)
+        .lines()
+        .map(without_elapsed)
+        .collect();
+    let b: Vec<Value> = stdout(&from_native).lines().map(without_elapsed).collect();
+    assert_eq!(a.len(), 21);
+    assert_eq!(a, b);
+    // And the lines themselves, byte for byte, once elapsed_ms is gone.
+    let text = |v: &[Value]| v.iter().map(Value::to_string).collect::<Vec<_>>();
+    assert_eq!(text(&a), text(&b));
+}
+
+#[test]
+fn plan_one_task_prints_one_json_object_with_the_documented_keys() {
+    let out = coherent(&["plan", arg(&env_file(0)), "--task", "0", "--json"]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let text = stdout(&out);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 1, "{}", show(&out));
+    let v: Value = serde_json::from_str(lines[0]).expect("one JSON object");
+    let obj = v.as_object().expect("an object");
+    let mut keys: Vec<&str> = obj.keys().map(String::as_str).collect();
+    keys.sort_unstable();
+    let mut want = [
+        "scene",
+        "task_id",
+        "gt_steps",
+        "optimal_steps",
+        "solvable",
+        "reason",
+        "task_type",
+        "plan",
+        "states_expanded",
+        "elapsed_ms",
+    ];
+    want.sort_unstable();
+    assert_eq!(keys, want);
+    assert_eq!(v["scene"], "env0");
+    assert_eq!(v["task_id"], 0);
+    assert_eq!(v["gt_steps"], 5);
+    assert_eq!(v["optimal_steps"], 5);
+    assert_eq!(v["solvable"], true);
+    assert_eq!(v["reason"], Value::Null);
+    assert_eq!(v["task_type"], "mono");
+    let plan = v["plan"].as_array().expect("plan is a list");
+    assert_eq!(plan.len(), 5);
+    for step in plan {
+        let step = step.as_object().expect("a step is an object");
+        assert_eq!(step.len(), 2);
+        assert!(step["robot"].is_i64());
+        assert!(step["action"].as_str().is_some_and(|a| a.starts_with('[')));
+    }
+    // The goal is the quadrotor ON the high kitchen table: it ends by landing there.
+    assert_eq!(plan[4]["action"], "[land_on] <high kitchen table>(35)");
+    assert!(v["states_expanded"].as_u64().is_some_and(|n| n > 0));
+    assert!(v["elapsed_ms"].as_f64().is_some_and(|ms| ms >= 0.0));
+    // The file's malformed neighbours do not matter here: env0 is clean.
+    assert!(stderr(&out).is_empty(), "{}", show(&out));
+}
+
+#[test]
+fn plan_unknown_task_id_exits_2() {
+    let out = coherent(&["plan", arg(&env_file(0)), "--task", "999", "--json"]);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(
+        stderr(&out).contains("no task with task_id 999"),
+        "{}",
+        show(&out)
+    );
+}
+
+#[test]
+fn missing_file_exits_2_and_names_it() {
+    let dir = TempDir::new("missing");
+    let missing = dir.path().join("nope.json");
+    for cmd in ["validate", "plan"] {
+        let out = coherent(&[cmd, arg(&missing)]);
+        assert_eq!(code(&out), 2, "{cmd}: {}", show(&out));
+        assert!(
+            stderr(&out).contains(arg(&missing)),
+            "{cmd}: {}",
+            show(&out)
+        );
+    }
+}
+
+#[test]
+fn bad_json_exits_2_and_names_root() {
+    let dir = TempDir::new("bad-json");
+    let file = dir.path().join("env0.json");
+    std::fs::write(&file, "[{\"task_id\": }]").expect("writable");
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(
+        stderr(&out).contains(&format!("{}: $: invalid JSON", arg(&file))),
+        "{}",
+        show(&out)
+    );
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    let env0 = env_file(0);
+    let env0 = arg(&env0);
+    for args in [
+        &[][..],
+        &["frobnicate"],
+        &["validate"],
+        &["import", env0],
+        &["import", "-o", "/tmp/x"],
+        &["plan"],
+        &["plan", env0, "--task", "zero"],
+        &["plan", env0, "--max-states", "-5"],
+        &["plan", env0, "--bogus"],
+        &["validate", env0, "--max-states"],
+    ] {
+        let out = coherent(args);
+        assert_eq!(code(&out), 2, "{args:?}: {}", show(&out));
+        assert!(
+            stdout(&out).is_empty(),
+            "{args:?}: usage errors go to stderr: {}",
+            show(&out)
+        );
+        assert!(!stderr(&out).is_empty(), "{args:?}: {}", show(&out));
+    }
+}
+
+#[test]
+fn help_and_version_exit_0() {
+    for args in [&["--help"][..], &["--version"], &["plan", "--help"]] {
+        let out = coherent(args);
+        assert_eq!(code(&out), 0, "{args:?}: {}", show(&out));
+        assert!(!stdout(&out).is_empty(), "{args:?}");
+    }
+}
