@@ -27,7 +27,7 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
         /// Most states one search may visit.
-        #[arg(long, default_value_t = Limits::default().max_states)]
+        #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
     },
     /// Convert original env files into native task files, one per task.
@@ -49,7 +49,7 @@ enum Command {
         #[arg(long)]
         json: bool,
         /// Most states one search may visit.
-        #[arg(long, default_value_t = Limits::default().max_states)]
+        #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
     },
 }
@@ -69,14 +69,16 @@ where
         }
     };
     let result = match cli.command {
-        Command::Validate { files, max_states } => validate_files(&files, Limits { max_states }),
+        Command::Validate { files, max_states } => {
+            validate_files(&files, &Limits::max_states(max_states))
+        }
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
             file,
             tasks,
             json,
             max_states,
-        } => plan(&file, &tasks, json, Limits { max_states }),
+        } => plan(&file, &tasks, json, &Limits::max_states(max_states)),
     };
     match result {
         Ok(code) => code,
@@ -122,7 +124,7 @@ fn task_name(t: &Task) -> String {
     format!("{} task {}{file}", t.meta.scene, t.meta.task_id)
 }
 
-fn validate_files(files: &[PathBuf], limits: Limits) -> Result<u8, Error> {
+fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
     let mut malformed = 0;
     let tasks = read_all(files, &mut malformed);
     let mut with_problems = 0;
@@ -183,7 +185,7 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
     Ok(if malformed > 0 { 2 } else { 0 })
 }
 
-fn plan(file: &Path, only: &[i64], as_json: bool, limits: Limits) -> Result<u8, Error> {
+fn plan(file: &Path, only: &[i64], as_json: bool, limits: &Limits) -> Result<u8, Error> {
     let mut malformed = 0;
     let mut tasks = read_all(&[file.to_owned()], &mut malformed);
     if !only.is_empty() {

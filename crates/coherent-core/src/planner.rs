@@ -6,6 +6,8 @@
 use std::time::{Duration, Instant};
 
 use std::hash::BuildHasher;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use hashbrown::HashTable;
 use rustc_hash::FxBuildHasher;
@@ -24,17 +26,35 @@ pub struct Step {
 }
 
 /// Bounds on one search.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct Limits {
     /// Stop after this many distinct states; the answer is then "unknown", not "unsolvable".
     pub max_states: usize,
+    /// Set from another thread to stop early (Ctrl-C in Python, say); the answer is then
+    /// "unknown" too.
+    pub cancel: Option<Arc<AtomicBool>>,
+}
+
+impl Limits {
+    pub const DEFAULT_MAX_STATES: usize = 5_000_000;
+
+    pub fn max_states(max_states: usize) -> Limits {
+        Limits {
+            max_states,
+            cancel: None,
+        }
+    }
+
+    pub fn cancelled(&self) -> bool {
+        self.cancel
+            .as_ref()
+            .is_some_and(|c| c.load(Ordering::Relaxed))
+    }
 }
 
 impl Default for Limits {
     fn default() -> Limits {
-        Limits {
-            max_states: 5_000_000,
-        }
+        Limits::max_states(Limits::DEFAULT_MAX_STATES)
     }
 }
 
@@ -45,7 +65,8 @@ pub struct Search {
     pub plan: Option<Vec<Step>>,
     /// States taken off the queue and expanded.
     pub states_expanded: usize,
-    /// Whether the search hit [`Limits::max_states`] before it could finish.
+    /// Whether the search stopped (at [`Limits::max_states`], or cancelled) before it
+    /// could finish.
     pub truncated: bool,
 }
 
@@ -53,7 +74,7 @@ pub struct Search {
 /// admissible and consistent heuristic [`lower_bound`] and duplicate detection on the
 /// compact state. States are expanded in order of `f = g + h` (a bucket queue, deepest
 /// first among equals); with `h = 0` this is breadth-first search.
-pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Limits) -> Search {
+pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Limits) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
     if holds(&task.init) {
         return Search {
@@ -91,6 +112,13 @@ pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: Lim
         }
         closed[i] = true;
         expanded += 1;
+        if expanded.is_multiple_of(1024) && limits.cancelled() {
+            return Search {
+                plan: None,
+                states_expanded: expanded,
+                truncated: true,
+            };
+        }
         if holds(&states[i]) {
             return Search {
                 plan: Some(unwind(&parent, i)),
@@ -292,7 +320,7 @@ impl Analysis {
 }
 
 /// Plans `task` optimally, finds its type, or says why it cannot be solved.
-pub fn analyse(task: &Task, limits: Limits) -> Analysis {
+pub fn analyse(task: &Task, limits: &Limits) -> Analysis {
     let start = Instant::now();
     let obstacles: Vec<String> = task
         .goal
@@ -328,7 +356,7 @@ pub fn analyse(task: &Task, limits: Limits) -> Analysis {
 /// The fewest robot types with which the goal is reachable; none when the goal already
 /// holds at the start. The types used by `plan` (a shortest plan of the whole team)
 /// bound the answer, so only smaller teams are searched.
-fn task_type(task: &Task, plan: &[Step], limits: Limits) -> Option<TaskType> {
+fn task_type(task: &Task, plan: &[Step], limits: &Limits) -> Option<TaskType> {
     const TYPES: [TaskType; 3] = [TaskType::Mono, TaskType::Dual, TaskType::Trio];
     let mut used: Vec<RobotKind> = plan
         .iter()
@@ -384,7 +412,10 @@ fn subsets(kinds: &[RobotKind], size: usize) -> Vec<Vec<RobotKind>> {
 
 /// Why an exhaustive search found no plan: which predicates cannot be reached even
 /// alone, or that they cannot be reached together.
-fn why_unsolvable(task: &Task, full: &Search, limits: Limits) -> String {
+fn why_unsolvable(task: &Task, full: &Search, limits: &Limits) -> String {
+    if full.truncated && limits.cancelled() {
+        return "planning was cancelled before the search finished".to_owned();
+    }
     if full.truncated {
         return format!(
             "search stopped at the limit of {} states without reaching the goal; raise the limit to decide",

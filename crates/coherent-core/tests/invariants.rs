@@ -509,12 +509,8 @@ fn check_agrees_with_actions_along_shortest_plans() {
     let mut states = 0;
     for tasks in scenes() {
         for task in tasks {
-            let search = planner::search(
-                task,
-                &task.robots,
-                &task.goal,
-                Limits { max_states: 20_000 },
-            );
+            let search =
+                planner::search(task, &task.robots, &task.goal, &Limits::max_states(20_000));
             let Some(plan) = search.plan else { continue };
             planned += 1;
             let mut objects: Vec<Idx> = task.goal.iter().map(|p| p.subject).collect();

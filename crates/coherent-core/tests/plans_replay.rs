@@ -62,7 +62,7 @@ fn plan_and_replay(task: &Task) -> Verdict {
     if !why.is_empty() {
         return Verdict::Obstacle(why.join("; "));
     }
-    let search = planner::search(task, &task.robots, &task.goal, Limits::default());
+    let search = planner::search(task, &task.robots, &task.goal, &Limits::default());
     assert!(
         !search.truncated,
         "{}: search hit the state limit",
@@ -231,7 +231,7 @@ fn goal_holding_at_the_start_gives_an_empty_plan() {
     for task in all_tasks() {
         if task.goal_satisfied(&task.init) {
             found += 1;
-            let search = planner::search(&task, &task.robots, &task.goal, Limits::default());
+            let search = planner::search(&task, &task.robots, &task.goal, &Limits::default());
             assert_eq!(search.plan.as_deref(), Some(&[][..]), "{}", name(&task));
             let state = planner::replay(&task, &[]).expect("the empty plan replays");
             assert_eq!(state, task.init);

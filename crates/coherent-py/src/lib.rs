@@ -7,6 +7,7 @@ use std::ffi::OsString;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
@@ -165,17 +166,15 @@ fn to_py<'py, T: serde::Serialize>(py: Python<'py>, value: &T) -> PyResult<Bound
 }
 
 /// Runs `f` on its own thread with the GIL released, checking for Ctrl-C (and other
-/// signals) every 50 ms, so that a long search can be interrupted from Python.
-///
-/// `coherent-core`'s planner has no way to be cancelled, so on an interrupt the thread is
-/// left to finish on its own and its result is dropped.
-fn interruptible<T, F>(py: Python<'_>, f: F) -> PyResult<T>
+/// signals) every 50 ms. On an interrupt it sets `cancel`, which stops the planner
+/// within a few milliseconds, waits for the thread, and raises the interrupt.
+fn interruptible<T, F>(py: Python<'_>, cancel: Arc<AtomicBool>, f: F) -> PyResult<T>
 where
     T: Send + 'static,
     F: FnOnce() -> T + Send + 'static,
 {
     let (tx, mut rx) = mpsc::channel();
-    std::thread::Builder::new()
+    let worker = std::thread::Builder::new()
         .name("coherent-planner".to_owned())
         .spawn(move || {
             // The receiver is gone only after an interrupt; nobody wants the result then.
@@ -187,7 +186,14 @@ where
         let receiver = &mut rx;
         match py.detach(move || receiver.recv_timeout(Duration::from_millis(50))) {
             Ok(result) => return Ok(result),
-            Err(RecvTimeoutError::Timeout) => py.check_signals()?,
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(interrupt) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    // The search notices within about a thousand states.
+                    let _ = py.detach(move || worker.join());
+                    return Err(interrupt);
+                }
+            }
             Err(RecvTimeoutError::Disconnected) => {
                 return Err(PyRuntimeError::new_err(
                     "the planner thread panicked (a bug in coherent-core; see the message on stderr)",
@@ -404,8 +410,8 @@ fn load_tasks(py: Python<'_>, path: PathBuf) -> PyResult<Vec<PyTask>> {
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
 ///
-/// The default `max_states` is `Limits::default()`'s, written out so that Python shows it
-/// in the signature (a test pins the two together, through the CLI's `--help`).
+/// The default `max_states` is `Limits::DEFAULT_MAX_STATES`, written out so that Python
+/// shows it in the signature (a test pins the two together, through the CLI's `--help`).
 #[pyfunction]
 #[pyo3(signature = (task, max_states = 5_000_000))]
 fn plan<'py>(
@@ -414,8 +420,13 @@ fn plan<'py>(
     max_states: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let task = Arc::clone(&task.get().0);
-    let json = interruptible(py, move || {
-        planner::analyse(&task, Limits { max_states }).to_json(&task)
+    let cancel = Arc::new(AtomicBool::new(false));
+    let limits = Limits {
+        max_states,
+        cancel: Some(Arc::clone(&cancel)),
+    };
+    let json = interruptible(py, cancel, move || {
+        planner::analyse(&task, &limits).to_json(&task)
     })?;
     json_to_py(py, &json)
 }
@@ -429,8 +440,13 @@ fn validate_task(
     max_states: usize,
 ) -> PyResult<Vec<String>> {
     let task = Arc::clone(&task.get().0);
-    interruptible(py, move || {
-        let analysis = planner::analyse(&task, Limits { max_states });
+    let cancel = Arc::new(AtomicBool::new(false));
+    let limits = Limits {
+        max_states,
+        cancel: Some(Arc::clone(&cancel)),
+    };
+    interruptible(py, cancel, move || {
+        let analysis = planner::analyse(&task, &limits);
         coherent_core::validate::findings(&task, &analysis)
     })
 }

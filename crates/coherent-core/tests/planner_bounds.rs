@@ -1,0 +1,122 @@
+//! The two approximations the planner relies on, checked on every released task:
+//! - `lower_bound` (the A* heuristic) never overestimates: along each shortest plan it
+//!   is at most the steps left, and one action lowers it by at most one (consistency),
+//!   which is what makes the first plan A* finds a shortest one;
+//! - `relaxed::may_reach` is sound: a team it rules out finds no plan (searched with a
+//!   bound: every team that can reach its goal does so within a few thousand states).
+
+use std::path::{Path, PathBuf};
+
+use coherent_core::planner::{self, Limits, lower_bound};
+use coherent_core::{Robot, RobotKind, State, Task, load, relaxed, rules};
+
+fn all_tasks() -> Vec<Task> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env");
+    let files: Vec<PathBuf> = (0..4).map(|n| dir.join(format!("env{n}.json"))).collect();
+    let tasks: Vec<Task> = files
+        .iter()
+        .flat_map(|f| load::read_tasks(f).expect("benchmark file loads"))
+        .filter_map(Result::ok)
+        .collect();
+    assert_eq!(
+        tasks.len(),
+        81,
+        "env3's task at index 18 is malformed, the rest load"
+    );
+    tasks
+}
+
+fn name(t: &Task) -> String {
+    format!("{} task {}", t.meta.scene, t.meta.task_id)
+}
+
+#[test]
+fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbours() {
+    let mut checked = 0;
+    for task in all_tasks() {
+        if task
+            .goal
+            .iter()
+            .any(|p| planner::static_obstacle(&task, p).is_some())
+        {
+            continue;
+        }
+        let found = planner::search(&task, &task.robots, &task.goal, &Limits::default());
+        let plan = found
+            .plan
+            .unwrap_or_else(|| panic!("{} has a plan", name(&task)));
+        let mut s: State = task.init.clone();
+        for (k, step) in plan.iter().enumerate() {
+            let h = lower_bound(&task, &s, &task.goal);
+            assert!(
+                usize::from(h) <= plan.len() - k,
+                "{}: h = {h} with {} steps left",
+                name(&task),
+                plan.len() - k
+            );
+            // Consistency on every action available here, not only the plan's.
+            for &robot in &task.robots {
+                for a in rules::actions(&task, &s, robot) {
+                    let mut next = s.clone();
+                    rules::apply(&task, &mut next, robot, a);
+                    let h2 = lower_bound(&task, &next, &task.goal);
+                    assert!(
+                        h <= h2 + 1,
+                        "{}: {} drops h from {h} to {h2}",
+                        name(&task),
+                        a.render(&task)
+                    );
+                    checked += 1;
+                }
+            }
+            let robot = task.robot(step.robot).copied().expect("plans name robots");
+            rules::apply(&task, &mut s, robot, step.action);
+        }
+        assert_eq!(
+            lower_bound(&task, &s, &task.goal),
+            0,
+            "{}: h = 0 at the goal",
+            name(&task)
+        );
+    }
+    assert!(checked > 5_000, "only {checked} transitions checked");
+}
+
+#[test]
+fn relaxed_reachability_never_rules_out_a_team_that_can_reach_the_goal() {
+    let mut ruled_out = 0;
+    let mut kept = 0;
+    for task in all_tasks() {
+        for mask in 1u32..7 {
+            let kinds: Vec<RobotKind> = RobotKind::ALL
+                .into_iter()
+                .enumerate()
+                .filter(|(i, _)| mask >> i & 1 == 1)
+                .map(|(_, k)| k)
+                .collect();
+            if relaxed::may_reach(&task, &kinds, &task.goal) {
+                kept += 1;
+                continue;
+            }
+            ruled_out += 1;
+            let team: Vec<Robot> = task
+                .robots
+                .iter()
+                .copied()
+                .filter(|r| kinds.contains(&r.kind))
+                .collect();
+            let found = planner::search(&task, &team, &task.goal, &Limits::max_states(4_000));
+            assert!(
+                found.plan.is_none(),
+                "{}: the team {kinds:?} was ruled out but reaches the goal in {} steps",
+                name(&task),
+                found.plan.map_or(0, |p| p.len())
+            );
+        }
+    }
+    // Measured on the released tasks: 378 of the 486 (task, team) pairs are ruled out.
+    assert!(
+        ruled_out > 300 && kept > 100,
+        "ruled out {ruled_out}, kept {kept}"
+    );
+}
