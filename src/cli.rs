@@ -230,7 +230,7 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
         .unwrap_or_else(|| "-".to_owned());
     let head = format!("{} task {}", t.meta.scene, t.meta.task_id);
     match &a.plan {
-        None => format!("{head}: unsolvable: {}", a.reason.as_deref().unwrap_or("")),
+        None => format!("{head}: no plan: {}", a.reason.as_deref().unwrap_or("")),
         Some(plan) => {
             let steps: Vec<String> = plan
                 .iter()
