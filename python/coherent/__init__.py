@@ -27,6 +27,7 @@ from ._coherent import (
     load_tasks,
     parse_action,
     plan,
+    read_tasks,
     validate,
 )
 
@@ -42,5 +43,6 @@ __all__ = [
     "load_tasks",
     "parse_action",
     "plan",
+    "read_tasks",
     "validate",
 ]

@@ -128,9 +128,13 @@ class Env:
 def load_tasks(path: str | os.PathLike[str]) -> list[Task]:
     """Every task at ``path``: an original env file, a native task file, or a folder."""
 
+def read_tasks(path: str | os.PathLike[str]) -> tuple[list[Task], list[TaskFormatError]]:
+    """Every well-formed task at ``path``, and an error for each malformed one; raises
+    only when a file cannot be read or is not JSON."""
+
 def plan(task: Task, max_states: int = 5_000_000) -> _PlanResult:
     """Plans ``task`` optimally (one line of ``coherent plan --json``). Ctrl-C interrupts
-    it, though the search itself runs on to its end in the background."""
+    it and stops the search."""
 
 def validate(task: Task, max_states: int = 5_000_000) -> list[str]:
     """Semantic problems of ``task``, in words; empty when it is clean."""

@@ -124,3 +124,22 @@ def test_invalid_json(tmp_path: Path) -> None:
 def test_not_a_path() -> None:
     with pytest.raises(TypeError):
         coherent.load_tasks(42)  # type: ignore[arg-type]
+
+
+def test_read_tasks_keeps_going_past_a_malformed_task(env0_path: Path) -> None:
+    # The released folder: env3's task at index 18 uses node id 24 twice.
+    tasks, errors = coherent.read_tasks(env0_path.parent)
+    assert len(tasks) == 81
+    assert len(errors) == 1
+    (error,) = errors
+    assert isinstance(error, coherent.TaskFormatError)
+    assert error.file.endswith("env3.json")
+    assert error.json_path == "$[18].init_graph.nodes[25].id"
+    assert "duplicate node id 24" in str(error)
+    with pytest.raises(coherent.TaskFormatError, match=r"\$\[18\]\.init_graph\.nodes\[25\]\.id"):
+        coherent.load_tasks(env0_path.parent)
+
+
+def test_read_tasks_raises_for_an_unreadable_path(tmp_path: Path) -> None:
+    with pytest.raises(coherent.TaskFormatError, match="missing.json"):
+        coherent.read_tasks(tmp_path / "missing.json")

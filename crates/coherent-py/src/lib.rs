@@ -408,6 +408,25 @@ fn load_tasks(py: Python<'_>, path: PathBuf) -> PyResult<Vec<PyTask>> {
     Ok(tasks.into_iter().map(|t| PyTask(Arc::new(t))).collect())
 }
 
+/// Every well-formed task at `path`, and a `TaskFormatError` for each malformed one, so
+/// that one bad task does not hide the others (as `coherent validate` reports them).
+/// A path that cannot be read, or a file that is not JSON, still raises.
+#[pyfunction]
+fn read_tasks(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
+    let results = py
+        .detach(|| load::read_tasks(&path))
+        .map_err(|e| py_err(py, e))?;
+    let mut tasks = Vec::new();
+    let mut errors = Vec::new();
+    for r in results {
+        match r {
+            Ok(t) => tasks.push(PyTask(Arc::new(t))),
+            Err(e) => errors.push(py_err(py, e).into_value(py).into_any()),
+        }
+    }
+    Ok((tasks, errors))
+}
+
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
 ///
 /// The default `max_states` is `Limits::DEFAULT_MAX_STATES`, written out so that Python
@@ -492,6 +511,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyTask>()?;
     m.add_class::<PyEnv>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
     m.add_function(wrap_pyfunction!(validate_task, m)?)?;
     m.add_function(wrap_pyfunction!(parse_action, m)?)?;
