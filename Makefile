@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: test lint rust-test py-test venv demo bench-build
+.PHONY: test lint rust-test py-test venv demo bench
 
 test: lint rust-test py-test
 
@@ -28,3 +28,7 @@ py-test: venv
 demo: venv
 	$(BIN)/pip install --quiet .
 	$(BIN)/coherent plan examples/tasks/demo.json
+
+# Criterion benchmarks of the planning loop (release build; minutes).
+bench:
+	cargo bench

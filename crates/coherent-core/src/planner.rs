@@ -1,13 +1,13 @@
-//! The optimal planner: breadth-first search over the full state, one robot acting per
-//! step, with duplicate detection on the compact [`State`]. Breadth-first order makes
-//! the first plan found a shortest one. Also the task type (the fewest robot types
-//! with which the goal is reachable) and the reason a task cannot be solved.
-
-use std::time::{Duration, Instant};
+//! The optimal planner: A* over the full state with an admissible, consistent
+//! heuristic, one robot acting per step, with duplicate detection on the compact
+//! [`State`]; the first plan found is a shortest one (`docs/planner.md`). Also the task
+//! type (the fewest robot types with which the goal is reachable) and the reason a task
+//! cannot be solved.
 
 use std::hash::BuildHasher;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
 
 use hashbrown::HashTable;
 use rustc_hash::FxBuildHasher;
@@ -58,7 +58,7 @@ impl Default for Limits {
     }
 }
 
-/// The result of one breadth-first search.
+/// The result of one search.
 #[derive(Clone, Debug)]
 pub struct Search {
     /// A shortest plan, if the goal is reachable.
@@ -73,7 +73,7 @@ pub struct Search {
 /// A* search for a shortest plan reaching `goal` with only `robots` acting, with the
 /// admissible and consistent heuristic [`lower_bound`] and duplicate detection on the
 /// compact state. States are expanded in order of `f = g + h` (a bucket queue, deepest
-/// first among equals); with `h = 0` this is breadth-first search.
+/// first among equals).
 pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Limits) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
     if holds(&task.init) {
