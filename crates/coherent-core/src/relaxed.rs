@@ -28,8 +28,9 @@ struct Facts {
     basket_low_at: Vec<bool>,
     open: Vec<bool>,
     dog_close: Vec<bool>,
-    /// held[x]: a robot of the team (dog or some arm) may hold x.
+    /// dog_holds[x]: the robot dog may hold x.
     dog_holds: Vec<bool>,
+    /// arm_holds[a * n + x]: arm `a` may hold x.
     arm_holds: Vec<bool>,
     dog_room: Vec<bool>,
     quad_room: Vec<bool>,
