@@ -70,13 +70,25 @@ pub struct Search {
     pub truncated: bool,
 }
 
-/// A* search for a shortest plan reaching `goal` with only `robots` acting, with the
-/// admissible and consistent heuristic [`lower_bound`] and duplicate detection on the
-/// compact state. States are expanded in order of `f = g + h` (a bucket queue, deepest
-/// first among equals).
+/// A* search for a shortest plan reaching `goal` from the task's initial state with only
+/// `robots` acting; see [`search_from`].
 pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Limits) -> Search {
+    search_from(task, &task.init, robots, goal, limits)
+}
+
+/// A* search for a shortest plan reaching `goal` from `start` with only `robots` acting,
+/// with the admissible and consistent heuristic [`lower_bound`] and duplicate detection
+/// on the compact state. States are expanded in order of `f = g + h` (a bucket queue,
+/// deepest first among equals).
+pub fn search_from(
+    task: &Task,
+    start: &State,
+    robots: &[Robot],
+    goal: &[GoalPredicate],
+    limits: &Limits,
+) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
-    if holds(&task.init) {
+    if holds(start) {
         return Search {
             plan: Some(Vec::new()),
             states_expanded: 0,
@@ -88,17 +100,17 @@ pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Li
     // of indices finds duplicates; each child is built in one reused buffer, hashed
     // once, and copied out only when it is new.
     let hasher = FxBuildHasher;
-    let mut states: Vec<State> = vec![task.init.clone()];
-    let mut hashes: Vec<u64> = vec![hasher.hash_one(&task.init)];
+    let mut states: Vec<State> = vec![start.clone()];
+    let mut hashes: Vec<u64> = vec![hasher.hash_one(start)];
     let mut g: Vec<u16> = vec![0];
-    let mut h: Vec<u16> = vec![lower_bound(task, &task.init, goal)];
+    let mut h: Vec<u16> = vec![lower_bound(task, start, goal)];
     let mut closed: Vec<bool> = vec![false];
     let mut parent: Vec<(u32, Option<Step>)> = vec![(0, None)];
     let mut table: HashTable<u32> = HashTable::new();
     table.insert_unique(hashes[0], 0, |&i| hashes[i as usize]);
     let mut buckets: Vec<Vec<u32>> = Vec::new();
     push(&mut buckets, usize::from(h[0]), 0);
-    let mut child = task.init.clone();
+    let mut child = start.clone();
     let mut expanded = 0usize;
     let mut f = 0usize;
     while f < buckets.len() {

@@ -120,3 +120,28 @@ fn relaxed_reachability_never_rules_out_a_team_that_can_reach_the_goal() {
         "ruled out {ruled_out}, kept {kept}"
     );
 }
+
+/// Shortest plans have optimal substructure: from the state after `k` steps of one,
+/// `search_from` finds a plan of exactly the remaining length.
+#[test]
+fn search_from_a_state_midway_finds_the_rest_of_a_shortest_plan() {
+    let tasks: Vec<Task> = all_tasks()
+        .into_iter()
+        .filter(|t| t.meta.scene == "env0")
+        .collect();
+    for task in &tasks {
+        let plan = planner::search(task, &task.robots, &task.goal, &Limits::default())
+            .plan
+            .unwrap_or_else(|| panic!("{} has a plan", name(task)));
+        let k = plan.len() / 2;
+        let mut s = task.init.clone();
+        for step in &plan[..k] {
+            let robot = task.robot(step.robot).copied().expect("plans name robots");
+            rules::apply(task, &mut s, robot, step.action);
+        }
+        let rest = planner::search_from(task, &s, &task.robots, &task.goal, &Limits::default())
+            .plan
+            .unwrap_or_else(|| panic!("{}: no plan from step {k}", name(task)));
+        assert_eq!(rest.len(), plan.len() - k, "{}", name(task));
+    }
+}
