@@ -208,9 +208,12 @@ impl State {
     }
     /// Targets of `n`'s edges with relation `rel`.
     pub fn targets(&self, n: Idx, rel: Relation) -> impl Iterator<Item = Idx> + '_ {
-        self.out(n)
+        // Edges sort by (from, relation, to): one binary search finds the run.
+        let edges = self.edges();
+        let lo = edges.partition_point(|e| *e < Edge::new(n, rel, Idx(0)));
+        edges[lo..]
             .iter()
-            .filter(move |e| e.rel() == rel)
+            .take_while(move |e| e.from() == n && e.rel() == rel)
             .map(|e| e.to())
     }
 
