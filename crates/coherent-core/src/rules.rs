@@ -87,7 +87,7 @@ pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
             }
         }
         for r in &task.robots {
-            if room_of(task, s, r.node) == Some(room) {
+            if s.has(Edge::new(r.node, Relation::Inside, room)) {
                 v.insert(r.node);
                 if let Some(basket) = task.basket_of(r.node) {
                     v.insert(basket);
@@ -219,44 +219,37 @@ impl<'a> View<'a> {
     pub fn arm_reach(&self) -> Vec<Idx> {
         let mut set = NodeSet::new(self.task.nodes.len());
         let mut reach = Vec::new();
-        let mut add = |n: Idx, reach: &mut Vec<Idx>| {
-            if set.insert(n) {
-                reach.push(n);
-            }
-        };
         let Some(surface) = self.own(Relation::On) else {
             return reach;
         };
         for x in self.s.sources(Relation::On, surface) {
-            if x != self.robot.node && self.sees(x) {
-                add(x, &mut reach);
+            if x != self.robot.node && self.sees(x) && set.insert(x) {
+                reach.push(x);
             }
         }
-        let children = |of: Idx| {
-            self.s
-                .edges()
-                .iter()
-                .filter(move |e| e.rel().is_location() && e.to() == of && self.sees(e.from()))
-                .map(|e| e.from())
-        };
-        for _ in 0..3 {
-            let level = reach.clone();
-            for z in level {
-                for y in children(z) {
-                    add(y, &mut reach);
+        // One pass over the edges per level: the children of every member so far.
+        let grow = |from: &NodeSet, set: &mut NodeSet, reach: &mut Vec<Idx>| {
+            for e in self.s.edges() {
+                if e.rel().is_location()
+                    && from.contains(e.to())
+                    && self.sees(e.from())
+                    && set.insert(e.from())
+                {
+                    reach.push(e.from());
                 }
             }
+        };
+        for _ in 0..3 {
+            let level = set.clone();
+            grow(&level, &mut set, &mut reach);
         }
-        let holders: Vec<Idx> = reach
-            .iter()
-            .copied()
-            .filter(|&o| self.has(o, PropSet::SURFACES) || self.has(o, PropSet::CONTAINERS))
-            .collect();
-        for o in holders {
-            for y in children(o) {
-                add(y, &mut reach);
+        let mut holders = NodeSet::new(self.task.nodes.len());
+        for &o in &reach {
+            if self.has(o, PropSet::SURFACES) || self.has(o, PropSet::CONTAINERS) {
+                holders.insert(o);
             }
         }
+        grow(&holders, &mut set, &mut reach);
         reach
     }
 }
