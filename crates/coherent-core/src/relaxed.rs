@@ -63,6 +63,23 @@ impl Facts {
         }
         let dog = kinds.contains(&RobotKind::RobotDog);
         let quad = kinds.contains(&RobotKind::Quadrotor);
+        let arm = kinds.contains(&RobotKind::RobotArm);
+        // A task may start with a robot next to something or holding it.
+        for e in s.edges() {
+            let (from, to) = (e.from().get(), e.to().get());
+            match (e.rel(), task.node(e.from()).kind) {
+                (Relation::Close, NodeKind::Robot(RobotKind::RobotDog)) if dog => {
+                    f.dog_close[to] = true
+                }
+                (Relation::Hold, NodeKind::Robot(RobotKind::RobotDog)) if dog => {
+                    f.dog_holds[to] = true
+                }
+                (Relation::Hold, NodeKind::Robot(RobotKind::RobotArm)) if arm => {
+                    f.arm_holds[from * n + to] = true;
+                }
+                _ => {}
+            }
+        }
         let robots_of = |k: RobotKind| {
             task.robots
                 .iter()
@@ -149,8 +166,7 @@ impl Facts {
             if dog {
                 changed |= f.dog(task, &has, &kind);
             }
-            for a in robots_of(RobotKind::RobotArm).filter(|_| kinds.contains(&RobotKind::RobotArm))
-            {
+            for a in robots_of(RobotKind::RobotArm).filter(|_| arm) {
                 changed |= f.arm(task, a, &has);
             }
         }

@@ -145,3 +145,49 @@ fn search_from_a_state_midway_finds_the_rest_of_a_shortest_plan() {
         assert_eq!(rest.len(), plan.len() - k, "{}", name(task));
     }
 }
+
+/// A task may start with a robot holding something: the relaxation must count it, or
+/// it would rule out the one robot that can finish the job.
+#[test]
+fn relaxed_reachability_counts_what_a_robot_holds_at_the_start() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/coherent-original/env/env0.json");
+    let text = std::fs::read_to_string(&path).expect("env0.json is readable");
+    let mut list: serde_json::Value = serde_json::from_str(&text).expect("env0.json is JSON");
+    let mut task = list[0].take();
+    // The robot dog (23, in the kitchen) starts holding the socks (29); the goal is the
+    // socks on the kitchen table (32).
+    let edges = task["init_graph"]["edges"].as_array_mut().expect("edges");
+    edges.retain(|e| e["from_id"] != 29);
+    edges.push(serde_json::json!({"from_id": 23, "to_id": 29, "relation_type": "HOLD"}));
+    task["task_goal"] = serde_json::json!({"on_<socks>(29)_<kitchen table>(32)": [1, []]});
+    let task = load::read_value("test.json", "env0", &serde_json::Value::Array(vec![task]))
+        .expect("a list")
+        .pop()
+        .expect("one task")
+        .expect("well-formed");
+    let dog: Vec<Robot> = task
+        .robots
+        .iter()
+        .copied()
+        .filter(|r| r.kind == RobotKind::RobotDog)
+        .collect();
+    let plan = planner::search(&task, &dog, &task.goal, &Limits::default())
+        .plan
+        .expect("the dog can do it");
+    assert_eq!(
+        plan.len(),
+        2,
+        "move to the kitchen table, put the socks on it"
+    );
+    assert!(relaxed::may_reach(
+        &task,
+        &[RobotKind::RobotDog],
+        &task.goal
+    ));
+    assert!(!relaxed::may_reach(
+        &task,
+        &[RobotKind::RobotArm],
+        &task.goal
+    ));
+}
