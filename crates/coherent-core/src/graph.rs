@@ -248,18 +248,22 @@ impl State {
         }
     }
 
-    /// Removes every outgoing edge of `n` with relation `rel`.
-    pub(crate) fn remove_out(&mut self, n: Idx, rel: Relation) {
+    /// Keeps only the edges for which `keep` is true.
+    pub(crate) fn retain(&mut self, mut keep: impl FnMut(Edge) -> bool) {
         let start = self.edges_start();
-        let mut keep = start;
+        let mut kept = start;
         for i in start..self.data.len() {
-            let e = Edge(self.data[i]);
-            if !(e.from() == n && e.rel() == rel) {
-                self.data[keep] = self.data[i];
-                keep += 1;
+            if keep(Edge(self.data[i])) {
+                self.data[kept] = self.data[i];
+                kept += 1;
             }
         }
-        self.data.truncate(keep);
+        self.data.truncate(kept);
+    }
+
+    /// Removes every outgoing edge of `n` with relation `rel`.
+    pub(crate) fn remove_out(&mut self, n: Idx, rel: Relation) {
+        self.retain(|e| !(e.from() == n && e.rel() == rel));
     }
 }
 

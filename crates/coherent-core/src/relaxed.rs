@@ -184,8 +184,9 @@ impl Facts {
         new
     }
 
-    fn may_be_in_room_of_dog(&self, x: usize) -> bool {
-        (0..self.n).any(|r| self.dog_room[r] && self.in_room[x * self.n + r])
+    /// Whether `x` may be in one of `rooms` (a robot's possible rooms).
+    fn may_be_in(&self, x: usize, rooms: &[bool]) -> bool {
+        (0..self.n).any(|r| rooms[r] && self.in_room[x * self.n + r])
     }
 
     /// The quadrotor lands on landable surfaces of the rooms it may reach; what is in
@@ -200,8 +201,7 @@ impl Facts {
         {
             for s in 0..n {
                 let landable = task.nodes[s].properties.contains(PropSet::LANDABLE);
-                let reachable =
-                    (0..n).any(|room| self.quad_room[room] && self.in_room[s * n + room]);
+                let reachable = self.may_be_in(s, &self.quad_room);
                 if !landable || !reachable {
                     continue;
                 }
@@ -238,7 +238,7 @@ impl Facts {
                 NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
             ) && !has(x, PropSet::HIGH_HEIGHT)
                 && self.low[x]
-                && self.may_be_in_room_of_dog(x);
+                && self.may_be_in(x, &self.dog_room);
             if !approachable {
                 continue;
             }

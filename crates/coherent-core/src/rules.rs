@@ -372,17 +372,9 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
             if let Some(b) = task.basket_of(me) {
                 s.remove(Edge::new(b, Relation::On, x));
                 let inside: Vec<Idx> = s.sources(Relation::Inside, b).collect();
-                let close: Vec<Edge> = s
-                    .edges()
-                    .iter()
-                    .copied()
-                    .filter(|e| {
-                        e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to()))
-                    })
-                    .collect();
-                for e in close {
-                    s.remove(e);
-                }
+                s.retain(|e| {
+                    !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
+                });
                 set_basket_high(s, b, true);
             }
         }

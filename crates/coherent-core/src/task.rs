@@ -159,26 +159,22 @@ impl Task {
                 )));
             }
             let kind = node_kind(raw, &at)?;
-            let mut properties = PropSet::NONE;
-            for (j, name) in raw.properties.iter().enumerate() {
-                let bit = vocab.property(name).ok_or_else(|| {
-                    at.key("properties").index(j).error(format!(
-                        "property {name:?}: too many distinct unknown property names (at most {})",
-                        64 - PropSet::KNOWN.len()
-                    ))
-                })?;
-                properties = properties | bit;
-            }
-            let mut set = StateSet::NONE;
-            for (j, name) in raw.states.iter().enumerate() {
-                let bit = vocab.state(name).ok_or_else(|| {
-                    at.key("states").index(j).error(format!(
-                        "state {name:?}: too many distinct unknown state names (at most {})",
-                        32 - StateSet::KNOWN.len()
-                    ))
-                })?;
-                set = set | bit;
-            }
+            let properties = intern_names(
+                &raw.properties,
+                &at.key("properties"),
+                "property",
+                64 - PropSet::KNOWN.len(),
+                |n| vocab.property(n).map(|p| p.0),
+            )
+            .map(PropSet)?;
+            let set = intern_names(
+                &raw.states,
+                &at.key("states"),
+                "state",
+                32 - StateSet::KNOWN.len(),
+                |n| vocab.state(n).map(|p| u64::from(p.0)),
+            )
+            .map(|bits| StateSet(bits as u32))?;
             states.push(set);
             high.push(properties.contains(PropSet::ON_HIGH_SURFACE));
             nodes.push(Node {
@@ -413,6 +409,26 @@ impl Task {
         let all: Vec<Idx> = (0..self.nodes.len()).map(|i| Idx(i as u16)).collect();
         self.raw_subgraph(&self.init, &all, &self.init_edges)
     }
+}
+
+/// The bit set of `names`, each interned by `intern`; `None` from it means more than
+/// `limit` unknown names.
+fn intern_names(
+    names: &[String],
+    site: &Site<'_>,
+    what: &str,
+    limit: usize,
+    mut intern: impl FnMut(&str) -> Option<u64>,
+) -> Result<u64> {
+    let mut bits = 0;
+    for (j, name) in names.iter().enumerate() {
+        bits |= intern(name).ok_or_else(|| {
+            site.index(j).error(format!(
+                "{what} {name:?}: too many distinct unknown {what} names (at most {limit})"
+            ))
+        })?;
+    }
+    Ok(bits)
 }
 
 pub(crate) fn predicate_holds(s: &State, p: &GoalPredicate) -> bool {
