@@ -2,14 +2,10 @@
 //! original -> Task -> native JSON -> Task and original -> Task -> original JSON -> Task
 //! give back the same Task.
 
-use std::path::{Path, PathBuf};
-
 use coherent_core::{Task, load, native, original};
 use serde_json::{Value, json};
 
-fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
+mod common;
 
 struct Scene {
     /// The file name as given to the loader (and kept in the tasks' source).
@@ -24,14 +20,9 @@ struct Scene {
 fn scenes() -> Vec<Scene> {
     (0..4)
         .map(|n| {
-            let path = env_dir().join(format!("env{n}.json"));
+            let path = common::data_dir().join(format!("env{n}.json"));
             let file = path.display().to_string();
-            let text = std::fs::read_to_string(&path).expect("benchmark file is readable");
-            let value: Value = serde_json::from_str(&text).expect("benchmark file is JSON");
-            let list = value
-                .as_array()
-                .expect("an original file is a list")
-                .clone();
+            let list = common::original_list(n);
             let tasks = load::read_tasks(&path).expect("benchmark file loads");
             assert_eq!(tasks.len(), list.len());
             Scene {

@@ -3,7 +3,6 @@
 //! offered actions and always says why it refuses; the action parser never panics and
 //! round-trips what the rules render.
 
-use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
 use coherent_core::action::{self, Action, Verb};
@@ -15,9 +14,7 @@ use proptest::prelude::*;
 use proptest::sample::Index;
 use proptest::test_runner::{FileFailurePersistence, TestCaseError};
 
-fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
+mod common;
 
 /// The well-formed tasks of env0..env3, by scene.
 fn scenes() -> &'static [Vec<Task>] {
@@ -25,7 +22,7 @@ fn scenes() -> &'static [Vec<Task>] {
     SCENES.get_or_init(|| {
         (0..4)
             .map(|n| {
-                let path = env_dir().join(format!("env{n}.json"));
+                let path = common::data_dir().join(format!("env{n}.json"));
                 load::read_tasks(&path)
                     .expect("benchmark file loads")
                     .into_iter()

@@ -7,23 +7,11 @@ use std::path::{Path, PathBuf};
 use coherent_core::{Error, Task, load, native};
 use serde_json::{Value, json};
 
-fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
-
-/// The original JSON list of `env<n>.json`.
-fn original_list(n: usize) -> Vec<Value> {
-    let path = env_dir().join(format!("env{n}.json"));
-    let text = std::fs::read_to_string(&path).expect("benchmark file is readable");
-    match serde_json::from_str(&text).expect("benchmark file is JSON") {
-        Value::Array(items) => items,
-        other => panic!("{} is not a list: {other}", path.display()),
-    }
-}
+mod common;
 
 /// Task 0 of env0.json as a JSON value, ready to corrupt.
 fn env0_task0() -> Value {
-    original_list(0).swap_remove(0)
+    common::original_list(0).swap_remove(0)
 }
 
 /// A temporary folder, removed when dropped.
@@ -288,7 +276,7 @@ fn missing_field() {
 fn one_malformed_task_does_not_hide_the_others() {
     let mut bad = env0_task0();
     bad["init_graph"]["edges"][0]["to_id"] = json!(4242);
-    let list = original_list(0);
+    let list = common::original_list(0);
     let good_count = list.len();
     let mut all = list;
     all.insert(1, bad);
@@ -316,7 +304,7 @@ fn top_level_not_a_list_or_task() {
 
 /// Task 0 of env0 as a native JSON value, ready to corrupt.
 fn native_from_env0() -> Value {
-    let path = env_dir().join("env0.json");
+    let path = common::data_dir().join("env0.json");
     let tasks: Vec<Task> = load::read_tasks(&path)
         .expect("env0.json is readable")
         .into_iter()
@@ -463,7 +451,7 @@ fn native_robot_list_disagrees_with_graph() {
 
 #[test]
 fn env3_task_18_duplicate_id_is_reported_and_others_load() {
-    let path = env_dir().join("env3.json");
+    let path = common::data_dir().join("env3.json");
     let tasks = load::read_tasks(&path).expect("env3.json is JSON");
     assert_eq!(tasks.len(), 20);
     for (i, t) in tasks.iter().enumerate() {

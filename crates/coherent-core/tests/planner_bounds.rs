@@ -5,35 +5,15 @@
 //! - `relaxed::may_reach` is sound: a team it rules out finds no plan (searched with a
 //!   bound: every team that can reach its goal does so within a few thousand states).
 
-use std::path::{Path, PathBuf};
-
 use coherent_core::planner::{self, Limits, lower_bound};
 use coherent_core::{Robot, RobotKind, State, Task, load, relaxed, rules};
 
-fn all_tasks() -> Vec<Task> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env");
-    let files: Vec<PathBuf> = (0..4).map(|n| dir.join(format!("env{n}.json"))).collect();
-    let tasks: Vec<Task> = files
-        .iter()
-        .flat_map(|f| load::read_tasks(f).expect("benchmark file loads"))
-        .filter_map(Result::ok)
-        .collect();
-    assert_eq!(
-        tasks.len(),
-        81,
-        "env3's task at index 18 is malformed, the rest load"
-    );
-    tasks
-}
-
-fn name(t: &Task) -> String {
-    format!("{} task {}", t.meta.scene, t.meta.task_id)
-}
+mod common;
 
 #[test]
 fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbours() {
     let mut checked = 0;
-    for task in all_tasks() {
+    for task in common::released_tasks() {
         if task
             .goal
             .iter()
@@ -44,14 +24,14 @@ fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbo
         let found = planner::search(&task, &task.robots, &task.goal, &Limits::default());
         let plan = found
             .plan
-            .unwrap_or_else(|| panic!("{} has a plan", name(&task)));
+            .unwrap_or_else(|| panic!("{} has a plan", common::name(&task)));
         let mut s: State = task.init.clone();
         for (k, step) in plan.iter().enumerate() {
             let h = lower_bound(&task, &s, &task.goal);
             assert!(
                 usize::from(h) <= plan.len() - k,
                 "{}: h = {h} with {} steps left",
-                name(&task),
+                common::name(&task),
                 plan.len() - k
             );
             // Consistency on every action available here, not only the plan's.
@@ -63,7 +43,7 @@ fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbo
                     assert!(
                         h <= h2 + 1,
                         "{}: {} drops h from {h} to {h2}",
-                        name(&task),
+                        common::name(&task),
                         a.render(&task)
                     );
                     checked += 1;
@@ -76,7 +56,7 @@ fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbo
             lower_bound(&task, &s, &task.goal),
             0,
             "{}: h = 0 at the goal",
-            name(&task)
+            common::name(&task)
         );
     }
     assert!(checked > 5_000, "only {checked} transitions checked");
@@ -86,7 +66,7 @@ fn heuristic_is_admissible_and_consistent_along_shortest_plans_and_their_neighbo
 fn relaxed_reachability_never_rules_out_a_team_that_can_reach_the_goal() {
     let mut ruled_out = 0;
     let mut kept = 0;
-    for task in all_tasks() {
+    for task in common::released_tasks() {
         for mask in 1u32..7 {
             let kinds: Vec<RobotKind> = RobotKind::ALL
                 .into_iter()
@@ -109,7 +89,7 @@ fn relaxed_reachability_never_rules_out_a_team_that_can_reach_the_goal() {
             assert!(
                 found.plan.is_none(),
                 "{}: the team {kinds:?} was ruled out but reaches the goal in {} steps",
-                name(&task),
+                common::name(&task),
                 found.plan.map_or(0, |p| p.len())
             );
         }
@@ -125,14 +105,14 @@ fn relaxed_reachability_never_rules_out_a_team_that_can_reach_the_goal() {
 /// `search_from` finds a plan of exactly the remaining length.
 #[test]
 fn search_from_a_state_midway_finds_the_rest_of_a_shortest_plan() {
-    let tasks: Vec<Task> = all_tasks()
+    let tasks: Vec<Task> = common::released_tasks()
         .into_iter()
         .filter(|t| t.meta.scene == "env0")
         .collect();
     for task in &tasks {
         let plan = planner::search(task, &task.robots, &task.goal, &Limits::default())
             .plan
-            .unwrap_or_else(|| panic!("{} has a plan", name(task)));
+            .unwrap_or_else(|| panic!("{} has a plan", common::name(task)));
         let k = plan.len() / 2;
         let mut s = task.init.clone();
         for step in &plan[..k] {
@@ -141,8 +121,8 @@ fn search_from_a_state_midway_finds_the_rest_of_a_shortest_plan() {
         }
         let rest = planner::search_from(task, &s, &task.robots, &task.goal, &Limits::default())
             .plan
-            .unwrap_or_else(|| panic!("{}: no plan from step {k}", name(task)));
-        assert_eq!(rest.len(), plan.len() - k, "{}", name(task));
+            .unwrap_or_else(|| panic!("{}: no plan from step {k}", common::name(task)));
+        assert_eq!(rest.len(), plan.len() - k, "{}", common::name(task));
     }
 }
 
@@ -150,11 +130,7 @@ fn search_from_a_state_midway_finds_the_rest_of_a_shortest_plan() {
 /// it would rule out the one robot that can finish the job.
 #[test]
 fn relaxed_reachability_counts_what_a_robot_holds_at_the_start() {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/coherent-original/env/env0.json");
-    let text = std::fs::read_to_string(&path).expect("env0.json is readable");
-    let mut list: serde_json::Value = serde_json::from_str(&text).expect("env0.json is JSON");
-    let mut task = list[0].take();
+    let mut task = common::original_list(0).swap_remove(0);
     // The robot dog (23, in the kitchen) starts holding the socks (29); the goal is the
     // socks on the kitchen table (32).
     let edges = task["init_graph"]["edges"].as_array_mut().expect("edges");

@@ -2,41 +2,14 @@
 //! through `SymbolicEnv::step` with the rendered action strings, every step executes and
 //! the goal holds after exactly `plan.len()` steps, not before.
 
-use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use coherent_core::planner::{self, Limits};
-use coherent_core::{Edge, Environment, SymbolicEnv, Task, load};
+use coherent_core::{Edge, Environment, SymbolicEnv, Task};
 
-fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
-
-/// Every well-formed task of the four files (env3 index 18 is malformed by design).
-fn all_tasks() -> Vec<Task> {
-    let mut out = Vec::new();
-    for n in 0..4 {
-        let path = env_dir().join(format!("env{n}.json"));
-        for (i, t) in load::read_tasks(&path)
-            .expect("benchmark file loads")
-            .into_iter()
-            .enumerate()
-        {
-            match t {
-                Ok(t) => out.push(t),
-                Err(e) => assert!(n == 3 && i == 18, "env{n}[{i}] is malformed: {e}"),
-            }
-        }
-    }
-    assert_eq!(out.len(), 81);
-    out
-}
-
-fn name(t: &Task) -> String {
-    format!("{} task {}", t.meta.scene, t.meta.task_id)
-}
+mod common;
 
 /// What the planner said about one task.
 enum Verdict {
@@ -66,7 +39,7 @@ fn plan_and_replay(task: &Task) -> Verdict {
     assert!(
         !search.truncated,
         "{}: search hit the state limit",
-        name(task)
+        common::name(task)
     );
     let Some(plan) = search.plan else {
         return Verdict::Unsolvable;
@@ -78,14 +51,14 @@ fn plan_and_replay(task: &Task) -> Verdict {
         let state = planner::replay(task, &plan[..k]).unwrap_or_else(|(i, why)| {
             panic!(
                 "{}: step {i} of the plan does not replay: {why}",
-                name(task)
+                common::name(task)
             )
         });
         assert_eq!(
             task.goal_satisfied(&state),
             k == plan.len(),
             "{}: goal after {k} of {} steps",
-            name(task),
+            common::name(task),
             plan.len()
         );
     }
@@ -97,7 +70,7 @@ fn plan_and_replay(task: &Task) -> Verdict {
         env.goal_satisfied(),
         plan.is_empty(),
         "{}: goal at the start",
-        name(task)
+        common::name(task)
     );
     for (i, step) in plan.iter().enumerate() {
         let robot = task.id(step.robot);
@@ -106,32 +79,36 @@ fn plan_and_replay(task: &Task) -> Verdict {
         assert!(
             offered.contains(&text),
             "{}: step {i} {text:?} is not offered to {robot}",
-            name(task)
+            common::name(task)
         );
         let outcome = env.step(robot, &text).expect("a robot of the task");
         assert!(
             outcome.executed(),
             "{}: step {i} ({robot} {text}) not executed: {:?}",
-            name(task),
+            common::name(task),
             outcome.infeasible
         );
         assert_eq!(
             outcome.done,
             i + 1 == plan.len(),
             "{}: goal after step {i}",
-            name(task)
+            common::name(task)
         );
         assert_eq!(env.goal_satisfied(), outcome.done);
     }
-    assert!(env.goal_satisfied(), "{}: goal after the plan", name(task));
+    assert!(
+        env.goal_satisfied(),
+        "{}: goal after the plan",
+        common::name(task)
+    );
     assert_eq!(
         env.state(),
         &end,
         "{}: env and replay end in the same state",
-        name(task)
+        common::name(task)
     );
     env.reset();
-    assert_eq!(env.state(), &task.init, "{}: reset", name(task));
+    assert_eq!(env.state(), &task.init, "{}: reset", common::name(task));
     Verdict::Solved(plan.len())
 }
 
@@ -174,7 +151,7 @@ fn listing(items: &[String]) -> String {
 #[test]
 fn optimal_plans_replay_and_reach_the_goal_exactly_at_the_end() {
     let start = Instant::now();
-    let tasks = all_tasks();
+    let tasks = common::released_tasks();
     let verdicts = par_map(&tasks, plan_and_replay);
     let mut obstacles = Vec::new();
     let mut unsolvable = Vec::new();
@@ -183,16 +160,16 @@ fn optimal_plans_replay_and_reach_the_goal_exactly_at_the_end() {
     let mut solvable = 0;
     for (task, verdict) in tasks.iter().zip(&verdicts) {
         match verdict {
-            Verdict::Obstacle(why) => obstacles.push(format!("{} ({why})", name(task))),
-            Verdict::Unsolvable => unsolvable.push(name(task)),
+            Verdict::Obstacle(why) => obstacles.push(format!("{} ({why})", common::name(task))),
+            Verdict::Unsolvable => unsolvable.push(common::name(task)),
             Verdict::Solved(len) => {
                 solvable += 1;
                 match task.meta.gt_steps {
                     Some(gt) if gt as usize != *len => {
-                        differ.push(format!("{} (gt {gt}, optimal {len})", name(task)));
+                        differ.push(format!("{} (gt {gt}, optimal {len})", common::name(task)));
                     }
                     Some(_) => {}
-                    None => no_gt.push(name(task)),
+                    None => no_gt.push(common::name(task)),
                 }
             }
         }
@@ -228,11 +205,16 @@ fn optimal_plans_replay_and_reach_the_goal_exactly_at_the_end() {
 #[test]
 fn goal_holding_at_the_start_gives_an_empty_plan() {
     let mut found = 0;
-    for task in all_tasks() {
+    for task in common::released_tasks() {
         if task.goal_satisfied(&task.init) {
             found += 1;
             let search = planner::search(&task, &task.robots, &task.goal, &Limits::default());
-            assert_eq!(search.plan.as_deref(), Some(&[][..]), "{}", name(&task));
+            assert_eq!(
+                search.plan.as_deref(),
+                Some(&[][..]),
+                "{}",
+                common::name(&task)
+            );
             let state = planner::replay(&task, &[]).expect("the empty plan replays");
             assert_eq!(state, task.init);
             assert!(SymbolicEnv::new(Arc::new(task)).goal_satisfied());
@@ -244,7 +226,7 @@ fn goal_holding_at_the_start_gives_an_empty_plan() {
 /// An infeasible step is not executed and leaves the state as it was.
 #[test]
 fn infeasible_steps_do_not_change_the_state() {
-    for task in all_tasks().into_iter().step_by(7) {
+    for task in common::released_tasks().into_iter().step_by(7) {
         let mut env = SymbolicEnv::new(Arc::new(task.clone()));
         for r in &task.robots {
             let id = task.id(r.node);
@@ -256,7 +238,11 @@ fn infeasible_steps_do_not_change_the_state() {
             ] {
                 let before = env.state().clone();
                 let outcome = env.step(id, text).expect("a robot of the task");
-                assert!(!outcome.executed(), "{}: {text:?} executed", name(&task));
+                assert!(
+                    !outcome.executed(),
+                    "{}: {text:?} executed",
+                    common::name(&task)
+                );
                 assert_eq!(env.state(), &before);
             }
         }

@@ -1,19 +1,11 @@
 //! Semantic problems `validate::findings` must name: each test breaks one thing in a
 //! real task (env0 task 0) and checks the message, and the untouched task is clean.
 
-use std::path::Path;
-
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Task, load, validate};
 use serde_json::{Value, json};
 
-fn env0_task0() -> Value {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/coherent-original/env/env0.json");
-    let text = std::fs::read_to_string(&path).expect("env0.json is readable");
-    let mut list: Value = serde_json::from_str(&text).expect("env0.json is JSON");
-    list[0].take()
-}
+mod common;
 
 fn findings(task: Value) -> Vec<String> {
     let task: Task = load::read_value("test.json", "env0", &Value::Array(vec![task]))
@@ -47,12 +39,15 @@ fn assert_names(found: &[String], expected: &str) {
 
 #[test]
 fn the_released_task_is_clean() {
-    assert_eq!(findings(env0_task0()), Vec::<String>::new());
+    assert_eq!(
+        findings(common::original_list(0).swap_remove(0)),
+        Vec::<String>::new()
+    );
 }
 
 #[test]
 fn a_grabable_door() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     node_mut(&mut t, 8)["properties"]
         .as_array_mut()
         .expect("list")
@@ -62,7 +57,7 @@ fn a_grabable_door() {
 
 #[test]
 fn a_floor_that_is_no_surface() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     node_mut(&mut t, 7)["properties"] = json!(["LANDABLE", "LOW_HEIGHT"]);
     assert_names(
         &findings(t),
@@ -72,7 +67,7 @@ fn a_floor_that_is_no_surface() {
 
 #[test]
 fn a_robot_in_no_room() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     edges_mut(&mut t).retain(|e| !(e["from_id"] == 23 && e["relation_type"] == "INSIDE"));
     assert_names(
         &findings(t),
@@ -82,7 +77,7 @@ fn a_robot_in_no_room() {
 
 #[test]
 fn a_quadrotor_without_basket_or_flight_state() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     edges_mut(&mut t).retain(|e| e["relation_type"] != "WITH");
     node_mut(&mut t, 22)["states"] = json!([]);
     let found = findings(t);
@@ -98,7 +93,7 @@ fn a_quadrotor_without_basket_or_flight_state() {
 
 #[test]
 fn an_arm_on_nothing() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     edges_mut(&mut t).retain(|e| !(e["from_id"] == 24 && e["relation_type"] == "ON"));
     assert_names(
         &findings(t),
@@ -108,7 +103,7 @@ fn an_arm_on_nothing() {
 
 #[test]
 fn a_closed_basket() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     node_mut(&mut t, 25)["states"] = json!(["CLOSED"]);
     assert_names(
         &findings(t),
@@ -118,14 +113,14 @@ fn a_closed_basket() {
 
 #[test]
 fn an_object_in_two_places() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     edges_mut(&mut t).push(json!({"from_id": 29, "to_id": 12, "relation_type": "ON"}));
     assert_names(&findings(t), "<socks>(29): an object in 2 places at once");
 }
 
 #[test]
 fn high_and_low_at_once() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     node_mut(&mut t, 13)["properties"]
         .as_array_mut()
         .expect("list")
@@ -138,7 +133,7 @@ fn high_and_low_at_once() {
 
 #[test]
 fn openable_without_an_open_or_closed_state() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     node_mut(&mut t, 14)["states"] = json!([]);
     assert_names(
         &findings(t),
@@ -148,7 +143,7 @@ fn openable_without_an_open_or_closed_state() {
 
 #[test]
 fn a_door_to_one_room_and_a_room_without_floor() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     edges_mut(&mut t).retain(|e| !(e["from_id"] == 8 && e["to_id"] == 0));
     edges_mut(&mut t).retain(|e| !(e["from_id"] == 1 && e["relation_type"] == "INSIDE"));
     let found = findings(t);
@@ -161,7 +156,7 @@ fn a_door_to_one_room_and_a_room_without_floor() {
 
 #[test]
 fn an_edge_listed_twice() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     let first = edges_mut(&mut t)[0].clone();
     edges_mut(&mut t).push(first);
     assert_names(&findings(t), "1 edges are listed more than once");
@@ -169,7 +164,7 @@ fn an_edge_listed_twice() {
 
 #[test]
 fn a_goal_that_holds_at_the_start_and_a_count_that_never_can() {
-    let mut t = env0_task0();
+    let mut t = common::original_list(0).swap_remove(0);
     t["task_goal"] = json!({"on_<socks>(29)_<sofa>(11)": [1, []]});
     assert_names(
         &findings(t.clone()),

@@ -1,6 +1,7 @@
-//! Helpers shared by the hand-written rule tests (`rules_env*.rs`).
+//! Helpers shared by the integration tests: the released benchmark files, and a
+//! [`Scene`] that drives the hand-written rule tests (`rules_env*.rs`).
 //!
-//! Every expectation in those tests was derived by hand from the task's JSON and
+//! Every expectation in the rule tests was derived by hand from the task's JSON and
 //! `SEMANTICS.md`; these helpers only drive a [`SymbolicEnv`] and compare, reporting
 //! what is missing and what is unexpected when a list differs.
 
@@ -14,6 +15,41 @@ use coherent_core::{Environment, NodeId, Outcome, PropSet, Reason, SymbolicEnv, 
 /// The original benchmark files: `shared/` lies beside the repository.
 pub fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
+}
+
+/// The JSON list of `env<n>.json`, as released.
+pub fn original_list(n: usize) -> Vec<serde_json::Value> {
+    let path = data_dir().join(format!("env{n}.json"));
+    let text = std::fs::read_to_string(&path).expect("benchmark file is readable");
+    match serde_json::from_str(&text).expect("benchmark file is JSON") {
+        serde_json::Value::Array(items) => items,
+        other => panic!("{} is not a list: {other}", path.display()),
+    }
+}
+
+/// Every well-formed task of the four files (env3 index 18 is malformed by design).
+pub fn released_tasks() -> Vec<coherent_core::Task> {
+    let mut out = Vec::new();
+    for n in 0..4 {
+        let path = data_dir().join(format!("env{n}.json"));
+        for (i, t) in read_tasks(&path)
+            .expect("benchmark file loads")
+            .into_iter()
+            .enumerate()
+        {
+            match t {
+                Ok(t) => out.push(t),
+                Err(e) => assert!(n == 3 && i == 18, "env{n}[{i}] is malformed: {e}"),
+            }
+        }
+    }
+    assert_eq!(out.len(), 81);
+    out
+}
+
+/// `<scene> task <id>`, for messages.
+pub fn name(t: &coherent_core::Task) -> String {
+    format!("{} task {}", t.meta.scene, t.meta.task_id)
 }
 
 /// A task being played, step by step.
