@@ -276,6 +276,11 @@ impl Task {
         })
     }
 
+    /// Every node's index, in file order.
+    pub fn indices(&self) -> impl Iterator<Item = Idx> + use<> {
+        (0..self.nodes.len() as u16).map(Idx)
+    }
+
     pub fn node(&self, n: Idx) -> &Node {
         &self.nodes[n.get()]
     }
@@ -372,7 +377,7 @@ impl Task {
 
     /// The graph of state `s` in the original format's field names.
     pub fn raw_graph(&self, s: &State) -> RawGraph {
-        let all: Vec<Idx> = (0..self.nodes.len()).map(|i| Idx(i as u16)).collect();
+        let all: Vec<Idx> = self.indices().collect();
         self.raw_subgraph(s, &all, s.edges())
     }
 
@@ -406,7 +411,7 @@ impl Task {
 
     /// The initial graph as read, edges in file order: what both exporters write.
     pub fn initial_raw_graph(&self) -> RawGraph {
-        let all: Vec<Idx> = (0..self.nodes.len()).map(|i| Idx(i as u16)).collect();
+        let all: Vec<Idx> = self.indices().collect();
         self.raw_subgraph(&self.init, &all, &self.init_edges)
     }
 }

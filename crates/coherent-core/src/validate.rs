@@ -30,11 +30,11 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
             plan.len()
         ));
     }
-    for (i, node) in task.nodes.iter().enumerate() {
+    for n in task.indices() {
         out.extend(
-            role_contradictions(task, Idx(i as u16))
+            role_contradictions(task, n)
                 .into_iter()
-                .map(|m| format!("{}: {m}", node.label())),
+                .map(|m| format!("{}: {m}", task.node(n).label())),
         );
     }
     let listed = task.init_edges.len();
