@@ -6,7 +6,7 @@ use std::fmt;
 
 use crate::action::{self, Action, Mention, Verb};
 use crate::graph::{Idx, NodeKind, RobotKind, State};
-use crate::rules::{self, View};
+use crate::rules::View;
 use crate::task::{Robot, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
@@ -119,10 +119,12 @@ pub fn check(task: &Task, s: &State, robot: Robot, text: &str) -> Result<Action,
         object,
         target,
     };
-    if rules::actions(task, s, robot).contains(&action) {
+    // One view serves both the action list and, when the action is not in it, the why.
+    let view = View::new(task, s, robot);
+    if view.actions().contains(&action) {
         return Ok(action);
     }
-    Err(diagnose(&View::new(task, s, robot), action))
+    Err(diagnose(&view, action))
 }
 
 fn resolve(task: &Task, m: &Mention) -> Result<Idx, Infeasible> {

@@ -256,21 +256,27 @@ impl<'a> View<'a> {
 
 /// Every action `robot` may take in state `s`, without duplicates.
 pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
-    let view = View::new(task, s, robot);
-    let mut out = Vec::new();
-    match robot.kind {
-        RobotKind::Quadrotor => quadrotor_actions(&view, &mut out),
-        RobotKind::RobotDog => dog_actions(&view, &mut out),
-        RobotKind::RobotArm => arm_actions(&view, &mut out),
-    }
-    // Lists are short: a quadratic pass beats hashing.
-    let mut unique = Vec::with_capacity(out.len());
-    for a in out {
-        if !unique.contains(&a) {
-            unique.push(a);
+    View::new(task, s, robot).actions()
+}
+
+impl View<'_> {
+    /// The robot's action list, from this view.
+    pub fn actions(&self) -> Vec<Action> {
+        let mut out = Vec::new();
+        match self.robot.kind {
+            RobotKind::Quadrotor => quadrotor_actions(self, &mut out),
+            RobotKind::RobotDog => dog_actions(self, &mut out),
+            RobotKind::RobotArm => arm_actions(self, &mut out),
         }
+        // Lists are short: a quadratic pass beats hashing.
+        let mut unique = Vec::with_capacity(out.len());
+        for a in out {
+            if !unique.contains(&a) {
+                unique.push(a);
+            }
+        }
+        unique
     }
-    unique
 }
 
 fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
