@@ -250,9 +250,14 @@ impl State {
 
     /// Keeps only the edges for which `keep` is true.
     pub(crate) fn retain(&mut self, mut keep: impl FnMut(Edge) -> bool) {
-        let start = self.edges_start();
-        let mut kept = start;
-        for i in start..self.data.len() {
+        // Most calls remove nothing: write only from the first edge that goes.
+        let Some(first) =
+            (self.edges_start()..self.data.len()).find(|&i| !keep(Edge(self.data[i])))
+        else {
+            return;
+        };
+        let mut kept = first;
+        for i in first + 1..self.data.len() {
             if keep(Edge(self.data[i])) {
                 self.data[kept] = self.data[i];
                 kept += 1;
