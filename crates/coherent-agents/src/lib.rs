@@ -1,5 +1,26 @@
-//! `coherent-agents`: the LLM side of COHERENT: the async OpenAI-compatible client,
-//! prompt templates, the PEFA loop (Task Assigner, Robot Executors), the baselines,
-//! transcripts and the benchmark harness. It talks to any `coherent_core::Environment`;
-//! see ARCHITECTURE.md. The loop arrives with the PEFA issue; until then this crate only
-//! fixes its place in the workspace.
+//! `coherent-agents`: the COHERENT planning loop over language models.
+//!
+//! [`pefa`] runs the paper's Proposal-Execution-Feedback-Adjustment loop on any
+//! `coherent_core::Environment`, asking its two roles through a [`Backend`]: an
+//! OpenAI-compatible server ([`openai`]), a recorded transcript ([`replay`]) or the
+//! optimal planner ([`builtin`]). Prompts are template files ([`prompt`]); answers are
+//! parsed robustly ([`answer`]); every episode writes a [`transcript`].
+
+pub mod answer;
+pub mod builtin;
+pub mod llm;
+pub mod openai;
+pub mod episode;
+pub mod pefa;
+pub mod prompt;
+pub mod replay;
+pub mod retry;
+pub mod transcript;
+
+pub use builtin::BuiltinBackend;
+pub use episode::{Budget, Method, Settings};
+pub use llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
+pub use openai::{ApiKey, OpenAiClient, OpenAiConfig};
+pub use pefa::{Cancel, Episode, PefaConfig};
+pub use replay::ReplayBackend;
+pub use transcript::{Status, Summary, Transcript};

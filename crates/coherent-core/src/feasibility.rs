@@ -63,6 +63,43 @@ pub enum Reason {
     NotOffered,
 }
 
+impl Reason {
+    /// A stable snake_case name, as written in transcripts and results.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::Unparsable => "unparsable",
+            Reason::NoSuchNode => "no_such_node",
+            Reason::WrongRobotType => "wrong_robot_type",
+            Reason::NotInView => "not_in_view",
+            Reason::NotClose => "not_close",
+            Reason::OutOfReach => "out_of_reach",
+            Reason::TooHigh => "too_high",
+            Reason::HandFull => "hand_full",
+            Reason::HandEmpty => "hand_empty",
+            Reason::NotHolding => "not_holding",
+            Reason::NotGrabable => "not_grabable",
+            Reason::NotContainer => "not_container",
+            Reason::NotSurface => "not_surface",
+            Reason::NotOpenable => "not_openable",
+            Reason::AlreadyOpen => "already_open",
+            Reason::AlreadyClosed => "already_closed",
+            Reason::AlwaysOpen => "always_open",
+            Reason::ContainerClosed => "container_closed",
+            Reason::DoorClosed => "door_closed",
+            Reason::NoDoor => "no_door",
+            Reason::AlreadyThere => "already_there",
+            Reason::NotATarget => "not_a_target",
+            Reason::NotLandable => "not_landable",
+            Reason::NotFlying => "not_flying",
+            Reason::NotLanded => "not_landed",
+            Reason::NotAbove => "not_above",
+            Reason::NotOnSurface => "not_on_surface",
+            Reason::Misplaced => "misplaced",
+            Reason::NotOffered => "not_offered",
+        }
+    }
+}
+
 /// An action that cannot be executed, with the reason in words.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Infeasible {

@@ -6,7 +6,10 @@ use std::fmt;
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// A node's id as written in a task file (`"id": 22`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize, serde::Deserialize,
+)]
+#[serde(transparent)]
 pub struct NodeId(pub i64);
 
 impl fmt::Display for NodeId {

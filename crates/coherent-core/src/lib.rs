@@ -7,6 +7,7 @@
 //! planners and physics plug into.
 
 pub mod action;
+pub mod describe;
 pub mod env;
 pub mod error;
 pub mod feasibility;

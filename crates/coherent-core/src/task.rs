@@ -436,7 +436,8 @@ fn intern_names(
     Ok(bits)
 }
 
-pub(crate) fn predicate_holds(s: &State, p: &GoalPredicate) -> bool {
+/// Whether `p` holds in `s`: its edge is there as many times as it asks (0 or 1).
+pub fn predicate_holds(s: &State, p: &GoalPredicate) -> bool {
     u32::from(s.has(Edge::new(p.subject, p.relation, p.target))) == p.count
 }
 

@@ -1,5 +1,7 @@
-//! The `coherent` command line: `validate`, `import`, `plan`. One implementation serves
-//! the `coherent` binary and the console script that `pip install` puts on the PATH.
+//! The `coherent` command line: `run`, `plan`, `validate`, `import`. One implementation
+//! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
+
+mod run;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -21,6 +23,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Run a planning method on one task: one line per step, a summary, a transcript.
+    /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
+    /// 3 when the model's server fails for good or a replay diverges, 130 on Ctrl-C.
+    Run(Box<run::RunArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
     Validate {
         /// Original env files, native task files or folders of them.
@@ -69,6 +75,12 @@ where
         }
     };
     let result = match cli.command {
+        Command::Run(args) => {
+            return run::run(*args).unwrap_or_else(|e| {
+                eprintln!("error: {e}");
+                2
+            });
+        }
         Command::Validate { files, max_states } => {
             validate_files(&files, &Limits::max_states(max_states))
         }

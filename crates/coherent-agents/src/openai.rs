@@ -1,0 +1,398 @@
+//! A client for any OpenAI-compatible chat completions endpoint (OpenAI, vLLM, Ollama,
+//! llama.cpp's server, LM Studio, OpenRouter...): timeouts, retries with backoff,
+//! a concurrency limit, token accounting, and structured outputs with fallbacks.
+
+use std::fmt;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::time::{Duration, Instant, SystemTime};
+
+use reqwest::StatusCode;
+use serde::Deserialize;
+use serde_json::{Value, json};
+use tokio::sync::Semaphore;
+
+use crate::llm::{
+    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
+    Usage,
+};
+use crate::retry::{Backoff, Jitter, parse_retry_after};
+
+/// An API key. It is sent in the `Authorization` header and nowhere else: it has no
+/// `Serialize`, its `Debug` hides it, and every text from the server is scrubbed of it.
+#[derive(Clone, PartialEq, Eq)]
+pub struct ApiKey(String);
+
+impl ApiKey {
+    pub fn new(key: impl Into<String>) -> ApiKey {
+        ApiKey(key.into())
+    }
+
+    /// `text` with every occurrence of the key replaced.
+    pub fn scrub(&self, text: &str) -> String {
+        if self.0.is_empty() {
+            text.to_owned()
+        } else {
+            text.replace(&self.0, "[api key]")
+        }
+    }
+}
+
+impl fmt::Debug for ApiKey {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("ApiKey([hidden])")
+    }
+}
+
+/// Settings of the HTTP backend.
+#[derive(Clone, Debug)]
+pub struct OpenAiConfig {
+    /// Up to and including the version, e.g. `https://api.openai.com/v1`.
+    pub base_url: String,
+    pub api_key: Option<ApiKey>,
+    pub model: String,
+    pub temperature: f32,
+    pub seed: Option<u64>,
+    pub connect_timeout: Duration,
+    /// Longest silence while reading a response.
+    pub read_timeout: Duration,
+    /// Longest one attempt may take in all.
+    pub total_timeout: Duration,
+    pub backoff: Backoff,
+    /// Requests in flight at once, across all episodes sharing the client.
+    pub concurrency: usize,
+    /// The answer format to ask for first; a server that refuses it gets the next one.
+    pub output: OutputMode,
+}
+
+impl OpenAiConfig {
+    pub fn new(base_url: impl Into<String>, model: impl Into<String>) -> OpenAiConfig {
+        OpenAiConfig {
+            base_url: base_url.into(),
+            api_key: None,
+            model: model.into(),
+            temperature: 0.0,
+            seed: None,
+            connect_timeout: Duration::from_secs(10),
+            read_timeout: Duration::from_secs(120),
+            total_timeout: Duration::from_secs(300),
+            backoff: Backoff::default(),
+            concurrency: 4,
+            output: OutputMode::JsonSchema,
+        }
+    }
+}
+
+/// The HTTP backend.
+#[derive(Debug)]
+pub struct OpenAiClient {
+    http: reqwest::Client,
+    config: OpenAiConfig,
+    url: String,
+    limit: Semaphore,
+    /// The answer format currently asked for (an [`OutputMode`] index); it only ever
+    /// moves down, once a server has refused the one above.
+    mode: AtomicU8,
+    jitter: Mutex<Jitter>,
+}
+
+const MODES: [OutputMode; 3] = [OutputMode::JsonSchema, OutputMode::JsonObject, OutputMode::Text];
+
+impl OpenAiClient {
+    pub fn new(config: OpenAiConfig) -> Result<OpenAiClient, LlmError> {
+        if config.model.trim().is_empty() {
+            return Err(LlmError::new(
+                LlmErrorKind::Config,
+                "no model name: pass --model or set COHERENT_MODEL",
+            ));
+        }
+        let url = format!("{}/chat/completions", config.base_url.trim_end_matches('/'));
+        if reqwest::Url::parse(&url).is_err() {
+            return Err(LlmError::new(
+                LlmErrorKind::Config,
+                format!("base URL {:?} is not a URL", config.base_url),
+            ));
+        }
+        let http = reqwest::Client::builder()
+            .connect_timeout(config.connect_timeout)
+            .read_timeout(config.read_timeout)
+            .timeout(config.total_timeout)
+            .build()
+            .map_err(|e| LlmError::new(LlmErrorKind::Config, e.to_string()))?;
+        let seed = SystemTime::now()
+            .duration_since(SystemTime::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos() as u64);
+        let first = MODES.iter().position(|&m| m == config.output).unwrap_or(0);
+        Ok(OpenAiClient {
+            http,
+            url,
+            limit: Semaphore::new(config.concurrency.max(1)),
+            mode: AtomicU8::new(first as u8),
+            jitter: Mutex::new(Jitter::new(seed)),
+            config,
+        })
+    }
+
+    fn scrub(&self, text: &str) -> String {
+        match &self.config.api_key {
+            Some(k) => k.scrub(text),
+            None => text.to_owned(),
+        }
+    }
+
+    fn body(&self, q: &Query, mode: OutputMode) -> Value {
+        let mut body = json!({
+            "model": self.config.model,
+            "messages": q.messages,
+            "temperature": self.config.temperature,
+            "max_tokens": q.max_tokens,
+        });
+        if let Some(seed) = self.config.seed {
+            body["seed"] = json!(seed);
+        }
+        match mode {
+            OutputMode::JsonSchema => {
+                body["response_format"] = json!({
+                    "type": "json_schema",
+                    "json_schema": {"name": q.schema_name, "strict": true, "schema": q.schema},
+                });
+            }
+            OutputMode::JsonObject => body["response_format"] = json!({"type": "json_object"}),
+            OutputMode::Text => {}
+        }
+        body
+    }
+
+    /// One HTTP exchange: the status, `Retry-After` if any, and the whole body.
+    async fn exchange(
+        &self,
+        body: &Value,
+    ) -> Result<(StatusCode, Option<Duration>, Vec<u8>), LlmError> {
+        let mut request = self.http.post(&self.url).json(body);
+        if let Some(key) = &self.config.api_key {
+            request = request.bearer_auth(&key.0);
+        }
+        let response = request.send().await.map_err(|e| self.transport(&e))?;
+        let status = response.status();
+        let retry_after = response
+            .headers()
+            .get(reqwest::header::RETRY_AFTER)
+            .and_then(|v| v.to_str().ok())
+            .and_then(|v| parse_retry_after(v, SystemTime::now()));
+        let bytes = response.bytes().await.map_err(|e| self.transport(&e))?;
+        Ok((status, retry_after, bytes.to_vec()))
+    }
+
+    fn transport(&self, e: &reqwest::Error) -> LlmError {
+        let kind = if e.is_timeout() {
+            LlmErrorKind::Timeout
+        } else {
+            LlmErrorKind::Connect
+        };
+        // The error's own text is terse ("error sending request"); its sources say why.
+        let mut message = e.to_string();
+        let mut source = std::error::Error::source(e);
+        while let Some(s) = source {
+            message.push_str(": ");
+            message.push_str(&s.to_string());
+            source = s.source();
+        }
+        LlmError::new(kind, self.scrub(&message))
+    }
+
+    async fn ask_http(&self, q: Query) -> Result<Answer, LlmError> {
+        let _permit = self
+            .limit
+            .acquire()
+            .await
+            .map_err(|e| LlmError::new(LlmErrorKind::Config, e.to_string()))?;
+        let start = Instant::now();
+        let mut attempts = 0;
+        let mut retries = 0;
+        loop {
+            let mode = MODES[usize::from(self.mode.load(Ordering::Relaxed))];
+            attempts += 1;
+            let failure = match self.exchange(&self.body(&q, mode)).await {
+                Ok((status, _, bytes)) if status.is_success() => {
+                    let mut answer = parse_completion(&bytes)
+                        .map_err(|message| LlmError {
+                            kind: LlmErrorKind::Malformed,
+                            message: self.scrub(&message),
+                            attempts,
+                        })?;
+                    answer.text = self.scrub(&answer.text);
+                    answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
+                    answer.attempts = attempts;
+                    answer.mode = mode;
+                    return Ok(answer);
+                }
+                Ok((status, retry_after, bytes)) => {
+                    let text = String::from_utf8_lossy(&bytes);
+                    if refuses_format(status, &text) && self.downgrade(mode) {
+                        continue;
+                    }
+                    let excerpt: String = text.chars().take(400).collect();
+                    (
+                        LlmError::new(
+                            LlmErrorKind::Status(status.as_u16()),
+                            self.scrub(excerpt.trim()),
+                        ),
+                        retry_after,
+                    )
+                }
+                Err(e) => (e, None),
+            };
+            let (mut error, retry_after) = failure;
+            error.attempts = attempts;
+            if !error.retryable() || retries >= self.config.backoff.max_retries {
+                return Err(error);
+            }
+            let unit = self
+                .jitter
+                .lock()
+                .map_or(0.5, |mut j| j.next_unit());
+            tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
+            retries += 1;
+        }
+    }
+
+    /// Asks for the next, looser answer format from now on; false when there is none.
+    fn downgrade(&self, from: OutputMode) -> bool {
+        let i = MODES.iter().position(|&m| m == from).unwrap_or(MODES.len());
+        if i + 1 >= MODES.len() {
+            return false;
+        }
+        // Another request may have moved it already; either way it is now lower.
+        let _ = self.mode.compare_exchange(
+            i as u8,
+            (i + 1) as u8,
+            Ordering::Relaxed,
+            Ordering::Relaxed,
+        );
+        true
+    }
+}
+
+/// A 400 or 422 whose body names the answer format: the server does not support it.
+fn refuses_format(status: StatusCode, body: &str) -> bool {
+    let body = body.to_ascii_lowercase();
+    matches!(status.as_u16(), 400 | 422)
+        && ["response_format", "json_schema", "json_object", "schema"]
+            .iter()
+            .any(|w| body.contains(w))
+}
+
+#[derive(Deserialize)]
+struct Completion {
+    choices: Vec<Choice>,
+    usage: Option<UsageBody>,
+}
+
+#[derive(Deserialize)]
+struct Choice {
+    message: Option<MessageBody>,
+    finish_reason: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct MessageBody {
+    content: Option<String>,
+    refusal: Option<String>,
+}
+
+#[derive(Deserialize)]
+struct UsageBody {
+    prompt_tokens: Option<u64>,
+    completion_tokens: Option<u64>,
+}
+
+/// A chat completion body as an answer (latency, attempts and mode filled in later).
+fn parse_completion(bytes: &[u8]) -> Result<Answer, String> {
+    let completion: Completion = serde_json::from_slice(bytes).map_err(|e| {
+        let excerpt: String = String::from_utf8_lossy(bytes).chars().take(200).collect();
+        format!("not a chat completion ({e}): {excerpt:?}")
+    })?;
+    let choice = completion
+        .choices
+        .into_iter()
+        .next()
+        .ok_or("the response has no choices")?;
+    let message = choice.message.ok_or("the first choice has no message")?;
+    let finish = match (message.refusal, choice.finish_reason.as_deref()) {
+        (Some(words), _) => Finish::Refusal(words),
+        (None, Some("stop") | None) => Finish::Stop,
+        (None, Some("length")) => Finish::Length,
+        (None, Some("content_filter")) => Finish::ContentFilter,
+        (None, Some(other)) => Finish::Other(other.to_owned()),
+    };
+    let usage = completion.usage.map_or(Usage::default(), |u| Usage {
+        prompt_tokens: u.prompt_tokens.unwrap_or(0),
+        completion_tokens: u.completion_tokens.unwrap_or(0),
+    });
+    Ok(Answer {
+        text: message.content.unwrap_or_default(),
+        finish,
+        usage,
+        latency_ms: 0.0,
+        attempts: 0,
+        mode: OutputMode::Text,
+    })
+}
+
+impl Backend for OpenAiClient {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            kind: "openai".into(),
+            model: self.config.model.clone(),
+            base_url: Some(self.config.base_url.clone()),
+        }
+    }
+
+    fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
+        Box::pin(self.ask_http(query))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn completions_parse_with_their_finish_reason_and_usage() {
+        let body = br#"{"choices":[{"message":{"role":"assistant","content":"{\"a\":1}"},"finish_reason":"length"}],"usage":{"prompt_tokens":12,"completion_tokens":3}}"#;
+        let a = parse_completion(body).expect("a completion");
+        assert_eq!(a.text, "{\"a\":1}");
+        assert_eq!(a.finish, Finish::Length);
+        assert_eq!(a.usage.prompt_tokens, 12);
+        assert_eq!(a.usage.completion_tokens, 3);
+    }
+
+    #[test]
+    fn refusals_and_empty_bodies_are_not_panics() {
+        let refusal = br#"{"choices":[{"message":{"content":null,"refusal":"I can't help"},"finish_reason":"stop"}]}"#;
+        assert_eq!(
+            parse_completion(refusal).expect("parsed").finish,
+            Finish::Refusal("I can't help".into())
+        );
+        assert!(parse_completion(br#"{"choices":[]}"#).is_err());
+        assert!(parse_completion(b"{\"choices\": [").is_err());
+        assert!(parse_completion(b"").is_err());
+    }
+
+    #[test]
+    fn the_key_is_scrubbed_and_hidden_from_debug() {
+        let key = ApiKey::new("sk-secret-123");
+        assert_eq!(key.scrub("echo sk-secret-123!"), "echo [api key]!");
+        assert!(!format!("{key:?}").contains("secret"));
+    }
+
+    #[test]
+    fn only_format_complaints_downgrade() {
+        assert!(refuses_format(
+            StatusCode::BAD_REQUEST,
+            "{\"error\":\"response_format json_schema is not supported\"}"
+        ));
+        assert!(!refuses_format(StatusCode::BAD_REQUEST, "context too long"));
+        assert!(!refuses_format(StatusCode::INTERNAL_SERVER_ERROR, "schema"));
+    }
+}

@@ -1,0 +1,74 @@
+//! The replay backend: answers every call with the answer recorded in a transcript, with
+//! no network, after checking that the call is the one recorded (same role, robot and
+//! prompt). Run with the transcript's settings, an episode replays step for step.
+
+use std::collections::VecDeque;
+use std::sync::{Mutex, PoisonError};
+
+use crate::llm::{Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query};
+use crate::transcript::{Call, Transcript};
+
+#[derive(Debug)]
+pub struct ReplayBackend {
+    recorded: BackendInfo,
+    calls: Mutex<VecDeque<(u32, Call)>>,
+}
+
+impl ReplayBackend {
+    pub fn new(transcript: &Transcript) -> ReplayBackend {
+        let calls = transcript
+            .rounds
+            .iter()
+            .flat_map(|r| r.calls.iter().map(move |c| (r.step, c.clone())))
+            .collect();
+        ReplayBackend {
+            recorded: transcript.header.backend.clone(),
+            calls: Mutex::new(calls),
+        }
+    }
+
+    fn next(&self, q: &Query) -> Result<Answer, LlmError> {
+        let (step, call) = self
+            .calls
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .pop_front()
+            .ok_or_else(|| {
+                LlmError::new(LlmErrorKind::Replay, "the transcript has no more calls")
+            })?;
+        let diverged = |what: &str| {
+            LlmError::new(
+                LlmErrorKind::Replay,
+                format!("round {step}: the {what} differs from the recorded call"),
+            )
+        };
+        if call.role != q.role {
+            return Err(diverged("role"));
+        }
+        if call.robot != q.robot.map(|r| r.0) {
+            return Err(diverged("robot"));
+        }
+        if call.messages != q.messages {
+            return Err(diverged("prompt"));
+        }
+        match (call.answer, call.error) {
+            (Some(answer), _) => Ok(answer),
+            (None, Some(error)) => Err(error),
+            (None, None) => Err(diverged("answer (none recorded)")),
+        }
+    }
+}
+
+impl Backend for ReplayBackend {
+    fn info(&self) -> BackendInfo {
+        BackendInfo {
+            kind: "replay".into(),
+            model: self.recorded.model.clone(),
+            base_url: None,
+        }
+    }
+
+    fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
+        Box::pin(async move { self.next(&query) })
+    }
+}

@@ -1,0 +1,202 @@
+//! Transcripts: one JSON-lines file per episode, a header, one line per round (prompts,
+//! raw answers, parsed decisions, the action list, the outcome, tokens, latencies),
+//! then a summary; each line is flushed as it is written, so a crash loses nothing that
+//! ran. A transcript holds everything needed to replay its episode ([`crate::replay`]).
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::answer::{Decision, Proposal};
+use crate::llm::{Answer, BackendInfo, LlmError, Message, Role};
+
+pub const FORMAT: &str = "coherent-transcript";
+pub const VERSION: u32 = 1;
+
+/// The first line: what ran, on what, with which settings.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Header {
+    pub format: String,
+    pub version: u32,
+    /// The version of coherent that wrote it.
+    pub coherent: String,
+    /// The task in the native format, so that a replay needs nothing else.
+    pub task: serde_json::Value,
+    pub task_name: String,
+    pub method: String,
+    pub history: usize,
+    pub max_steps: u32,
+    pub gt_steps: Option<u32>,
+    pub backend: BackendInfo,
+    pub temperature: Option<f32>,
+    pub seed: Option<u64>,
+    /// Milliseconds since the Unix epoch.
+    pub started_ms: u64,
+}
+
+/// One call to a role: what was sent and what came back (or why nothing did).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Call {
+    pub role: Role,
+    pub robot: Option<i64>,
+    pub messages: Vec<Message>,
+    pub answer: Option<Answer>,
+    pub error: Option<LlmError>,
+}
+
+/// What came of one round.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum Outcome {
+    /// The action ran.
+    Executed,
+    /// The action was checked and refused (core's feasibility reason; physics when on).
+    Infeasible { reason: String, message: String },
+    /// The executor said it cannot do the subtask now.
+    Declined,
+    /// The assigner's answer could not be used.
+    NoProposal { why: String },
+    /// The executor's answer could not be used.
+    NoDecision { why: String },
+    /// The backend failed for good; the episode ends here.
+    BackendError { message: String },
+}
+
+/// One PEFA round, which is one step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Round {
+    pub step: u32,
+    pub calls: Vec<Call>,
+    pub proposal: Option<Proposal>,
+    /// The executor's action list at that moment.
+    pub actions: Vec<String>,
+    pub decision: Option<Decision>,
+    pub outcome: Outcome,
+    /// What the assigner is told about this round from the next round on.
+    pub feedback: String,
+    /// Whether the goal holds after this round.
+    pub done: bool,
+    /// Time the round took, model time included.
+    pub wall_ms: f64,
+}
+
+/// How an episode ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Status {
+    /// The goal holds.
+    Success,
+    /// The step budget is spent.
+    Failure,
+    /// The backend failed for good (see the last round).
+    BackendError,
+    /// Stopped from outside (Ctrl-C).
+    Interrupted,
+}
+
+/// The last line.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    pub status: Status,
+    pub success: bool,
+    pub steps: u32,
+    pub gt_steps: Option<u32>,
+    pub max_steps: u32,
+    pub llm_calls: u32,
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub wall_ms: f64,
+    pub error: Option<String>,
+}
+
+/// A line of a transcript.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum Record {
+    Header(Box<Header>),
+    Round(Box<Round>),
+    Summary(Summary),
+}
+
+/// Writes a transcript line by line, flushing each.
+#[derive(Debug)]
+pub struct Writer {
+    file: File,
+    path: PathBuf,
+}
+
+impl Writer {
+    /// Creates the file (and its folder) and writes the header.
+    pub fn create(path: &Path, header: Header) -> io::Result<Writer> {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir)?;
+        }
+        let mut w = Writer {
+            file: File::create(path)?,
+            path: path.to_owned(),
+        };
+        w.write(&Record::Header(Box::new(header)))?;
+        Ok(w)
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    pub fn write(&mut self, record: &Record) -> io::Result<()> {
+        let mut line = serde_json::to_vec(record).map_err(io::Error::other)?;
+        line.push(b'\n');
+        self.file.write_all(&line)?;
+        self.file.flush()
+    }
+}
+
+/// A transcript as read back.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transcript {
+    pub header: Header,
+    pub rounds: Vec<Round>,
+    /// Absent when the episode did not finish (a crash, a kill).
+    pub summary: Option<Summary>,
+}
+
+/// Reads a transcript; errors name the file and the line.
+pub fn read(path: &Path) -> Result<Transcript, String> {
+    let file = File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut header = None;
+    let mut rounds = Vec::new();
+    let mut summary = None;
+    for (i, line) in BufReader::new(file).lines().enumerate() {
+        let at = || format!("{}: line {}", path.display(), i + 1);
+        let line = line.map_err(|e| format!("{}: {e}", at()))?;
+        if line.trim().is_empty() {
+            continue;
+        }
+        let record: Record =
+            serde_json::from_str(&line).map_err(|e| format!("{}: {e}", at()))?;
+        match record {
+            Record::Header(h) if i == 0 => {
+                if h.format != FORMAT || h.version != VERSION {
+                    return Err(format!(
+                        "{}: format {:?} version {} (this is {FORMAT} version {VERSION})",
+                        at(),
+                        h.format,
+                        h.version
+                    ));
+                }
+                header = Some(*h);
+            }
+            Record::Round(r) if header.is_some() && summary.is_none() => rounds.push(*r),
+            Record::Summary(s) if header.is_some() && summary.is_none() => summary = Some(s),
+            _ => return Err(format!("{}: a line out of order", at())),
+        }
+    }
+    let header = header.ok_or_else(|| format!("{}: no header line", path.display()))?;
+    Ok(Transcript {
+        header,
+        rounds,
+        summary,
+    })
+}

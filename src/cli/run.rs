@@ -1,0 +1,405 @@
+//! `coherent run`: one episode of a planning method on one task, one line per step, a
+//! summary, and a transcript.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+use clap::{Args, ValueEnum};
+use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::llm::Backend;
+use coherent_agents::retry::Backoff;
+use coherent_agents::transcript::{self, Outcome, Round, Status};
+use coherent_agents::{
+    ApiKey, BuiltinBackend, Cancel, Episode, OpenAiClient, OpenAiConfig, OutputMode,
+    ReplayBackend,
+};
+use coherent_core::planner::Limits;
+use coherent_core::{Environment, SymbolicEnv, Task, load};
+use serde_json::json;
+
+/// Exit status when the episode ran but the goal was not reached.
+const FAILED: u8 = 1;
+/// Exit status when the model's server failed for good or a replay diverged.
+const BACKEND_FAILED: u8 = 3;
+/// Exit status after Ctrl-C, as shells report SIGINT.
+const INTERRUPTED: u8 = 130;
+
+#[derive(Args)]
+pub struct RunArgs {
+    /// A native task file, or an original env file with --task (not needed with --replay).
+    #[arg(required_unless_present = "replay")]
+    task_file: Option<PathBuf>,
+    /// Which task of the file (its task_id).
+    #[arg(long = "task")]
+    task_id: Option<i64>,
+    /// The planning method.
+    #[arg(long, default_value = "pefa", value_parser = method_names())]
+    method: String,
+    /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
+    #[arg(long, default_value_t = 5)]
+    history: usize,
+    /// Step budget; by default 2 x the task's ground truth (2 x the optimum without one).
+    #[arg(long)]
+    max_steps: Option<u32>,
+    /// Folder for the transcript.
+    #[arg(long, default_value = "runs")]
+    out: PathBuf,
+    /// Re-run the episode of a transcript, answering from it (no network), and check
+    /// that every round comes out the same.
+    #[arg(long)]
+    replay: Option<PathBuf>,
+    /// Print a JSON summary on stdout (step lines go to stderr).
+    #[arg(long)]
+    json: bool,
+    /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1
+    /// [env: OPENAI_BASE_URL]
+    #[arg(long)]
+    base_url: Option<String>,
+    /// API key [env: OPENAI_API_KEY]. Prefer the variable: flags show up in `ps`.
+    #[arg(long)]
+    api_key: Option<String>,
+    /// Model name [env: COHERENT_MODEL].
+    #[arg(long)]
+    model: Option<String>,
+    #[arg(long, default_value_t = 0.0)]
+    temperature: f32,
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Answer format asked for first; a server that refuses it gets the next one.
+    #[arg(long, value_enum, default_value_t = Format::JsonSchema)]
+    format: Format,
+    /// Seconds to wait for a connection.
+    #[arg(long, default_value_t = 10.0)]
+    connect_timeout: f64,
+    /// Seconds of silence allowed while reading a response.
+    #[arg(long, default_value_t = 120.0)]
+    read_timeout: f64,
+    /// Seconds one request may take in all.
+    #[arg(long, default_value_t = 300.0)]
+    timeout: f64,
+    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
+    #[arg(long, default_value_t = 4)]
+    max_retries: u32,
+    /// Requests in flight at once.
+    #[arg(long, default_value_t = 4)]
+    concurrency: usize,
+    /// Most states one search of the built-in planner may visit.
+    #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
+    max_states: usize,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum Format {
+    JsonSchema,
+    JsonObject,
+    Text,
+}
+
+fn method_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
+}
+
+fn seconds(s: f64, what: &str) -> Result<Duration, String> {
+    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
+}
+
+/// Where human-readable lines go: stdout, or stderr when stdout carries JSON.
+struct Lines {
+    json: bool,
+}
+
+impl Lines {
+    fn say(&self, line: &str) {
+        if self.json {
+            eprintln!("{line}");
+        } else {
+            let _ = writeln!(std::io::stdout(), "{line}");
+        }
+    }
+}
+
+pub fn run(args: RunArgs) -> Result<u8, String> {
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
+    runtime.block_on(run_async(args))
+}
+
+async fn run_async(args: RunArgs) -> Result<u8, String> {
+    let lines = Lines { json: args.json };
+    let cancel = Cancel::default();
+    let limits = Limits {
+        cancel: Some(cancel.flag()),
+        ..Limits::max_states(args.max_states)
+    };
+    let recorded = match &args.replay {
+        Some(path) => Some(transcript::read(path)?),
+        None => None,
+    };
+    let (task, settings, budget, backend): (Task, Settings, Budget, Box<dyn Backend>) =
+        match (&recorded, &args.replay) {
+            (Some(t), Some(path)) => {
+                let task = episode::recorded_task(t, path)?;
+                if let Some(file) = &args.task_file {
+                    let given = pick_task(file, args.task_id)?;
+                    if coherent_core::native::to_value(&given) != t.header.task {
+                        return Err(format!(
+                            "{}: the task differs from the one recorded in {}",
+                            file.display(),
+                            path.display()
+                        ));
+                    }
+                }
+                let (settings, budget) = episode::recorded_settings(t)?;
+                (task, settings, budget, Box::new(ReplayBackend::new(t)))
+            }
+            _ => {
+                let file = args
+                    .task_file
+                    .as_deref()
+                    .ok_or("a task file is needed without --replay")?;
+                let task = pick_task(file, args.task_id)?;
+                let method = Method::from_name(&args.method)
+                    .ok_or_else(|| format!("unknown method {:?}", args.method))?;
+                let budget = Budget::of(&task, args.max_steps, &limits)?;
+                let backend = http_backend(&args)?;
+                let settings = Settings {
+                    method,
+                    history: args.history,
+                    max_steps: args.max_steps,
+                    temperature: backend.as_ref().map(|_| args.temperature),
+                    seed: backend.as_ref().and(args.seed),
+                };
+                let backend: Box<dyn Backend> = match backend {
+                    Some(b) => Box::new(b),
+                    None => Box::new(BuiltinBackend::new(limits.clone())),
+                };
+                (task, settings, budget, backend)
+            }
+        };
+    lines.say(&backend_line(backend.as_ref(), args.replay.as_deref()));
+    let task = Arc::new(task);
+    let gt = task
+        .meta
+        .gt_steps
+        .map_or("none".to_owned(), |g| g.to_string());
+    let budget_note = match budget {
+        Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
+        Budget::Given(n) => format!("{n} steps"),
+        Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
+    };
+    lines.say(&format!(
+        "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
+        task.meta.scene,
+        task.meta.task_id,
+        task.meta.instruction,
+        settings.method.name()
+    ));
+    let path = episode::transcript_path(&args.out, &task, settings.method);
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let ctrl_c = {
+        let cancel = cancel.clone();
+        tokio::spawn(async move {
+            if tokio::signal::ctrl_c().await.is_ok() {
+                cancel.cancel();
+            }
+        })
+    };
+    let max = budget.steps();
+    let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
+    let result = episode::run(
+        &task,
+        &mut env,
+        backend.as_ref(),
+        &settings,
+        budget,
+        &path,
+        &cancel,
+        &mut progress,
+    )
+    .await;
+    ctrl_c.abort();
+    let episode = result?;
+    let s = &episode.summary;
+    lines.say(&summary_line(&episode, &env));
+    lines.say(&format!("transcript: {}", path.display()));
+    if let Some(t) = &recorded {
+        match episode::check_replay(t, &episode) {
+            Ok(()) => lines.say(&format!(
+                "replay: all {} rounds match the recording",
+                episode.rounds.len()
+            )),
+            Err(why) => {
+                lines.say(&format!("replay: {why}"));
+                return Ok(BACKEND_FAILED);
+            }
+        }
+    }
+    if args.json {
+        println!(
+            "{}",
+            json!({
+                "success": s.success,
+                "status": s.status,
+                "steps": s.steps,
+                "gt_steps": s.gt_steps,
+                "max_steps": s.max_steps,
+                "llm_calls": s.llm_calls,
+                "prompt_tokens": s.prompt_tokens,
+                "completion_tokens": s.completion_tokens,
+                "wall_ms": s.wall_ms,
+                "error": s.error,
+                "backend": backend.info(),
+                "transcript": path.display().to_string(),
+            })
+        );
+    }
+    Ok(match s.status {
+        Status::Success => 0,
+        Status::Failure => FAILED,
+        Status::BackendError => BACKEND_FAILED,
+        Status::Interrupted => INTERRUPTED,
+    })
+}
+
+/// The task `id` of `file` (or its only task).
+fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
+    let results = load::read_tasks(file).map_err(|e| e.to_string())?;
+    let name = file.display();
+    match id {
+        Some(id) => {
+            let mut malformed = Vec::new();
+            for r in results {
+                match r {
+                    Ok(t) if t.meta.task_id == id => return Ok(t),
+                    Ok(_) => {}
+                    Err(e) => malformed.push(e.to_string()),
+                }
+            }
+            let mut message = format!("{name}: no well-formed task with task_id {id}");
+            for e in malformed {
+                message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
+            }
+            Err(message)
+        }
+        None => {
+            let mut results = results;
+            match results.len() {
+                1 => results.pop().expect("one task").map_err(|e| e.to_string()),
+                0 => Err(format!("{name}: no tasks")),
+                n => Err(format!("{name}: {n} tasks; choose one with --task ID")),
+            }
+        }
+    }
+}
+
+/// The HTTP backend when an endpoint is configured: a base URL, or a key and a model
+/// (then OpenAI's own endpoint).
+fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
+    let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+    let key = args.api_key.clone().or_else(|| from_env("OPENAI_API_KEY"));
+    let model = args.model.clone().or_else(|| from_env("COHERENT_MODEL"));
+    let base_url = match args.base_url.clone().or_else(|| from_env("OPENAI_BASE_URL")) {
+        Some(url) => url,
+        None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
+        None => return Ok(None),
+    };
+    let model = model.ok_or_else(|| {
+        format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
+    })?;
+    let config = OpenAiConfig {
+        api_key: key.map(ApiKey::new),
+        temperature: args.temperature,
+        seed: args.seed,
+        connect_timeout: seconds(args.connect_timeout, "connect-timeout")?,
+        read_timeout: seconds(args.read_timeout, "read-timeout")?,
+        total_timeout: seconds(args.timeout, "timeout")?,
+        backoff: Backoff {
+            max_retries: args.max_retries,
+            ..Backoff::default()
+        },
+        concurrency: args.concurrency,
+        output: match args.format {
+            Format::JsonSchema => OutputMode::JsonSchema,
+            Format::JsonObject => OutputMode::JsonObject,
+            Format::Text => OutputMode::Text,
+        },
+        ..OpenAiConfig::new(base_url, model)
+    };
+    OpenAiClient::new(config).map(Some).map_err(|e| e.to_string())
+}
+
+fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {
+    let info = backend.info();
+    match (info.kind.as_str(), replay) {
+        ("replay", Some(path)) => format!(
+            "backend: replay of {} (recorded with model {}; no network)",
+            path.display(),
+            info.model
+        ),
+        ("openai", _) => format!(
+            "backend: OpenAI-compatible endpoint {} with model {}",
+            info.base_url.unwrap_or_default(),
+            info.model
+        ),
+        _ => "backend: built-in (the optimal planner plays the assigner and the executors; \
+              to use a model, set OPENAI_BASE_URL, COHERENT_MODEL and OPENAI_API_KEY, \
+              or pass --base-url, --model and --api-key)"
+            .to_owned(),
+    }
+}
+
+fn step_line(task: &Task, r: &Round, max: u32) -> String {
+    let robot = r
+        .proposal
+        .as_ref()
+        .and_then(|p| task.idx(p.robot))
+        .map_or("-".to_owned(), |i| task.node(i).label());
+    let subtask = r
+        .proposal
+        .as_ref()
+        .map_or(String::new(), |p| format!("{:?}", p.subtask));
+    let action = r
+        .decision
+        .as_ref()
+        .and_then(|d| d.action.clone())
+        .unwrap_or_else(|| "-".to_owned());
+    let outcome = match &r.outcome {
+        Outcome::Executed if r.done => "ok, goal reached".to_owned(),
+        Outcome::Executed => "ok".to_owned(),
+        Outcome::Infeasible { reason, .. } => format!("infeasible ({reason})"),
+        Outcome::Declined => "declined".to_owned(),
+        Outcome::NoProposal { why } => format!("no usable proposal: {why}"),
+        Outcome::NoDecision { why } => format!("no usable decision: {why}"),
+        Outcome::BackendError { message } => format!("backend failed: {message}"),
+    };
+    let width = max.to_string().len();
+    format!(
+        "step {:>width$}/{max}  {robot}  {subtask}  {action}  -> {outcome}",
+        r.step
+    )
+}
+
+fn summary_line(e: &Episode, env: &dyn Environment) -> String {
+    let s = &e.summary;
+    let result = match s.status {
+        Status::Success => "success",
+        Status::Failure => "failure: step budget spent",
+        Status::BackendError => "stopped: the backend failed",
+        Status::Interrupted => "interrupted",
+    };
+    let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
+    let goal = if env.goal_satisfied() { "holds" } else { "not reached" };
+    format!(
+        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion | wall {:.2} s",
+        s.steps,
+        s.max_steps,
+        s.llm_calls,
+        s.prompt_tokens,
+        s.completion_tokens,
+        s.wall_ms / 1e3
+    )
+}
