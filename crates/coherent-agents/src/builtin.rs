@@ -167,7 +167,9 @@ impl Backend for BuiltinBackend {
             // A search can take a second or two: keep it off the async workers.
             let mut answer = tokio::task::spawn_blocking(move || planner.answer(&query))
                 .await
-                .map_err(|e| LlmError::new(LlmErrorKind::Internal, format!("the planner failed: {e}")))?;
+                .map_err(|e| {
+                    LlmError::new(LlmErrorKind::Internal, format!("the planner failed: {e}"))
+                })?;
             answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
             Ok(answer)
         })

@@ -8,9 +8,9 @@
 
 pub mod answer;
 pub mod builtin;
+pub mod episode;
 pub mod llm;
 pub mod openai;
-pub mod episode;
 pub mod pefa;
 pub mod prompt;
 pub mod replay;

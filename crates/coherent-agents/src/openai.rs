@@ -96,7 +96,11 @@ pub struct OpenAiClient {
     jitter: Mutex<Jitter>,
 }
 
-const MODES: [OutputMode; 3] = [OutputMode::JsonSchema, OutputMode::JsonObject, OutputMode::Text];
+const MODES: [OutputMode; 3] = [
+    OutputMode::JsonSchema,
+    OutputMode::JsonObject,
+    OutputMode::Text,
+];
 
 impl OpenAiClient {
     pub fn new(config: OpenAiConfig) -> Result<OpenAiClient, LlmError> {
@@ -214,12 +218,11 @@ impl OpenAiClient {
             attempts += 1;
             let failure = match self.exchange(&self.body(&q, mode)).await {
                 Ok((status, _, bytes)) if status.is_success() => {
-                    let mut answer = parse_completion(&bytes)
-                        .map_err(|message| LlmError {
-                            kind: LlmErrorKind::Malformed,
-                            message: self.scrub(&message),
-                            attempts,
-                        })?;
+                    let mut answer = parse_completion(&bytes).map_err(|message| LlmError {
+                        kind: LlmErrorKind::Malformed,
+                        message: self.scrub(&message),
+                        attempts,
+                    })?;
                     answer.text = self.scrub(&answer.text);
                     answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
                     answer.attempts = attempts;
@@ -247,10 +250,7 @@ impl OpenAiClient {
             if !error.retryable() || retries >= self.config.backoff.max_retries {
                 return Err(error);
             }
-            let unit = self
-                .jitter
-                .lock()
-                .map_or(0.5, |mut j| j.next_unit());
+            let unit = self.jitter.lock().map_or(0.5, |mut j| j.next_unit());
             tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
             retries += 1;
         }

@@ -15,7 +15,7 @@ use coherent_core::{Environment, NodeId, Relation, Task, describe, rules};
 use tokio::sync::Notify;
 
 use crate::answer;
-use crate::llm::{Answer, Backend, Finish, LlmError, Query, Role, Situation};
+use crate::llm::{Backend, Finish, LlmError, Query, Role, Situation};
 use crate::prompt::{self, AssignerView, ExecutorView};
 use crate::transcript::{Call, Outcome, Round, Status, Summary};
 
@@ -110,8 +110,7 @@ pub async fn run(
             break;
         }
         let step = rounds.len() as u32 + 1;
-        let Some(round) = round(env, task, backend, config, cancel, &history, step).await
-        else {
+        let Some(round) = round(env, task, backend, config, cancel, &history, step).await else {
             status = Status::Interrupted;
             break;
         };
@@ -199,7 +198,7 @@ async fn round(
         situation: situation(None),
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
-    let proposal = match reply.and_then(|text| answer::parse_proposal(task, &text).map_err(Unusable::Bad)) {
+    let proposal = match reply.and_then(|r| r.read(|text| answer::parse_proposal(task, text))) {
         Ok(p) => p,
         Err(e) => return Some(finish(env, round, e.outcome(Side::Assigner), start)),
     };
@@ -208,7 +207,14 @@ async fn round(
     // Execution.
     let robot = proposal.robot;
     let Ok(r) = task.robot_by_id(robot) else {
-        return Some(finish(env, round, Outcome::NoProposal { why: format!("robot {robot} is not in the team") }, start));
+        return Some(finish(
+            env,
+            round,
+            Outcome::NoProposal {
+                why: format!("robot {robot} is not in the team"),
+            },
+            start,
+        ));
     };
     round.actions = env.actions(robot).unwrap_or_default();
     let observation = env
@@ -232,10 +238,11 @@ async fn round(
         situation: situation(Some(proposal.subtask.clone())),
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
-    let decision = match reply.and_then(|text| answer::parse_decision(&round.actions, &text).map_err(Unusable::Bad)) {
-        Ok(d) => d,
-        Err(e) => return Some(finish(env, round, e.outcome(Side::Executor), start)),
-    };
+    let decision =
+        match reply.and_then(|r| r.read(|text| answer::parse_decision(&round.actions, text))) {
+            Ok(d) => d,
+            Err(e) => return Some(finish(env, round, e.outcome(Side::Executor), start)),
+        };
     round.decision = Some(decision.clone());
     let outcome = match &decision.action {
         Some(action) if decision.can_do => match env.step(robot, action) {
@@ -282,14 +289,37 @@ impl Unusable {
     }
 }
 
-/// Asks `backend`, records the call, and gives the answer's text when it can be read;
-/// `None` when cancelled.
+/// An answer's text, and whether generation was cut at the token limit.
+struct Reply {
+    text: String,
+    truncated: bool,
+}
+
+impl Reply {
+    /// Parses the text; a truncated answer counts when what matters came before the cut
+    /// (a small model may pad a complete action with whitespace up to the limit).
+    fn read<T>(self, parse: impl FnOnce(&str) -> Result<T, String>) -> Result<T, Unusable> {
+        parse(&self.text).map_err(|why| {
+            Unusable::Bad(if self.truncated {
+                format!(
+                    "the answer was cut off at the token limit ({why}): {:?}",
+                    excerpt(&self.text)
+                )
+            } else {
+                why
+            })
+        })
+    }
+}
+
+/// Asks `backend`, records the call, and gives the answer's text unless it is empty,
+/// refused or filtered; `None` when cancelled.
 async fn ask(
     backend: &dyn Backend,
     query: Query,
     cancel: &Cancel,
     calls: &mut Vec<Call>,
-) -> Option<Result<String, Unusable>> {
+) -> Option<Result<Reply, Unusable>> {
     let mut call = Call {
         role: query.role,
         robot: query.robot.map(|r| r.0),
@@ -304,9 +334,21 @@ async fn ask(
     };
     let reply = match result {
         Ok(answer) => {
-            let text = readable(&answer);
+            let reply = match &answer.finish {
+                Finish::Refusal(words) => Err(format!("the model refused: {words}")),
+                Finish::ContentFilter => Err("the answer was withheld by a content filter".into()),
+                _ if answer.text.trim().is_empty() => Err(if answer.finish == Finish::Length {
+                    "the answer was cut off at the token limit before any text".into()
+                } else {
+                    "the answer was empty".into()
+                }),
+                finish => Ok(Reply {
+                    text: answer.text.clone(),
+                    truncated: *finish == Finish::Length,
+                }),
+            };
             call.answer = Some(answer);
-            text.map_err(Unusable::Bad)
+            reply.map_err(Unusable::Bad)
         }
         Err(e) => {
             call.error = Some(e.clone());
@@ -319,25 +361,6 @@ async fn ask(
     };
     calls.push(call);
     Some(reply)
-}
-
-/// The answer's text, unless it is empty, refused or filtered. A truncated answer is
-/// still tried: the object may be complete before the cut.
-fn readable(answer: &Answer) -> Result<String, String> {
-    match &answer.finish {
-        Finish::Refusal(words) => Err(format!("the model refused: {words}")),
-        Finish::ContentFilter => Err("the answer was withheld by a content filter".into()),
-        _ if answer.text.trim().is_empty() => Err(if answer.finish == Finish::Length {
-            "the answer was cut off at the token limit before any text".into()
-        } else {
-            "the answer was empty".into()
-        }),
-        Finish::Length if !answer.text.contains('}') => Err(format!(
-            "the answer was cut off at the token limit: {:?}",
-            excerpt(&answer.text)
-        )),
-        _ => Ok(answer.text.clone()),
-    }
 }
 
 fn excerpt(text: &str) -> String {
@@ -385,10 +408,7 @@ fn feedback(env: &(dyn Environment + Send), round: &Round, outcome: &Outcome) ->
     };
     match outcome {
         Outcome::Executed => {
-            let done = round
-                .decision
-                .as_ref()
-                .is_some_and(|d| d.subtask_complete);
+            let done = round.decision.as_ref().is_some_and(|d| d.subtask_complete);
             let note = round
                 .decision
                 .as_ref()
@@ -403,7 +423,10 @@ fn feedback(env: &(dyn Environment + Send), round: &Round, outcome: &Outcome) ->
             }
         }
         Outcome::Infeasible { message, .. } => {
-            format!("{robot} tried {action}, which cannot be done: {message}. {}", can_do_now())
+            format!(
+                "{robot} tried {action}, which cannot be done: {message}. {}",
+                can_do_now()
+            )
         }
         Outcome::Declined => {
             let note = round
@@ -412,7 +435,10 @@ fn feedback(env: &(dyn Environment + Send), round: &Round, outcome: &Outcome) ->
                 .map(|d| d.note.trim().to_owned())
                 .filter(|n| !n.is_empty())
                 .unwrap_or_else(|| "no reason given".into());
-            format!("{robot} cannot do this subtask now ({note}). {}", can_do_now())
+            format!(
+                "{robot} cannot do this subtask now ({note}). {}",
+                can_do_now()
+            )
         }
         Outcome::NoProposal { why } => format!(
             "Your answer could not be used ({why}). Name one robot of the team and one subtask."

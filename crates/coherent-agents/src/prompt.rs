@@ -70,7 +70,11 @@ pub fn assigner_messages(task: &Task, view: &AssignerView<'_>) -> Vec<Message> {
         view.history.join("\n")
     };
     vec![
-        Message::system(fill(ASSIGNER_SYSTEM, &[("team", &team(task))]).trim_end().to_owned()),
+        Message::system(
+            fill(ASSIGNER_SYSTEM, &[("team", &team(task))])
+                .trim_end()
+                .to_owned(),
+        ),
         Message::user(
             fill(
                 ASSIGNER_USER,
@@ -90,7 +94,11 @@ pub fn assigner_messages(task: &Task, view: &AssignerView<'_>) -> Vec<Message> {
 /// The assigner's answer: a robot of the team and a subtask, reasoning first so that a
 /// model thinks before it commits.
 pub fn assigner_schema(task: &Task) -> Value {
-    let robots: Vec<String> = task.robots.iter().map(|r| task.node(r.node).label()).collect();
+    let robots: Vec<String> = task
+        .robots
+        .iter()
+        .map(|r| task.node(r.node).label())
+        .collect();
     json!({
         "type": "object",
         "properties": {
@@ -170,7 +178,10 @@ mod tests {
     #[test]
     fn fill_replaces_every_known_key_once() {
         assert_eq!(
-            fill("{{a}} and {{a}}, {{b}} {{c}}", &[("a", "x"), ("b", "{{a}}")]),
+            fill(
+                "{{a}} and {{a}}, {{b}} {{c}}",
+                &[("a", "x"), ("b", "{{a}}")]
+            ),
             "x and x, {{a}} {{c}}"
         );
     }
@@ -179,7 +190,10 @@ mod tests {
     fn every_template_placeholder_is_filled() {
         let cases: [(&str, &[&str]); 6] = [
             (ASSIGNER_SYSTEM, &["team"]),
-            (ASSIGNER_USER, &["instruction", "robots", "observation", "history"]),
+            (
+                ASSIGNER_USER,
+                &["instruction", "robots", "observation", "history"],
+            ),
             (EXECUTOR_USER, &["subtask", "observation", "actions"]),
             (EXECUTOR_QUADROTOR, &["robot"]),
             (EXECUTOR_ROBOT_DOG, &["robot"]),

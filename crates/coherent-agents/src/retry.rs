@@ -81,7 +81,10 @@ mod tests {
             base: Duration::from_millis(100),
             cap: Duration::from_secs(1),
         };
-        assert_eq!(b.pause(0, None, 0.999_999), Duration::from_millis(100).mul_f64(0.999_999));
+        assert_eq!(
+            b.pause(0, None, 0.999_999),
+            Duration::from_millis(100).mul_f64(0.999_999)
+        );
         assert_eq!(b.pause(2, None, 0.5), Duration::from_millis(200));
         assert_eq!(b.pause(3, None, 0.0), Duration::ZERO);
         assert_eq!(b.pause(40, None, 0.5), Duration::from_millis(500));

@@ -174,8 +174,7 @@ pub fn read(path: &Path) -> Result<Transcript, String> {
         if line.trim().is_empty() {
             continue;
         }
-        let record: Record =
-            serde_json::from_str(&line).map_err(|e| format!("{}: {e}", at()))?;
+        let record: Record = serde_json::from_str(&line).map_err(|e| format!("{}: {e}", at()))?;
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {

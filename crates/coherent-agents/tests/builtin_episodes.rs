@@ -38,7 +38,10 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-async fn run_builtin(task: &Arc<Task>, out: &Path) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
+async fn run_builtin(
+    task: &Arc<Task>,
+    out: &Path,
+) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
     let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
     let path = episode::transcript_path(out, task, Method::Pefa);
     let mut env = SymbolicEnv::new(Arc::clone(task));
@@ -74,14 +77,20 @@ async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
                 assert_eq!(s.llm_calls, 2 * s.steps, "{name}: two calls per round");
                 assert_eq!(s.status, Status::Success, "{name}");
                 assert_eq!(s.steps, optimum, "{name}: steps against the optimum");
-                assert!(e.rounds.iter().all(|r| r.outcome == Outcome::Executed), "{name}");
+                assert!(
+                    e.rounds.iter().all(|r| r.outcome == Outcome::Executed),
+                    "{name}"
+                );
                 solved += 1;
             }
             None => {
                 // env3 task 0: the planner refuses each round until the budget is spent.
                 assert_eq!(s.status, Status::Failure, "{name}");
                 assert_eq!(s.steps, budget.steps(), "{name}");
-                assert_eq!(s.llm_calls, s.steps, "{name}: the assigner's refusal ends each round");
+                assert_eq!(
+                    s.llm_calls, s.steps,
+                    "{name}: the assigner's refusal ends each round"
+                );
                 assert!(
                     e.rounds
                         .iter()
@@ -91,7 +100,10 @@ async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
             }
         }
         let t = transcript::read(&path).expect("the transcript reads back");
-        assert!(t.rounds == e.rounds, "{name}: every round is in the transcript");
+        assert!(
+            t.rounds == e.rounds,
+            "{name}: every round is in the transcript"
+        );
         assert_eq!(t.summary.as_ref(), Some(&e.summary), "{name}");
     }
     assert_eq!(solved, 80);
@@ -107,7 +119,12 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
     let task = Arc::new(task);
     let (_, recorded_episode, path) = run_builtin(&task, &out).await;
     let recorded = transcript::read(&path).expect("reads back");
-    assert!(recorded_episode.rounds[0].calls.iter().any(|c| c.role == Role::Executor));
+    assert!(
+        recorded_episode.rounds[0]
+            .calls
+            .iter()
+            .any(|c| c.role == Role::Executor)
+    );
 
     let replay = |t: &transcript::Transcript| {
         let t = t.clone();
@@ -136,10 +153,15 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
 
     // A prompt that differs from the recording stops the replay with the round named.
     let mut changed = recorded.clone();
-    changed.rounds[2].calls[0].messages[1].content.push_str(" (edited)");
+    changed.rounds[2].calls[0].messages[1]
+        .content
+        .push_str(" (edited)");
     let diverged = replay(&changed).await;
     assert_eq!(diverged.summary.status, Status::BackendError);
     let error = diverged.summary.error.clone().unwrap_or_default();
-    assert!(error.contains("round 3") && error.contains("prompt"), "{error}");
+    assert!(
+        error.contains("round 3") && error.contains("prompt"),
+        "{error}"
+    );
     assert!(episode::check_replay(&recorded, &diverged).is_err());
 }

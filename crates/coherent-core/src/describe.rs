@@ -41,11 +41,7 @@ pub fn facts(task: &Task, s: &State, observations: &[&Observation]) -> String {
     edges.dedup();
 
     let mut out = String::new();
-    let rooms: Vec<String> = task
-        .rooms()
-        .iter()
-        .map(|&r| task.node(r).label())
-        .collect();
+    let rooms: Vec<String> = task.rooms().iter().map(|&r| task.node(r).label()).collect();
     let _ = writeln!(out, "Rooms: {}", rooms.join(", "));
     for &door in nodes
         .iter()
@@ -71,9 +67,9 @@ pub fn facts(task: &Task, s: &State, observations: &[&Observation]) -> String {
         if matches!(node.kind, NodeKind::Room | NodeKind::Door) {
             continue;
         }
-        let mut words = task.vocab.property_names(PropSet(
-            task.properties(s, n).0 & USEFUL.0,
-        ));
+        let mut words = task
+            .vocab
+            .property_names(PropSet(task.properties(s, n).0 & USEFUL.0));
         words.extend(task.vocab.state_names(s.states(n)));
         if words.is_empty() {
             let _ = writeln!(out, "- {}", node.label());
