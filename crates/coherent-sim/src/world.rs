@@ -729,6 +729,11 @@ impl World {
     /// pose only when the root's type changes, so the pose is copied in here.
     fn sync_arm(&mut self, joint: MultibodyJointHandle, root: RigidBodyHandle) {
         let root_pose = *self.pw.bodies[root].position();
+        self.sync_arm_to(joint, root_pose);
+    }
+
+    /// Puts an arm's chain on a root at `root_pose`.
+    fn sync_arm_to(&mut self, joint: MultibodyJointHandle, root_pose: Pose) {
         if let Some((mb, _)) = self.pw.multibody_joints.get_mut(joint) {
             // `true`: on the first call the root turns from dynamic to fixed and takes
             // the body's pose rather than the identity.
@@ -910,6 +915,19 @@ impl World {
 
     pub(crate) fn step(&mut self) {
         self.control_quad();
+        // A multibody writes its root link's pose into the root body during the step, so
+        // the root link is put where a kinematic root (the walking dog) is going first;
+        // otherwise the root's kinematic target is overwritten and it never moves.
+        for i in 0..self.arms.len() {
+            let (j, r) = (self.arms[i].joints[0], self.arms[i].root);
+            let rb = &self.pw.bodies[r];
+            let next = if rb.is_kinematic() {
+                *rb.next_position()
+            } else {
+                *rb.position()
+            };
+            self.sync_arm_to(j, next);
+        }
         self.pw.step();
         // Kinematic arm joints follow their root (the moving dog) after each step.
         for i in 0..self.arms.len() {
@@ -1359,6 +1377,7 @@ impl World {
         // A cylinder: turning the robot never makes it collide.
         let shape = Cylinder::new(h[1], h[0].max(h[2]));
         let shape_off = Vector::new(0.0, h[1], 0.0);
+        let mut last_hit: Option<(ColliderHandle, Vector)> = None;
         for wp in route.into_iter().skip(1) {
             let mut stuck = 0;
             let from = self.pw.bodies[dog.body].translation();
@@ -1376,7 +1395,9 @@ impl World {
                     let qp = self.pw.query_pipeline_with_filter(filter);
                     let cpose = Pose::from_translation(pos + shape_off);
                     self.kcc
-                        .move_shape(DT, &qp, &shape, &cpose, want, |_| {})
+                        .move_shape(DT, &qp, &shape, &cpose, want, |c| {
+                            last_hit = Some((c.handle, c.hit.witness1));
+                        })
                         .translation
                 };
                 let rb = &mut self.pw.bodies[dog.body];
@@ -1407,8 +1428,12 @@ impl World {
                 return fail(
                     FailureKind::Blocked,
                     format!(
-                        "the legged robot slid along an obstacle and stopped {off:.2} m short of ({:.2}, {:.2})",
-                        wp.x, wp.z
+                        "the legged robot slid along an obstacle and stopped {off:.2} m short of ({:.2}, {:.2}) at ({:.2}, {:.2}){}",
+                        wp.x,
+                        wp.z,
+                        pos.x,
+                        pos.z,
+                        self.hit_name(last_hit)
                     ),
                 );
             }
@@ -1423,6 +1448,21 @@ impl World {
             d.yaw = yaw;
         }
         Ok(())
+    }
+
+    /// Names what a character-controller contact touched, for failure messages.
+    fn hit_name(&self, hit: Option<(ColliderHandle, Vector)>) -> String {
+        let Some((h, p)) = hit else {
+            return String::new();
+        };
+        let what = match self.owner.get(&h) {
+            Some(n) => self.label(*n),
+            None => "a wall".to_string(),
+        };
+        format!(
+            " (last contact: {what} at ({:.2}, {:.2}, {:.2}))",
+            p.x, p.y, p.z
+        )
     }
 
     /// The fixed thing a node ultimately stands on or in (furniture), or itself.
