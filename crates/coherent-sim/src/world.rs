@@ -109,6 +109,9 @@ struct Quad {
     robot: Idx,
     body: RigidBodyHandle,
     motors_on: bool,
+    /// Integral of the position error (m·s): removes the steady offset a payload or
+    /// a tilted start leaves.
+    integral: Vector,
     /// Rotor positions in the body frame.
     rotors: [Vector; 4],
 }
@@ -579,6 +582,7 @@ impl World {
                         robot: r,
                         body,
                         motors_on: false,
+                        integral: Vector::ZERO,
                         rotors,
                     });
                     self.paths
@@ -965,20 +969,31 @@ impl World {
     fn control_quad(&mut self) {
         let Some(q) = self.quad.clone() else { return };
         let target = self.quad_target;
+        let payload = if q.motors_on { self.basket_load() } else { 0.0 };
         let rb = &mut self.pw.bodies[q.body];
         rb.reset_forces(false);
         rb.reset_torques(false);
         if !q.motors_on {
             return;
         }
-        let m = rb.mass();
+        let craft = rb.mass();
+        // Feed-forward: what rides in the basket weighs on it too.
+        let m = craft + payload;
         let p = rb.center_of_mass();
         let v = rb.linvel();
         let w = rb.angvel();
         let rot = *rb.rotation();
-        // Position loop: desired acceleration, tilt limited.
+        // Position loop (PID): desired acceleration, tilt limited.
         let (tp, tv) = target;
-        let mut acc = (tp - p) * 3.0 + (tv - v) * 3.5;
+        let mut integral = q.integral + (tp - p) * DT;
+        if integral.length() > 0.5 {
+            integral = integral.normalize() * 0.5;
+        }
+        if let Some(qm) = self.quad.as_mut() {
+            qm.integral = integral;
+        }
+        let rb = &mut self.pw.bodies[q.body];
+        let mut acc = (tp - p) * 3.0 + (tv - v) * 3.5 + integral * 1.5;
         let horiz = Vector::new(acc.x, 0.0, acc.z);
         let limit = 2.5;
         if horiz.length() > limit {
@@ -1006,7 +1021,7 @@ impl World {
             // A force f along +y at (x, y, z) gives the torque (-z f, 0, x f).
             fr[i] = thrust / 4.0 - torque.x * r.z.signum() / (4.0 * l)
                 + torque.z * r.x.signum() / (4.0 * l);
-            fr[i] = fr[i].clamp(0.0, m * 9.81);
+            fr[i] = fr[i].clamp(0.0, craft * 9.81);
         }
         let pose = *rb.position();
         for (i, r) in q.rotors.iter().enumerate() {
@@ -1014,6 +1029,45 @@ impl World {
             rb.add_force_at_point(up * fr[i], at, true);
         }
         rb.add_torque(rot * Vector::new(0.0, torque.y, 0.0), true);
+    }
+}
+
+impl World {
+    /// Mass of the loose things resting in the quadrotor's basket (their centres within
+    /// the basket's footprint, up to 0.4 m above its floor).
+    fn basket_load(&self) -> f32 {
+        let Some(q) = &self.quad else { return 0.0 };
+        let Some(v) = self
+            .task
+            .basket_of(q.robot)
+            .and_then(|b| self.volume[b.get()])
+        else {
+            return 0.0;
+        };
+        let frame = *self.pw.bodies[v.body].position() * v.local;
+        let mut load = 0.0;
+        for it in self.layout.items.iter().filter(|it| it.dynamic) {
+            let Some(b) = self
+                .task
+                .idx(NodeId(it.id))
+                .and_then(|n| self.body[n.get()])
+            else {
+                continue;
+            };
+            if b == q.body {
+                continue;
+            }
+            let rb = &self.pw.bodies[b];
+            let l = frame.inverse_transform_point(rb.translation());
+            if l.x.abs() <= v.half.x
+                && l.z.abs() <= v.half.z
+                && l.y >= -v.half.y - 0.02
+                && l.y <= 0.4
+            {
+                load += rb.mass();
+            }
+        }
+        load
     }
 }
 
@@ -1281,6 +1335,7 @@ impl World {
         };
         if let Some(q) = self.quad.as_mut() {
             q.motors_on = true;
+            q.integral = Vector::ZERO;
         }
         self.fly(&[p + Vector::new(0.0, 0.7, 0.0)])
     }
