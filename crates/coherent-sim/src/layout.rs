@@ -360,6 +360,8 @@ impl Layout {
             });
         }
 
+        let loc = locations(task);
+        let fitted = fitted_sizes(task, &specs, &loc);
         let mut items: Vec<ItemGeom> = Vec::new();
         let mut robots: Vec<RobotGeom> = Vec::new();
         for &(r, (i, j)) in &cell {
@@ -374,7 +376,8 @@ impl Layout {
                         yaw: 0.0,
                     }),
                     _ => {
-                        let (size, container, lid, dynamic) = shape_of(task, n, &specs);
+                        let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                        let size = fitted[n.get()];
                         items.push(ItemGeom {
                             id: task.id(n).0,
                             pos: [x, 0.0, z],
@@ -441,17 +444,13 @@ impl Layout {
             .filter(|&n| task.node(n).kind == NodeKind::Object)
             .filter(|&n| items.iter().all(|it| it.id != task.id(n).0))
             .collect();
-        // Filled part of each holder: next x and row z, current row depth.
-        let mut cursor: Vec<(i64, f32, f32, f32)> = Vec::new();
+        // Where each holder's things go: packed in its region, in file order.
+        let mut spots: Vec<(i64, bool, Vec<[f32; 2]>)> = Vec::new();
         while !pending.is_empty() {
             let before = pending.len();
             let mut rest = Vec::new();
             for n in pending {
-                let loc = task
-                    .init_edges
-                    .iter()
-                    .find(|e| e.from() == n && e.rel().is_location());
-                let Some(loc) = loc else {
+                let Some((holder, inside)) = loc[n.get()] else {
                     // In no room at all (some released tasks have such things): set
                     // aside on an unnamed pad outside the house, where nothing sees it.
                     let (size, container, lid, dynamic) = shape_of(task, n, &specs);
@@ -470,52 +469,49 @@ impl Layout {
                     });
                     continue;
                 };
-                let holder = loc.to();
-                let Some(hg) = items.iter().find(|it| it.id == task.id(holder).0).cloned() else {
-                    rest.push(n);
-                    continue;
+                let hg = match items.iter().find(|it| it.id == task.id(holder).0) {
+                    Some(h) => h.clone(),
+                    // A quadrotor's basket: the open box on the craft.
+                    None => match basket_geom(task, holder, &robots, &specs) {
+                        Some(h) => h,
+                        None => {
+                            rest.push(n);
+                            continue;
+                        }
+                    },
                 };
-                let (size, container, lid, dynamic) = shape_of(task, n, &specs);
-                let inside = loc.rel() == Relation::Inside;
-                let arm_here = robots.iter().any(|rg| {
-                    task.idx(NodeId(rg.id)).is_some_and(|ri| {
-                        init.has(coherent_core::Edge::new(ri, Relation::On, holder))
-                    })
-                });
-                let region = pack_region(&hg, inside, arm_here);
-                let c = match cursor.iter_mut().find(|c| c.0 == hg.id) {
-                    Some(c) => c,
+                let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                let size = fitted[n.get()];
+                let group: Vec<Idx> = contents(&loc, holder, inside);
+                let slot = group.iter().position(|&x| x == n).unwrap_or(0);
+                let packed = match spots.iter().find(|c| c.0 == hg.id && c.1 == inside) {
+                    Some(c) => Some(c.2.clone()),
                     None => {
-                        cursor.push((hg.id, region[0], region[1], 0.0));
-                        let last = cursor.len() - 1;
-                        &mut cursor[last]
+                        let sizes: Vec<[f32; 3]> = group.iter().map(|x| fitted[x.get()]).collect();
+                        let flags = holder_flags(task, &specs, &loc, holder);
+                        let got = pack(pack_region(&hg, inside, flags.0, flags.1), &sizes);
+                        if let Some(g) = &got {
+                            spots.push((hg.id, inside, g.clone()));
+                        }
+                        got
                     }
                 };
-                if c.1 + size[0] > region[2] + 1e-4 {
-                    c.1 = region[0];
-                    c.2 += c.3 + GAP;
-                    c.3 = 0.0;
-                }
-                if c.1 + size[0] > region[2] + 1e-4 || c.2 + size[2] > region[3] + 1e-4 {
+                let Some(at) = packed.and_then(|p| p.get(slot).copied()) else {
                     return err(format!(
                         "layout: no room left for {} {} {}",
                         task.node(n).label(),
                         if inside { "in" } else { "on" },
                         task.node(holder).label()
                     ));
-                }
-                let x = hg.pos[0] + c.1 + size[0] / 2.0;
-                let z = hg.pos[2] + c.2 + size[2] / 2.0;
-                c.1 += size[0] + GAP;
-                c.3 = c.3.max(size[2]);
+                };
                 let y = if inside {
-                    hg.pos[1] + WALL
+                    hg.pos[1] + wall_of(hg.size[1])
                 } else {
                     hg.pos[1] + hg.size[1]
                 };
                 items.push(ItemGeom {
                     id: task.id(n).0,
-                    pos: [x, y + 0.002, z],
+                    pos: [hg.pos[0] + at[0], y + 0.002, hg.pos[2] + at[1]],
                     size,
                     container,
                     lid,
@@ -550,21 +546,209 @@ pub fn arm_spot(surface: &ItemGeom) -> (f32, f32) {
     )
 }
 
+/// Thickness of a container's floor and walls of height `h`.
+pub fn wall_of(h: f32) -> f32 {
+    WALL.min(h / 4.0)
+}
+
+/// Width kept free at the right (+x) end of a top where the quadrotor may land: its
+/// frame plus the landing search's clearance on each side, on the search's 10 cm grid.
+fn landing_pad(specs: &RobotSpecs) -> f32 {
+    2.0 * specs.quad_half + 0.4
+}
+
+/// Where each object is at the start: the holder its location edge names and whether
+/// it is inside (rather than on) it.
+fn locations(task: &Task) -> Vec<Option<(Idx, bool)>> {
+    let mut loc = vec![None; task.nodes.len()];
+    for n in task.indices() {
+        if task.node(n).kind != NodeKind::Object {
+            continue;
+        }
+        loc[n.get()] = task
+            .init_edges
+            .iter()
+            .find(|e| e.from() == n && e.rel().is_location())
+            .map(|e| (e.to(), e.rel() == Relation::Inside));
+    }
+    loc
+}
+
+/// The things on (or in) `holder`, in file order.
+fn contents(loc: &[Option<(Idx, bool)>], holder: Idx, inside: bool) -> Vec<Idx> {
+    loc.iter()
+        .enumerate()
+        .filter(|(_, l)| **l == Some((holder, inside)))
+        .map(|(i, _)| Idx(i as u16))
+        .collect()
+}
+
+/// Whether a fixed arm stands on `holder`, and whether the quadrotor may land on it
+/// (a top standing on a floor, in a task with a quadrotor).
+fn holder_flags(
+    task: &Task,
+    specs: &RobotSpecs,
+    loc: &[Option<(Idx, bool)>],
+    holder: Idx,
+) -> (bool, Option<f32>) {
+    let arm_here = task.robots.iter().any(|r| {
+        r.kind == RobotKind::RobotArm
+            && task
+                .init
+                .has(coherent_core::Edge::new(r.node, Relation::On, holder))
+    });
+    let has_quad = task.robots.iter().any(|r| r.kind == RobotKind::Quadrotor);
+    let p = task.node(holder).properties;
+    let on_floor = loc
+        .get(holder.get())
+        .copied()
+        .flatten()
+        .is_some_and(|(h, _)| task.node(h).kind == NodeKind::Floor);
+    let pad =
+        (has_quad && on_floor && p.contains(PropSet::SURFACES) && !p.contains(PropSet::GRABABLE))
+            .then(|| landing_pad(specs));
+    (arm_here, pad)
+}
+
+/// Every object's size, grown from its default (see [`shape_of`]) until what the graph
+/// puts on or in it packs there, with the landing pad and arm strip kept free; lidded
+/// containers also grow tall enough to close over their contents. Deepest things first.
+fn fitted_sizes(task: &Task, specs: &RobotSpecs, loc: &[Option<(Idx, bool)>]) -> Vec<[f32; 3]> {
+    let n = task.nodes.len();
+    let mut size: Vec<[f32; 3]> = vec![[0.0; 3]; n];
+    let depth = |x: Idx| {
+        let mut d = 0;
+        let mut cur = x;
+        while let Some((h, _)) = loc[cur.get()] {
+            d += 1;
+            cur = h;
+            if d > 16 {
+                break;
+            }
+        }
+        d
+    };
+    let mut order: Vec<Idx> = task
+        .indices()
+        .filter(|&x| task.node(x).kind == NodeKind::Object)
+        .collect();
+    order.sort_by_key(|&x| std::cmp::Reverse(depth(x)));
+    for x in order {
+        let (base, container, lid, _) = shape_of(task, x, specs);
+        let mut s = base;
+        let inner: Vec<[f32; 3]> = contents(loc, x, true)
+            .iter()
+            .map(|c| size[c.get()])
+            .collect();
+        let on: Vec<[f32; 3]> = contents(loc, x, false)
+            .iter()
+            .map(|c| size[c.get()])
+            .collect();
+        if container && lid != Lid::None {
+            let tallest = inner.iter().map(|c| c[1]).fold(0.0f32, f32::max);
+            let lids = if lid == Lid::Front { 2.0 } else { 1.0 };
+            while s[1] - lids * wall_of(s[1]) < tallest + 0.02 {
+                s[1] += 0.02;
+            }
+        }
+        let flags = holder_flags(task, specs, loc, x);
+        let floor_standing =
+            loc[x.get()].is_some_and(|(h, _)| task.node(h).kind == NodeKind::Floor);
+        for _ in 0..80 {
+            let g = ItemGeom {
+                id: 0,
+                pos: [0.0; 3],
+                size: s,
+                container,
+                lid,
+                dynamic: false,
+            };
+            let fits = (inner.is_empty()
+                || pack(pack_region(&g, true, false, None), &inner).is_some())
+                && (on.is_empty() || pack(pack_region(&g, false, flags.0, flags.1), &on).is_some());
+            if fits {
+                break;
+            }
+            // Furniture grows along x up to what leaves a walkway in its 3 m cell;
+            // smaller things stay about square.
+            if floor_standing {
+                if s[0] < 2.2 {
+                    s[0] += 0.1;
+                } else {
+                    s[2] += 0.1;
+                }
+            } else if s[0] <= s[2] {
+                s[0] += 0.04;
+            } else {
+                s[2] += 0.04;
+            }
+        }
+        size[x.get()] = s;
+    }
+    size
+}
+
+/// A quadrotor's basket as a holder: the open box on the craft where the layout put it.
+fn basket_geom(
+    task: &Task,
+    basket: Idx,
+    robots: &[RobotGeom],
+    specs: &RobotSpecs,
+) -> Option<ItemGeom> {
+    let q = task
+        .robots
+        .iter()
+        .find(|r| task.basket_of(r.node) == Some(basket))?;
+    let rg = robots.iter().find(|g| g.id == task.id(q.node).0)?;
+    let b = 2.0 * specs.basket_half;
+    Some(ItemGeom {
+        id: task.id(basket).0,
+        pos: rg.pos,
+        // Its floor is 2 cm thick, as the robot model builds it.
+        size: [b, 0.08, b],
+        container: true,
+        lid: Lid::None,
+        dynamic: true,
+    })
+}
+
+/// Packs boxes of `sizes` in rows from the region's near corner; their centres relative
+/// to the holder's bottom centre, or `None` when they do not all fit.
+fn pack(region: [f32; 4], sizes: &[[f32; 3]]) -> Option<Vec<[f32; 2]>> {
+    let (mut x, mut z, mut row) = (region[0], region[1], 0.0f32);
+    let mut out = Vec::with_capacity(sizes.len());
+    for s in sizes {
+        if x + s[0] > region[2] + 1e-4 {
+            x = region[0];
+            z += row + GAP;
+            row = 0.0;
+        }
+        if x + s[0] > region[2] + 1e-4 || z + s[2] > region[3] + 1e-4 {
+            return None;
+        }
+        out.push([x + s[0] / 2.0, z + s[2] / 2.0]);
+        x += s[0] + GAP;
+        row = row.max(s[2]);
+    }
+    Some(out)
+}
+
 /// Part of a holder's top (or inside) to pack things in, relative to its bottom centre:
-/// `[x0, z0, x1, z1]`.
-fn pack_region(h: &ItemGeom, inside: bool, arm_here: bool) -> [f32; 4] {
+/// `[x0, z0, x1, z1]`. `pad`: width kept free at the +x end for landing.
+fn pack_region(h: &ItemGeom, inside: bool, arm_here: bool, pad: Option<f32>) -> [f32; 4] {
     let (hx, hz) = (h.size[0] / 2.0, h.size[2] / 2.0);
     if inside {
-        let m = WALL + 0.01;
-        [-hx + m, -hz + m, hx - m, hz - m]
-    } else if arm_here {
-        // All but the back strip, where the arm stands; the quadrotor lands where it
-        // finds room.
-        [-hx + 0.05, -hz + 0.05, hx - 0.05, hz - 0.32]
+        let m = wall_of(h.size[1]) + 0.01;
+        return [-hx + m, -hz + m, hx - m, hz - m];
+    }
+    let m = 0.05;
+    let x1 = hx - pad.unwrap_or(m);
+    if arm_here {
+        // All but the back strip, where the arm stands.
+        [-hx + m, -hz + m, x1, hz - 0.32]
     } else {
-        let m = 0.05;
         // Centre band first, so that the legged robot reaches from either long side.
-        [-hx + m, (-0.15f32).max(-hz + m), hx - m, hz - m]
+        [-hx + m, (-0.15f32).max(-hz + m), x1, hz - m]
     }
 }
 

@@ -10,7 +10,7 @@ use rapier3d::control::{CharacterLength, KinematicCharacterController};
 use rapier3d::na::DVector;
 use rapier3d::prelude::*;
 
-use crate::layout::{ASIDE, ItemGeom, Layout, Lid, WALL};
+use crate::layout::{ASIDE, ItemGeom, Layout, Lid, WALL, wall_of};
 use crate::path;
 
 pub const DT: f32 = 1.0 / 60.0;
@@ -367,7 +367,7 @@ impl World {
             let gr = groups(if it.dynamic { G_OBJECT } else { G_STATIC });
             let density = if it.dynamic { 100.0 } else { 1000.0 };
             if it.container {
-                let t = WALL.min(h / 4.0);
+                let t = wall_of(h);
                 // Floor and four walls: an open box.
                 let parts = [
                     (Vector::new(0.0, t / 2.0, 0.0), [w / 2.0, t / 2.0, d / 2.0]),
@@ -2084,7 +2084,12 @@ impl World {
                 .support_of(xb, x)
                 .map_or(Placement::Loose, Placement::On);
         }
-        let centre = self.pw.bodies[xb].center_of_mass();
+        // Inside = resting within a container's interior: the middle of the thing's
+        // underside lies in the interior volume (an apple in a shallow plate pokes out
+        // above the rim, yet it is in the plate).
+        let Some(low) = self.underside(xb) else {
+            return Placement::Loose;
+        };
         let mut best: Option<(f32, Idx)> = None;
         for n in self.task.indices() {
             if n == x {
@@ -2096,7 +2101,7 @@ impl World {
                 }
                 let pose = *self.pw.bodies[v.body].position() * v.local;
                 let shape = Cuboid::new(v.half);
-                if shape.contains_point(&pose, centre) {
+                if shape.contains_point(&pose, low) {
                     let vol = v.half.x * v.half.y * v.half.z;
                     if best.is_none_or(|(b, _)| vol < b) {
                         best = Some((vol, n));
@@ -2111,10 +2116,24 @@ impl World {
             .map_or(Placement::Loose, Placement::On)
     }
 
+    /// A point 1 cm above the lowest point of a body's colliders, below its centre of
+    /// mass.
+    fn underside(&self, b: RigidBodyHandle) -> Option<Vector> {
+        let rb = &self.pw.bodies[b];
+        let com = rb.center_of_mass();
+        let low = rb
+            .colliders()
+            .iter()
+            .map(|c| self.pw.colliders[*c].compute_aabb().mins.y)
+            .reduce(f32::min)?;
+        Some(Vector::new(com.x, (low + 0.01).min(com.y), com.z))
+    }
+
     /// The named thing under body `xb` that it touches.
     fn support_of(&self, xb: RigidBodyHandle, x: Idx) -> Option<Idx> {
-        let rb = &self.pw.bodies[xb];
-        let origin = rb.center_of_mass();
+        // From just above its underside: a ray from the centre would start inside what
+        // rests in it (a tall apple in a shallow plate).
+        let origin = self.underside(xb)?;
         let mut filter = solid().exclude_rigid_body(xb);
         // The quadrotor rests on furniture or a floor, never on what is in its basket.
         if self.quad.as_ref().is_some_and(|q| q.body == xb) {
