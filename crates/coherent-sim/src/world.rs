@@ -1579,22 +1579,30 @@ impl World {
         let gap = h[0].max(h[2]) + 0.12;
         let c = aabb.center();
         let he = aabb.half_extents();
+        let grid = path::Grid::new(self, dog.body);
         let mut cands = Vec::new();
         for (nx, nz) in [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)] {
-            let base = Vector::new(c.x + nx * (he.x + gap), 0.0, c.z + nz * (he.z + gap));
             let lateral = if nx == 0.0 {
                 Vector::X * he.x
             } else {
                 Vector::Z * he.z
             };
             for f in [0.0f32, -0.6, 0.6, -0.3, 0.3] {
-                cands.push(base + lateral * f);
+                // Nearest free cell straight out from that side (a wall beside a door
+                // or the grid's 10 cm cells can block the first one).
+                let free = [0.0f32, 0.1, 0.2, 0.3].into_iter().find_map(|extra| {
+                    let p = Vector::new(
+                        c.x + nx * (he.x + gap + extra),
+                        0.0,
+                        c.z + nz * (he.z + gap + extra),
+                    ) + lateral * f;
+                    grid.free(p).then_some(p)
+                });
+                cands.extend(free);
             }
         }
-        let grid = path::Grid::new(self, dog.body);
         let start = self.pw.bodies[dog.body].translation();
         let fwd = self.layout.specs.dog_shoulder[2];
-        cands.retain(|p| grid.free(*p));
         cands.sort_by(|p, q| {
             let sp =
                 *p + (Vector::new(target.x - p.x, 0.0, target.z - p.z)).normalize_or_zero() * fwd;
