@@ -969,7 +969,11 @@ impl World {
     fn control_quad(&mut self) {
         let Some(q) = self.quad.clone() else { return };
         let target = self.quad_target;
-        let payload = if q.motors_on { self.basket_load() } else { 0.0 };
+        let (payload, load_at) = if q.motors_on {
+            self.basket_load()
+        } else {
+            (0.0, Vector::ZERO)
+        };
         let rb = &mut self.pw.bodies[q.body];
         rb.reset_forces(false);
         rb.reset_torques(false);
@@ -985,7 +989,15 @@ impl World {
         let rot = *rb.rotation();
         // Position loop (PID): desired acceleration, tilt limited.
         let (tp, tv) = target;
-        let mut integral = q.integral + (tp - p) * DT;
+        // Horizontally only while hovering: it would wind up on the tracking lag of a
+        // long flight and overshoot at the end of it.
+        let err = tp - p;
+        let err = if tv.length() < 1e-3 {
+            err
+        } else {
+            Vector::new(0.0, err.y, 0.0)
+        };
+        let mut integral = q.integral + err * DT;
         if integral.length() > 0.5 {
             integral = integral.normalize() * 0.5;
         }
@@ -1011,7 +1023,13 @@ impl World {
         let fwd = rot * Vector::Z;
         let err_yaw = Vector::new(0.0, -fwd.x.atan2(fwd.z), 0.0);
         let inertia = 0.08;
-        let torque_world = (err_tilt * 60.0 + err_yaw * 4.0 - w * 12.0) * inertia;
+        // Feed-forward: cancel the load's weight torque about the centre of mass.
+        let load_torque = if payload > 0.0 {
+            (load_at - p).cross(Vector::new(0.0, -9.81 * payload, 0.0))
+        } else {
+            Vector::ZERO
+        };
+        let torque_world = (err_tilt * 60.0 + err_yaw * 4.0 - w * 12.0) * inertia - load_torque;
         let torque = rot.inverse() * torque_world;
         // Mixer: four rotor thrusts along body up give the thrust and the roll/pitch
         // torques; yaw comes from rotor drag, applied as a torque.
@@ -1035,15 +1053,18 @@ impl World {
 impl World {
     /// Mass of the loose things resting in the quadrotor's basket (their centres within
     /// the basket's footprint, up to 0.4 m above its floor).
-    fn basket_load(&self) -> f32 {
-        let Some(q) = &self.quad else { return 0.0 };
+    /// Returns the mass and its centre.
+    fn basket_load(&self) -> (f32, Vector) {
+        let none = (0.0, Vector::ZERO);
+        let Some(q) = &self.quad else { return none };
         let Some(v) = self
             .task
             .basket_of(q.robot)
             .and_then(|b| self.volume[b.get()])
         else {
-            return 0.0;
+            return none;
         };
+        let mut moment = Vector::ZERO;
         let frame = *self.pw.bodies[v.body].position() * v.local;
         let mut load = 0.0;
         for it in self.layout.items.iter().filter(|it| it.dynamic) {
@@ -1065,9 +1086,14 @@ impl World {
                 && l.y <= 0.4
             {
                 load += rb.mass();
+                moment += rb.center_of_mass() * rb.mass();
             }
         }
-        load
+        if load > 0.0 {
+            (load, moment / load)
+        } else {
+            none
+        }
     }
 }
 
