@@ -772,7 +772,8 @@ fn shape_of(task: &Task, n: Idx, specs: &RobotSpecs) -> ([f32; 3], bool, Lid, bo
     });
     let size = if grabable {
         if container {
-            [0.24, 0.07, 0.24]
+            // Room for two by two small things: more may be put in than it starts with.
+            [0.3, 0.08, 0.3]
         } else if surface {
             [0.4, 0.03, 0.3]
         } else {

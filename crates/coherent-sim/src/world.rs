@@ -99,6 +99,8 @@ struct Arm {
     q: [f32; 4],
     limits: [(f32, f32); 3],
     reach: f32,
+    /// Closest the hand gets to the shoulder with the elbow at its limit.
+    min_reach: f32,
     shoulder_local: Vector,
 }
 
@@ -699,6 +701,12 @@ impl World {
             q: [0.0; 4],
             limits: [(-PI, PI), (-1.6, 1.6), (0.0, 2.6)],
             reach: links[0] + links[1],
+            min_reach: {
+                let c = 2.6f32.cos();
+                (links[0] * links[0] + links[1] * links[1] + 2.0 * links[0] * links[1] * c)
+                    .max(0.0)
+                    .sqrt()
+            },
             shoulder_local: shoulder,
         };
         let home = [ARM_HOME[0], ARM_HOME[1], ARM_HOME[2]];
@@ -1260,8 +1268,14 @@ impl World {
         let qbody = self.quad.as_ref().map(|q| q.body);
         let mut best: Option<(f32, Vector)> = None;
         let step = 0.1;
-        let nx = ((half[0] - qh) / step).floor() as i32;
-        let nz = ((half[1] - qh) / step).floor() as i32;
+        // A floor is walled: keep the craft's overshoot on arrival off the walls.
+        let wall_gap = if self.task.node(s).kind == NodeKind::Floor {
+            0.45
+        } else {
+            0.0
+        };
+        let nx = ((half[0] - qh - wall_gap) / step).floor() as i32;
+        let nz = ((half[1] - qh - wall_gap) / step).floor() as i32;
         for i in -nx..=nx {
             for k in -nz..=nz {
                 let local = c + Vector::new(i as f32 * step, 0.005, k as f32 * step);
@@ -1748,6 +1762,7 @@ impl World {
         };
         let shoulder = self.shoulder(&self.arms[ai]);
         let reach = self.arms[ai].reach;
+        let min_reach = self.arms[ai].min_reach + 0.05;
         let pose = *self.pw.bodies[body].position();
         let shape = Cuboid::new(Vector::new(
             size[0] / 2.0 - 0.005,
@@ -1783,7 +1798,7 @@ impl World {
                 let grip = p + Vector::new(0.0, size[1], 0.0);
                 let d = (grip - shoulder).length();
                 nearest_any = nearest_any.min(d);
-                if d > reach - 0.03 {
+                if d > reach - 0.03 || d < min_reach {
                     continue;
                 }
                 let probe =
