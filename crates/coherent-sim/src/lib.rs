@@ -1,4 +1,14 @@
 //! `coherent-sim`: Rapier grounding of the COHERENT world (quadrotors, legged robots,
 //! fixed arms). It depends on `coherent-core` only and implements its `Environment`
-//! physically; see ARCHITECTURE.md. The physics arrives with the physics issue; until
-//! then this crate only fixes its place in the workspace.
+//! physically: [`layout`] places everything (a task's geometry, or generated from the
+//! graph), [`world`] builds the bodies and robot models, executes an action and reads
+//! the relations back, and [`PhysicalEnv`] checks each step against the rules.
+
+pub mod env;
+pub mod layout;
+mod path;
+pub mod world;
+
+pub use env::{PhysicalEnv, PlanReport, StepReport, disagreements, execute_plan};
+pub use layout::{Layout, LayoutError, RobotSpecs};
+pub use world::{FailureKind, PhysicsError, Placement, World};

@@ -1,0 +1,413 @@
+//! [`PhysicalEnv`]: the rules decide what may be done, Rapier does it, and the relations
+//! read back from the bodies must agree with the symbolic state after every step.
+
+use std::sync::Arc;
+use std::time::Instant;
+
+use coherent_core::feasibility::{self, Infeasible, Reason};
+use coherent_core::planner::Step;
+use coherent_core::rules::{self, Observation};
+use coherent_core::{
+    Action, Edge, Environment, Idx, NodeId, NodeKind, Outcome, PropSet, Relation, RobotKind, State,
+    StateSet, Task,
+};
+
+use crate::layout::Layout;
+use crate::world::{FailureKind, PhysicsError, Placement, World, fail};
+
+/// A symbolic environment whose every action is also carried out in Rapier.
+#[derive(Debug)]
+pub struct PhysicalEnv {
+    task: Arc<Task>,
+    layout: Layout,
+    state: State,
+    world: World,
+    last_error: Option<PhysicsError>,
+    wall: std::time::Duration,
+}
+
+/// What one physically executed step did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepReport {
+    pub action: String,
+    pub sim_seconds: f64,
+    pub done: bool,
+}
+
+impl PhysicalEnv {
+    /// The task's layout (its geometry, or a generated one) in Rapier.
+    pub fn new(task: Arc<Task>) -> Result<PhysicalEnv, PhysicsError> {
+        let layout = Layout::for_task(&task).map_err(|e| PhysicsError {
+            kind: FailureKind::Layout,
+            message: e.0,
+        })?;
+        PhysicalEnv::with_layout(task, layout)
+    }
+
+    pub fn with_layout(task: Arc<Task>, layout: Layout) -> Result<PhysicalEnv, PhysicsError> {
+        let start = Instant::now();
+        let world = World::new(task.clone(), layout.clone())?;
+        let env = PhysicalEnv {
+            state: task.init.clone(),
+            task,
+            layout,
+            world,
+            last_error: None,
+            wall: start.elapsed(),
+        };
+        env.compare().map_err(|e| PhysicsError {
+            kind: e.kind,
+            message: format!("the initial scene: {}", e.message),
+        })?;
+        Ok(env)
+    }
+
+    pub fn world(&self) -> &World {
+        &self.world
+    }
+
+    pub fn layout(&self) -> &Layout {
+        &self.layout
+    }
+
+    /// The physical failure of the last step, if it had one.
+    pub fn last_physics_error(&self) -> Option<&PhysicsError> {
+        self.last_error.as_ref()
+    }
+
+    pub fn sim_seconds(&self) -> f64 {
+        self.world.sim_time
+    }
+
+    /// Wall time spent building and stepping the world.
+    pub fn wall_time(&self) -> std::time::Duration {
+        self.wall
+    }
+
+    /// Checks `text` with the rules, executes it physically, applies it symbolically and
+    /// compares the two. A rules refusal is `Ok(Err(infeasible))`; a physical failure or
+    /// a disagreement is `Err`.
+    pub fn step_physical(
+        &mut self,
+        robot: NodeId,
+        text: &str,
+    ) -> Result<Result<StepReport, Infeasible>, PhysicsError> {
+        if let Some(e) = &self.last_error {
+            return Err(PhysicsError {
+                kind: e.kind,
+                message: format!(
+                    "the world is inconsistent after an earlier failure ({e}); reset it"
+                ),
+            });
+        }
+        let r = self.task.robot_by_id(robot).map_err(|e| PhysicsError {
+            kind: FailureKind::Layout,
+            message: e.to_string(),
+        })?;
+        let a = match feasibility::check(&self.task, &self.state, r, text) {
+            Ok(a) => a,
+            Err(why) => return Ok(Err(why)),
+        };
+        let t0 = self.world.sim_time;
+        let start = Instant::now();
+        let result = self.execute_and_compare(r.node, a);
+        self.wall += start.elapsed();
+        match result {
+            Ok(()) => Ok(Ok(StepReport {
+                action: a.render(&self.task),
+                sim_seconds: self.world.sim_time - t0,
+                done: self.task.goal_satisfied(&self.state),
+            })),
+            Err(e) => {
+                let e = PhysicsError {
+                    kind: e.kind,
+                    message: format!(
+                        "{} {}: {}",
+                        self.task.node(r.node).label(),
+                        a.render(&self.task),
+                        e.message
+                    ),
+                };
+                self.last_error = Some(e.clone());
+                Err(e)
+            }
+        }
+    }
+
+    /// Executes `a` physically without asking the rules (for tests of physical limits);
+    /// the symbolic state is left as it is.
+    pub fn execute_unchecked(&mut self, robot: NodeId, a: Action) -> Result<(), PhysicsError> {
+        let r = self.task.robot_by_id(robot).map_err(|e| PhysicsError {
+            kind: FailureKind::Layout,
+            message: e.to_string(),
+        })?;
+        let out = self.world.execute(r.node, a);
+        if let Err(e) = &out {
+            self.last_error = Some(e.clone());
+        }
+        out
+    }
+
+    fn execute_and_compare(&mut self, robot: Idx, a: Action) -> Result<(), PhysicsError> {
+        self.world.execute(robot, a)?;
+        let robot = *self.task.robot(robot).ok_or_else(|| PhysicsError {
+            kind: FailureKind::Layout,
+            message: "not a robot".into(),
+        })?;
+        rules::apply(&self.task, &mut self.state, robot, a);
+        self.compare()
+    }
+
+    /// Relations read back from the bodies against the symbolic state; every difference
+    /// is listed with both views.
+    pub fn compare(&self) -> Result<(), PhysicsError> {
+        let diffs = disagreements(&self.task, &self.state, &self.world);
+        if diffs.is_empty() {
+            Ok(())
+        } else {
+            fail(FailureKind::Disagreement, diffs.join("; "))
+        }
+    }
+}
+
+/// Every difference between the physical relations and the symbolic state `s`.
+pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
+    let mut out = Vec::new();
+    let label = |n: Idx| task.node(n).label();
+    for x in task.indices() {
+        let node = task.node(x);
+        let movable = node.properties.contains(PropSet::GRABABLE) || node.kind == NodeKind::Tool;
+        if movable {
+            let mut symbolic: Vec<Placement> = Vec::new();
+            for e in s.out(x) {
+                match e.rel() {
+                    Relation::On => symbolic.push(Placement::On(e.to())),
+                    Relation::Inside => symbolic.push(Placement::Inside(e.to())),
+                    _ => {}
+                }
+            }
+            for r in &task.robots {
+                if s.has(Edge::new(r.node, Relation::Hold, x)) {
+                    symbolic.push(Placement::Held(r.node));
+                }
+            }
+            let physical = w.placement(x);
+            let agree = match (symbolic.as_slice(), physical) {
+                ([], Placement::Loose) => true,
+                ([one], p) => *one == p,
+                _ => false,
+            };
+            if !agree {
+                let show = |p: &Placement| match *p {
+                    Placement::On(t) => format!("ON {}", label(t)),
+                    Placement::Inside(t) => format!("INSIDE {}", label(t)),
+                    Placement::Held(r) => format!("held by {}", label(r)),
+                    Placement::Loose => "on nothing named".to_owned(),
+                };
+                let sym: Vec<String> = symbolic.iter().map(show).collect();
+                let pos = w.position(x).map_or(String::new(), |p| {
+                    format!(" at ({:.2}, {:.2}, {:.2})", p.x, p.y, p.z)
+                });
+                out.push(format!(
+                    "{}: symbolic [{}], physical {}{pos}",
+                    label(x),
+                    sym.join(", "),
+                    show(&physical)
+                ));
+            }
+        }
+        let states = s.states(x);
+        if states.intersects(StateSet::OPEN | StateSet::CLOSED | StateSet::OPEN_FOREVER)
+            && let Some(angle) = w.hinge_angle(x)
+        {
+            let deg = angle.abs().to_degrees();
+            let open = states.is_open();
+            if (open && deg < 60.0) || (!open && deg > 2.0) {
+                out.push(format!(
+                    "{}: symbolic {}, physical hinge at {deg:.1} degrees",
+                    label(x),
+                    if open { "OPEN" } else { "CLOSED" }
+                ));
+            }
+        }
+    }
+    for r in &task.robots {
+        let me = label(r.node);
+        if r.kind != RobotKind::RobotArm {
+            let sym = rules::room_of(task, s, r.node);
+            let phys = w.robot_room(r.node);
+            if sym != phys {
+                out.push(format!(
+                    "{me}: symbolic room {}, physical room {}",
+                    sym.map_or("none".into(), label),
+                    phys.map_or("none".into(), label)
+                ));
+            }
+        }
+        match r.kind {
+            RobotKind::Quadrotor => {
+                let flying = s.states(r.node).contains(StateSet::FLYING);
+                let Some((landed, on)) = w.quad_landed_on() else {
+                    continue;
+                };
+                let sym_on = s.target(r.node, Relation::On);
+                if flying == landed {
+                    out.push(format!(
+                        "{me}: symbolic {}, physical {}",
+                        if flying { "FLYING" } else { "LAND" },
+                        if landed { "landed" } else { "in the air" }
+                    ));
+                } else if landed && sym_on != on {
+                    out.push(format!(
+                        "{me}: symbolic ON {}, physical on {}",
+                        sym_on.map_or("nothing".into(), label),
+                        on.map_or("nothing".into(), label)
+                    ));
+                }
+                if flying
+                    && let Some(a) = s.target(r.node, Relation::Above)
+                    && !w.quad_above(a)
+                {
+                    out.push(format!(
+                        "{me}: symbolic ABOVE {}, physically not over it",
+                        label(a)
+                    ));
+                }
+            }
+            RobotKind::RobotDog => {
+                let reach = w.dog_reach();
+                for x in s.targets(r.node, Relation::Close) {
+                    match w.dog_distance(x) {
+                        Some(d) if d <= reach + 0.01 => {}
+                        Some(d) => out.push(format!(
+                            "{me}: symbolic CLOSE {}, physically {d:.2} m from its shoulder (reach {reach:.2} m)",
+                            label(x)
+                        )),
+                        None => {}
+                    }
+                }
+            }
+            RobotKind::RobotArm => {}
+        }
+    }
+    out
+}
+
+impl Environment for PhysicalEnv {
+    fn task(&self) -> &Task {
+        &self.task
+    }
+
+    fn state(&self) -> &State {
+        &self.state
+    }
+
+    fn observe(&self, robot: NodeId) -> coherent_core::Result<Observation> {
+        let r = self.task.robot_by_id(robot)?;
+        Ok(rules::observe(&self.task, &self.state, r.node))
+    }
+
+    fn actions(&self, robot: NodeId) -> coherent_core::Result<Vec<String>> {
+        let r = self.task.robot_by_id(robot)?;
+        Ok(rules::actions(&self.task, &self.state, r)
+            .iter()
+            .map(|a| a.render(&self.task))
+            .collect())
+    }
+
+    /// A physical failure comes back as an infeasible outcome whose message has the
+    /// numbers; [`PhysicalEnv::last_physics_error`] has it too.
+    fn step(&mut self, robot: NodeId, action: &str) -> coherent_core::Result<Outcome> {
+        self.task.robot_by_id(robot)?;
+        let infeasible = match self.step_physical(robot, action) {
+            Ok(Ok(_)) => None,
+            Ok(Err(why)) => Some(why),
+            Err(e) => Some(Infeasible {
+                reason: match e.kind {
+                    FailureKind::Reach => Reason::OutOfReach,
+                    FailureKind::Blocked => Reason::DoorClosed,
+                    _ => Reason::NotOffered,
+                },
+                message: format!("physics: {}", e.message),
+            }),
+        };
+        Ok(Outcome {
+            infeasible,
+            done: self.goal_satisfied(),
+        })
+    }
+
+    fn goal_satisfied(&self) -> bool {
+        self.task.goal_satisfied(&self.state)
+    }
+
+    /// Rebuilds the world from the layout (deterministic: the same bodies in the same order).
+    fn reset(&mut self) {
+        self.state = self.task.init.clone();
+        self.last_error = None;
+        match World::new(self.task.clone(), self.layout.clone()) {
+            Ok(w) => self.world = w,
+            Err(e) => self.last_error = Some(e),
+        }
+    }
+}
+
+/// The result of executing a whole plan physically.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlanReport {
+    pub physics_ok: bool,
+    pub physics_error: Option<String>,
+    /// Steps executed before the end or the failure.
+    pub steps_done: usize,
+    pub sim_seconds: f64,
+    pub wall_ms: f64,
+    /// Final pose of every body, `(id, [x, y, z, qx, qy, qz, qw])`.
+    pub final_poses: Vec<(NodeId, [f32; 7])>,
+    /// Each mobile robot's track on the floor plan.
+    pub paths: Vec<(NodeId, Vec<[f32; 2]>)>,
+}
+
+/// Executes `plan` (e.g. `planner::analyse(..).plan`) in Rapier with the task's layout,
+/// checking the relations after every step.
+pub fn execute_plan(task: &Arc<Task>, plan: &[Step]) -> PlanReport {
+    let start = Instant::now();
+    let mut report = PlanReport {
+        physics_ok: false,
+        physics_error: None,
+        steps_done: 0,
+        sim_seconds: 0.0,
+        wall_ms: 0.0,
+        final_poses: Vec::new(),
+        paths: Vec::new(),
+    };
+    let mut env = match PhysicalEnv::new(task.clone()) {
+        Ok(env) => env,
+        Err(e) => {
+            report.physics_error = Some(e.message);
+            report.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+            return report;
+        }
+    };
+    let mut error = None;
+    for (i, step) in plan.iter().enumerate() {
+        let text = step.action.render(task);
+        match env.step_physical(task.id(step.robot), &text) {
+            Ok(Ok(_)) => report.steps_done = i + 1,
+            Ok(Err(why)) => {
+                error = Some(format!("step {i}: the rules refuse {text}: {why}"));
+                break;
+            }
+            Err(e) => {
+                error = Some(format!("step {i}: {e}"));
+                break;
+            }
+        }
+    }
+    report.physics_ok = error.is_none();
+    report.physics_error = error;
+    report.sim_seconds = env.sim_seconds();
+    report.final_poses = env.world.poses();
+    report.paths = env.world.paths.clone();
+    report.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    report
+}

@@ -1,0 +1,800 @@
+//! Where everything is: rooms, doors, furniture, objects and robot start poses. A task's
+//! `geometry` (native files) is this structure as JSON; without one (every imported
+//! original task) [`Layout::generate`] derives a deterministic layout from the graph.
+//!
+//! Frame: metres, `y` up, the floor at `y = 0`; positions are the bottom centre of a box.
+
+use coherent_core::{Idx, NodeId, NodeKind, PropSet, Relation, RobotKind, StateSet, Task};
+use serde::{Deserialize, Serialize};
+
+/// Sizes and limits of the robots, shared by the layout and the robot models.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RobotSpecs {
+    /// Half extents of the legged robot's body box (x, y, z); it walks with its bottom
+    /// 2 cm above the floor.
+    pub dog_half: [f32; 3],
+    /// Shoulder of the arm on the dog's back, in the body frame (forward is +z).
+    pub dog_shoulder: [f32; 3],
+    /// Upper arm and forearm of the dog's arm (reach = their sum).
+    pub dog_links: [f32; 2],
+    pub dog_speed: f32,
+    /// Shoulder height of a fixed arm above its surface.
+    pub arm_shoulder: f32,
+    pub arm_links: [f32; 2],
+    pub quad_mass: f32,
+    /// Half width of the quadrotor's frame (rotors inside it) and of its basket.
+    pub quad_half: f32,
+    pub basket_half: f32,
+    pub cruise_altitude: f32,
+    pub flight_speed: f32,
+    /// Top heights of LOW_HEIGHT and HIGH_HEIGHT furniture.
+    pub low_top: f32,
+    pub high_top: f32,
+}
+
+impl Default for RobotSpecs {
+    fn default() -> RobotSpecs {
+        RobotSpecs {
+            dog_half: [0.3, 0.2, 0.3],
+            dog_shoulder: [0.0, 0.47, 0.15],
+            dog_links: [0.45, 0.40],
+            dog_speed: 1.0,
+            arm_shoulder: 0.3,
+            arm_links: [0.65, 0.6],
+            quad_mass: 1.5,
+            quad_half: 0.3,
+            basket_half: 0.22,
+            cruise_altitude: 1.9,
+            flight_speed: 1.0,
+            low_top: 0.45,
+            high_top: 1.4,
+        }
+    }
+}
+
+impl RobotSpecs {
+    pub fn dog_reach(&self) -> f32 {
+        self.dog_links[0] + self.dog_links[1]
+    }
+    pub fn arm_reach(&self) -> f32 {
+        self.arm_links[0] + self.arm_links[1]
+    }
+    /// Highest point the legged robot's hand gets to.
+    pub fn dog_max_height(&self) -> f32 {
+        self.dog_shoulder[1] + 0.02 + self.dog_half[1] * 0.0 + self.dog_reach()
+    }
+}
+
+/// A room: an axis-aligned footprint on a level.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoomGeom {
+    pub id: i64,
+    /// Corners of the footprint, `[x, z]`.
+    pub min: [f32; 2],
+    pub max: [f32; 2],
+    /// Floor height of the level (0 for single-storey scenes).
+    #[serde(default)]
+    pub level: f32,
+}
+
+/// A door: an opening in the wall between two rooms with a hinged panel.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DoorGeom {
+    pub id: i64,
+    pub rooms: [i64; 2],
+    /// Centre of the opening on the wall line, `[x, z]`.
+    pub center: [f32; 2],
+    /// Whether the wall runs along x (the opening spans x); otherwise along z.
+    pub along_x: bool,
+    pub width: f32,
+    pub height: f32,
+}
+
+/// How a container opens.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Lid {
+    /// Always open (no panel).
+    None,
+    /// A lid hinged at the back of the top.
+    Top,
+    /// A door hinged on the left of the front (-z) face; the top stays a surface.
+    Front,
+}
+
+/// A piece of furniture or an object: a box (furniture, fixed) or a small body (GRABABLE
+/// things are dynamic). Containers are open boxes with walls of `wall` thickness.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ItemGeom {
+    pub id: i64,
+    /// Bottom centre.
+    pub pos: [f32; 3],
+    /// Width (x), height (y), depth (z).
+    pub size: [f32; 3],
+    pub container: bool,
+    pub lid: Lid,
+    pub dynamic: bool,
+}
+
+/// A robot's start pose: base position (bottom centre) and heading about y.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobotGeom {
+    pub id: i64,
+    pub pos: [f32; 3],
+    #[serde(default)]
+    pub yaw: f32,
+}
+
+/// The geometry of a scene. As JSON it is the `geometry` object of a native task file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Layout {
+    #[serde(default)]
+    pub specs: RobotSpecs,
+    pub rooms: Vec<RoomGeom>,
+    pub doors: Vec<DoorGeom>,
+    pub items: Vec<ItemGeom>,
+    pub robots: Vec<RobotGeom>,
+    #[serde(default = "default_wall_height")]
+    pub wall_height: f32,
+}
+
+fn default_wall_height() -> f32 {
+    2.6
+}
+
+/// Why a layout could not be made.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LayoutError(pub String);
+
+impl std::fmt::Display for LayoutError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for LayoutError {}
+
+fn err<T>(msg: String) -> Result<T, LayoutError> {
+    Err(LayoutError(msg))
+}
+
+/// Side of a floor cell; the generated layout puts one floor item in each.
+const CELL: f32 = 3.0;
+/// Gap between things packed on a surface or in a container.
+const GAP: f32 = 0.06;
+pub const WALL: f32 = 0.04;
+/// Where things that are in no room are set aside, `[x, z]`.
+pub const ASIDE: [f32; 2] = [-30.0, -30.0];
+
+impl Layout {
+    /// The task's own geometry when it has one, otherwise a generated layout.
+    pub fn for_task(task: &Task) -> Result<Layout, LayoutError> {
+        match &task.meta.geometry {
+            Some(map) => {
+                let layout: Layout = serde_json::from_value(serde_json::Value::Object(map.clone()))
+                    .map_err(|e| LayoutError(format!("geometry: {e}")))?;
+                layout.check(task)?;
+                Ok(layout)
+            }
+            None => Layout::generate(task),
+        }
+    }
+
+    pub fn room(&self, id: NodeId) -> Option<&RoomGeom> {
+        self.rooms.iter().find(|r| r.id == id.0)
+    }
+    pub fn item(&self, id: NodeId) -> Option<&ItemGeom> {
+        self.items.iter().find(|r| r.id == id.0)
+    }
+    pub fn door(&self, id: NodeId) -> Option<&DoorGeom> {
+        self.doors.iter().find(|r| r.id == id.0)
+    }
+    pub fn robot(&self, id: NodeId) -> Option<&RobotGeom> {
+        self.robots.iter().find(|r| r.id == id.0)
+    }
+
+    /// Every room, door, robot and placed thing of the task has geometry.
+    pub fn check(&self, task: &Task) -> Result<(), LayoutError> {
+        for n in task.indices() {
+            let node = task.node(n);
+            let id = node.id;
+            let ok = match node.kind {
+                NodeKind::Room => self.room(id).is_some(),
+                NodeKind::Door => self.door(id).is_some(),
+                NodeKind::Robot(_) => self.robot(id).is_some(),
+                NodeKind::Floor | NodeKind::Tool => true,
+                NodeKind::Object => self.item(id).is_some(),
+            };
+            if !ok {
+                return err(format!("geometry: no entry for {}", node.label()));
+            }
+        }
+        Ok(())
+    }
+
+    /// A deterministic layout from the graph: rooms on a grid joined where doors say,
+    /// one floor item per cell, things packed on their surface or in their container.
+    pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
+        let specs = RobotSpecs::default();
+        let init = &task.init;
+        let rooms = task.rooms().to_vec();
+        if rooms.is_empty() {
+            return err("layout: the task has no room".into());
+        }
+        // Door -> its two rooms.
+        let mut doors: Vec<(Idx, Vec<Idx>)> = Vec::new();
+        for &(d, r) in task.doors() {
+            match doors.iter_mut().find(|(x, _)| *x == d) {
+                Some((_, rs)) => rs.push(r),
+                None => doors.push((d, vec![r])),
+            }
+        }
+        // Grid places, breadth first from the room with the most doors.
+        let degree = |r: Idx| doors.iter().filter(|(_, rs)| rs.contains(&r)).count();
+        let hub = rooms
+            .iter()
+            .copied()
+            .max_by_key(|&r| (degree(r), std::cmp::Reverse(r)))
+            .unwrap_or(rooms[0]);
+        let mut cell: Vec<(Idx, (i32, i32))> = vec![(hub, (0, 0))];
+        let mut queue = vec![hub];
+        let mut qi = 0;
+        let place_of = |cell: &[(Idx, (i32, i32))], r: Idx| {
+            cell.iter().find(|(x, _)| *x == r).map(|(_, p)| *p)
+        };
+        while qi < queue.len() || cell.len() < rooms.len() {
+            if qi == queue.len() {
+                // A room no door reaches: next free cell along x.
+                let r = rooms
+                    .iter()
+                    .copied()
+                    .find(|&r| place_of(&cell, r).is_none())
+                    .unwrap_or(hub);
+                let x = cell.iter().map(|(_, p)| p.0).max().unwrap_or(0) + 1;
+                cell.push((r, (x, 0)));
+                queue.push(r);
+            }
+            let r = queue[qi];
+            qi += 1;
+            let p = place_of(&cell, r).unwrap_or((0, 0));
+            for (_, rs) in &doors {
+                if !rs.contains(&r) {
+                    continue;
+                }
+                for &o in rs {
+                    if o == r || place_of(&cell, o).is_some() {
+                        continue;
+                    }
+                    let free = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                        .into_iter()
+                        .map(|(dx, dz)| (p.0 + dx, p.1 + dz))
+                        .find(|q| cell.iter().all(|(_, c)| c != q));
+                    let Some(q) = free else {
+                        return err(format!(
+                            "layout: no free side of {} for {}",
+                            task.node(r).label(),
+                            task.node(o).label()
+                        ));
+                    };
+                    cell.push((o, q));
+                    queue.push(o);
+                }
+            }
+        }
+
+        // Floor items of each room (robots included), in file order.
+        let floor_items = |room: Idx| -> Vec<Idx> {
+            let floor = task.floor_of(room);
+            task.indices()
+                .filter(|&n| {
+                    let k = task.node(n).kind;
+                    (k == NodeKind::Object
+                        || k == NodeKind::Robot(RobotKind::RobotDog)
+                        || k == NodeKind::Robot(RobotKind::Quadrotor))
+                        && if k == NodeKind::Object {
+                            floor.is_some_and(|f| {
+                                init.has(coherent_core::Edge::new(n, Relation::On, f))
+                                    || init.has(coherent_core::Edge::new(n, Relation::Inside, f))
+                            })
+                        } else {
+                            // A robot is in the room its INSIDE edge names.
+                            init.has(coherent_core::Edge::new(n, Relation::Inside, room))
+                        }
+                })
+                .collect()
+        };
+        let mut k = 2usize;
+        for &r in &rooms {
+            let n = floor_items(r).len() + 1;
+            let mut kr = (n as f32).sqrt().ceil() as usize;
+            kr += kr % 2; // even, so that no item stands in front of a door
+            k = k.max(kr);
+        }
+        let side = k as f32 * CELL;
+        let room_geom: Vec<RoomGeom> = cell
+            .iter()
+            .map(|&(r, (i, j))| RoomGeom {
+                id: task.id(r).0,
+                min: [i as f32 * side, j as f32 * side],
+                max: [(i + 1) as f32 * side, (j + 1) as f32 * side],
+                level: 0.0,
+            })
+            .collect();
+        let mut door_geom = Vec::new();
+        for (d, rs) in &doors {
+            let label = task.node(*d).label();
+            let [a, b] = rs[..] else {
+                return err(format!(
+                    "layout: {label} leads to {} rooms, not 2",
+                    rs.len()
+                ));
+            };
+            let (Some(pa), Some(pb)) = (place_of(&cell, a), place_of(&cell, b)) else {
+                return err(format!("layout: {label} leads to an unplaced room"));
+            };
+            let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
+            if dx.abs() + dz.abs() != 1 {
+                return err(format!(
+                    "layout: {label} joins {} and {}, which are not side by side on the grid",
+                    task.node(a).label(),
+                    task.node(b).label()
+                ));
+            }
+            let ca = [(pa.0 as f32 + 0.5) * side, (pa.1 as f32 + 0.5) * side];
+            door_geom.push(DoorGeom {
+                id: task.id(*d).0,
+                rooms: [task.id(a).0, task.id(b).0],
+                center: [
+                    ca[0] + dx as f32 * side / 2.0,
+                    ca[1] + dz as f32 * side / 2.0,
+                ],
+                along_x: dz != 0,
+                width: 1.1,
+                height: 2.3,
+            });
+        }
+
+        let loc = locations(task);
+        let fitted = fitted_sizes(task, &specs, &loc);
+        let mut items: Vec<ItemGeom> = Vec::new();
+        let mut robots: Vec<RobotGeom> = Vec::new();
+        for &(r, (i, j)) in &cell {
+            for (slot, n) in floor_items(r).into_iter().enumerate() {
+                let (a, b) = (slot % k, slot / k);
+                let x = i as f32 * side + (a as f32 + 0.5) * CELL;
+                let z = j as f32 * side + (b as f32 + 0.5) * CELL;
+                match task.node(n).kind {
+                    NodeKind::Robot(_) => robots.push(RobotGeom {
+                        id: task.id(n).0,
+                        pos: [x, 0.0, z],
+                        yaw: 0.0,
+                    }),
+                    _ => {
+                        let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                        let size = fitted[n.get()];
+                        items.push(ItemGeom {
+                            id: task.id(n).0,
+                            pos: [x, 0.0, z],
+                            size,
+                            container,
+                            lid,
+                            dynamic,
+                        });
+                    }
+                }
+            }
+        }
+        // A quadrotor that starts on a piece of furniture: on the right end of its top.
+        for r in &task.robots {
+            if r.kind != RobotKind::Quadrotor {
+                continue;
+            }
+            let Some(s) = init.target(r.node, Relation::On) else {
+                continue;
+            };
+            if task.node(s).kind == NodeKind::Floor {
+                continue;
+            }
+            let (Some(sg), Some(rg)) = (
+                items.iter().find(|it| it.id == task.id(s).0),
+                robots.iter_mut().find(|g| g.id == task.id(r.node).0),
+            ) else {
+                continue;
+            };
+            rg.pos = [
+                sg.pos[0] + sg.size[0] / 2.0 - specs.quad_half - 0.02,
+                sg.pos[1] + sg.size[1],
+                sg.pos[2] - 0.1,
+            ];
+        }
+        // Fixed arms on their surfaces.
+        for r in &task.robots {
+            if r.kind != RobotKind::RobotArm {
+                continue;
+            }
+            let Some(s) = init.target(r.node, Relation::On) else {
+                return err(format!(
+                    "layout: {} stands on nothing",
+                    task.node(r.node).label()
+                ));
+            };
+            let Some(sg) = items.iter().find(|it| it.id == task.id(s).0) else {
+                return err(format!(
+                    "layout: {} stands on {}, which is not on a floor",
+                    task.node(r.node).label(),
+                    task.node(s).label()
+                ));
+            };
+            let (x0, z0) = arm_spot(sg);
+            robots.push(RobotGeom {
+                id: task.id(r.node).0,
+                pos: [x0, sg.pos[1] + sg.size[1], z0],
+                yaw: 0.0,
+            });
+        }
+        // Everything else, level by level: on a surface or in a container already placed.
+        let mut pending: Vec<Idx> = task
+            .indices()
+            .filter(|&n| task.node(n).kind == NodeKind::Object)
+            .filter(|&n| items.iter().all(|it| it.id != task.id(n).0))
+            .collect();
+        // Where each holder's things go: packed in its region, in file order.
+        let mut spots: Vec<(i64, bool, Vec<[f32; 2]>)> = Vec::new();
+        while !pending.is_empty() {
+            let before = pending.len();
+            let mut rest = Vec::new();
+            for n in pending {
+                let Some((holder, inside)) = loc[n.get()] else {
+                    // In no room at all (some released tasks have such things): set
+                    // aside on an unnamed pad outside the house, where nothing sees it.
+                    let (size, container, lid, dynamic) = shape_of(task, n, &specs);
+                    let k = items.len() as f32;
+                    items.push(ItemGeom {
+                        id: task.id(n).0,
+                        pos: [
+                            ASIDE[0] - (k % 10.0) * 0.5,
+                            0.002,
+                            ASIDE[1] - (k / 10.0).floor() * 0.5,
+                        ],
+                        size,
+                        container,
+                        lid,
+                        dynamic,
+                    });
+                    continue;
+                };
+                let hg = match items.iter().find(|it| it.id == task.id(holder).0) {
+                    Some(h) => h.clone(),
+                    // A quadrotor's basket: the open box on the craft.
+                    None => match basket_geom(task, holder, &robots, &specs) {
+                        Some(h) => h,
+                        None => {
+                            rest.push(n);
+                            continue;
+                        }
+                    },
+                };
+                let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                let size = fitted[n.get()];
+                let group: Vec<Idx> = contents(&loc, holder, inside);
+                let slot = group.iter().position(|&x| x == n).unwrap_or(0);
+                let packed = match spots.iter().find(|c| c.0 == hg.id && c.1 == inside) {
+                    Some(c) => Some(c.2.clone()),
+                    None => {
+                        let sizes: Vec<[f32; 3]> = group.iter().map(|x| fitted[x.get()]).collect();
+                        let flags = holder_flags(task, &specs, &loc, holder);
+                        let got = pack(pack_region(&hg, inside, flags.0, flags.1), &sizes);
+                        if let Some(g) = &got {
+                            spots.push((hg.id, inside, g.clone()));
+                        }
+                        got
+                    }
+                };
+                let Some(at) = packed.and_then(|p| p.get(slot).copied()) else {
+                    return err(format!(
+                        "layout: no room left for {} {} {}",
+                        task.node(n).label(),
+                        if inside { "in" } else { "on" },
+                        task.node(holder).label()
+                    ));
+                };
+                let y = if inside {
+                    hg.pos[1] + wall_of(hg.size[1])
+                } else {
+                    hg.pos[1] + hg.size[1]
+                };
+                items.push(ItemGeom {
+                    id: task.id(n).0,
+                    pos: [hg.pos[0] + at[0], y + 0.002, hg.pos[2] + at[1]],
+                    size,
+                    container,
+                    lid,
+                    dynamic,
+                });
+            }
+            if rest.len() == before {
+                let names: Vec<String> = rest.iter().map(|&n| task.node(n).label()).collect();
+                return err(format!("layout: cannot place {}", names.join(", ")));
+            }
+            pending = rest;
+        }
+        let layout = Layout {
+            specs,
+            rooms: room_geom,
+            doors: door_geom,
+            items,
+            robots,
+            wall_height: default_wall_height(),
+        };
+        layout.check(task)?;
+        Ok(layout)
+    }
+}
+
+/// Where a fixed arm stands on its surface: towards the back, left of centre, leaving
+/// the right end free for the quadrotor to land.
+pub fn arm_spot(surface: &ItemGeom) -> (f32, f32) {
+    (
+        surface.pos[0] - 0.2 * surface.size[0] / 1.8,
+        surface.pos[2] + surface.size[2] / 2.0 - 0.15,
+    )
+}
+
+/// Thickness of a container's floor and walls of height `h`.
+pub fn wall_of(h: f32) -> f32 {
+    WALL.min(h / 4.0)
+}
+
+/// Width kept free at the right (+x) end of a top where the quadrotor may land: its
+/// frame plus the landing search's clearance on each side, on the search's 10 cm grid.
+fn landing_pad(specs: &RobotSpecs) -> f32 {
+    2.0 * specs.quad_half + 0.4
+}
+
+/// Where each object is at the start: the holder its location edge names and whether
+/// it is inside (rather than on) it.
+fn locations(task: &Task) -> Vec<Option<(Idx, bool)>> {
+    let mut loc = vec![None; task.nodes.len()];
+    for n in task.indices() {
+        if task.node(n).kind != NodeKind::Object {
+            continue;
+        }
+        loc[n.get()] = task
+            .init_edges
+            .iter()
+            .find(|e| e.from() == n && e.rel().is_location())
+            .map(|e| (e.to(), e.rel() == Relation::Inside));
+    }
+    loc
+}
+
+/// The things on (or in) `holder`, in file order.
+fn contents(loc: &[Option<(Idx, bool)>], holder: Idx, inside: bool) -> Vec<Idx> {
+    loc.iter()
+        .enumerate()
+        .filter(|(_, l)| **l == Some((holder, inside)))
+        .map(|(i, _)| Idx(i as u16))
+        .collect()
+}
+
+/// Whether a fixed arm stands on `holder`, and whether the quadrotor may land on it
+/// (a top standing on a floor, in a task with a quadrotor).
+fn holder_flags(
+    task: &Task,
+    specs: &RobotSpecs,
+    loc: &[Option<(Idx, bool)>],
+    holder: Idx,
+) -> (bool, Option<f32>) {
+    let arm_here = task.robots.iter().any(|r| {
+        r.kind == RobotKind::RobotArm
+            && task
+                .init
+                .has(coherent_core::Edge::new(r.node, Relation::On, holder))
+    });
+    let has_quad = task.robots.iter().any(|r| r.kind == RobotKind::Quadrotor);
+    let p = task.node(holder).properties;
+    let on_floor = loc
+        .get(holder.get())
+        .copied()
+        .flatten()
+        .is_some_and(|(h, _)| task.node(h).kind == NodeKind::Floor);
+    let pad =
+        (has_quad && on_floor && p.contains(PropSet::SURFACES) && !p.contains(PropSet::GRABABLE))
+            .then(|| landing_pad(specs));
+    (arm_here, pad)
+}
+
+/// Every object's size, grown from its default (see [`shape_of`]) until what the graph
+/// puts on or in it packs there, with the landing pad and arm strip kept free; lidded
+/// containers also grow tall enough to close over their contents. Deepest things first.
+fn fitted_sizes(task: &Task, specs: &RobotSpecs, loc: &[Option<(Idx, bool)>]) -> Vec<[f32; 3]> {
+    let n = task.nodes.len();
+    let mut size: Vec<[f32; 3]> = vec![[0.0; 3]; n];
+    let depth = |x: Idx| {
+        let mut d = 0;
+        let mut cur = x;
+        while let Some((h, _)) = loc[cur.get()] {
+            d += 1;
+            cur = h;
+            if d > 16 {
+                break;
+            }
+        }
+        d
+    };
+    let mut order: Vec<Idx> = task
+        .indices()
+        .filter(|&x| task.node(x).kind == NodeKind::Object)
+        .collect();
+    order.sort_by_key(|&x| std::cmp::Reverse(depth(x)));
+    for x in order {
+        let (base, container, lid, _) = shape_of(task, x, specs);
+        let mut s = base;
+        let inner: Vec<[f32; 3]> = contents(loc, x, true)
+            .iter()
+            .map(|c| size[c.get()])
+            .collect();
+        let on: Vec<[f32; 3]> = contents(loc, x, false)
+            .iter()
+            .map(|c| size[c.get()])
+            .collect();
+        if container && lid != Lid::None {
+            let tallest = inner.iter().map(|c| c[1]).fold(0.0f32, f32::max);
+            let lids = if lid == Lid::Front { 2.0 } else { 1.0 };
+            while s[1] - lids * wall_of(s[1]) < tallest + 0.02 {
+                s[1] += 0.02;
+            }
+        }
+        let flags = holder_flags(task, specs, loc, x);
+        let floor_standing =
+            loc[x.get()].is_some_and(|(h, _)| task.node(h).kind == NodeKind::Floor);
+        for _ in 0..80 {
+            let g = ItemGeom {
+                id: 0,
+                pos: [0.0; 3],
+                size: s,
+                container,
+                lid,
+                dynamic: false,
+            };
+            let fits = (inner.is_empty()
+                || pack(pack_region(&g, true, false, None), &inner).is_some())
+                && (on.is_empty() || pack(pack_region(&g, false, flags.0, flags.1), &on).is_some());
+            if fits {
+                break;
+            }
+            // Furniture grows along x up to what leaves a walkway in its 3 m cell;
+            // smaller things stay about square.
+            if floor_standing {
+                if s[0] < 2.2 {
+                    s[0] += 0.1;
+                } else {
+                    s[2] += 0.1;
+                }
+            } else if s[0] <= s[2] {
+                s[0] += 0.04;
+            } else {
+                s[2] += 0.04;
+            }
+        }
+        size[x.get()] = s;
+    }
+    size
+}
+
+/// A quadrotor's basket as a holder: the open box on the craft where the layout put it.
+fn basket_geom(
+    task: &Task,
+    basket: Idx,
+    robots: &[RobotGeom],
+    specs: &RobotSpecs,
+) -> Option<ItemGeom> {
+    let q = task
+        .robots
+        .iter()
+        .find(|r| task.basket_of(r.node) == Some(basket))?;
+    let rg = robots.iter().find(|g| g.id == task.id(q.node).0)?;
+    let b = 2.0 * specs.basket_half;
+    Some(ItemGeom {
+        id: task.id(basket).0,
+        pos: rg.pos,
+        // Its floor is 2 cm thick, as the robot model builds it.
+        size: [b, 0.08, b],
+        container: true,
+        lid: Lid::None,
+        dynamic: true,
+    })
+}
+
+/// Packs boxes of `sizes` in rows from the region's near corner; their centres relative
+/// to the holder's bottom centre, or `None` when they do not all fit.
+fn pack(region: [f32; 4], sizes: &[[f32; 3]]) -> Option<Vec<[f32; 2]>> {
+    let (mut x, mut z, mut row) = (region[0], region[1], 0.0f32);
+    let mut out = Vec::with_capacity(sizes.len());
+    for s in sizes {
+        if x + s[0] > region[2] + 1e-4 {
+            x = region[0];
+            z += row + GAP;
+            row = 0.0;
+        }
+        if x + s[0] > region[2] + 1e-4 || z + s[2] > region[3] + 1e-4 {
+            return None;
+        }
+        out.push([x + s[0] / 2.0, z + s[2] / 2.0]);
+        x += s[0] + GAP;
+        row = row.max(s[2]);
+    }
+    Some(out)
+}
+
+/// Part of a holder's top (or inside) to pack things in, relative to its bottom centre:
+/// `[x0, z0, x1, z1]`. `pad`: width kept free at the +x end for landing.
+fn pack_region(h: &ItemGeom, inside: bool, arm_here: bool, pad: Option<f32>) -> [f32; 4] {
+    let (hx, hz) = (h.size[0] / 2.0, h.size[2] / 2.0);
+    if inside {
+        let m = wall_of(h.size[1]) + 0.01;
+        return [-hx + m, -hz + m, hx - m, hz - m];
+    }
+    let m = 0.05;
+    let x1 = hx - pad.unwrap_or(m);
+    if arm_here {
+        // All but the back strip, where the arm stands.
+        [-hx + m, -hz + m, x1, hz - 0.32]
+    } else {
+        // Centre band first, so that the legged robot reaches from either long side.
+        [-hx + m, (-0.15f32).max(-hz + m), x1, hz - m]
+    }
+}
+
+/// Size, whether a container, its lid, whether dynamic.
+fn shape_of(task: &Task, n: Idx, specs: &RobotSpecs) -> ([f32; 3], bool, Lid, bool) {
+    let p = task.node(n).properties;
+    let states = task.init.states(n);
+    let container = p.contains(PropSet::CONTAINERS);
+    let surface = p.contains(PropSet::SURFACES);
+    let grabable = p.contains(PropSet::GRABABLE);
+    let openable = container
+        && (p.contains(PropSet::CAN_OPEN) || states.intersects(StateSet::OPEN | StateSet::CLOSED))
+        && !states.contains(StateSet::OPEN_FOREVER);
+    let lid = match (openable, surface) {
+        (false, _) => Lid::None,
+        (true, true) => Lid::Front,
+        (true, false) => Lid::Top,
+    };
+    let on_floor = task.init_edges.iter().any(|e| {
+        e.from() == n && e.rel().is_location() && task.node(e.to()).kind == NodeKind::Floor
+    });
+    let size = if grabable {
+        if container {
+            // Room for two by two small things: more may be put in than it starts with.
+            [0.3, 0.08, 0.3]
+        } else if surface {
+            [0.4, 0.03, 0.3]
+        } else {
+            [0.12, 0.12, 0.12]
+        }
+    } else if on_floor {
+        if p.contains(PropSet::HIGH_HEIGHT) {
+            [1.8, specs.high_top, 1.0]
+        } else if container {
+            [0.7, 0.6, 0.6]
+        } else if surface {
+            [1.2, specs.low_top, 0.6]
+        } else {
+            [0.6, 0.5, 0.6]
+        }
+    } else if container {
+        [0.4, 0.22, 0.35]
+    } else if surface {
+        [0.35, 0.08, 0.35]
+    } else {
+        [0.3, 0.2, 0.3]
+    };
+    (size, container, lid, grabable)
+}
