@@ -633,12 +633,49 @@ fn fitted_sizes(task: &Task, specs: &RobotSpecs, loc: &[Option<(Idx, bool)>]) ->
         .filter(|&x| task.node(x).kind == NodeKind::Object)
         .collect();
     order.sort_by_key(|&x| std::cmp::Reverse(depth(x)));
-    for x in order {
+    // Again until nothing changes: a goal may put a thing that grew into a holder that
+    // was sized before it (a plate into a sink).
+    for _ in 0..4 {
+        let before = size.clone();
+        fit_pass(task, specs, loc, &order, &mut size);
+        if size == before {
+            break;
+        }
+    }
+    size
+}
+
+/// One sizing pass over `order` (see [`fitted_sizes`]).
+fn fit_pass(
+    task: &Task,
+    specs: &RobotSpecs,
+    loc: &[Option<(Idx, bool)>],
+    order: &[Idx],
+    size: &mut [[f32; 3]],
+) {
+    for &x in order {
         let (base, container, lid, _) = shape_of(task, x, specs);
         let mut s = base;
-        let inner: Vec<[f32; 3]> = contents(loc, x, true)
+        // What must fit inside: what starts there and what the goal puts there.
+        let mut inner_things = contents(loc, x, true);
+        for g in &task.goal {
+            if g.relation == Relation::Inside
+                && g.target == x
+                && g.count > 0
+                && !inner_things.contains(&g.subject)
+            {
+                inner_things.push(g.subject);
+            }
+        }
+        let inner: Vec<[f32; 3]> = inner_things
             .iter()
-            .map(|c| size[c.get()])
+            .map(|&c| {
+                if size[c.get()][0] > 0.0 {
+                    size[c.get()]
+                } else {
+                    shape_of(task, c, specs).0
+                }
+            })
             .collect();
         let on: Vec<[f32; 3]> = contents(loc, x, false)
             .iter()
@@ -685,7 +722,6 @@ fn fitted_sizes(task: &Task, specs: &RobotSpecs, loc: &[Option<(Idx, bool)>]) ->
         }
         size[x.get()] = s;
     }
-    size
 }
 
 /// A quadrotor's basket as a holder: the open box on the craft where the layout put it.

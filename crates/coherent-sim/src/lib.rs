@@ -7,6 +7,7 @@
 pub mod env;
 pub mod layout;
 mod path;
+pub mod render;
 pub mod world;
 
 pub use env::{PhysicalEnv, PlanReport, StepReport, disagreements, execute_plan};

@@ -1863,9 +1863,13 @@ impl World {
             .item(self.task.id(x))
             .map(|it| it.size)
             .unwrap_or([0.12; 3]);
-        let top = self.pw.bodies[xb]
-            .position()
-            .transform_point(Vector::new(0.0, size[1], 0.0));
+        // The middle of its top as it lies now (it may have tipped over).
+        let top = match self.node_aabb(x) {
+            Some(a) => Vector::new(a.center().x, a.maxs.y, a.center().z),
+            None => self.pw.bodies[xb]
+                .position()
+                .transform_point(Vector::new(0.0, size[1], 0.0)),
+        };
         self.reach(robot, top + Vector::new(0.0, 0.01, 0.0), &self.label(x))?;
         let Some(ai) = self.arm_index(robot) else {
             return Ok(());
@@ -1956,10 +1960,12 @@ impl World {
         let Some(ai) = self.arm_index(robot) else {
             return Ok(());
         };
-        let hb = self.body[h.get()];
-        // Hand target: where the object's bottom is 1 cm above the spot.
-        let offset = match hb {
-            Some(b) => self.hand_pos(&self.arms[ai]) - self.pw.bodies[b].translation(),
+        // Hand target: where the middle of the object's underside is 1 cm above the
+        // spot (its lowest point, whichever way up it is held).
+        let offset = match self.node_aabb(h) {
+            Some(a) => {
+                self.hand_pos(&self.arms[ai]) - Vector::new(a.center().x, a.mins.y, a.center().z)
+            }
             None => Vector::new(0.0, size[1], 0.0),
         };
         let target = spot + Vector::new(0.0, 0.01, 0.0) + offset;
@@ -2135,10 +2141,8 @@ impl World {
         }
         // Inside = resting within a container's interior: the middle of the thing's
         // underside lies in the interior volume (an apple in a shallow plate pokes out
-        // above the rim, yet it is in the plate).
-        let Some(low) = self.underside(xb) else {
-            return Placement::Loose;
-        };
+        // above the rim, yet it is in the plate). Its underside is taken in the
+        // container's frame, so that a plate in a basket tilted in flight is still in it.
         let mut best: Option<(f32, Idx)> = None;
         for n in self.task.indices() {
             if n == x {
@@ -2149,8 +2153,11 @@ impl World {
                     continue;
                 }
                 let pose = *self.pw.bodies[v.body].position() * v.local;
+                let Some(low) = self.underside_in(xb, pose) else {
+                    return Placement::Loose;
+                };
                 let shape = Cuboid::new(v.half);
-                if shape.contains_point(&pose, low) {
+                if shape.contains_local_point(low) {
                     let vol = v.half.x * v.half.y * v.half.z;
                     if best.is_none_or(|(b, _)| vol < b) {
                         best = Some((vol, n));
@@ -2163,6 +2170,22 @@ impl World {
         }
         self.support_of(xb, x)
             .map_or(Placement::Loose, Placement::On)
+    }
+
+    /// The middle of body `b`'s underside (1 cm up) in the frame `frame`, not above
+    /// the middle of its extent there.
+    fn underside_in(&self, b: RigidBodyHandle, frame: Pose) -> Option<Vector> {
+        let inv = frame.inverse();
+        let aabb = self.pw.bodies[b]
+            .colliders()
+            .iter()
+            .map(|c| {
+                let col = &self.pw.colliders[*c];
+                col.shape().compute_aabb(&(inv * *col.position()))
+            })
+            .reduce(|a, b| a.merged(&b))?;
+        let c = aabb.center();
+        Some(Vector::new(c.x, (aabb.mins.y + 0.01).min(c.y), c.z))
     }
 
     /// A point 1 cm above the lowest point of a body's colliders, below its centre of

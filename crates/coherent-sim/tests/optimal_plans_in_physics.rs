@@ -8,7 +8,6 @@ use coherent_sim::execute_plan;
 mod common;
 
 #[test]
-#[ignore = "acceptance target not met yet: 72 of 80 plans execute physically (see docs/physics.md)"]
 fn every_solvable_task_executes_its_optimal_plan_physically() {
     let start = Instant::now();
     let only = std::env::var("COHERENT_SIM_ONLY").ok();
