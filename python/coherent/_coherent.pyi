@@ -75,6 +75,9 @@ class ActionParseError(CoherentError, ValueError):
     action: str
     reason: str
 
+class PhysicsError(CoherentError):
+    """The physical simulation cannot build a task's scene; the message says why."""
+
 class Task:
     """A task: the scene graph at the start, the robots, the goal and the ground truth.
 
@@ -105,15 +108,20 @@ class Task:
         """The task in the paper's format: one element of an env file's list."""
 
 class Env:
-    """The symbolic environment of a task: robots observe and act one action at a time.
+    """The environment of a task: robots observe and act one action at a time, by the
+    rules, and with ``physics=True`` also in Rapier (a physical failure is a refused
+    step whose reason has the numbers; a scene that cannot be built raises
+    :class:`PhysicsError`).
 
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
     for an id that is not one of the task's robots.
     """
 
-    def __init__(self, task: Task) -> None: ...
+    def __init__(self, task: Task, physics: bool = False) -> None: ...
     @property
     def task(self) -> Task: ...
+    @property
+    def physics(self) -> bool: ...
     @property
     def robots(self) -> list[int]: ...
     def observe(self, robot: int) -> _Observation: ...

@@ -1,10 +1,12 @@
 //! The `coherent` command line: `run`, `plan`, `validate`, `import`. One implementation
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
+mod render;
 mod run;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use coherent_core::planner::{self, Analysis, Limits};
@@ -23,6 +25,9 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Draw a task's scene from above as SVG: rooms, doors and their state, furniture
+    /// with heights, objects, robots; with --plan or --transcript, each robot's path.
+    Render(render::RenderArgs),
     /// Run a planning method on one task: one line per step, a summary, a transcript.
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
     /// 3 when the model's server fails for good or a replay diverges, 130 on Ctrl-C.
@@ -44,7 +49,8 @@ enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
-    /// Plan optimally: shortest plan, task type, or why a task cannot be solved.
+    /// Plan optimally: shortest plan, task type, or why a task cannot be solved. Exit 1
+    /// when a plan fails in physics (--physics), 2 on malformed input.
     Plan {
         /// An original env file, a native task file or a folder of them.
         file: PathBuf,
@@ -57,6 +63,10 @@ enum Command {
         /// Most states one search may visit.
         #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
+        /// Also execute each plan in Rapier and check it against the rules after every
+        /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
+        #[arg(long)]
+        physics: bool,
     },
 }
 
@@ -75,6 +85,12 @@ where
         }
     };
     let result = match cli.command {
+        Command::Render(args) => {
+            return render::render(&args).unwrap_or_else(|e| {
+                eprintln!("error: {e}");
+                2
+            });
+        }
         Command::Run(args) => {
             return run::run(*args).unwrap_or_else(|e| {
                 eprintln!("error: {e}");
@@ -90,7 +106,8 @@ where
             tasks,
             json,
             max_states,
-        } => plan(&file, &tasks, json, &Limits::max_states(max_states)),
+            physics,
+        } => plan(&file, &tasks, json, physics, &Limits::max_states(max_states)),
     };
     match result {
         Ok(code) => code,
@@ -197,7 +214,13 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
     Ok(if malformed > 0 { 2 } else { 0 })
 }
 
-fn plan(file: &Path, only: &[i64], as_json: bool, limits: &Limits) -> Result<u8, Error> {
+fn plan(
+    file: &Path,
+    only: &[i64],
+    as_json: bool,
+    physics: bool,
+    limits: &Limits,
+) -> Result<u8, Error> {
     let mut malformed = 0;
     let mut tasks = read_all(&[file.to_owned()], &mut malformed);
     if !only.is_empty() {
@@ -215,13 +238,36 @@ fn plan(file: &Path, only: &[i64], as_json: bool, limits: &Limits) -> Result<u8,
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let mut total_ms = 0.0;
+    let mut physics_failed = false;
     for t in &tasks {
         let analysis = planner::analyse(t, limits);
         total_ms += analysis.elapsed.as_secs_f64() * 1e3;
+        let report = match (&analysis.plan, physics) {
+            (Some(plan), true) => Some(coherent_sim::execute_plan(&Arc::new(t.clone()), plan)),
+            _ => None,
+        };
+        physics_failed |= report.as_ref().is_some_and(|r| !r.physics_ok);
         let line = if as_json {
-            analysis.to_json(t).to_string()
+            let mut value = analysis.to_json(t);
+            if let Some(r) = &report {
+                value["physics_ok"] = r.physics_ok.into();
+                value["physics_error"] = r.physics_error.clone().into();
+                value["sim_seconds"] = r.sim_seconds.into();
+                value["physics_wall_ms"] = ((r.wall_ms * 1e3).round() / 1e3).into();
+            }
+            value.to_string()
         } else {
-            plan_text(t, &analysis)
+            let mut text = plan_text(t, &analysis);
+            if let Some(r) = &report {
+                text.push_str(&match &r.physics_error {
+                    None => format!(
+                        "\n  physics: ok, {:.1} s simulated in {:.0} ms",
+                        r.sim_seconds, r.wall_ms
+                    ),
+                    Some(e) => format!("\n  physics: failed: {e}"),
+                });
+            }
+            text
         };
         // A closed pipe (e.g. `| head`) ends the listing quietly.
         if writeln!(out, "{line}").is_err() {
@@ -231,7 +277,13 @@ fn plan(file: &Path, only: &[i64], as_json: bool, limits: &Limits) -> Result<u8,
     if !as_json {
         let _ = writeln!(out, "{} tasks planned in {:.1} ms", tasks.len(), total_ms);
     }
-    Ok(if malformed > 0 { 2 } else { 0 })
+    Ok(if malformed > 0 {
+        2
+    } else if physics_failed {
+        1
+    } else {
+        0
+    })
 }
 
 fn plan_text(t: &Task, a: &Analysis) -> String {
@@ -256,6 +308,37 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
                 a.elapsed.as_secs_f64() * 1e3,
                 steps.join("\n")
             )
+        }
+    }
+}
+
+/// The task `id` of `file` (or its only task).
+pub(crate) fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
+    let results = load::read_tasks(file).map_err(|e| e.to_string())?;
+    let name = file.display();
+    match id {
+        Some(id) => {
+            let mut malformed = Vec::new();
+            for r in results {
+                match r {
+                    Ok(t) if t.meta.task_id == id => return Ok(t),
+                    Ok(_) => {}
+                    Err(e) => malformed.push(e.to_string()),
+                }
+            }
+            let mut message = format!("{name}: no well-formed task with task_id {id}");
+            for e in malformed {
+                message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
+            }
+            Err(message)
+        }
+        None => {
+            let mut results = results;
+            match results.len() {
+                1 => results.pop().expect("one task").map_err(|e| e.to_string()),
+                0 => Err(format!("{name}: no tasks")),
+                n => Err(format!("{name}: {n} tasks; choose one with --task ID")),
+            }
         }
     }
 }

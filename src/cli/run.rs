@@ -15,7 +15,9 @@ use coherent_agents::{
     ApiKey, BuiltinBackend, Cancel, Episode, OpenAiClient, OpenAiConfig, OutputMode, ReplayBackend,
 };
 use coherent_core::planner::Limits;
-use coherent_core::{Environment, SymbolicEnv, Task, load};
+use coherent_core::{Environment, SymbolicEnv, Task};
+
+use super::pick_task;
 use serde_json::json;
 
 /// Exit status when the episode ran but the goal was not reached.
@@ -52,6 +54,10 @@ pub struct RunArgs {
     /// Print a JSON summary on stdout (step lines go to stderr).
     #[arg(long)]
     json: bool,
+    /// Execute every action in Rapier too; a physical failure is an infeasible step
+    /// whose message has the numbers.
+    #[arg(long)]
+    physics: bool,
     /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1
     /// [env: OPENAI_BASE_URL]
     #[arg(long)]
@@ -171,6 +177,7 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                     max_steps: args.max_steps,
                     temperature: backend.as_ref().map(|_| args.temperature),
                     seed: backend.as_ref().and(args.seed),
+                    physics: args.physics,
                 };
                 let backend: Box<dyn Backend> = match backend {
                     Some(b) => Box::new(b),
@@ -198,7 +205,14 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
         settings.method.name()
     ));
     let path = episode::transcript_path(&args.out, &task, settings.method);
-    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let mut env: Box<dyn Environment + Send> = if settings.physics {
+        Box::new(
+            coherent_sim::PhysicalEnv::new(Arc::clone(&task))
+                .map_err(|e| format!("physics: {}", e.message))?,
+        )
+    } else {
+        Box::new(SymbolicEnv::new(Arc::clone(&task)))
+    };
     let ctrl_c = {
         let cancel = cancel.clone();
         tokio::spawn(async move {
@@ -211,7 +225,7 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
     let result = episode::run(
         &task,
-        &mut env,
+        env.as_mut(),
         backend.as_ref(),
         &settings,
         budget,
@@ -223,7 +237,7 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     ctrl_c.abort();
     let episode = result?;
     let s = &episode.summary;
-    lines.say(&summary_line(&episode, &env));
+    lines.say(&summary_line(&episode, env.as_ref()));
     lines.say(&format!("transcript: {}", path.display()));
     if let Some(t) = &recorded {
         match episode::check_replay(t, &episode) {
@@ -262,37 +276,6 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
         Status::BackendError => BACKEND_FAILED,
         Status::Interrupted => INTERRUPTED,
     })
-}
-
-/// The task `id` of `file` (or its only task).
-fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
-    let results = load::read_tasks(file).map_err(|e| e.to_string())?;
-    let name = file.display();
-    match id {
-        Some(id) => {
-            let mut malformed = Vec::new();
-            for r in results {
-                match r {
-                    Ok(t) if t.meta.task_id == id => return Ok(t),
-                    Ok(_) => {}
-                    Err(e) => malformed.push(e.to_string()),
-                }
-            }
-            let mut message = format!("{name}: no well-formed task with task_id {id}");
-            for e in malformed {
-                message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
-            }
-            Err(message)
-        }
-        None => {
-            let mut results = results;
-            match results.len() {
-                1 => results.pop().expect("one task").map_err(|e| e.to_string()),
-                0 => Err(format!("{name}: no tasks")),
-                n => Err(format!("{name}: {n} tasks; choose one with --task ID")),
-            }
-        }
-    }
 }
 
 /// The HTTP backend when an endpoint is configured: a base URL, or a key and a model

@@ -47,6 +47,8 @@ pub struct Settings {
     pub max_steps: Option<u32>,
     pub temperature: Option<f32>,
     pub seed: Option<u64>,
+    /// Whether the environment is physical (recorded; the caller builds the environment).
+    pub physics: bool,
 }
 
 impl Settings {
@@ -57,6 +59,7 @@ impl Settings {
             max_steps: None,
             temperature: None,
             seed: None,
+            physics: false,
         }
     }
 }
@@ -169,6 +172,7 @@ pub async fn run(
         history,
         max_steps: budget.steps(),
         gt_steps: task.meta.gt_steps,
+        physics: settings.physics,
         backend: backend.info(),
         temperature: settings.temperature,
         seed: settings.seed,
@@ -205,6 +209,7 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
         max_steps: Some(t.header.max_steps),
         temperature: t.header.temperature,
         seed: t.header.seed,
+        physics: t.header.physics,
     };
     Ok((settings, Budget::Given(t.header.max_steps)))
 }

@@ -29,6 +29,8 @@ pub struct Header {
     pub history: usize,
     pub max_steps: u32,
     pub gt_steps: Option<u32>,
+    /// Whether every action was also carried out in physics.
+    pub physics: bool,
     pub backend: BackendInfo,
     pub temperature: Option<f32>,
     pub seed: Option<u64>,

@@ -61,6 +61,10 @@ pub enum Reason {
     Misplaced,
     /// Not offered, and no rule above explains why; tests pin that this never happens.
     NotOffered,
+    /// Allowed by the rules, but the physical world could not carry it out (a reach, a
+    /// collision, a landing spot); the message has the numbers. Only physical
+    /// environments give it.
+    Physics,
 }
 
 impl Reason {
@@ -96,6 +100,7 @@ impl Reason {
             Reason::NotOnSurface => "not_on_surface",
             Reason::Misplaced => "misplaced",
             Reason::NotOffered => "not_offered",
+            Reason::Physics => "physics",
         }
     }
 }

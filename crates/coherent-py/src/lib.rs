@@ -34,6 +34,7 @@ struct Exceptions {
     task_format: Py<PyType>,
     unknown_robot: Py<PyType>,
     action_parse: Py<PyType>,
+    physics: Py<PyType>,
 }
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
@@ -73,11 +74,18 @@ fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
             "An action string that does not follow the grammar `[verb] <name>(id)`.\n\n\
              Attributes: `action` (the text) and `reason`.",
         )?;
+        let physics = make(
+            "PhysicsError",
+            vec![base.bind(py).clone()],
+            "The physical simulation cannot build a task's scene; the message says why,\n\
+             with the numbers.",
+        )?;
         Ok(Exceptions {
             base,
             task_format,
             unknown_robot,
             action_parse,
+            physics,
         })
     })
 }
@@ -298,21 +306,43 @@ impl PyTask {
 // ---------------------------------------------------------------------------------------
 // Env
 
-/// A symbolic environment: robots observe and act one action at a time.
+/// A task's environment: robots observe and act one action at a time, by the rules, and
+/// with `physics=True` also in Rapier.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 struct PyEnv {
-    env: SymbolicEnv,
+    env: Box<dyn Environment + Send + Sync>,
     task: Py<PyTask>,
+    physics: bool,
 }
 
 #[pymethods]
 impl PyEnv {
     #[new]
-    fn new(task: Bound<'_, PyTask>) -> PyEnv {
-        PyEnv {
-            env: SymbolicEnv::new(Arc::clone(&task.get().0)),
+    #[pyo3(signature = (task, physics = false))]
+    fn new(py: Python<'_>, task: Bound<'_, PyTask>, physics: bool) -> PyResult<PyEnv> {
+        let t = Arc::clone(&task.get().0);
+        let env: Box<dyn Environment + Send + Sync> = if physics {
+            let built = py.detach(|| coherent_sim::PhysicalEnv::new(t));
+            Box::new(built.map_err(|e| {
+                exceptions(py).map_or_else(
+                    |inner| inner,
+                    |exc| PyErr::from_type(exc.physics.bind(py).clone(), e.message),
+                )
+            })?)
+        } else {
+            Box::new(SymbolicEnv::new(t))
+        };
+        Ok(PyEnv {
+            env,
             task: task.unbind(),
-        }
+            physics,
+        })
+    }
+
+    /// Whether actions are also carried out in physics.
+    #[getter]
+    fn physics(&self) -> bool {
+        self.physics
     }
 
     /// The task this environment runs.
@@ -383,10 +413,11 @@ impl PyEnv {
     fn __repr__(&self, py: Python<'_>) -> String {
         let meta = &self.env.task().meta;
         format!(
-            "Env(scene={}, task_id={}, robots={:?}, goal_satisfied={})",
+            "Env(scene={}, task_id={}, robots={:?}, physics={}, goal_satisfied={})",
             py_repr(py, &meta.scene),
             meta.task_id,
             self.robots(),
+            if self.physics { "True" } else { "False" },
             if self.env.goal_satisfied() {
                 "True"
             } else {
@@ -508,6 +539,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("TaskFormatError", exc.task_format.clone_ref(py))?;
     m.add("UnknownRobotError", exc.unknown_robot.clone_ref(py))?;
     m.add("ActionParseError", exc.action_parse.clone_ref(py))?;
+    m.add("PhysicsError", exc.physics.clone_ref(py))?;
     m.add_class::<PyTask>()?;
     m.add_class::<PyEnv>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;

@@ -323,11 +323,7 @@ impl Environment for PhysicalEnv {
             Ok(Ok(_)) => None,
             Ok(Err(why)) => Some(why),
             Err(e) => Some(Infeasible {
-                reason: match e.kind {
-                    FailureKind::Reach => Reason::OutOfReach,
-                    FailureKind::Blocked => Reason::DoorClosed,
-                    _ => Reason::NotOffered,
-                },
+                reason: Reason::Physics,
                 message: format!("physics: {}", e.message),
             }),
         };
