@@ -648,7 +648,7 @@ async fn measure_primitive_mcts_on_every_original_task() {
         let paper = paper
             .iter()
             .find(|(k, _)| k == kind)
-            .map_or("-".to_owned(), |(_, as_)| format!("0.000 / {as_}"));
+            .map_or("-".to_owned(), |(_, as_)| format!("0.000 / {as_:.1}"));
         println!(
             "| {kind} | {} | {:.3} | {:.1} | {:.1} | {paper} |",
             row.tasks,
