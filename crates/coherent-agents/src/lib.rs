@@ -10,6 +10,7 @@ pub mod answer;
 pub mod builtin;
 pub mod episode;
 pub mod llm;
+pub mod mcts;
 pub mod openai;
 pub mod pefa;
 pub mod prompt;
