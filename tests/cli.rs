@@ -389,3 +389,90 @@ fn help_and_version_exit_0() {
         assert!(!stdout(&out).is_empty(), "{args:?}");
     }
 }
+
+fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json")
+}
+
+/// `plan --physics` carries the optimal plan out in Rapier and adds the four documented
+/// keys to the JSON line.
+#[test]
+fn plan_physics_adds_the_physical_outcome_to_each_line() {
+    let out = coherent(&["plan", arg(&demo()), "--physics", "--json"]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let line: Value = serde_json::from_str(stdout(&out).trim()).expect("one JSON line");
+    assert_eq!(line["physics_ok"], json!(true), "{line}");
+    assert_eq!(line["physics_error"], Value::Null);
+    assert!(line["sim_seconds"].as_f64().is_some_and(|s| s > 0.0));
+    assert!(line["physics_wall_ms"].as_f64().is_some_and(|s| s > 0.0));
+}
+
+/// `run --physics` and `run --method mcts` go through the same loop and transcript.
+#[test]
+fn run_with_physics_and_with_mcts() {
+    let dir = TempDir::new("run-physics");
+    let out = coherent(&[
+        "run",
+        arg(&demo()),
+        "--physics",
+        "--json",
+        "--out",
+        arg(dir.path()),
+    ]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let summary: Value = serde_json::from_str(stdout(&out).trim()).expect("a JSON summary");
+    assert_eq!(
+        (summary["success"].clone(), summary["steps"].clone()),
+        (json!(true), json!(22))
+    );
+    let transcript = std::fs::read_to_string(summary["transcript"].as_str().expect("a path"))
+        .expect("the transcript is written");
+    let header: Value =
+        serde_json::from_str(transcript.lines().next().expect("a header")).expect("JSON");
+    assert_eq!(header["physics"], json!(true));
+
+    let out = coherent(&[
+        "run",
+        arg(&env_file(0)),
+        "--task",
+        "0",
+        "--method",
+        "mcts",
+        "--out",
+        arg(dir.path()),
+    ]);
+    assert!(matches!(code(&out), 0 | 1), "{}", show(&out));
+    assert!(
+        stdout(&out).starts_with("backend: none (mcts asks no model)"),
+        "{}",
+        show(&out)
+    );
+}
+
+/// `render --plan` writes an SVG naming every room and robot, with the robots' paths.
+#[test]
+fn render_writes_a_picture_with_paths() {
+    let dir = TempDir::new("render");
+    let svg = dir.path().join("demo.svg");
+    let out = coherent(&["render", arg(&demo()), "--plan", "-o", arg(&svg)]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let text = std::fs::read_to_string(&svg).expect("the SVG is written");
+    assert!(
+        text.starts_with("<svg") || text.starts_with("<?xml"),
+        "{}",
+        &text[..80]
+    );
+    for name in [
+        "kitchen",
+        "living room",
+        "quadrotor",
+        "robot dog",
+        "robot arm",
+    ] {
+        assert!(text.contains(name), "{name} is not in the picture");
+    }
+    assert!(text.contains("<polyline class=\"path\""), "no path drawn");
+    let out = coherent(&["render", arg(&env_file(0)), "-o", arg(&svg)]);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(stderr(&out).contains("choose one with --task ID"));
+}

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -125,3 +126,20 @@ def test_envs_of_one_task_are_independent(task0: coherent.Task) -> None:
     assert a.step(*TASK0_PLAN[0])[0]
     assert a.graph() != b.graph()
     assert b.actions(22) == ["[takeoff_from] <childroom floor>(3)"]
+
+
+def test_physical_env_carries_the_optimal_plan_out_in_rapier() -> None:
+    demo = Path(__file__).resolve().parents[2] / "examples" / "tasks" / "demo.json"
+    task = coherent.load_tasks(demo)[0]
+    env = coherent.Env(task, physics=True)
+    assert env.physics and "physics=True" in repr(env)
+    ok, reason, _ = env.step(13, "[grab] <mug>(7)")
+    assert not ok and reason  # the rules still refuse first, with their reason
+    done = False
+    for step in coherent.plan(task)["plan"]:
+        ok, reason, done = env.step(step["robot"], step["action"])
+        assert ok, reason
+    assert done and env.goal_satisfied()
+    env.reset()
+    assert not env.goal_satisfied()
+    assert issubclass(coherent.PhysicsError, coherent.CoherentError)

@@ -107,7 +107,13 @@ where
             json,
             max_states,
             physics,
-        } => plan(&file, &tasks, json, physics, &Limits::max_states(max_states)),
+        } => plan(
+            &file,
+            &tasks,
+            json,
+            physics,
+            &Limits::max_states(max_states),
+        ),
     };
     match result {
         Ok(code) => code,

@@ -50,7 +50,9 @@ pub fn render(args: &RenderArgs) -> Result<u8, String> {
         let plan = analysis.plan.ok_or_else(|| {
             format!(
                 "no plan to draw: {}",
-                analysis.reason.unwrap_or_else(|| "the search stopped".into())
+                analysis
+                    .reason
+                    .unwrap_or_else(|| "the search stopped".into())
             )
         })?;
         let report = coherent_sim::execute_plan(&task, &plan);
@@ -69,14 +71,16 @@ pub fn render(args: &RenderArgs) -> Result<u8, String> {
     Ok(0)
 }
 
+/// A robot's track on the floor plan, as `coherent_sim` records it.
+type RobotPath = (coherent_core::NodeId, Vec<[f32; 2]>);
+
 /// The robots' paths when the transcript's executed actions are carried out in physics.
-fn replay_paths(
-    task: &Arc<Task>,
-    t: &transcript::Transcript,
-) -> Result<Vec<(coherent_core::NodeId, Vec<[f32; 2]>)>, String> {
-    let mut env = PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
+fn replay_paths(task: &Arc<Task>, t: &transcript::Transcript) -> Result<Vec<RobotPath>, String> {
+    let mut env =
+        PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
     for round in &t.rounds {
-        let (Outcome::Executed, Some(p), Some(d)) = (&round.outcome, &round.proposal, &round.decision)
+        let (Outcome::Executed, Some(p), Some(d)) =
+            (&round.outcome, &round.proposal, &round.decision)
         else {
             continue;
         };

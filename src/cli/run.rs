@@ -186,7 +186,11 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                 (task, settings, budget, backend)
             }
         };
-    lines.say(&backend_line(backend.as_ref(), args.replay.as_deref()));
+    lines.say(&if settings.method.uses_model() {
+        backend_line(backend.as_ref(), args.replay.as_deref())
+    } else {
+        format!("backend: none ({} asks no model)", settings.method.name())
+    });
     let task = Arc::new(task);
     let gt = task
         .meta

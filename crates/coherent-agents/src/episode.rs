@@ -9,7 +9,8 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task, native};
 
-use crate::llm::Backend;
+use crate::llm::{Backend, BackendInfo};
+use crate::mcts::{self, MctsConfig};
 use crate::pefa::{self, Cancel, Episode, PefaConfig};
 use crate::transcript::{self, Header, Record, Round, Summary, Transcript, Writer};
 
@@ -20,16 +21,32 @@ pub enum Method {
     Pefa,
     /// The paper's "w/o history" ablation: the window is 0.
     PefaNoHistory,
+    /// Primitive MCTS with the authors' settings; no model.
+    Mcts,
+    /// MCTS with a language-model prior at the root of each step's tree.
+    LlmMcts,
 }
 
 impl Method {
-    pub const ALL: [Method; 2] = [Method::Pefa, Method::PefaNoHistory];
+    pub const ALL: [Method; 4] = [
+        Method::Pefa,
+        Method::PefaNoHistory,
+        Method::Mcts,
+        Method::LlmMcts,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Pefa => "pefa",
             Method::PefaNoHistory => "pefa-no-history",
+            Method::Mcts => "mcts",
+            Method::LlmMcts => "llm-mcts",
         }
+    }
+
+    /// Whether the method asks a model (the backend) at all.
+    pub fn uses_model(self) -> bool {
+        self != Method::Mcts
     }
 
     pub fn from_name(name: &str) -> Option<Method> {
@@ -41,11 +58,13 @@ impl Method {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub method: Method,
-    /// Rounds of history the assigner sees (ignored by `pefa-no-history`).
+    /// Rounds of history the assigner sees (ignored by `pefa-no-history`; for the MCTS
+    /// methods, executed actions in the prompt).
     pub history: usize,
     /// Overrides the budget of 2 x GT.
     pub max_steps: Option<u32>,
     pub temperature: Option<f32>,
+    /// The model's sampling seed; for the MCTS methods also the search's (0 when unset).
     pub seed: Option<u64>,
     /// Whether the environment is physical (recorded; the caller builds the environment).
     pub physics: bool,
@@ -159,8 +178,17 @@ pub async fn run(
     progress: &mut (dyn FnMut(&Round) + Send),
 ) -> Result<Episode, String> {
     let history = match settings.method {
-        Method::Pefa => settings.history,
         Method::PefaNoHistory => 0,
+        _ => settings.history,
+    };
+    let backend_info = if settings.method.uses_model() {
+        backend.info()
+    } else {
+        BackendInfo {
+            kind: "none".into(),
+            model: String::new(),
+            base_url: None,
+        }
     };
     let header = Header {
         format: transcript::FORMAT.into(),
@@ -173,7 +201,7 @@ pub async fn run(
         max_steps: budget.steps(),
         gt_steps: task.meta.gt_steps,
         physics: settings.physics,
-        backend: backend.info(),
+        backend: backend_info,
         temperature: settings.temperature,
         seed: settings.seed,
         started_ms: SystemTime::now()
@@ -182,17 +210,39 @@ pub async fn run(
     };
     let io = |e: std::io::Error| format!("{}: {e}", transcript.display());
     let mut writer = Writer::create(transcript, header).map_err(io)?;
-    let config = PefaConfig {
-        history,
-        ..PefaConfig::new(budget.steps())
-    };
     let mut on_round = |r: &Round| {
         progress(r);
         writer.write(&Record::Round(Box::new(r.clone())))
     };
-    let episode = pefa::run(env, task, backend, &config, cancel, &mut on_round)
-        .await
-        .map_err(io)?;
+    let mcts = MctsConfig {
+        seed: settings.seed.unwrap_or(0),
+        history,
+        ..MctsConfig::default()
+    };
+    let steps = budget.steps();
+    let episode = match settings.method {
+        Method::Pefa | Method::PefaNoHistory => {
+            let config = PefaConfig {
+                history,
+                ..PefaConfig::new(steps)
+            };
+            pefa::run(env, task, backend, &config, cancel, &mut on_round).await
+        }
+        Method::Mcts => mcts::run(env, task, None, &mcts, steps, cancel, &mut on_round).await,
+        Method::LlmMcts => {
+            mcts::run(
+                env,
+                task,
+                Some(backend),
+                &mcts,
+                steps,
+                cancel,
+                &mut on_round,
+            )
+            .await
+        }
+    }
+    .map_err(io)?;
     writer
         .write(&Record::Summary(episode.summary.clone()))
         .map_err(io)?;

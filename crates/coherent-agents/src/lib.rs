@@ -16,6 +16,7 @@ pub mod pefa;
 pub mod prompt;
 pub mod replay;
 pub mod retry;
+pub mod rng;
 pub mod transcript;
 
 pub use builtin::BuiltinBackend;

@@ -78,6 +78,7 @@ use crate::answer::Decision;
 use crate::llm::{Backend, Finish, Message, Query, Role, Situation};
 use crate::pefa::{Cancel, Episode};
 use crate::prompt;
+use crate::rng::Rng;
 use crate::transcript::{Call, Outcome, Round, Status, Summary};
 
 const TEMPLATE: &str = include_str!("../prompts/llm_mcts.txt");
@@ -125,31 +126,6 @@ impl Default for MctsConfig {
             history: 5,
             max_tokens: 120,
         }
-    }
-}
-
-/// SplitMix64 (Steele, Lea and Flood): small, fast and plenty for rollouts; written
-/// here so that results do not depend on another crate's generator across versions.
-#[derive(Clone, Debug)]
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Rng {
-        Rng(seed)
-    }
-
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    /// Uniform in `0..n` for `n > 0` (multiply-shift; the bias of at most `n / 2^64` is
-    /// far below anything a rollout could show).
-    pub fn below(&mut self, n: usize) -> usize {
-        ((u128::from(self.next_u64()) * n as u128) >> 64) as usize
     }
 }
 

@@ -16,7 +16,8 @@ use crate::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
     Usage,
 };
-use crate::retry::{Backoff, Jitter, parse_retry_after};
+use crate::retry::{Backoff, parse_retry_after};
+use crate::rng::Rng;
 
 /// An API key. It is sent in the `Authorization` header and nowhere else: it has no
 /// `Serialize`, its `Debug` hides it, and every text from the server is scrubbed of it.
@@ -93,7 +94,7 @@ pub struct OpenAiClient {
     /// The answer format currently asked for (an [`OutputMode`] index); it only ever
     /// moves down, once a server has refused the one above.
     mode: AtomicU8,
-    jitter: Mutex<Jitter>,
+    jitter: Mutex<Rng>,
 }
 
 const MODES: [OutputMode; 3] = [
@@ -132,7 +133,7 @@ impl OpenAiClient {
             url,
             limit: Semaphore::new(config.concurrency.max(1)),
             mode: AtomicU8::new(first as u8),
-            jitter: Mutex::new(Jitter::new(seed)),
+            jitter: Mutex::new(Rng::new(seed)),
             config,
         })
     }
@@ -250,7 +251,7 @@ impl OpenAiClient {
             if !error.retryable() || retries >= self.config.backoff.max_retries {
                 return Err(error);
             }
-            let unit = self.jitter.lock().map_or(0.5, |mut j| j.next_unit());
+            let unit = self.jitter.lock().map_or(0.5, |mut j| j.unit());
             tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
             retries += 1;
         }

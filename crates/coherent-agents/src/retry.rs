@@ -50,26 +50,6 @@ pub fn parse_retry_after(value: &str, now: SystemTime) -> Option<Duration> {
     Some(when.duration_since(now).unwrap_or(Duration::ZERO))
 }
 
-/// A small, fast generator for jitter (SplitMix64); jitter needs spread, not quality.
-#[derive(Clone, Debug)]
-pub struct Jitter(u64);
-
-impl Jitter {
-    pub fn new(seed: u64) -> Jitter {
-        Jitter(seed)
-    }
-
-    /// Uniform in [0, 1).
-    pub fn next_unit(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^= z >> 31;
-        (z >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,9 +97,9 @@ mod tests {
     }
 
     #[test]
-    fn jitter_is_uniform_enough() {
-        let mut j = Jitter::new(42);
-        let draws: Vec<f64> = (0..10_000).map(|_| j.next_unit()).collect();
+    fn unit_draws_are_uniform_enough_for_jitter() {
+        let mut j = crate::rng::Rng::new(42);
+        let draws: Vec<f64> = (0..10_000).map(|_| j.unit()).collect();
         assert!(draws.iter().all(|&u| (0.0..1.0).contains(&u)));
         let mean = draws.iter().sum::<f64>() / draws.len() as f64;
         assert!((mean - 0.5).abs() < 0.02, "mean {mean}");

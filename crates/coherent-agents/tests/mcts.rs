@@ -11,9 +11,10 @@ use coherent_agents::llm::{
     Role, Usage,
 };
 use coherent_agents::mcts::{
-    self, JointAction, MctsConfig, Rng, joint_actions, match_sample, mix_prior, puct, read_sample,
+    self, JointAction, MctsConfig, joint_actions, match_sample, mix_prior, puct, read_sample,
     softmax_q,
 };
+use coherent_agents::rng::Rng;
 use coherent_agents::transcript::{Outcome, Status};
 use coherent_agents::{Cancel, Episode};
 use coherent_core::planner::{self, Limits};
