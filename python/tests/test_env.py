@@ -19,7 +19,7 @@ def test_env_basics(task0: coherent.Task) -> None:
     assert env.robots == [22, 23, 24, 50]
     assert env.task.task_id == 0
     assert not env.goal_satisfied()
-    assert repr(env) == "Env(scene='env0', task_id=0, robots=[22, 23, 24, 50], goal_satisfied=False)"
+    assert repr(env) == "Env(scene='env0', task_id=0, robots=[22, 23, 24, 50], physics=False, goal_satisfied=False)"
 
 
 def test_observe(task0: coherent.Task) -> None:
