@@ -177,8 +177,10 @@ impl Layout {
     pub fn for_task(task: &Task) -> Result<Layout, LayoutError> {
         match &task.meta.geometry {
             Some(map) => {
-                let layout: Layout = serde_json::from_value(serde_json::Value::Object(map.clone()))
-                    .map_err(|e| LayoutError(format!("geometry: {e}")))?;
+                let value = serde_json::Value::Object(map.clone());
+                let layout: Layout = serde_path_to_error::deserialize(value).map_err(|e| {
+                    LayoutError(format!("$.geometry.{}: {}", e.path(), e.inner()))
+                })?;
                 layout.check(task)?;
                 Ok(layout)
             }

@@ -1,0 +1,62 @@
+//! Explicit geometry: a native task file's `geometry` object is the layout the world is
+//! built from, instead of the generated one, and a bad one is refused with its JSON path.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use coherent_core::planner::{self, Limits};
+use coherent_core::{Task, load_tasks, native};
+use coherent_sim::{Layout, PhysicalEnv, execute_plan};
+use serde_json::Value;
+
+fn demo() -> Task {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+    load_tasks(&path).expect("the demo task loads").remove(0)
+}
+
+/// `task` with `geometry` in its native file.
+fn with_geometry(task: &Task, geometry: Value) -> Task {
+    let mut value = native::to_value(task);
+    value["geometry"] = geometry;
+    native::read("demo-with-geometry.json", &value).expect("the native file reads back")
+}
+
+#[test]
+fn explicit_geometry_is_the_layout_and_the_plan_runs_on_it() {
+    let task = demo();
+    let mut layout = Layout::generate(&task).expect("a generated layout");
+    // Move the coffee table (10) a metre along x: the world must follow the file.
+    let table = layout
+        .items
+        .iter_mut()
+        .find(|i| i.id == 10)
+        .expect("the coffee table has geometry");
+    table.pos[0] += 1.0;
+    let geometry = serde_json::to_value(&layout).expect("a layout serializes");
+    let task = Arc::new(with_geometry(&task, geometry));
+    assert_eq!(Layout::for_task(&task).expect("the geometry reads"), layout);
+    let env = PhysicalEnv::new(Arc::clone(&task)).expect("the world builds");
+    assert_eq!(env.layout(), &layout);
+    let plan = planner::analyse(&task, &Limits::default())
+        .plan
+        .expect("the demo is solvable");
+    let report = execute_plan(&task, &plan);
+    assert!(report.physics_ok, "{:?}", report.physics_error);
+}
+
+#[test]
+fn bad_geometry_names_its_json_path() {
+    let task = demo();
+    let mut geometry = serde_json::to_value(Layout::generate(&task).expect("a layout"))
+        .expect("a layout serializes");
+    geometry["items"][0]["size"] = Value::String("big".into());
+    let e = Layout::for_task(&with_geometry(&task, geometry)).expect_err("refused");
+    assert!(e.0.starts_with("$.geometry.items[0].size:"), "{e}");
+
+    // Geometry that leaves out a robot is incomplete.
+    let mut geometry = serde_json::to_value(Layout::generate(&task).expect("a layout"))
+        .expect("a layout serializes");
+    geometry["robots"] = Value::Array(Vec::new());
+    let e = Layout::for_task(&with_geometry(&task, geometry)).expect_err("refused");
+    assert!(e.0.contains("no entry for"), "{e}");
+}
