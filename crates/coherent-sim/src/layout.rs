@@ -178,9 +178,8 @@ impl Layout {
         match &task.meta.geometry {
             Some(map) => {
                 let value = serde_json::Value::Object(map.clone());
-                let layout: Layout = serde_path_to_error::deserialize(value).map_err(|e| {
-                    LayoutError(format!("$.geometry.{}: {}", e.path(), e.inner()))
-                })?;
+                let layout: Layout = serde_path_to_error::deserialize(value)
+                    .map_err(|e| LayoutError(format!("$.geometry.{}: {}", e.path(), e.inner())))?;
                 layout.check(task)?;
                 Ok(layout)
             }
