@@ -1,7 +1,12 @@
 //! The built-in backend: the optimal planner plays both roles, so that the loop runs
 //! on a fresh machine with no model. The assigner proposes the first step of a shortest
-//! plan from the current state; the executor takes that step when it is in its list.
-//! Its answers are the same JSON a model would give, and go through the same parsing.
+//! plan from the current state; the executor takes that step when it is in its list; a
+//! central or dialogue method gets that step as its joint action. Its answers are the
+//! same JSON a model would give, and go through the same parsing.
+//!
+//! The simulated backend is the same planner making the mistakes language models make,
+//! each at its own seeded rate ([`ErrorRates`]), for offline study of how methods recover;
+//! it is labelled `simulated` wherever its results appear.
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -9,13 +14,14 @@ use std::time::Instant;
 
 use coherent_core::planner::{self, Limits, Step};
 use coherent_core::task::predicate_holds;
-use coherent_core::{State, Task, rules};
+use coherent_core::{Idx, State, Task, rules};
 use serde_json::json;
 
 use crate::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
-    Role, Usage,
+    Usage,
 };
+use crate::rng::Rng;
 
 /// The next step of a shortest plan from each state seen, per task, or why there is
 /// none. Planning once and following the plan costs one search per episode instead of
@@ -25,6 +31,9 @@ type Plans = HashMap<(usize, State), Result<Step, String>>;
 #[derive(Debug, Default)]
 pub struct BuiltinBackend {
     inner: Arc<Planner>,
+    /// The simulated backend's error model and its seeded draws; `None` for the
+    /// built-in backend, which makes no mistakes.
+    errors: Option<(ErrorRates, Arc<Mutex<Rng>>)>,
 }
 
 #[derive(Debug, Default)]
@@ -43,6 +52,16 @@ impl BuiltinBackend {
                 limits,
                 ..Planner::default()
             }),
+            errors: None,
+        }
+    }
+
+    /// The simulated backend: the planner's answers with mistakes at `rates`, drawn
+    /// from `seed` (one backend per episode keeps an episode reproducible).
+    pub fn simulated(limits: Limits, rates: ErrorRates, seed: u64) -> BuiltinBackend {
+        BuiltinBackend {
+            errors: Some((rates, Arc::new(Mutex::new(Rng::new(seed))))),
+            ..BuiltinBackend::new(limits)
         }
     }
 }
@@ -104,72 +123,271 @@ impl Planner {
         Ok(plan[0])
     }
 
-    fn answer(&self, q: &Query) -> Answer {
+    /// The answer to `q`: the first step of a shortest plan, as the request's schema
+    /// wants it, unless `mistake` says which error to make instead.
+    fn answer(&self, q: &Query, mistake: Option<(Mistake, &mut Rng)>) -> Answer {
         let task = &q.situation.task;
         let state = &q.situation.state;
-        let (text, finish) = match q.role {
-            Role::Assigner => match self.next_step(task, state) {
-                Ok(step) => (
-                    json!({
-                        "reasoning": "The first step of a shortest plan from here.",
-                        "robot": task.node(step.robot).label(),
-                        "subtask": step.action.render(task),
-                    })
-                    .to_string(),
-                    Finish::Stop,
-                ),
-                Err(why) => (String::new(), Finish::Refusal(why)),
-            },
-            Role::Executor => {
+        let text = match q.schema_name {
+            "decision" => {
                 let subtask = q.situation.subtask.as_deref().unwrap_or_default();
-                let robot = q.robot.and_then(|id| task.robot_by_id(id).ok());
-                let offered = robot.is_some_and(|r| {
-                    rules::actions(task, state, r)
-                        .iter()
-                        .any(|a| a.render(task) == subtask)
-                });
-                let answer = if offered {
-                    json!({"action": subtask, "subtask_complete": true, "note": ""})
-                } else {
-                    json!({
+                let actions: Vec<String> = q
+                    .robot
+                    .and_then(|id| task.robot_by_id(id).ok())
+                    .map(|r| {
+                        rules::actions(task, state, r)
+                            .iter()
+                            .map(|a| a.render(task))
+                            .collect()
+                    })
+                    .unwrap_or_default();
+                let offered = actions.iter().any(|a| a == subtask);
+                let chosen = match mistake {
+                    Some((Mistake::Hallucinate, rng)) => Some(hallucinated(task, &actions, rng)),
+                    Some((Mistake::Suboptimal, rng)) if !actions.is_empty() => {
+                        Some(actions[rng.below(actions.len())].clone())
+                    }
+                    _ if offered => Some(subtask.to_owned()),
+                    _ => None,
+                };
+                match chosen {
+                    Some(action) => {
+                        json!({"action": action, "subtask_complete": true, "note": ""})
+                    }
+                    None => json!({
                         "action": "none",
                         "subtask_complete": false,
                         "note": "the subtask is not one of my actions now",
-                    })
+                    }),
+                }
+                .to_string()
+            }
+            // The assigner's proposal, or one joint action (CMRS, DMRS, LLM-MCTS).
+            kind => {
+                let step = match self.next_step(task, state) {
+                    Ok(step) => step,
+                    Err(why) => return answer(String::new(), Finish::Refusal(why)),
                 };
-                (answer.to_string(), Finish::Stop)
+                let (mut robot, mut action) = (step.robot, step.action.render(task));
+                match mistake {
+                    Some((Mistake::WrongRobot, rng)) => robot = other_robot(task, robot, rng),
+                    Some((Mistake::Suboptimal, rng)) => {
+                        let joint: Vec<(Idx, String)> = task
+                            .robots
+                            .iter()
+                            .flat_map(|r| {
+                                rules::actions(task, state, *r)
+                                    .into_iter()
+                                    .map(|a| (r.node, a.render(task)))
+                            })
+                            .collect();
+                        (robot, action) = joint[rng.below(joint.len())].clone();
+                    }
+                    Some((Mistake::Hallucinate, rng)) => {
+                        let listed: Vec<String> = task
+                            .robot(robot)
+                            .map(|r| {
+                                rules::actions(task, state, *r)
+                                    .iter()
+                                    .map(|a| a.render(task))
+                                    .collect()
+                            })
+                            .unwrap_or_default();
+                        action = hallucinated(task, &listed, rng);
+                    }
+                    _ => {}
+                }
+                let label = task.node(robot).label();
+                if kind == "proposal" {
+                    json!({
+                        "reasoning": "The first step of a shortest plan from here.",
+                        "robot": label,
+                        "subtask": action,
+                    })
+                } else {
+                    json!({"reasoning": "The first step of a shortest plan from here.", "action": format!("{label}: {action}")})
+                }
+                .to_string()
             }
         };
-        Answer {
-            text,
-            finish,
-            usage: Usage::default(),
-            latency_ms: 0.0,
-            attempts: 1,
-            mode: OutputMode::JsonSchema,
+        answer(text, Finish::Stop)
+    }
+}
+
+fn answer(text: String, finish: Finish) -> Answer {
+    Answer {
+        text,
+        finish,
+        usage: Usage::default(),
+        latency_ms: 0.0,
+        attempts: 1,
+        mode: OutputMode::JsonSchema,
+    }
+}
+
+/// Another robot of the team than `robot` (the same one when it is alone).
+fn other_robot(task: &Task, robot: Idx, rng: &mut Rng) -> Idx {
+    let others: Vec<Idx> = task
+        .robots
+        .iter()
+        .map(|r| r.node)
+        .filter(|&n| n != robot)
+        .collect();
+    if others.is_empty() {
+        robot
+    } else {
+        others[rng.below(others.len())]
+    }
+}
+
+/// A well-formed action that is not in `listed`: grabbing a random thing of the scene,
+/// the most common invention of a model that has lost track of what it can reach.
+fn hallucinated(task: &Task, listed: &[String], rng: &mut Rng) -> String {
+    let all: Vec<Idx> = task.indices().collect();
+    for _ in 0..32 {
+        let n = all[rng.below(all.len())];
+        let action = format!("[grab] {}", task.node(n).label());
+        if !listed.contains(&action) {
+            return action;
         }
+    }
+    "[grab] <nothing>(-1)".to_owned()
+}
+
+/// The kinds of mistakes the simulated backend makes, each with its own rate.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Mistake {
+    /// An action that is not in the robot's list.
+    Hallucinate,
+    /// The right step given to the wrong robot.
+    WrongRobot,
+    /// An answer that cannot be parsed.
+    Malformed,
+    /// A valid choice that is not a step of a shortest plan.
+    Suboptimal,
+}
+
+/// Rates of the simulated backend's mistakes, each the probability that one answer makes
+/// that mistake (they are exclusive; their sum is at most 1).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ErrorRates {
+    pub hallucinate: f64,
+    pub wrong_robot: f64,
+    pub malformed: f64,
+    pub suboptimal: f64,
+}
+
+impl ErrorRates {
+    /// Every kind at `rate`.
+    pub fn all(rate: f64) -> ErrorRates {
+        ErrorRates {
+            hallucinate: rate,
+            wrong_robot: rate,
+            malformed: rate,
+            suboptimal: rate,
+        }
+    }
+
+    /// `hallucinate=0.1,wrong_robot=0.1,malformed=0.05,suboptimal=0.1`; `all=0.1` sets
+    /// every kind; kinds not named are 0.
+    pub fn parse(spec: &str) -> Result<ErrorRates, String> {
+        let mut rates = ErrorRates::default();
+        for part in spec.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let (key, value) = part
+                .split_once('=')
+                .ok_or_else(|| format!("{part:?}: expected kind=rate"))?;
+            let rate: f64 = value
+                .trim()
+                .parse()
+                .ok()
+                .filter(|r| (0.0..=1.0).contains(r))
+                .ok_or_else(|| format!("{part:?}: the rate must be a number from 0 to 1"))?;
+            match key.trim() {
+                "all" => rates = ErrorRates::all(rate),
+                "hallucinate" => rates.hallucinate = rate,
+                "wrong_robot" => rates.wrong_robot = rate,
+                "malformed" => rates.malformed = rate,
+                "suboptimal" => rates.suboptimal = rate,
+                other => {
+                    return Err(format!(
+                        "{other:?} is not an error kind (hallucinate, wrong_robot, malformed, suboptimal, all)"
+                    ));
+                }
+            }
+        }
+        let sum = rates.hallucinate + rates.wrong_robot + rates.malformed + rates.suboptimal;
+        if sum > 1.0 + 1e-9 {
+            return Err(format!("the rates add up to {sum}, more than 1"));
+        }
+        Ok(rates)
+    }
+
+    /// `hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`.
+    pub fn label(&self) -> String {
+        format!(
+            "hallucinate={},wrong_robot={},malformed={},suboptimal={}",
+            self.hallucinate, self.wrong_robot, self.malformed, self.suboptimal
+        )
+    }
+
+    /// The mistake of one answer, from a uniform draw `u` in [0, 1).
+    fn draw(&self, u: f64) -> Option<Mistake> {
+        let mut edge = 0.0;
+        for (rate, mistake) in [
+            (self.hallucinate, Mistake::Hallucinate),
+            (self.wrong_robot, Mistake::WrongRobot),
+            (self.malformed, Mistake::Malformed),
+            (self.suboptimal, Mistake::Suboptimal),
+        ] {
+            edge += rate;
+            if u < edge {
+                return Some(mistake);
+            }
+        }
+        None
     }
 }
 
 impl Backend for BuiltinBackend {
     fn info(&self) -> BackendInfo {
-        BackendInfo {
-            kind: "builtin".into(),
-            model: "optimal-planner".into(),
-            base_url: None,
+        match &self.errors {
+            None => BackendInfo {
+                kind: "builtin".into(),
+                model: "optimal-planner".into(),
+                base_url: None,
+            },
+            Some((rates, _)) => BackendInfo {
+                kind: "simulated".into(),
+                model: format!("optimal-planner with errors {}", rates.label()),
+                base_url: None,
+            },
         }
     }
 
     fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
         let planner = Arc::clone(&self.inner);
+        let errors = self.errors.clone();
         Box::pin(async move {
             let start = Instant::now();
             // A search can take a second or two: keep it off the async workers.
-            let mut answer = tokio::task::spawn_blocking(move || planner.answer(&query))
-                .await
-                .map_err(|e| {
-                    LlmError::new(LlmErrorKind::Internal, format!("the planner failed: {e}"))
-                })?;
+            let mut answer = tokio::task::spawn_blocking(move || match errors {
+                None => planner.answer(&query, None),
+                Some((rates, rng)) => {
+                    let mut rng = rng.lock().unwrap_or_else(PoisonError::into_inner);
+                    let u = rng.unit();
+                    match rates.draw(u) {
+                        Some(Mistake::Malformed) => {
+                            answer("{\"robot\": <the one that".to_owned(), Finish::Stop)
+                        }
+                        Some(m) => planner.answer(&query, Some((m, &mut rng))),
+                        None => planner.answer(&query, None),
+                    }
+                }
+            })
+            .await
+            .map_err(|e| {
+                LlmError::new(LlmErrorKind::Internal, format!("the planner failed: {e}"))
+            })?;
             answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
             Ok(answer)
         })

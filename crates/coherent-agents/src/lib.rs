@@ -19,7 +19,7 @@ pub mod retry;
 pub mod rng;
 pub mod transcript;
 
-pub use builtin::BuiltinBackend;
+pub use builtin::{BuiltinBackend, ErrorRates};
 pub use episode::{Budget, Method, Settings};
 pub use llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
 pub use openai::{ApiKey, OpenAiClient, OpenAiConfig};
