@@ -27,7 +27,7 @@ pub struct Decision {
 }
 
 /// The first JSON object in `text`.
-fn json_object(text: &str) -> Option<Map<String, Value>> {
+pub(crate) fn json_object(text: &str) -> Option<Map<String, Value>> {
     text.match_indices('{').take(16).find_map(|(i, _)| {
         let mut values = serde_json::Deserializer::from_str(&text[i..]).into_iter::<Value>();
         match values.next() {
@@ -139,7 +139,7 @@ pub fn parse_proposal(task: &Task, text: &str) -> Result<Proposal, String> {
 }
 
 /// Lower case with single spaces, for matching an action however it was spaced.
-fn normal(s: &str) -> String {
+pub(crate) fn normal(s: &str) -> String {
     s.split_whitespace()
         .collect::<Vec<_>>()
         .join(" ")

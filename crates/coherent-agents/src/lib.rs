@@ -9,6 +9,7 @@
 pub mod answer;
 pub mod builtin;
 pub mod episode;
+pub mod joint;
 pub mod llm;
 pub mod mcts;
 pub mod openai;

@@ -57,7 +57,7 @@
 //! [`MctsConfig::samples`] (5) times with a CMRS-like prompt (the instruction, every
 //! robot's observation as facts, the union of the action lists as `<robot>: <action>`
 //! lines, the last 5 executed actions), each answer is matched to the nearest valid
-//! joint action ([`match_sample`]; an answer matching none is dropped), and
+//! joint action ([`joint::match_line`]; an answer matching none is dropped), and
 //! `P = 0.5 x (the empirical distribution of matched samples) + 0.5 x uniform`
 //! ([`mix_prior`]). Below the root the prior is uniform. Asking the model only at the
 //! root is this project's named simplification (LLM-MCTS as published asks its policy
@@ -71,19 +71,15 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
-use coherent_core::{Action, Environment, Robot, State, Task, describe, rules};
-use serde_json::{Value, json};
+use coherent_core::{Environment, State, Task, rules};
 
 use crate::answer::Decision;
-use crate::llm::{Backend, Finish, Message, Query, Role, Situation};
+use crate::joint::{self, JointAction, joint_actions};
+use crate::llm::{Backend, Finish, Query, Role, Situation};
+use crate::pefa::team_observation;
 use crate::pefa::{Cancel, Episode};
-use crate::prompt;
-use crate::rng::Rng;
+use crate::rng::{Rng, seed_of};
 use crate::transcript::{Call, Outcome, Round, Status, Summary};
-
-const TEMPLATE: &str = include_str!("../prompts/llm_mcts.txt");
-/// The line that separates the template's system part from its user part.
-const USER_MARK: &str = "@@user@@";
 
 /// Settings of one MCTS episode; the default is the authors' (METHOD.md).
 #[derive(Clone, Debug, PartialEq)]
@@ -127,44 +123,6 @@ impl Default for MctsConfig {
             max_tokens: 120,
         }
     }
-}
-
-/// The seed of real step `step`'s search: each step gets its own stream, so that a
-/// step's search does not depend on how many numbers the steps before it drew.
-fn step_seed(seed: u64, step: u32) -> u64 {
-    let base = Rng::new(seed).next_u64();
-    Rng::new(base ^ u64::from(step).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
-}
-
-/// One robot's action: an element of the joint action space.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct JointAction {
-    pub robot: Robot,
-    pub action: Action,
-}
-
-impl JointAction {
-    /// `<robot label>: <action>`, as the prompt lists it.
-    pub fn line(&self, task: &Task) -> String {
-        format!(
-            "{}: {}",
-            task.node(self.robot.node).label(),
-            self.action.render(task)
-        )
-    }
-}
-
-/// Every action of every robot in `s`: robots in team order, each robot's actions in
-/// [`rules::actions`] order.
-pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
-    task.robots
-        .iter()
-        .flat_map(|&robot| {
-            rules::actions(task, s, robot)
-                .into_iter()
-                .map(move |action| JointAction { robot, action })
-        })
-        .collect()
 }
 
 /// The softmax(`temperature`)-weighted mean of `returns`; 0 when there are none.
@@ -433,157 +391,6 @@ fn root_stats(mut tree: Vec<Node>, config: &MctsConfig, simulations: u32) -> Roo
     stats
 }
 
-/// Lower case with single spaces.
-fn normal(s: &str) -> String {
-    s.split_whitespace()
-        .collect::<Vec<_>>()
-        .join(" ")
-        .to_ascii_lowercase()
-}
-
-/// Words and numbers: `[grab] <apple>(3)` gives `grab`, `apple`, `3`.
-fn tokens(s: &str) -> Vec<String> {
-    let mut out: Vec<String> = s
-        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
-        .filter(|t| !t.is_empty())
-        .map(str::to_ascii_lowercase)
-        .collect();
-    out.sort_unstable();
-    out.dedup();
-    out
-}
-
-/// |a ∩ b| / |a ∪ b| of two sorted token sets.
-fn overlap(a: &[String], b: &[String]) -> f64 {
-    let common = a.iter().filter(|t| b.binary_search(t).is_ok()).count();
-    let union = a.len() + b.len() - common;
-    if union == 0 {
-        0.0
-    } else {
-        common as f64 / union as f64
-    }
-}
-
-/// The least token overlap at which an answer counts as meaning an action.
-const MIN_OVERLAP: f64 = 0.5;
-
-/// The joint action line of `lines` that `answer` means, or `None`. First an exact match
-/// (ignoring case and spacing); then, when the answer names a robot by its label (the
-/// first label in the text), the action of that robot whose words and ids overlap most
-/// with the rest of the answer, at least half of them; when it names no robot, the best
-/// such action of any robot (ties go to the earlier line).
-pub fn match_sample(lines: &[String], answer: &str) -> Option<usize> {
-    let wanted = normal(answer);
-    if wanted.is_empty() {
-        return None;
-    }
-    if let Some(i) = lines.iter().position(|l| normal(l) == wanted) {
-        return Some(i);
-    }
-    let split: Vec<(String, String)> = lines
-        .iter()
-        .map(|l| match l.split_once(": ") {
-            Some((robot, action)) => (normal(robot), action.to_owned()),
-            None => (String::new(), l.clone()),
-        })
-        .collect();
-    let named = split
-        .iter()
-        .filter(|(robot, _)| !robot.is_empty())
-        .filter_map(|(robot, _)| wanted.find(robot.as_str()).map(|at| (at, robot)))
-        .min();
-    let (robot, rest) = match named {
-        Some((at, robot)) => {
-            let rest = wanted[at + robot.len()..].trim_start_matches([':', '-', ',', ' ']);
-            (Some(robot.clone()), rest.to_owned())
-        }
-        None => (None, wanted.clone()),
-    };
-    let want = tokens(&rest);
-    let mut best: Option<(usize, f64)> = None;
-    for (i, (r, action)) in split.iter().enumerate() {
-        if robot.as_ref().is_some_and(|named| named != r) {
-            continue;
-        }
-        let score = overlap(&want, &tokens(action));
-        if score >= MIN_OVERLAP && best.is_none_or(|(_, s)| score > s) {
-            best = Some((i, score));
-        }
-    }
-    best.map(|(i, _)| i)
-}
-
-/// The action an answer names: the `action` field of its first JSON object (with its
-/// `robot` field in front when the action does not name one; a `subtask` field stands in
-/// for a missing `action`), else the whole text.
-pub fn read_sample(text: &str) -> String {
-    let object = text.match_indices('{').take(16).find_map(|(i, _)| {
-        let mut values = serde_json::Deserializer::from_str(&text[i..]).into_iter::<Value>();
-        match values.next() {
-            Some(Ok(Value::Object(map))) => Some(map),
-            _ => None,
-        }
-    });
-    let Some(map) = object else {
-        return text.trim().to_owned();
-    };
-    let field = |k: &str| map.get(k).and_then(Value::as_str).map(str::trim);
-    let action = field("action").or_else(|| field("subtask")).unwrap_or("");
-    match field("robot") {
-        Some(robot) if !robot.is_empty() && !action.contains(robot) => {
-            format!("{robot}: {action}")
-        }
-        _ => action.to_owned(),
-    }
-}
-
-/// The prompt of one LLM-MCTS sample.
-pub fn llm_messages(
-    task: &Task,
-    observation: &str,
-    lines: &[String],
-    history: &[String],
-) -> Vec<Message> {
-    let team = task
-        .robots
-        .iter()
-        .map(|r| format!("- {}: {}", task.node(r.node).label(), r.kind))
-        .collect::<Vec<_>>()
-        .join("\n");
-    let history = if history.is_empty() {
-        "(none yet)".to_owned()
-    } else {
-        history.join("\n")
-    };
-    let actions = lines.join("\n");
-    let values = [
-        ("team", team.as_str()),
-        ("instruction", task.meta.instruction.as_str()),
-        ("observation", observation),
-        ("history", history.as_str()),
-        ("actions", actions.as_str()),
-    ];
-    let (system, user) = TEMPLATE.split_once(USER_MARK).unwrap_or(("", TEMPLATE));
-    let mut messages = Vec::new();
-    if !system.trim().is_empty() {
-        messages.push(Message::system(
-            prompt::fill(system, &values).trim().to_owned(),
-        ));
-    }
-    messages.push(Message::user(prompt::fill(user, &values).trim().to_owned()));
-    messages
-}
-
-/// The answer: one of the joint action lines.
-pub fn llm_schema(lines: &[String]) -> Value {
-    json!({
-        "type": "object",
-        "properties": {"action": {"type": "string", "enum": lines}},
-        "required": ["action"],
-        "additionalProperties": false,
-    })
-}
-
 /// Runs MCTS on `env` until the goal holds, `max_steps` steps are spent, the backend
 /// fails for good, or `cancel` fires: primitive MCTS when `backend` is `None`, LLM-MCTS
 /// otherwise. `on_round` sees each round as it ends; its error stops the episode.
@@ -690,7 +497,7 @@ async fn round(
     // The prior, from the model's samples.
     let mut prior = None;
     if let Some(backend) = backend {
-        let messages = llm_messages(task, &team_observation(env, task), &lines, history);
+        let messages = joint::central_messages(task, &team_observation(env, task), &lines, history);
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {
@@ -698,7 +505,7 @@ async fn round(
                 robot: None,
                 messages: messages.clone(),
                 schema_name: "joint_action",
-                schema: llm_schema(&lines),
+                schema: joint::central_schema(&lines),
                 max_tokens: config.max_tokens,
                 situation: Situation {
                     task: Arc::clone(task),
@@ -723,7 +530,9 @@ async fn round(
                     // A refusal, a filtered or an empty answer names nothing.
                     let usable = matches!(answer.finish, Finish::Stop | Finish::Length)
                         && !answer.text.trim().is_empty();
-                    if usable && let Some(i) = match_sample(&lines, &read_sample(&answer.text)) {
+                    if usable
+                        && let Some(i) = joint::match_line(&lines, &joint::read_line(&answer.text))
+                    {
                         counts[i] += 1;
                     }
                     call.answer = Some(answer);
@@ -746,7 +555,7 @@ async fn round(
     }
 
     // The search is CPU work: keep it off the async workers.
-    let seed = step_seed(config.seed, step);
+    let seed = seed_of(config.seed, u64::from(step));
     let (t, s, c, flag) = (Arc::clone(task), state, config.clone(), cancel.flag());
     let stats = tokio::task::spawn_blocking(move || {
         search(
@@ -814,47 +623,4 @@ fn close(env: &(dyn Environment + Send), mut round: Round, start: Instant) -> Ro
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     round
-}
-
-/// Every robot's observation, merged, as facts.
-fn team_observation(env: &(dyn Environment + Send), task: &Task) -> String {
-    let observations: Vec<_> = task
-        .robots
-        .iter()
-        .filter_map(|r| env.observe(task.id(r.node)).ok())
-        .collect();
-    let refs: Vec<_> = observations.iter().collect();
-    describe::facts(task, env.state(), &refs)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_template_is_filled_and_split() {
-        let (system, user) = TEMPLATE.split_once(USER_MARK).expect("a user part");
-        assert!(system.contains("{{team}}"));
-        for key in ["instruction", "observation", "history", "actions"] {
-            assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
-        }
-    }
-
-    #[test]
-    fn the_generator_is_uniform_enough_and_seeded() {
-        let mut a = Rng::new(7);
-        let mut b = Rng::new(7);
-        let mut counts = [0u32; 4];
-        for _ in 0..4000 {
-            let x = a.below(4);
-            assert_eq!(x, b.below(4));
-            counts[x] += 1;
-        }
-        assert!(
-            counts.iter().all(|&c| (900..1100).contains(&c)),
-            "{counts:?}"
-        );
-        assert_ne!(step_seed(0, 1), step_seed(0, 2));
-        assert_ne!(step_seed(0, 1), step_seed(1, 1));
-    }
 }

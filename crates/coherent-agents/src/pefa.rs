@@ -499,8 +499,8 @@ fn robot_lines(env: &(dyn Environment + Send), task: &Task) -> String {
         .join("\n")
 }
 
-/// Every robot's observation, merged.
-fn team_observation(env: &(dyn Environment + Send), task: &Task) -> String {
+/// Every robot's observation, merged, as facts.
+pub(crate) fn team_observation(env: &(dyn Environment + Send), task: &Task) -> String {
     let observations: Vec<_> = task
         .robots
         .iter()

@@ -6,14 +6,12 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, PoisonError};
 
+use coherent_agents::joint::{JointAction, joint_actions, match_line, read_line};
 use coherent_agents::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
     Role, Usage,
 };
-use coherent_agents::mcts::{
-    self, JointAction, MctsConfig, joint_actions, match_sample, mix_prior, puct, read_sample,
-    softmax_q,
-};
+use coherent_agents::mcts::{self, MctsConfig, mix_prior, puct, softmax_q};
 use coherent_agents::rng::Rng;
 use coherent_agents::transcript::{Outcome, Status};
 use coherent_agents::{Cancel, Episode};
@@ -256,41 +254,41 @@ fn samples_are_matched_to_the_nearest_joint_action_or_dropped() {
     .to_vec();
     // Exact, however spaced and cased.
     assert_eq!(
-        match_sample(&lines, "<robot dog>(2):  [MoveTowards] <apple>(7)"),
+        match_line(&lines, "<robot dog>(2):  [MoveTowards] <apple>(7)"),
         Some(1)
     );
     // A robot label and a near action: the best of that robot's actions.
     assert_eq!(
-        match_sample(&lines, "<robot dog>(2): go [movetowards] <kitchen>(3) now"),
+        match_line(&lines, "<robot dog>(2): go [movetowards] <kitchen>(3) now"),
         Some(2)
     );
     assert_eq!(
-        match_sample(&lines, "<robot dog>(2) [movetowards] <apple>"),
+        match_line(&lines, "<robot dog>(2) [movetowards] <apple>"),
         Some(1)
     );
     // No robot named: the nearest action of any robot.
-    assert_eq!(match_sample(&lines, "[grab] <apple>(7)"), Some(3));
+    assert_eq!(match_line(&lines, "[grab] <apple>(7)"), Some(3));
     // The named robot has nothing like it: dropped, not given to another robot.
     assert_eq!(
-        match_sample(&lines, "<quadrotor>(1): [grab] <apple>(7)"),
+        match_line(&lines, "<quadrotor>(1): [grab] <apple>(7)"),
         None
     );
     // Nothing like any action.
-    assert_eq!(match_sample(&lines, "let the dog do it"), None);
-    assert_eq!(match_sample(&lines, ""), None);
-    assert_eq!(match_sample(&[], "[grab] <apple>(7)"), None);
+    assert_eq!(match_line(&lines, "let the dog do it"), None);
+    assert_eq!(match_line(&lines, ""), None);
+    assert_eq!(match_line(&[], "[grab] <apple>(7)"), None);
 
     assert_eq!(
-        read_sample(r#"{"action": "<robot arm>(4): [grab] <apple>(7)"}"#),
+        read_line(r#"{"action": "<robot arm>(4): [grab] <apple>(7)"}"#),
         lines[3]
     );
     assert_eq!(
-        read_sample(
+        read_line(
             "Sure: ```json\n{\"robot\": \"<robot arm>(4)\", \"subtask\": \"[grab] <apple>(7)\"}\n```"
         ),
         lines[3]
     );
-    assert_eq!(read_sample("  just text "), "just text");
+    assert_eq!(read_line("  just text "), "just text");
 }
 
 /// The state one step before the goal of `task`'s shortest plan, and that last step.

@@ -1,0 +1,198 @@
+//! The team's joint action space as text, for the methods that choose one robot's
+//! action centrally or in dialogue (CMRS, DMRS, LLM-MCTS): one line per `(robot,
+//! action)`, `<robot dog>(13): [grab] <mug>(7)`; the central prompt; and reading an
+//! answer back to a line.
+
+use coherent_core::{Action, Robot, State, Task, rules};
+use serde_json::{Value, json};
+
+use crate::answer::{self, normal};
+use crate::llm::Message;
+use crate::prompt;
+
+const TEMPLATE: &str = include_str!("../prompts/central.txt");
+/// The line that separates the template's system part from its user part.
+const USER_MARK: &str = "@@user@@";
+
+/// One robot's action: an element of the joint action space.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct JointAction {
+    pub robot: Robot,
+    pub action: Action,
+}
+
+impl JointAction {
+    /// `<robot label>: <action>`, as the prompt lists it.
+    pub fn line(&self, task: &Task) -> String {
+        format!(
+            "{}: {}",
+            task.node(self.robot.node).label(),
+            self.action.render(task)
+        )
+    }
+}
+
+/// Every action of every robot in `s`: robots in team order, each robot's actions in
+/// [`rules::actions`] order.
+pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
+    task.robots
+        .iter()
+        .flat_map(|&robot| {
+            rules::actions(task, s, robot)
+                .into_iter()
+                .map(move |action| JointAction { robot, action })
+        })
+        .collect()
+}
+
+/// Words and numbers: `[grab] <apple>(3)` gives `grab`, `apple`, `3`.
+fn tokens(s: &str) -> Vec<String> {
+    let mut out: Vec<String> = s
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_'))
+        .filter(|t| !t.is_empty())
+        .map(str::to_ascii_lowercase)
+        .collect();
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// |a ∩ b| / |a ∪ b| of two sorted token sets.
+fn overlap(a: &[String], b: &[String]) -> f64 {
+    let common = a.iter().filter(|t| b.binary_search(t).is_ok()).count();
+    let union = a.len() + b.len() - common;
+    if union == 0 {
+        0.0
+    } else {
+        common as f64 / union as f64
+    }
+}
+
+/// The least token overlap at which an answer counts as meaning an action.
+const MIN_OVERLAP: f64 = 0.5;
+
+/// The joint action line of `lines` that `answer` means, or `None`. First an exact match
+/// (ignoring case and spacing); then, when the answer names a robot by its label (the
+/// first label in the text), the action of that robot whose words and ids overlap most
+/// with the rest of the answer, at least half of them; when it names no robot, the best
+/// such action of any robot (ties go to the earlier line).
+pub fn match_line(lines: &[String], answer: &str) -> Option<usize> {
+    let wanted = normal(answer);
+    if wanted.is_empty() {
+        return None;
+    }
+    if let Some(i) = lines.iter().position(|l| normal(l) == wanted) {
+        return Some(i);
+    }
+    let split: Vec<(String, String)> = lines
+        .iter()
+        .map(|l| match l.split_once(": ") {
+            Some((robot, action)) => (normal(robot), action.to_owned()),
+            None => (String::new(), l.clone()),
+        })
+        .collect();
+    let named = split
+        .iter()
+        .filter(|(robot, _)| !robot.is_empty())
+        .filter_map(|(robot, _)| wanted.find(robot.as_str()).map(|at| (at, robot)))
+        .min();
+    let (robot, rest) = match named {
+        Some((at, robot)) => {
+            let rest = wanted[at + robot.len()..].trim_start_matches([':', '-', ',', ' ']);
+            (Some(robot.clone()), rest.to_owned())
+        }
+        None => (None, wanted.clone()),
+    };
+    let want = tokens(&rest);
+    let mut best: Option<(usize, f64)> = None;
+    for (i, (r, action)) in split.iter().enumerate() {
+        if robot.as_ref().is_some_and(|named| named != r) {
+            continue;
+        }
+        let score = overlap(&want, &tokens(action));
+        if score >= MIN_OVERLAP && best.is_none_or(|(_, s)| score > s) {
+            best = Some((i, score));
+        }
+    }
+    best.map(|(i, _)| i)
+}
+
+/// The action an answer names: the `action` field of its first JSON object (with its
+/// `robot` field in front when the action does not name one; a `subtask` field stands in
+/// for a missing `action`), else the whole text.
+pub fn read_line(text: &str) -> String {
+    let object = answer::json_object(text);
+    let Some(map) = object else {
+        return text.trim().to_owned();
+    };
+    let field = |k: &str| map.get(k).and_then(Value::as_str).map(str::trim);
+    let action = field("action").or_else(|| field("subtask")).unwrap_or("");
+    match field("robot") {
+        Some(robot) if !robot.is_empty() && !action.contains(robot) => {
+            format!("{robot}: {action}")
+        }
+        _ => action.to_owned(),
+    }
+}
+
+/// The central prompt: the team, the rules, the instruction, the team's observation,
+/// the last executed actions and every joint action line (CMRS, LLM-MCTS samples).
+pub fn central_messages(
+    task: &Task,
+    observation: &str,
+    lines: &[String],
+    history: &[String],
+) -> Vec<Message> {
+    let team = task
+        .robots
+        .iter()
+        .map(|r| format!("- {}: {}", task.node(r.node).label(), r.kind))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let history = if history.is_empty() {
+        "(none yet)".to_owned()
+    } else {
+        history.join("\n")
+    };
+    let actions = lines.join("\n");
+    let values = [
+        ("team", team.as_str()),
+        ("instruction", task.meta.instruction.as_str()),
+        ("observation", observation),
+        ("history", history.as_str()),
+        ("actions", actions.as_str()),
+    ];
+    let (system, user) = TEMPLATE.split_once(USER_MARK).unwrap_or(("", TEMPLATE));
+    let mut messages = Vec::new();
+    if !system.trim().is_empty() {
+        messages.push(Message::system(
+            prompt::fill(system, &values).trim().to_owned(),
+        ));
+    }
+    messages.push(Message::user(prompt::fill(user, &values).trim().to_owned()));
+    messages
+}
+
+/// The answer: one of the joint action lines.
+pub fn central_schema(lines: &[String]) -> Value {
+    json!({
+        "type": "object",
+        "properties": {"action": {"type": "string", "enum": lines}},
+        "required": ["action"],
+        "additionalProperties": false,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_template_is_filled_and_split() {
+        let (system, user) = TEMPLATE.split_once(USER_MARK).expect("a user part");
+        assert!(system.contains("{{team}}"));
+        for key in ["instruction", "observation", "history", "actions"] {
+            assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
+        }
+    }
+}
