@@ -3,12 +3,15 @@
 //! action)`, `<robot dog>(13): [grab] <mug>(7)`; the central prompt; and reading an
 //! answer back to a line.
 
+use std::collections::VecDeque;
+
 use coherent_core::{Action, Robot, State, Task, rules};
 use serde_json::{Value, json};
 
 use crate::answer::{self, normal};
 use crate::llm::Message;
 use crate::prompt;
+use crate::transcript::{Outcome, Round};
 
 const TEMPLATE: &str = include_str!("../prompts/central.txt");
 /// The line that separates the template's system part from its user part.
@@ -181,6 +184,40 @@ pub fn central_schema(lines: &[String]) -> Value {
         "required": ["action"],
         "additionalProperties": false,
     })
+}
+
+/// The last executed joint actions, oldest first: the action history the baselines
+/// see (METHOD.md: the last 5).
+#[derive(Clone, Debug, Default)]
+pub(crate) struct Executed {
+    lines: VecDeque<String>,
+    keep: usize,
+}
+
+impl Executed {
+    pub(crate) fn new(keep: usize) -> Executed {
+        Executed {
+            lines: VecDeque::new(),
+            keep,
+        }
+    }
+
+    /// Adds the round's action when it ran.
+    pub(crate) fn record(&mut self, round: &Round) {
+        if round.outcome == Outcome::Executed
+            && let Some(line) = round.decision.as_ref().and_then(|d| d.action.clone())
+            && self.keep > 0
+        {
+            self.lines.push_back(line);
+            while self.lines.len() > self.keep {
+                self.lines.pop_front();
+            }
+        }
+    }
+
+    pub(crate) fn lines(&self) -> Vec<String> {
+        self.lines.iter().cloned().collect()
+    }
 }
 
 #[cfg(test)]

@@ -65,7 +65,6 @@
 //! (a tree of 50 simulations would otherwise cost up to 250 calls a step) and keeps an
 //! episode's cost comparable with the other LLM methods'.
 
-use std::collections::VecDeque;
 use std::io;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -74,12 +73,12 @@ use std::time::Instant;
 use coherent_core::{Environment, State, Task, rules};
 
 use crate::answer::Decision;
-use crate::joint::{self, JointAction, joint_actions};
+use crate::joint::{self, Executed, JointAction, joint_actions};
 use crate::llm::{Backend, Finish, Query, Role, Situation};
-use crate::pefa::team_observation;
+use crate::pefa::{self, team_observation};
 use crate::pefa::{Cancel, Episode};
 use crate::rng::{Rng, seed_of};
-use crate::transcript::{Call, Outcome, Round, Status, Summary};
+use crate::transcript::{Call, Outcome, Round};
 
 /// Settings of one MCTS episode; the default is the authors' (METHOD.md).
 #[derive(Clone, Debug, PartialEq)]
@@ -403,65 +402,15 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let start = Instant::now();
-    let mut rounds: Vec<Round> = Vec::new();
-    let mut history: VecDeque<String> = VecDeque::new();
-    let mut status = if env.goal_satisfied() {
-        Status::Success
-    } else {
-        Status::Failure
+    let mut history = Executed::new(config.history);
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let r = round(env, task, backend, config, cancel, &history.lines(), step).await?;
+        if let Some(r) = &r {
+            history.record(r);
+        }
+        Ok(r)
     };
-    let mut error = None;
-    while status == Status::Failure && rounds.len() < max_steps as usize {
-        if cancel.is_cancelled() {
-            status = Status::Interrupted;
-            break;
-        }
-        let step = rounds.len() as u32 + 1;
-        let history_now: Vec<String> = history.iter().cloned().collect();
-        let Some(round) = round(env, task, backend, config, cancel, &history_now, step).await?
-        else {
-            status = Status::Interrupted;
-            break;
-        };
-        on_round(&round)?;
-        if round.outcome == Outcome::Executed
-            && let Some(line) = round.decision.as_ref().and_then(|d| d.action.clone())
-            && config.history > 0
-        {
-            history.push_back(line);
-            while history.len() > config.history {
-                history.pop_front();
-            }
-        }
-        if let Outcome::BackendError { message } = &round.outcome {
-            status = Status::BackendError;
-            error = Some(message.clone());
-        } else if round.done {
-            status = Status::Success;
-        }
-        rounds.push(round);
-    }
-    let (prompt_tokens, completion_tokens) = rounds
-        .iter()
-        .flat_map(|r| &r.calls)
-        .filter_map(|c| c.answer.as_ref())
-        .fold((0, 0), |(p, c), a| {
-            (p + a.usage.prompt_tokens, c + a.usage.completion_tokens)
-        });
-    let summary = Summary {
-        status,
-        success: status == Status::Success,
-        steps: rounds.len() as u32,
-        gt_steps: task.meta.gt_steps,
-        max_steps,
-        llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum(),
-        prompt_tokens,
-        completion_tokens,
-        wall_ms: start.elapsed().as_secs_f64() * 1e3,
-        error,
-    };
-    Ok(Episode { rounds, summary })
+    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
 /// One real step; `None` when cancelled during it (nothing of it is kept).

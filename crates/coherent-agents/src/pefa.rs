@@ -95,31 +95,50 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let start = Instant::now();
-    let mut rounds = Vec::new();
     let mut history: VecDeque<String> = VecDeque::new();
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let r = round(env, task, backend, config, cancel, &history, step).await;
+        if let Some(r) = &r
+            && config.history > 0
+        {
+            history.push_back(history_entry(task, r));
+            while history.len() > config.history {
+                history.pop_front();
+            }
+        }
+        Ok(r)
+    };
+    rounds(env, task, config.max_steps, cancel, on_round, play).await
+}
+
+/// The loop every method shares: `play` one round per step until the goal holds, the
+/// budget is spent, a round ends in a backend failure, or `cancel` fires (`play` gives
+/// `None` when cancelled during a round); then the summary.
+pub(crate) async fn rounds(
+    env: &mut (dyn Environment + Send),
+    task: &Task,
+    max_steps: u32,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+    mut play: impl AsyncFnMut(&mut (dyn Environment + Send), u32) -> io::Result<Option<Round>>,
+) -> io::Result<Episode> {
+    let start = Instant::now();
+    let mut rounds: Vec<Round> = Vec::new();
     let mut status = if env.goal_satisfied() {
         Status::Success
     } else {
         Status::Failure
     };
     let mut error = None;
-    while status == Status::Failure && rounds.len() < config.max_steps as usize {
+    while status == Status::Failure && rounds.len() < max_steps as usize {
         if cancel.is_cancelled() {
             status = Status::Interrupted;
             break;
         }
-        let step = rounds.len() as u32 + 1;
-        let Some(round) = round(env, task, backend, config, cancel, &history, step).await else {
+        let Some(round) = play(env, rounds.len() as u32 + 1).await? else {
             status = Status::Interrupted;
             break;
         };
-        if config.history > 0 {
-            history.push_back(history_entry(task, &round));
-            while history.len() > config.history {
-                history.pop_front();
-            }
-        }
         on_round(&round)?;
         if let Outcome::BackendError { message } = &round.outcome {
             status = Status::BackendError;
@@ -141,7 +160,7 @@ pub async fn run(
         success: status == Status::Success,
         steps: rounds.len() as u32,
         gt_steps: task.meta.gt_steps,
-        max_steps: config.max_steps,
+        max_steps,
         llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum(),
         prompt_tokens,
         completion_tokens,
