@@ -12,7 +12,8 @@ use coherent_agents::llm::Backend;
 use coherent_agents::retry::Backoff;
 use coherent_agents::transcript::{self, Outcome, Round, Status};
 use coherent_agents::{
-    ApiKey, BuiltinBackend, Cancel, Episode, OpenAiClient, OpenAiConfig, OutputMode, ReplayBackend,
+    ApiKey, BuiltinBackend, Cancel, Episode, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode,
+    ReplayBackend,
 };
 use coherent_core::planner::Limits;
 use coherent_core::{Environment, SymbolicEnv, Task};
@@ -90,6 +91,11 @@ pub struct RunArgs {
     /// Requests in flight at once.
     #[arg(long, default_value_t = 4)]
     concurrency: usize,
+    /// Without an endpoint: the simulated backend instead of the built-in one, making
+    /// these mistakes (`hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`,
+    /// or `all=0.1`), seeded by --seed.
+    #[arg(long)]
+    sim_errors: Option<String>,
     /// Most states one search of the built-in planner may visit.
     #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
     max_states: usize,
@@ -176,12 +182,23 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                     history: args.history,
                     max_steps: args.max_steps,
                     temperature: backend.as_ref().map(|_| args.temperature),
-                    seed: backend.as_ref().and(args.seed),
+                    seed: args.seed,
                     physics: args.physics,
                 };
-                let backend: Box<dyn Backend> = match backend {
-                    Some(b) => Box::new(b),
-                    None => Box::new(BuiltinBackend::new(limits.clone())),
+                let backend: Box<dyn Backend> = match (backend, &args.sim_errors) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            "--sim-errors is for the simulated backend: leave out the endpoint"
+                                .into(),
+                        );
+                    }
+                    (Some(b), None) => Box::new(b),
+                    (None, Some(spec)) => Box::new(BuiltinBackend::simulated(
+                        limits.clone(),
+                        ErrorRates::parse(spec).map_err(|e| format!("--sim-errors: {e}"))?,
+                        args.seed.unwrap_or(0),
+                    )),
+                    (None, None) => Box::new(BuiltinBackend::new(limits.clone())),
                 };
                 (task, settings, budget, backend)
             }
@@ -331,6 +348,11 @@ fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {
             "backend: replay of {} (recorded with model {}; no network)",
             path.display(),
             info.model
+        ),
+        ("simulated", _) => format!(
+            "backend: simulated (the optimal planner with seeded mistakes: {}; not a language model)",
+            info.model
+                .trim_start_matches("optimal-planner with errors ")
         ),
         ("openai", _) => format!(
             "backend: OpenAI-compatible endpoint {} with model {}",

@@ -9,10 +9,12 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task, native};
 
+use crate::dmrs::{self, DmrsConfig};
 use crate::llm::{Backend, BackendInfo};
 use crate::mcts::{self, MctsConfig};
 use crate::pefa::{self, Cancel, Episode, PefaConfig};
 use crate::transcript::{self, Header, Record, Round, Summary, Transcript, Writer};
+use crate::{cmrs, optimal};
 
 /// A planning method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -21,32 +23,48 @@ pub enum Method {
     Pefa,
     /// The paper's "w/o history" ablation: the window is 0.
     PefaNoHistory,
+    /// One central model choosing one robot's action per step.
+    Cmrs,
+    /// Decentralised dialogue, one round per step.
+    Dmrs1d,
+    /// Decentralised dialogue, two rounds per step.
+    Dmrs2d,
     /// Primitive MCTS with the authors' settings; no model.
     Mcts,
     /// MCTS with a language-model prior at the root of each step's tree.
     LlmMcts,
+    /// The optimal planner's plan: the ground-truth row; no model.
+    Optimal,
 }
 
 impl Method {
-    pub const ALL: [Method; 4] = [
+    pub const ALL: [Method; 8] = [
         Method::Pefa,
         Method::PefaNoHistory,
+        Method::Cmrs,
+        Method::Dmrs1d,
+        Method::Dmrs2d,
         Method::Mcts,
         Method::LlmMcts,
+        Method::Optimal,
     ];
 
     pub fn name(self) -> &'static str {
         match self {
             Method::Pefa => "pefa",
             Method::PefaNoHistory => "pefa-no-history",
+            Method::Cmrs => "cmrs",
+            Method::Dmrs1d => "dmrs-1d",
+            Method::Dmrs2d => "dmrs-2d",
             Method::Mcts => "mcts",
             Method::LlmMcts => "llm-mcts",
+            Method::Optimal => "optimal",
         }
     }
 
     /// Whether the method asks a model (the backend) at all.
     pub fn uses_model(self) -> bool {
-        self != Method::Mcts
+        !matches!(self, Method::Mcts | Method::Optimal)
     }
 
     pub fn from_name(name: &str) -> Option<Method> {
@@ -58,13 +76,14 @@ impl Method {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub method: Method,
-    /// Rounds of history the assigner sees (ignored by `pefa-no-history`; for the MCTS
-    /// methods, executed actions in the prompt).
+    /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
+    /// baselines, the executed actions in their prompts (the paper: 5 for both).
     pub history: usize,
     /// Overrides the budget of 2 x GT.
     pub max_steps: Option<u32>,
     pub temperature: Option<f32>,
-    /// The model's sampling seed; for the MCTS methods also the search's (0 when unset).
+    /// The model's sampling seed; also the MCTS search's and the DMRS speaking order's
+    /// (0 when unset).
     pub seed: Option<u64>,
     /// Whether the environment is physical (recorded; the caller builds the environment).
     pub physics: bool,
@@ -228,18 +247,30 @@ pub async fn run(
             };
             pefa::run(env, task, backend, &config, cancel, &mut on_round).await
         }
+        Method::Cmrs => cmrs::run(env, task, backend, history, steps, cancel, &mut on_round).await,
+        Method::Dmrs1d | Method::Dmrs2d => {
+            let config = DmrsConfig {
+                dialogue_rounds: if settings.method == Method::Dmrs1d {
+                    1
+                } else {
+                    2
+                },
+                history,
+                seed: settings.seed.unwrap_or(0),
+            };
+            dmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
+        }
         Method::Mcts => mcts::run(env, task, None, &mcts, steps, cancel, &mut on_round).await,
         Method::LlmMcts => {
-            mcts::run(
-                env,
-                task,
-                Some(backend),
-                &mcts,
-                steps,
-                cancel,
-                &mut on_round,
-            )
-            .await
+            let model = Some(backend);
+            mcts::run(env, task, model, &mcts, steps, cancel, &mut on_round).await
+        }
+        Method::Optimal => {
+            let limits = Limits {
+                cancel: Some(cancel.flag()),
+                ..Limits::default()
+            };
+            optimal::run(env, task, &limits, steps, cancel, &mut on_round).await
         }
     }
     .map_err(io)?;

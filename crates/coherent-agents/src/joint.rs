@@ -5,7 +5,7 @@
 
 use std::collections::VecDeque;
 
-use coherent_core::{Action, Robot, State, Task, rules};
+use coherent_core::{Action, NodeId, Robot, State, Task, rules};
 use serde_json::{Value, json};
 
 use crate::answer::{self, normal};
@@ -146,12 +146,7 @@ pub fn central_messages(
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
-    let team = task
-        .robots
-        .iter()
-        .map(|r| format!("- {}: {}", task.node(r.node).label(), r.kind))
-        .collect::<Vec<_>>()
-        .join("\n");
+    let team = prompt::team(task);
     let history = if history.is_empty() {
         "(none yet)".to_owned()
     } else {
@@ -184,6 +179,55 @@ pub fn central_schema(lines: &[String]) -> Value {
         "required": ["action"],
         "additionalProperties": false,
     })
+}
+
+/// The robot and action an answer chooses: one of `lines` (matched ignoring case and
+/// spacing), or else `<robot label>: <action>` for a robot of the team, the action then
+/// taken as written for the feasibility check to judge. No nearest-match guessing: that
+/// is LLM-MCTS's own mechanism ([`match_line`]), not these methods'.
+pub fn choose(task: &Task, lines: &[String], text: &str) -> Result<(NodeId, String), String> {
+    let said = read_line(text);
+    let line = lines
+        .iter()
+        .find(|l| normal(l) == normal(&said))
+        .cloned()
+        .unwrap_or(said);
+    for r in &task.robots {
+        let label = task.node(r.node).label();
+        if let Some(action) = line.strip_prefix(&label) {
+            let action = action.trim_start_matches([':', ' ']).trim();
+            if !action.is_empty() {
+                return Ok((task.id(r.node), action.to_owned()));
+            }
+        }
+    }
+    Err(format!(
+        "{:?} is not \"<robot>: <action>\" for a robot of the team",
+        excerpt(&line)
+    ))
+}
+
+/// `<label>(id)` of robot `robot`, or `robot <id>` when it is none of the task's.
+pub fn label(task: &Task, robot: NodeId) -> String {
+    task.idx(robot)
+        .map_or_else(|| format!("robot {robot}"), |i| task.node(i).label())
+}
+
+/// What a round of a central or dialogue method did, in a sentence for the transcript.
+pub(crate) fn feedback(line: &str, outcome: &Outcome) -> String {
+    match outcome {
+        Outcome::Executed => format!("{line} ran."),
+        Outcome::Infeasible { message, .. } => format!("{line} could not run: {message}"),
+        Outcome::NoProposal { why } | Outcome::NoDecision { why } => {
+            format!("No usable answer: {why}")
+        }
+        Outcome::BackendError { message } => format!("The model could not be reached: {message}"),
+        Outcome::Declined => "No action was chosen.".to_owned(),
+    }
+}
+
+fn excerpt(text: &str) -> String {
+    text.chars().take(120).collect()
 }
 
 /// The last executed joint actions, oldest first: the action history the baselines

@@ -8,11 +8,14 @@
 
 pub mod answer;
 pub mod builtin;
+pub mod cmrs;
+pub mod dmrs;
 pub mod episode;
 pub mod joint;
 pub mod llm;
 pub mod mcts;
 pub mod openai;
+pub mod optimal;
 pub mod pefa;
 pub mod prompt;
 pub mod replay;

@@ -427,17 +427,8 @@ async fn round(
     let state = env.state().clone();
     let actions = joint_actions(task, &state);
     let lines: Vec<String> = actions.iter().map(|a| a.line(task)).collect();
-    let mut round = Round {
-        step,
-        calls: Vec::new(),
-        proposal: None,
-        actions: lines.clone(),
-        decision: None,
-        outcome: Outcome::Declined,
-        feedback: String::new(),
-        done: false,
-        wall_ms: 0.0,
-    };
+    let mut round = Round::new(step);
+    round.actions = lines.clone();
     if actions.is_empty() {
         round.feedback = "No robot can act now.".into();
         return Ok(Some(close(env, round, start)));

@@ -181,17 +181,7 @@ async fn round(
     step: u32,
 ) -> Option<Round> {
     let start = Instant::now();
-    let mut round = Round {
-        step,
-        calls: Vec::new(),
-        proposal: None,
-        actions: Vec::new(),
-        decision: None,
-        outcome: Outcome::Declined,
-        feedback: String::new(),
-        done: false,
-        wall_ms: 0.0,
-    };
+    let mut round = Round::new(step);
     let situation = |subtask: Option<String>| Situation {
         task: Arc::clone(task),
         state: env.state().clone(),
@@ -264,26 +254,31 @@ async fn round(
         };
     round.decision = Some(decision.clone());
     let outcome = match &decision.action {
-        Some(action) if decision.can_do => match env.step(robot, action) {
-            Ok(o) => match o.infeasible {
-                None => Outcome::Executed,
-                Some(why) => Outcome::Infeasible {
-                    reason: why.reason.name().to_owned(),
-                    message: why.message,
-                },
-            },
-            Err(e) => Outcome::Infeasible {
-                reason: "error".into(),
-                message: e.to_string(),
-            },
-        },
+        Some(action) if decision.can_do => execute(env, robot, action),
         _ => Outcome::Declined,
     };
     Some(finish(env, round, outcome, start))
 }
 
+/// Checks and runs `action` for `robot`: executed, or why not.
+pub(crate) fn execute(env: &mut (dyn Environment + Send), robot: NodeId, action: &str) -> Outcome {
+    match env.step(robot, action) {
+        Ok(o) => match o.infeasible {
+            None => Outcome::Executed,
+            Some(why) => Outcome::Infeasible {
+                reason: why.reason.name().to_owned(),
+                message: why.message,
+            },
+        },
+        Err(e) => Outcome::Infeasible {
+            reason: "error".into(),
+            message: e.to_string(),
+        },
+    }
+}
+
 /// Why a role's answer gave nothing to act on.
-enum Unusable {
+pub(crate) enum Unusable {
     /// The backend failed for good.
     Failed(LlmError),
     /// An answer came, but not one that can be used.
@@ -291,13 +286,13 @@ enum Unusable {
 }
 
 #[derive(Clone, Copy)]
-enum Side {
+pub(crate) enum Side {
     Assigner,
     Executor,
 }
 
 impl Unusable {
-    fn outcome(self, side: Side) -> Outcome {
+    pub(crate) fn outcome(self, side: Side) -> Outcome {
         match (self, side) {
             (Unusable::Failed(e), _) => Outcome::BackendError {
                 message: e.to_string(),
@@ -309,15 +304,18 @@ impl Unusable {
 }
 
 /// An answer's text, and whether generation was cut at the token limit.
-struct Reply {
-    text: String,
+pub(crate) struct Reply {
+    pub(crate) text: String,
     truncated: bool,
 }
 
 impl Reply {
     /// Parses the text; a truncated answer counts when what matters came before the cut
     /// (a small model may pad a complete action with whitespace up to the limit).
-    fn read<T>(self, parse: impl FnOnce(&str) -> Result<T, String>) -> Result<T, Unusable> {
+    pub(crate) fn read<T>(
+        self,
+        parse: impl FnOnce(&str) -> Result<T, String>,
+    ) -> Result<T, Unusable> {
         parse(&self.text).map_err(|why| {
             Unusable::Bad(if self.truncated {
                 format!(
@@ -333,7 +331,7 @@ impl Reply {
 
 /// Asks `backend`, records the call, and gives the answer's text unless it is empty,
 /// refused or filtered; `None` when cancelled.
-async fn ask(
+pub(crate) async fn ask(
     backend: &dyn Backend,
     query: Query,
     cancel: &Cancel,

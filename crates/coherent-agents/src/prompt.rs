@@ -54,8 +54,8 @@ pub struct AssignerView<'a> {
     pub history: &'a [String],
 }
 
-/// The team list of the system prompt: each robot's label and type.
-fn team(task: &Task) -> String {
+/// The team list of a system prompt: each robot's label and type, one per line.
+pub(crate) fn team(task: &Task) -> String {
     task.robots
         .iter()
         .map(|r| format!("- {}: {}", task.node(r.node).label(), r.kind))

@@ -84,6 +84,23 @@ pub struct Round {
     pub wall_ms: f64,
 }
 
+impl Round {
+    /// Round `step` before anything happened in it.
+    pub fn new(step: u32) -> Round {
+        Round {
+            step,
+            calls: Vec::new(),
+            proposal: None,
+            actions: Vec::new(),
+            decision: None,
+            outcome: Outcome::Declined,
+            feedback: String::new(),
+            done: false,
+            wall_ms: 0.0,
+        }
+    }
+}
+
 /// How an episode ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -1,0 +1,94 @@
+//! CMRS, the paper's centralised baseline (METHOD.md, "Baselines"): each step one model
+//! sees every robot's observation, the union of all robots' action lists and the last
+//! executed actions, and answers one `<robot>: <action>` line, which is checked and run.
+//! One model call per step.
+
+use std::io;
+use std::sync::Arc;
+use std::time::Instant;
+
+use coherent_core::{Environment, Task};
+
+use crate::answer::Decision;
+use crate::joint::{self, Executed, joint_actions};
+use crate::llm::{Backend, Query, Role, Situation};
+use crate::pefa::{self, Cancel, Episode, Side, team_observation};
+use crate::transcript::Round;
+
+/// Most tokens of one answer (a line and a little reasoning).
+const MAX_TOKENS: u32 = 200;
+
+/// Runs CMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
+/// good, or `cancel` fires; `history` executed actions are shown (the paper: 5).
+pub async fn run(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    history: usize,
+    max_steps: u32,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+) -> io::Result<Episode> {
+    let mut executed = Executed::new(history);
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let r = round(env, task, backend, cancel, &executed.lines(), step).await;
+        if let Some(r) = &r {
+            executed.record(r);
+        }
+        Ok(r)
+    };
+    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+async fn round(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    cancel: &Cancel,
+    history: &[String],
+    step: u32,
+) -> Option<Round> {
+    let start = Instant::now();
+    let lines: Vec<String> = joint_actions(task, env.state())
+        .iter()
+        .map(|a| a.line(task))
+        .collect();
+    let mut round = Round::new(step);
+    round.actions = lines.clone();
+    let query = Query {
+        role: Role::Assigner,
+        robot: None,
+        messages: joint::central_messages(task, &team_observation(env, task), &lines, history),
+        schema_name: "joint_action",
+        schema: joint::central_schema(&lines),
+        max_tokens: MAX_TOKENS,
+        situation: Situation {
+            task: Arc::clone(task),
+            state: env.state().clone(),
+            subtask: None,
+        },
+    };
+    let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
+    let chosen = reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text)));
+    (round.outcome, round.feedback) = match chosen {
+        Ok((robot, action)) => {
+            let line = format!("{}: {action}", joint::label(task, robot));
+            round.decision = Some(Decision {
+                can_do: true,
+                action: Some(line.clone()),
+                subtask_complete: true,
+                note: String::new(),
+            });
+            let outcome = pefa::execute(env, robot, &action);
+            let feedback = joint::feedback(&line, &outcome);
+            (outcome, feedback)
+        }
+        Err(e) => {
+            let outcome = e.outcome(Side::Executor);
+            (outcome.clone(), joint::feedback("", &outcome))
+        }
+    };
+    round.done = env.goal_satisfied();
+    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    Some(round)
+}

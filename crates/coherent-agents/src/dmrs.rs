@@ -1,0 +1,233 @@
+//! DMRS, the paper's decentralised dialogue baselines after CoELA (METHOD.md,
+//! "Baselines"): each step the robots speak in a random order (seeded); each speaker sees
+//! the task, the last executed actions, its own observation, the action lists of itself
+//! and of the robots who spoke before it, and the step's dialogue so far, and proposes
+//! one `<robot>: <action>` line. The last speaker's proposal is checked and run.
+//! DMRS-1D has one dialogue round per step, DMRS-2D two (in the second every robot's
+//! list is known). One model call per robot per dialogue round.
+
+use std::io;
+use std::sync::Arc;
+use std::time::Instant;
+
+use coherent_core::{Environment, NodeId, Task, describe};
+use serde_json::{Value, json};
+
+use crate::answer::{self, Decision};
+use crate::joint::{self, Executed, joint_actions};
+use crate::llm::{Backend, Message, Query, Role, Situation};
+use crate::pefa::{self, Cancel, Episode, Side, Unusable};
+use crate::prompt;
+use crate::rng::{Rng, seed_of};
+use crate::transcript::Round;
+
+const TEMPLATE: &str = include_str!("../prompts/dmrs_speaker.txt");
+/// The line that separates the template's system part from its user part.
+const USER_MARK: &str = "@@user@@";
+/// Most tokens of one turn (a sentence and a line).
+const MAX_TOKENS: u32 = 200;
+
+/// Settings of a DMRS episode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DmrsConfig {
+    /// Dialogue rounds per step: 1 (DMRS-1D) or 2 (DMRS-2D).
+    pub dialogue_rounds: u32,
+    /// Executed actions shown (the paper: 5).
+    pub history: usize,
+    /// Seeds the speaking order of every step.
+    pub seed: u64,
+}
+
+/// Runs DMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
+/// good, or `cancel` fires.
+pub async fn run(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    config: &DmrsConfig,
+    max_steps: u32,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+) -> io::Result<Episode> {
+    let mut executed = Executed::new(config.history);
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let r = round(env, task, backend, config, cancel, &executed.lines(), step).await;
+        if let Some(r) = &r {
+            executed.record(r);
+        }
+        Ok(r)
+    };
+    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// One speaker's turn, as the next speakers hear it.
+fn said(task: &Task, speaker: NodeId, text: &str, proposal: Option<&(NodeId, String)>) -> String {
+    let message = answer::json_object(text)
+        .and_then(|m| m.get("message").and_then(Value::as_str).map(str::to_owned))
+        .unwrap_or_default();
+    let proposal = proposal.map_or("nothing usable".to_owned(), |(robot, action)| {
+        format!("{}: {action}", joint::label(task, *robot))
+    });
+    format!(
+        "{} said: {} It proposed {proposal}.",
+        joint::label(task, speaker),
+        message.trim()
+    )
+}
+
+async fn round(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    config: &DmrsConfig,
+    cancel: &Cancel,
+    history: &[String],
+    step: u32,
+) -> Option<Round> {
+    let start = Instant::now();
+    let mut round = Round::new(step);
+    let all = joint_actions(task, env.state());
+    let mut order: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
+    let mut rng = Rng::new(seed_of(config.seed, u64::from(step)));
+    for i in (1..order.len()).rev() {
+        order.swap(i, rng.below(i + 1));
+    }
+    let mut dialogue: Vec<String> = Vec::new();
+    let mut heard: Vec<NodeId> = Vec::new();
+    let mut proposal: Option<(NodeId, String)> = None;
+    for _ in 0..config.dialogue_rounds.max(1) {
+        for &speaker in &order {
+            if !heard.contains(&speaker) {
+                heard.push(speaker);
+            }
+            let lines: Vec<String> = all
+                .iter()
+                .filter(|a| heard.contains(&task.id(a.robot.node)))
+                .map(|a| a.line(task))
+                .collect();
+            let query = Query {
+                role: Role::Executor,
+                robot: Some(speaker),
+                messages: speaker_messages(env, task, speaker, history, &dialogue, &lines),
+                schema_name: "joint_action",
+                schema: speaker_schema(&lines),
+                max_tokens: MAX_TOKENS,
+                situation: Situation {
+                    task: Arc::clone(task),
+                    state: env.state().clone(),
+                    subtask: None,
+                },
+            };
+            let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
+            let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());
+            match reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text))) {
+                Ok(p) => proposal = Some(p),
+                Err(Unusable::Failed(e)) => {
+                    return Some(close(env, round, Unusable::Failed(e), start));
+                }
+                Err(Unusable::Bad(_)) => proposal = None,
+            }
+            dialogue.push(said(task, speaker, &text, proposal.as_ref()));
+        }
+    }
+    round.actions = all.iter().map(|a| a.line(task)).collect();
+    let Some((robot, action)) = proposal else {
+        let why = "the last speaker proposed nothing usable".to_owned();
+        return Some(close(env, round, Unusable::Bad(why), start));
+    };
+    let line = format!("{}: {action}", joint::label(task, robot));
+    round.decision = Some(Decision {
+        can_do: true,
+        action: Some(line.clone()),
+        subtask_complete: true,
+        note: dialogue.join("\n"),
+    });
+    round.outcome = pefa::execute(env, robot, &action);
+    round.feedback = joint::feedback(&line, &round.outcome);
+    round.done = env.goal_satisfied();
+    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    Some(round)
+}
+
+/// A round that ends without an action.
+fn close(env: &(dyn Environment + Send), mut round: Round, why: Unusable, start: Instant) -> Round {
+    round.outcome = why.outcome(Side::Executor);
+    round.feedback = joint::feedback("", &round.outcome);
+    round.done = env.goal_satisfied();
+    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    round
+}
+
+fn speaker_messages(
+    env: &(dyn Environment + Send),
+    task: &Task,
+    speaker: NodeId,
+    history: &[String],
+    dialogue: &[String],
+    lines: &[String],
+) -> Vec<Message> {
+    let kind = task
+        .robot_by_id(speaker)
+        .map_or(String::new(), |r| r.kind.to_string());
+    let observation = env
+        .observe(speaker)
+        .map(|o| describe::facts(task, env.state(), &[&o]))
+        .unwrap_or_default();
+    let or_none = |items: &[String]| {
+        if items.is_empty() {
+            "(none yet)".to_owned()
+        } else {
+            items.join("\n")
+        }
+    };
+    let values = [
+        ("robot", joint::label(task, speaker)),
+        ("kind", kind),
+        ("team", prompt::team(task)),
+        ("instruction", task.meta.instruction.clone()),
+        ("observation", observation),
+        ("history", or_none(history)),
+        ("dialogue", or_none(dialogue)),
+        ("actions", or_none(lines)),
+    ];
+    let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
+    let (system, user) = TEMPLATE.split_once(USER_MARK).unwrap_or(("", TEMPLATE));
+    vec![
+        Message::system(prompt::fill(system, &values).trim().to_owned()),
+        Message::user(prompt::fill(user, &values).trim().to_owned()),
+    ]
+}
+
+fn speaker_schema(lines: &[String]) -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "message": {"type": "string"},
+            "action": {"type": "string", "enum": lines},
+        },
+        "required": ["message", "action"],
+        "additionalProperties": false,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_placeholder_of_the_template_is_filled() {
+        let (system, user) = TEMPLATE.split_once(USER_MARK).expect("a user part");
+        for key in ["robot", "kind", "team"] {
+            assert!(system.contains(&format!("{{{{{key}}}}}")), "{key}");
+        }
+        for key in [
+            "instruction",
+            "observation",
+            "history",
+            "dialogue",
+            "actions",
+        ] {
+            assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
+        }
+    }
+}

@@ -1,0 +1,149 @@
+//! Every method through `episode::run` on the built-in backend (the optimal planner in
+//! every role, no mistakes) and on the simulated one (the same with seeded mistakes).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::transcript::{Outcome, Status};
+use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
+use coherent_core::planner::{self, Limits};
+use coherent_core::{SymbolicEnv, Task, read_tasks};
+
+fn task(scene: &str, id: i64) -> Arc<Task> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../../shared/coherent-original/env")
+        .join(format!("{scene}.json"));
+    let task = read_tasks(&path)
+        .expect("benchmark file loads")
+        .into_iter()
+        .flatten()
+        .find(|t| t.meta.task_id == id)
+        .expect("the task is in the file");
+    Arc::new(task)
+}
+
+fn out(name: &str) -> PathBuf {
+    std::env::temp_dir().join(format!("coherent-methods-{name}-{}", std::process::id()))
+}
+
+async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Episode {
+    let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
+    let path = episode::transcript_path(&out(method.name()), task, method);
+    let mut env = SymbolicEnv::new(Arc::clone(task));
+    episode::run(
+        task,
+        &mut env,
+        backend,
+        &Settings::new(method),
+        budget,
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs")
+}
+
+/// One task per scene, mono to trio.
+fn tasks() -> Vec<Arc<Task>> {
+    vec![
+        task("env0", 1),
+        task("env1", 3),
+        task("env2", 6),
+        task("env3", 2),
+    ]
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn without_mistakes_every_method_that_asks_a_model_solves_and_the_direct_ones_optimally() {
+    for task in tasks() {
+        let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
+        let optimum = planner::analyse(&task, &Limits::default())
+            .plan
+            .expect("solvable")
+            .len() as u32;
+        let robots = task.robots.len() as u32;
+        for method in Method::ALL {
+            if method == Method::Mcts {
+                continue; // no model: its own tests
+            }
+            let e = run(&task, method, &BuiltinBackend::new(Limits::default())).await;
+            let s = &e.summary;
+            assert_eq!(s.status, Status::Success, "{name} {}", method.name());
+            let per_step = match method {
+                Method::Pefa | Method::PefaNoHistory => 2,
+                Method::Cmrs => 1,
+                Method::Dmrs1d => robots,
+                Method::Dmrs2d => 2 * robots,
+                Method::LlmMcts => 5,
+                Method::Mcts | Method::Optimal => 0,
+            };
+            assert_eq!(s.llm_calls, per_step * s.steps, "{name} {}", method.name());
+            if method != Method::LlmMcts {
+                // The others take the planner's step every round.
+                assert_eq!(s.steps, optimum, "{name} {}", method.name());
+            }
+        }
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_simulated_backend_makes_its_mistakes_reproducibly() {
+    let task = task("env1", 3);
+    let rates = ErrorRates::all(0.2);
+    let mut seen = Vec::new();
+    for method in [Method::Pefa, Method::Cmrs, Method::Dmrs1d] {
+        let once = run(
+            &task,
+            method,
+            &BuiltinBackend::simulated(Limits::default(), rates, 7),
+        )
+        .await;
+        let again = run(
+            &task,
+            method,
+            &BuiltinBackend::simulated(Limits::default(), rates, 7),
+        )
+        .await;
+        let strip = |e: &Episode| -> Vec<_> {
+            e.rounds
+                .iter()
+                .map(|r| (r.decision.clone(), r.outcome.clone(), r.calls.len()))
+                .collect()
+        };
+        assert_eq!(
+            strip(&once),
+            strip(&again),
+            "{}: same seed, same episode",
+            method.name()
+        );
+        seen.extend(once.rounds.iter().map(|r| r.outcome.clone()));
+    }
+    let kinds = |f: fn(&Outcome) -> bool| seen.iter().filter(|o| f(o)).count();
+    assert!(
+        kinds(|o| matches!(o, Outcome::Infeasible { .. })) > 0,
+        "hallucinated actions are refused"
+    );
+    assert!(
+        kinds(|o| matches!(o, Outcome::NoProposal { .. } | Outcome::NoDecision { .. })) > 0,
+        "malformed answers cost rounds"
+    );
+    assert!(kinds(|o| *o == Outcome::Executed) > 0);
+}
+
+#[test]
+fn error_rates_parse_and_refuse_what_they_should() {
+    let r = ErrorRates::parse("hallucinate=0.1, wrong_robot=0.2").expect("valid");
+    assert_eq!(
+        (r.hallucinate, r.wrong_robot, r.malformed, r.suboptimal),
+        (0.1, 0.2, 0.0, 0.0)
+    );
+    assert_eq!(
+        ErrorRates::parse("all=0.25").expect("valid"),
+        ErrorRates::all(0.25)
+    );
+    for bad in ["typo=0.1", "hallucinate", "malformed=2", "all=0.3"] {
+        assert!(ErrorRates::parse(bad).is_err(), "{bad}");
+    }
+}
