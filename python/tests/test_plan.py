@@ -138,6 +138,9 @@ def exhaustive_task(env0_path: Path, tmp_path: Path) -> coherent.Task:
 def test_plan_is_interruptible(exhaustive_task: coherent.Task) -> None:
     # Ctrl-C reaches Python within 50 ms and cancels the search itself, which stops
     # within about a thousand states: the call returns at once, the CPU is free again.
+    # A runner started in the background (`cmd &`) inherits SIGINT ignored, and Python
+    # then keeps it ignored: put Python's own handler in place for this test.
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
     timer = _interrupt_soon(0.3)
     start = time.monotonic()
     try:
@@ -145,6 +148,7 @@ def test_plan_is_interruptible(exhaustive_task: coherent.Task) -> None:
             coherent.plan(exhaustive_task)
     finally:
         timer.cancel()
+        signal.signal(signal.SIGINT, previous)
     assert time.monotonic() - start < 2
     # The worker thread is gone: no more CPU time accrues to this process.
     cpu = time.process_time()

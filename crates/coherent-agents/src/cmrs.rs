@@ -9,7 +9,6 @@ use std::time::Instant;
 
 use coherent_core::{Environment, Task};
 
-use crate::answer::Decision;
 use crate::joint::{self, Executed, joint_actions};
 use crate::llm::{Backend, Query, Role, Situation};
 use crate::pefa::{self, Cancel, Episode, Side, team_observation};
@@ -70,24 +69,13 @@ async fn round(
     };
     let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
     let chosen = reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text)));
-    (round.outcome, round.feedback) = match chosen {
-        Ok((robot, action)) => {
-            let line = format!("{}: {action}", joint::label(task, robot));
-            round.decision = Some(Decision {
-                can_do: true,
-                action: Some(line.clone()),
-                subtask_complete: true,
-                note: String::new(),
-            });
-            let outcome = pefa::execute(env, robot, &action);
-            let feedback = joint::feedback(&line, &outcome);
-            (outcome, feedback)
-        }
+    match chosen {
+        Ok((robot, action)) => joint::act(env, task, &mut round, robot, &action, String::new()),
         Err(e) => {
-            let outcome = e.outcome(Side::Executor);
-            (outcome.clone(), joint::feedback("", &outcome))
+            round.outcome = e.outcome(Side::Executor);
+            round.feedback = joint::feedback("", &round.outcome);
         }
-    };
+    }
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     Some(round)

@@ -13,7 +13,7 @@ use std::time::Instant;
 use coherent_core::{Environment, NodeId, Task, describe};
 use serde_json::{Value, json};
 
-use crate::answer::{self, Decision};
+use crate::answer;
 use crate::joint::{self, Executed, joint_actions};
 use crate::llm::{Backend, Message, Query, Role, Situation};
 use crate::pefa::{self, Cancel, Episode, Side, Unusable};
@@ -135,15 +135,7 @@ async fn round(
         let why = "the last speaker proposed nothing usable".to_owned();
         return Some(close(env, round, Unusable::Bad(why), start));
     };
-    let line = format!("{}: {action}", joint::label(task, robot));
-    round.decision = Some(Decision {
-        can_do: true,
-        action: Some(line.clone()),
-        subtask_complete: true,
-        note: dialogue.join("\n"),
-    });
-    round.outcome = pefa::execute(env, robot, &action);
-    round.feedback = joint::feedback(&line, &round.outcome);
+    joint::act(env, task, &mut round, robot, &action, dialogue.join("\n"));
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     Some(round)

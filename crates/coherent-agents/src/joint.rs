@@ -5,11 +5,12 @@
 
 use std::collections::VecDeque;
 
-use coherent_core::{Action, NodeId, Robot, State, Task, rules};
+use coherent_core::{Action, Environment, NodeId, Robot, State, Task, rules};
 use serde_json::{Value, json};
 
-use crate::answer::{self, normal};
+use crate::answer::{self, Decision, normal};
 use crate::llm::Message;
+use crate::pefa;
 use crate::prompt;
 use crate::transcript::{Outcome, Round};
 
@@ -211,6 +212,27 @@ pub fn choose(task: &Task, lines: &[String], text: &str) -> Result<(NodeId, Stri
 pub fn label(task: &Task, robot: NodeId) -> String {
     task.idx(robot)
         .map_or_else(|| format!("robot {robot}"), |i| task.node(i).label())
+}
+
+/// Runs `robot`'s `action` as the round's decision: records the line, checks and
+/// executes it, and says what came of it.
+pub(crate) fn act(
+    env: &mut (dyn Environment + Send),
+    task: &Task,
+    round: &mut Round,
+    robot: NodeId,
+    action: &str,
+    note: String,
+) {
+    let line = format!("{}: {action}", label(task, robot));
+    round.outcome = pefa::execute(env, robot, action);
+    round.feedback = feedback(&line, &round.outcome);
+    round.decision = Some(Decision {
+        can_do: true,
+        action: Some(line),
+        subtask_complete: true,
+        note,
+    });
 }
 
 /// What a round of a central or dialogue method did, in a sentence for the transcript.

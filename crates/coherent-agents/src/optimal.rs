@@ -9,7 +9,6 @@ use std::time::Instant;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task};
 
-use crate::answer::Decision;
 use crate::joint;
 use crate::pefa::{self, Cancel, Episode};
 use crate::transcript::{Outcome, Round};
@@ -40,15 +39,7 @@ pub async fn run(
             Ok(Some(s)) => {
                 let robot = task.id(s.robot);
                 let action = s.action.render(task);
-                let line = format!("{}: {action}", joint::label(task, robot));
-                round.decision = Some(Decision {
-                    can_do: true,
-                    action: Some(line.clone()),
-                    subtask_complete: true,
-                    note: String::new(),
-                });
-                round.outcome = pefa::execute(env, robot, &action);
-                round.feedback = joint::feedback(&line, &round.outcome);
+                joint::act(env, task, &mut round, robot, &action, String::new());
             }
             Ok(None) => {
                 round.outcome = Outcome::NoDecision {

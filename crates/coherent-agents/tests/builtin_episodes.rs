@@ -10,26 +10,9 @@ use coherent_agents::llm::Role;
 use coherent_agents::transcript::{self, Outcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, ReplayBackend};
 use coherent_core::planner::{self, Limits};
-use coherent_core::{SymbolicEnv, Task, read_tasks};
+use coherent_core::{SymbolicEnv, Task};
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
-
-fn released_tasks() -> Vec<Task> {
-    let mut out = Vec::new();
-    for n in 0..4 {
-        let path = data_dir().join(format!("env{n}.json"));
-        out.extend(
-            read_tasks(&path)
-                .expect("benchmark file loads")
-                .into_iter()
-                .flatten(),
-        );
-    }
-    assert_eq!(out.len(), 81, "81 well-formed released tasks");
-    out
-}
+mod common;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("coherent-agents-{name}-{}", std::process::id()));
@@ -64,7 +47,7 @@ async fn run_builtin(
 async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
     let out = scratch("builtin");
     let mut solved = 0;
-    for task in released_tasks() {
+    for task in common::released_tasks() {
         let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
         let optimum = planner::analyse(&task, &Limits::default())
             .plan
@@ -112,7 +95,7 @@ async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
 #[tokio::test]
 async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
     let out = scratch("replay");
-    let task = released_tasks()
+    let task = common::released_tasks()
         .into_iter()
         .find(|t| t.meta.scene == "env0" && t.meta.task_id == 16)
         .expect("env0 task 16");

@@ -3,7 +3,6 @@
 //! the full measurement of primitive MCTS (ignored; run in release).
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent_agents::joint::{JointAction, joint_actions, match_line, read_line};
@@ -16,38 +15,10 @@ use coherent_agents::rng::Rng;
 use coherent_agents::transcript::{Outcome, Status};
 use coherent_agents::{Cancel, Episode};
 use coherent_core::planner::{self, Limits};
-use coherent_core::{State, SymbolicEnv, Task, read_tasks, rules};
+use coherent_core::{State, SymbolicEnv, Task, rules};
 use serde_json::json;
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
-
-fn released_tasks() -> Vec<Task> {
-    let mut out = Vec::new();
-    for n in 0..4 {
-        let path = data_dir().join(format!("env{n}.json"));
-        out.extend(
-            read_tasks(&path)
-                .expect("benchmark file loads")
-                .into_iter()
-                .flatten(),
-        );
-    }
-    assert_eq!(out.len(), 81, "81 well-formed released tasks");
-    out
-}
-
-fn task(scene: &str, id: i64) -> Arc<Task> {
-    let path = data_dir().join(format!("{scene}.json"));
-    let task = read_tasks(&path)
-        .expect("benchmark file loads")
-        .into_iter()
-        .flatten()
-        .find(|t| t.meta.task_id == id)
-        .expect("the task is in the file");
-    Arc::new(task)
-}
+mod common;
 
 fn gt(task: &Task) -> u32 {
     task.meta
@@ -314,7 +285,7 @@ fn one_step_before_the_goal(task: &Task) -> (State, JointAction) {
 
 #[test]
 fn one_step_from_the_goal_the_root_statistics_follow_the_formulas() {
-    let task = task("env0", 1);
+    let task = common::task("env0", 1);
     let (s, last) = one_step_before_the_goal(&task);
     let reaches = |a: &JointAction| {
         let mut after = s.clone();
@@ -386,7 +357,7 @@ fn one_step_from_the_goal_the_root_statistics_follow_the_formulas() {
 
 #[tokio::test]
 async fn the_same_seed_gives_the_same_actions() {
-    let task = task("env1", 3);
+    let task = common::task("env1", 3);
     let config = MctsConfig::default();
     let a = episode(&task, None, &config, 6).await;
     let b = episode(&task, None, &config, 6).await;
@@ -420,7 +391,7 @@ async fn the_same_seed_gives_the_same_actions() {
 #[tokio::test]
 async fn primitive_mcts_solves_a_short_task() {
     // One of the four (all mono) that seed 0 solves within 2 x GT; see the measurement.
-    let task = task("env0", 0);
+    let task = common::task("env0", 0);
     let e = episode(&task, None, &MctsConfig::default(), 2 * gt(&task)).await;
     let s = &e.summary;
     assert_eq!(s.status, Status::Success, "{:?}", chosen(&e));
@@ -450,7 +421,7 @@ async fn primitive_mcts_solves_a_short_task() {
 
 #[tokio::test]
 async fn an_oracle_prior_solves_optimally_what_primitive_mcts_does_not() {
-    let task = task("env1", 3);
+    let task = common::task("env1", 3);
     let optimum = planner::analyse(&task, &Limits::default())
         .plan
         .expect("solvable")
@@ -501,7 +472,7 @@ async fn an_oracle_prior_solves_optimally_what_primitive_mcts_does_not() {
 
 #[tokio::test]
 async fn unusable_answers_are_dropped_and_the_search_falls_back_to_uniform() {
-    let task = task("env0", 1);
+    let task = common::task("env0", 1);
     let config = MctsConfig::default();
     let garbage = Garbage::default();
     let llm = episode(&task, Some(&garbage), &config, 4).await;
@@ -534,7 +505,7 @@ async fn a_backend_gone_for_good_ends_the_episode() {
             Box::pin(async { Err(LlmError::new(LlmErrorKind::Connect, "refused")) })
         }
     }
-    let task = task("env0", 1);
+    let task = common::task("env0", 1);
     let e = episode(&task, Some(&Gone), &MctsConfig::default(), 8).await;
     assert_eq!(e.summary.status, Status::BackendError);
     assert_eq!(e.summary.steps, 1);
@@ -549,7 +520,7 @@ async fn a_backend_gone_for_good_ends_the_episode() {
 
 #[tokio::test]
 async fn a_cancelled_episode_stops_before_its_next_step() {
-    let task = task("env0", 1);
+    let task = common::task("env0", 1);
     let cancel = Cancel::default();
     let mut env = SymbolicEnv::new(Arc::clone(&task));
     let mut seen = 0;
@@ -592,7 +563,7 @@ async fn measure_primitive_mcts_on_every_original_task() {
         .map(|t| (t, Row::default()))
         .collect();
     let start = std::time::Instant::now();
-    for task in released_tasks() {
+    for task in common::released_tasks() {
         let kind = planner::analyse(&task, &Limits::default())
             .task_type
             .map_or("unsolvable", |t| t.name());

@@ -1,27 +1,16 @@
 //! Every method through `episode::run` on the built-in backend (the optimal planner in
 //! every role, no mistakes) and on the simulated one (the same with seeded mistakes).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::transcript::{Outcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
 use coherent_core::planner::{self, Limits};
-use coherent_core::{SymbolicEnv, Task, read_tasks};
+use coherent_core::{SymbolicEnv, Task};
 
-fn task(scene: &str, id: i64) -> Arc<Task> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/coherent-original/env")
-        .join(format!("{scene}.json"));
-    let task = read_tasks(&path)
-        .expect("benchmark file loads")
-        .into_iter()
-        .flatten()
-        .find(|t| t.meta.task_id == id)
-        .expect("the task is in the file");
-    Arc::new(task)
-}
+mod common;
 
 fn out(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("coherent-methods-{name}-{}", std::process::id()))
@@ -48,10 +37,10 @@ async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Epis
 /// One task per scene, mono to trio.
 fn tasks() -> Vec<Arc<Task>> {
     vec![
-        task("env0", 1),
-        task("env1", 3),
-        task("env2", 6),
-        task("env3", 2),
+        common::task("env0", 1),
+        common::task("env1", 3),
+        common::task("env2", 6),
+        common::task("env3", 2),
     ]
 }
 
@@ -90,7 +79,7 @@ async fn without_mistakes_every_method_that_asks_a_model_solves_and_the_direct_o
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_simulated_backend_makes_its_mistakes_reproducibly() {
-    let task = task("env1", 3);
+    let task = common::task("env1", 3);
     let rates = ErrorRates::all(0.2);
     let mut seen = Vec::new();
     for method in [Method::Pefa, Method::Cmrs, Method::Dmrs1d] {

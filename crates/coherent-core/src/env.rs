@@ -24,20 +24,36 @@ impl Outcome {
     }
 }
 
-/// A world that robots observe and act in, one action of one robot at a time.
+/// A world that robots observe and act in, one action of one robot at a time. What a
+/// robot sees and may do follow from the symbolic state by the rules, whatever carries
+/// the actions out; an implementation provides the state and the step.
 pub trait Environment {
     fn task(&self) -> &Task;
     /// The current symbolic state.
     fn state(&self) -> &State;
-    fn observe(&self, robot: NodeId) -> Result<Observation>;
-    /// The action strings `robot` may use now.
-    fn actions(&self, robot: NodeId) -> Result<Vec<String>>;
     /// Checks and, when feasible, executes `action`. An infeasible action is not an
     /// error: the outcome says why. An unknown robot is.
     fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome>;
-    fn goal_satisfied(&self) -> bool;
     /// Back to the task's initial state.
     fn reset(&mut self);
+
+    fn observe(&self, robot: NodeId) -> Result<Observation> {
+        let r = self.task().robot_by_id(robot)?;
+        Ok(rules::observe(self.task(), self.state(), r.node))
+    }
+
+    /// The action strings `robot` may use now.
+    fn actions(&self, robot: NodeId) -> Result<Vec<String>> {
+        let r = self.task().robot_by_id(robot)?;
+        Ok(rules::actions(self.task(), self.state(), r)
+            .iter()
+            .map(|a| a.render(self.task()))
+            .collect())
+    }
+
+    fn goal_satisfied(&self) -> bool {
+        self.task().goal_satisfied(self.state())
+    }
 }
 
 /// The rules of SEMANTICS.md, nothing else.
@@ -63,19 +79,6 @@ impl Environment for SymbolicEnv {
         &self.state
     }
 
-    fn observe(&self, robot: NodeId) -> Result<Observation> {
-        let r = self.task.robot_by_id(robot)?;
-        Ok(rules::observe(&self.task, &self.state, r.node))
-    }
-
-    fn actions(&self, robot: NodeId) -> Result<Vec<String>> {
-        let r = self.task.robot_by_id(robot)?;
-        Ok(rules::actions(&self.task, &self.state, r)
-            .iter()
-            .map(|a| a.render(&self.task))
-            .collect())
-    }
-
     fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome> {
         let r = self.task.robot_by_id(robot)?;
         let infeasible = match feasibility::check(&self.task, &self.state, r, action) {
@@ -89,10 +92,6 @@ impl Environment for SymbolicEnv {
             infeasible,
             done: self.goal_satisfied(),
         })
-    }
-
-    fn goal_satisfied(&self) -> bool {
-        self.task.goal_satisfied(&self.state)
     }
 
     fn reset(&mut self) {

@@ -6,7 +6,7 @@ use std::time::Instant;
 
 use coherent_core::feasibility::{self, Infeasible, Reason};
 use coherent_core::planner::Step;
-use coherent_core::rules::{self, Observation};
+use coherent_core::rules;
 use coherent_core::{
     Action, Edge, Environment, Idx, NodeId, NodeKind, Outcome, PropSet, Relation, RobotKind, State,
     StateSet, Task,
@@ -302,19 +302,6 @@ impl Environment for PhysicalEnv {
         &self.state
     }
 
-    fn observe(&self, robot: NodeId) -> coherent_core::Result<Observation> {
-        let r = self.task.robot_by_id(robot)?;
-        Ok(rules::observe(&self.task, &self.state, r.node))
-    }
-
-    fn actions(&self, robot: NodeId) -> coherent_core::Result<Vec<String>> {
-        let r = self.task.robot_by_id(robot)?;
-        Ok(rules::actions(&self.task, &self.state, r)
-            .iter()
-            .map(|a| a.render(&self.task))
-            .collect())
-    }
-
     /// A physical failure comes back as an infeasible outcome whose message has the
     /// numbers; [`PhysicalEnv::last_physics_error`] has it too.
     fn step(&mut self, robot: NodeId, action: &str) -> coherent_core::Result<Outcome> {
@@ -331,10 +318,6 @@ impl Environment for PhysicalEnv {
             infeasible,
             done: self.goal_satisfied(),
         })
-    }
-
-    fn goal_satisfied(&self) -> bool {
-        self.task.goal_satisfied(&self.state)
     }
 
     /// Rebuilds the world from the layout (deterministic: the same bodies in the same order).

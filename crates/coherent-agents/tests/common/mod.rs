@@ -1,0 +1,40 @@
+//! The released benchmark for the integration tests: `shared/` lies beside the repository.
+
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_core::{Task, read_tasks};
+
+pub fn data_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
+}
+
+/// Every well-formed task of the four released files (env3's index 18 is malformed).
+pub fn released_tasks() -> Vec<Task> {
+    let mut out = Vec::new();
+    for n in 0..4 {
+        let path = data_dir().join(format!("env{n}.json"));
+        out.extend(
+            read_tasks(&path)
+                .expect("benchmark file loads")
+                .into_iter()
+                .flatten(),
+        );
+    }
+    assert_eq!(out.len(), 81, "81 well-formed released tasks");
+    out
+}
+
+/// Task `id` of scene `scene` (`env0`..`env3`).
+pub fn task(scene: &str, id: i64) -> Arc<Task> {
+    let path = data_dir().join(format!("{scene}.json"));
+    let task = read_tasks(&path)
+        .expect("benchmark file loads")
+        .into_iter()
+        .flatten()
+        .find(|t| t.meta.task_id == id)
+        .expect("the task is in the file");
+    Arc::new(task)
+}
