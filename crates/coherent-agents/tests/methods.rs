@@ -132,7 +132,8 @@ fn error_rates_parse_and_refuse_what_they_should() {
         ErrorRates::parse("all=0.25").expect("valid"),
         ErrorRates::all(0.25)
     );
-    for bad in ["typo=0.1", "hallucinate", "malformed=2", "all=0.3"] {
+    assert_eq!(ErrorRates::parse("all=0.3").expect("valid").suboptimal, 0.3);
+    for bad in ["typo=0.1", "hallucinate", "malformed=2", "all=-0.1"] {
         assert!(ErrorRates::parse(bad).is_err(), "{bad}");
     }
 }
