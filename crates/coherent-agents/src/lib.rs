@@ -7,6 +7,7 @@
 //! parsed robustly ([`answer`]); every episode writes a [`transcript`].
 
 pub mod answer;
+pub mod bench;
 pub mod builtin;
 pub mod episode;
 pub mod llm;
@@ -15,6 +16,7 @@ pub mod openai;
 pub mod pefa;
 pub mod prompt;
 pub mod replay;
+pub mod report;
 pub mod retry;
 pub mod rng;
 pub mod transcript;
