@@ -309,7 +309,8 @@ fn missing_or_bad_field(value: &serde_json::Value) -> String {
     let Some(map) = value.as_object() else {
         return " (at $: expected an object)".into();
     };
-    let expect: [(&str, fn(&V) -> bool); 14] = [
+    type Check = fn(&V) -> bool;
+    let expect: [(&str, Check); 14] = [
         ("method", V::is_string),
         ("scene", V::is_string),
         ("task_id", V::is_i64),
