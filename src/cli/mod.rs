@@ -1,6 +1,7 @@
 //! The `coherent` command line: `run`, `plan`, `validate`, `import`. One implementation
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
+mod bench;
 mod render;
 mod run;
 
@@ -32,6 +33,10 @@ enum Command {
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
     /// 3 when the model's server fails for good or a replay diverges, 130 on Ctrl-C.
     Run(Box<run::RunArgs>),
+    /// Run methods x tasks x seeds concurrently into a resumable results file, then print
+    /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
+    /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
+    Bench(Box<bench::BenchArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
     Validate {
         /// Original env files, native task files or folders of them.
@@ -93,6 +98,12 @@ where
         }
         Command::Run(args) => {
             return run::run(*args).unwrap_or_else(|e| {
+                eprintln!("error: {e}");
+                2
+            });
+        }
+        Command::Bench(args) => {
+            return bench::bench(*args).unwrap_or_else(|e| {
                 eprintln!("error: {e}");
                 2
             });

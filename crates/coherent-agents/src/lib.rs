@@ -7,6 +7,7 @@
 //! parsed robustly ([`answer`]); every episode writes a [`transcript`].
 
 pub mod answer;
+pub mod bench;
 pub mod builtin;
 pub mod cmrs;
 pub mod dmrs;
@@ -19,6 +20,7 @@ pub mod optimal;
 pub mod pefa;
 pub mod prompt;
 pub mod replay;
+pub mod report;
 pub mod retry;
 pub mod rng;
 pub mod transcript;

@@ -1,0 +1,477 @@
+//! The paper's tables from a results file ([`crate::bench`]): Table I (success rate and
+//! average steps by task type, mono/dual/trio and the average), Table II (the same by
+//! scene), each with the ground-truth row, and each method's LLM calls and tokens.
+//!
+//! AS counts a failed episode as 2 x GT + 1 steps (SEMANTICS.md section 5; for a task
+//! without GT, its budget plus one). With several seeds each cell is the mean over seeds of the
+//! per-seed value, with the half-width of a 95% confidence interval from Student's t.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+
+use serde::Serialize;
+
+use crate::bench::{EpisodeKey, ResultLine};
+use crate::episode::Method;
+
+/// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
+/// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the
+/// normal 1.96 beyond.
+const T975: [f64; 30] = [
+    12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160,
+    2.145, 2.131, 2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056,
+    2.052, 2.048, 2.045, 2.042,
+];
+
+/// t(0.975, df); `df` must be at least 1.
+pub fn t975(df: usize) -> f64 {
+    T975.get(df.wrapping_sub(1)).copied().unwrap_or(1.96)
+}
+
+/// A mean over seeds and, with two seeds or more, the half-width of its 95% interval.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Stat {
+    pub mean: f64,
+    pub ci95: Option<f64>,
+}
+
+impl Stat {
+    /// Mean and t-interval of per-seed values.
+    pub fn of(values: &[f64]) -> Option<Stat> {
+        let k = values.len();
+        if k == 0 {
+            return None;
+        }
+        let mean = values.iter().sum::<f64>() / k as f64;
+        let ci95 = (k >= 2).then(|| {
+            let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (k - 1) as f64;
+            t975(k - 1) * (var / k as f64).sqrt()
+        });
+        Some(Stat { mean, ci95 })
+    }
+}
+
+/// One method in one column.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Cell {
+    /// Episodes counted, all seeds together.
+    pub episodes: usize,
+    pub sr: Stat,
+    #[serde(rename = "as")]
+    pub avg_steps: Stat,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Row {
+    pub method: String,
+    /// One per column; `None` where the method ran no task of that column.
+    pub cells: Vec<Option<Cell>>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Table {
+    pub title: String,
+    pub columns: Vec<String>,
+    /// Distinct tasks per column.
+    pub tasks: Vec<usize>,
+    pub rows: Vec<Row>,
+    /// Mean GT steps of the column's tasks (the ground-truth row).
+    pub gt: Vec<Option<f64>>,
+}
+
+/// A method's model use.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Cost {
+    pub method: String,
+    pub episodes: usize,
+    pub steps: u64,
+    pub llm_calls: u64,
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub calls_per_episode: f64,
+    pub tokens_per_episode: f64,
+    pub calls_per_step: Option<f64>,
+    pub tokens_per_step: Option<f64>,
+}
+
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Report {
+    /// Every backend that answered a model-using method, as labelled in the headers.
+    pub backends: Vec<String>,
+    pub seeds: Vec<u32>,
+    pub table1: Table,
+    pub table2: Table,
+    pub costs: Vec<Cost>,
+    /// Episodes with no final line (only backend errors or interruptions).
+    pub unfinished: usize,
+    /// Tasks the planner finds no plan for (task type null): in the average only.
+    pub untyped_tasks: usize,
+}
+
+/// The steps AS counts for one episode.
+pub fn counted_steps(l: &ResultLine) -> f64 {
+    if l.success {
+        f64::from(l.steps)
+    } else {
+        match l.gt_steps {
+            Some(gt) => f64::from(2 * gt + 1),
+            None => f64::from(l.max_steps + 1),
+        }
+    }
+}
+
+/// `simulated: optimal-planner with errors hallucinate=0.1,...`.
+fn backend_label(l: &ResultLine) -> String {
+    let b = &l.backend;
+    let mut s = format!("{}: {}", b.kind, b.model);
+    if let Some(url) = &b.base_url {
+        s.push_str(&format!(" at {url}"));
+    }
+    s
+}
+
+/// The final line of each episode (the last one, should one have been re-run), and how
+/// many episodes have none.
+pub fn final_lines(lines: &[ResultLine]) -> (Vec<&ResultLine>, usize) {
+    let mut last: BTreeMap<EpisodeKey, &ResultLine> = BTreeMap::new();
+    let mut all = BTreeSet::new();
+    for l in lines {
+        all.insert(l.key());
+        if l.is_final() {
+            last.insert(l.key(), l);
+        }
+    }
+    let unfinished = all.len() - last.len();
+    (last.into_values().collect(), unfinished)
+}
+
+fn method_order(name: &str) -> (usize, String) {
+    let at = Method::ALL
+        .iter()
+        .position(|m| m.name() == name)
+        .unwrap_or(Method::ALL.len());
+    (at, name.to_owned())
+}
+
+/// Builds both tables and the costs.
+pub fn build(lines: &[ResultLine]) -> Report {
+    let (finals, unfinished) = final_lines(lines);
+    let mut methods: Vec<String> = finals.iter().map(|l| l.method.clone()).collect();
+    methods.sort_by_key(|m| method_order(m));
+    methods.dedup();
+    let seeds: BTreeSet<u32> = finals.iter().map(|l| l.seed).collect();
+    let backends: BTreeSet<String> = finals
+        .iter()
+        .filter(|l| l.uses_model)
+        .map(|l| backend_label(l))
+        .collect();
+    let mut tasks: HashMap<(String, i64), &ResultLine> = HashMap::new();
+    for l in &finals {
+        tasks.entry((l.scene.clone(), l.task_id)).or_insert(l);
+    }
+    let untyped_tasks = tasks.values().filter(|l| l.task_type.is_none()).count();
+
+    let types = ["mono", "dual", "trio"];
+    let by_type = |l: &ResultLine, col: &str| col == "Avg" || l.task_type.as_deref() == Some(col);
+    let mut cols1: Vec<String> = types.iter().map(|t| (*t).to_owned()).collect();
+    cols1.push("Avg".into());
+    let table1 = table(
+        "Table I: success rate (SR) and average steps (AS) by task type",
+        &cols1,
+        &methods,
+        &finals,
+        &tasks,
+        &by_type,
+    );
+    let scenes: BTreeSet<String> = finals.iter().map(|l| l.scene.clone()).collect();
+    let mut cols2: Vec<String> = scenes.into_iter().collect();
+    cols2.push("Avg".into());
+    let by_scene = |l: &ResultLine, col: &str| col == "Avg" || l.scene == col;
+    let table2 = table(
+        "Table II: success rate (SR) and average steps (AS) by scene",
+        &cols2,
+        &methods,
+        &finals,
+        &tasks,
+        &by_scene,
+    );
+    let costs = methods
+        .iter()
+        .map(|m| {
+            let mine: Vec<&&ResultLine> = finals.iter().filter(|l| &l.method == m).collect();
+            let steps: u64 = mine.iter().map(|l| u64::from(l.steps)).sum();
+            let calls: u64 = mine.iter().map(|l| u64::from(l.llm_calls)).sum();
+            let prompt: u64 = mine.iter().map(|l| l.prompt_tokens).sum();
+            let completion: u64 = mine.iter().map(|l| l.completion_tokens).sum();
+            let n = mine.len().max(1) as f64;
+            let per_step = |x: u64| (steps > 0).then(|| x as f64 / steps as f64);
+            Cost {
+                method: m.clone(),
+                episodes: mine.len(),
+                steps,
+                llm_calls: calls,
+                prompt_tokens: prompt,
+                completion_tokens: completion,
+                calls_per_episode: calls as f64 / n,
+                tokens_per_episode: (prompt + completion) as f64 / n,
+                calls_per_step: per_step(calls),
+                tokens_per_step: per_step(prompt + completion),
+            }
+        })
+        .collect();
+    Report {
+        backends: backends.into_iter().collect(),
+        seeds: seeds.into_iter().collect(),
+        table1,
+        table2,
+        costs,
+        unfinished,
+        untyped_tasks,
+    }
+}
+
+fn table(
+    title: &str,
+    columns: &[String],
+    methods: &[String],
+    finals: &[&ResultLine],
+    tasks: &HashMap<(String, i64), &ResultLine>,
+    belongs: &dyn Fn(&ResultLine, &str) -> bool,
+) -> Table {
+    let rows = methods
+        .iter()
+        .map(|m| Row {
+            method: m.clone(),
+            cells: columns
+                .iter()
+                .map(|c| {
+                    let mine: Vec<&ResultLine> = finals
+                        .iter()
+                        .copied()
+                        .filter(|l| &l.method == m && belongs(l, c))
+                        .collect();
+                    cell(&mine)
+                })
+                .collect(),
+        })
+        .collect();
+    let in_col = |c: &str| -> Vec<&ResultLine> {
+        tasks.values().copied().filter(|l| belongs(l, c)).collect()
+    };
+    Table {
+        title: title.to_owned(),
+        columns: columns.to_vec(),
+        tasks: columns.iter().map(|c| in_col(c).len()).collect(),
+        rows,
+        gt: columns
+            .iter()
+            .map(|c| {
+                let gts: Vec<f64> = in_col(c)
+                    .iter()
+                    .filter_map(|l| l.gt_steps.map(f64::from))
+                    .collect();
+                (!gts.is_empty()).then(|| gts.iter().sum::<f64>() / gts.len() as f64)
+            })
+            .collect(),
+    }
+}
+
+/// SR and AS per seed, then their mean and interval over seeds.
+fn cell(lines: &[&ResultLine]) -> Option<Cell> {
+    let mut per_seed: BTreeMap<u32, (f64, f64, usize)> = BTreeMap::new();
+    for l in lines {
+        let e = per_seed.entry(l.seed).or_default();
+        e.0 += f64::from(u8::from(l.success));
+        e.1 += counted_steps(l);
+        e.2 += 1;
+    }
+    let sr: Vec<f64> = per_seed.values().map(|(s, _, n)| s / *n as f64).collect();
+    let avg: Vec<f64> = per_seed.values().map(|(_, a, n)| a / *n as f64).collect();
+    Some(Cell {
+        episodes: lines.len(),
+        sr: Stat::of(&sr)?,
+        avg_steps: Stat::of(&avg)?,
+    })
+}
+
+fn header_lines(r: &Report) -> Vec<String> {
+    let backend = if r.backends.is_empty() {
+        "none (no method here asks a model)".to_owned()
+    } else {
+        r.backends.join("; ")
+    };
+    let mut out = vec![format!("Backend: {backend}")];
+    let seeds = r.seeds.len();
+    out.push(if seeds > 1 {
+        format!(
+            "Seeds: {seeds}; each cell is the mean over seeds ± the half-width of a 95% confidence interval (Student's t, df = seeds - 1)"
+        )
+    } else {
+        format!("Seeds: {seeds}")
+    });
+    out.push("AS counts a failed episode as 2 x GT + 1 steps.".into());
+    if r.untyped_tasks > 0 {
+        out.push(format!(
+            "{} task(s) have no plan (no type): they count in Avg only.",
+            r.untyped_tasks
+        ));
+    }
+    if r.unfinished > 0 {
+        out.push(format!(
+            "{} episode(s) have no final result (backend error or interrupted) and are left out; re-run the same command to finish them.",
+            r.unfinished
+        ));
+    }
+    out
+}
+
+fn stat_text(s: &Stat, decimals: usize) -> String {
+    match s.ci95 {
+        Some(ci) => format!("{:.decimals$} ± {ci:.decimals$}", s.mean),
+        None => format!("{:.decimals$}", s.mean),
+    }
+}
+
+fn column_name(c: &str) -> String {
+    match c {
+        "mono" => "Mono".into(),
+        "dual" => "Dual".into(),
+        "trio" => "Trio".into(),
+        other => other.to_owned(),
+    }
+}
+
+/// The tables in Markdown, the paper's layout: one row per method, `SR / AS` per column.
+pub fn markdown(r: &Report) -> String {
+    let mut out = String::new();
+    for t in [&r.table1, &r.table2] {
+        out.push_str(&format!("### {}\n\n", t.title));
+        for h in header_lines(r) {
+            out.push_str(&format!("{h}  \n"));
+        }
+        out.push('\n');
+        let heads: Vec<String> = t
+            .columns
+            .iter()
+            .zip(&t.tasks)
+            .map(|(c, n)| format!("{} (n={n}) SR / AS", column_name(c)))
+            .collect();
+        out.push_str(&format!("| Method | {} |\n", heads.join(" | ")));
+        out.push_str(&format!("|---|{}\n", "---|".repeat(heads.len())));
+        for row in &t.rows {
+            let cells: Vec<String> = row
+                .cells
+                .iter()
+                .map(|c| match c {
+                    Some(c) => format!("{} / {}", stat_text(&c.sr, 3), stat_text(&c.avg_steps, 1)),
+                    None => "-".into(),
+                })
+                .collect();
+            out.push_str(&format!("| {} | {} |\n", row.method, cells.join(" | ")));
+        }
+        let gt: Vec<String> =
+            t.gt.iter()
+                .map(|g| g.map_or("- / -".into(), |g| format!("- / {g:.1}")))
+                .collect();
+        out.push_str(&format!("| Ground truth | {} |\n\n", gt.join(" | ")));
+    }
+    out.push_str("### LLM calls and tokens per method\n\n");
+    out.push_str(&format!("{}  \n\n", header_lines(r)[0]));
+    out.push_str("| Method | Episodes | Steps | LLM calls / episode | Tokens / episode | LLM calls / step | Tokens / step |\n|---|---|---|---|---|---|---|\n");
+    for c in &r.costs {
+        let opt = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| format!("{x:.d$}"));
+        out.push_str(&format!(
+            "| {} | {} | {} | {:.2} | {:.0} | {} | {} |\n",
+            c.method,
+            c.episodes,
+            c.steps,
+            c.calls_per_episode,
+            c.tokens_per_episode,
+            opt(c.calls_per_step, 2),
+            opt(c.tokens_per_step, 0)
+        ));
+    }
+    out
+}
+
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_owned()
+    }
+}
+
+/// One CSV: a row per (table, method, column), ground-truth rows with `method` =
+/// `ground truth`, and a `costs` row per method.
+pub fn csv(r: &Report) -> String {
+    let backend = csv_field(&r.backends.join("; "));
+    let mut out = String::from(
+        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,seeds,backend\n",
+    );
+    let num = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
+    let seeds = r.seeds.len();
+    for (name, t) in [("I", &r.table1), ("II", &r.table2)] {
+        for row in &t.rows {
+            for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
+                let Some(cell) = cell else { continue };
+                out.push_str(&format!(
+                    "{name},{},{c},{n},{},{},{},{},{},,,,,,{seeds},{backend}\n",
+                    csv_field(&row.method),
+                    cell.episodes,
+                    num(Some(cell.sr.mean)),
+                    num(cell.sr.ci95),
+                    num(Some(cell.avg_steps.mean)),
+                    num(cell.avg_steps.ci95),
+                ));
+            }
+        }
+        for ((c, n), gt) in t.columns.iter().zip(&t.tasks).zip(&t.gt) {
+            out.push_str(&format!(
+                "{name},ground truth,{c},{n},,,,,,{},,,,,{seeds},{backend}\n",
+                num(*gt)
+            ));
+        }
+    }
+    for c in &r.costs {
+        out.push_str(&format!(
+            "costs,{},all,,{},,,,,,{},{},{},{},{seeds},{backend}\n",
+            csv_field(&c.method),
+            c.episodes,
+            num(Some(c.calls_per_episode)),
+            num(Some(c.tokens_per_episode)),
+            num(c.calls_per_step),
+            num(c.tokens_per_step),
+        ));
+    }
+    out
+}
+
+/// The whole report as one JSON object.
+pub fn json(r: &Report) -> String {
+    serde_json::to_string_pretty(r).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn t_quantiles() {
+        assert_eq!(t975(1), 12.706);
+        assert_eq!(t975(30), 2.042);
+        assert_eq!(t975(31), 1.96);
+    }
+
+    #[test]
+    fn one_value_has_no_interval() {
+        let s = Stat::of(&[0.5]).expect("one value");
+        assert_eq!(
+            s,
+            Stat {
+                mean: 0.5,
+                ci95: None
+            }
+        );
+        assert!(Stat::of(&[]).is_none());
+    }
+}

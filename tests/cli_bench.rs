@@ -1,0 +1,196 @@
+//! `coherent bench` as a separate process: an end-to-end run on the paper40 tasks of
+//! env0, resume, `--report` in every format, and the exit status of bad input.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn env0() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/coherent-original/env/env0.json")
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("coherent-cli-bench-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+fn coherent(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args(args)
+        // No endpoint from the environment may change the backend.
+        .env_remove("OPENAI_BASE_URL")
+        .env_remove("OPENAI_API_KEY")
+        .env_remove("COHERENT_MODEL")
+        .output()
+        .expect("the coherent binary runs")
+}
+
+fn show(out: &Output) -> String {
+    format!(
+        "status {:?}\n--- stdout\n{}--- stderr\n{}",
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+#[test]
+fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
+    let dir = scratch("e2e");
+    let out = dir.join("results.jsonl");
+    let tasks = env0();
+    let args = [
+        "bench",
+        "--tasks",
+        tasks.to_str().expect("UTF-8 path"),
+        "--subset",
+        "paper40",
+        "--methods",
+        "pefa,mcts",
+        "--backend",
+        "builtin",
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ];
+    let first = coherent(&args);
+    assert_eq!(first.status.code(), Some(0), "{}", show(&first));
+    let text = String::from_utf8_lossy(&first.stdout);
+    assert!(
+        text.contains("tasks: 8 of subset paper40 present"),
+        "{}",
+        show(&first)
+    );
+    assert!(text.contains("missing: 32 of 40"), "{}", show(&first));
+    assert!(
+        text.contains("16 episodes: 0 already finished, 16 run now"),
+        "{}",
+        show(&first)
+    );
+    assert!(text.contains("### Table I"), "{}", show(&first));
+    // The built-in backend is the optimal planner: PEFA solves all 8.
+    assert!(text.contains("| pefa | 1.000 / "), "{}", show(&first));
+    assert!(text.contains("| Ground truth |"), "{}", show(&first));
+    assert!(
+        text.contains("Backend: builtin: optimal-planner"),
+        "{}",
+        show(&first)
+    );
+    let lines = std::fs::read_to_string(&out).expect("results file");
+    assert_eq!(lines.lines().count(), 16);
+    let first_line: serde_json::Value =
+        serde_json::from_str(lines.lines().next().expect("a line")).expect("JSON");
+    for field in [
+        "method",
+        "scene",
+        "task_id",
+        "task_type",
+        "seed",
+        "success",
+        "status",
+        "steps",
+        "gt_steps",
+        "max_steps",
+        "llm_calls",
+        "prompt_tokens",
+        "completion_tokens",
+        "wall_ms",
+        "backend",
+        "transcript",
+    ] {
+        assert!(
+            first_line.get(field).is_some(),
+            "{field} missing: {first_line}"
+        );
+    }
+    let transcript = first_line["transcript"].as_str().expect("a path");
+    assert!(Path::new(transcript).starts_with(dir.join("results.transcripts")));
+    assert!(Path::new(transcript).exists());
+
+    let second = coherent(&args);
+    assert_eq!(second.status.code(), Some(0), "{}", show(&second));
+    let text = String::from_utf8_lossy(&second.stdout);
+    assert!(
+        text.contains("16 episodes: 16 already finished, 0 run now"),
+        "{}",
+        show(&second)
+    );
+    let lines = std::fs::read_to_string(&out).expect("results file");
+    assert_eq!(lines.lines().count(), 16, "nothing ran twice");
+
+    let out_s = out.to_str().expect("UTF-8 path");
+    let md = coherent(&["bench", "--report", out_s]);
+    assert_eq!(md.status.code(), Some(0), "{}", show(&md));
+    assert!(String::from_utf8_lossy(&md.stdout).contains("### Table II"));
+    let csv = coherent(&["bench", "--report", out_s, "--format", "csv"]);
+    assert_eq!(csv.status.code(), Some(0), "{}", show(&csv));
+    let csv = String::from_utf8_lossy(&csv.stdout);
+    assert!(csv.starts_with("table,method,column,"), "{csv}");
+    assert!(csv.contains("\nI,mcts,Avg,8,8,0.000000,"), "{csv}");
+    let json = coherent(&["bench", "--report", out_s, "--format", "json"]);
+    let value: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON report");
+    assert_eq!(value["table1"]["rows"][0]["method"], "pefa");
+    assert_eq!(value["table1"]["rows"][0]["cells"][3]["sr"]["mean"], 1.0);
+}
+
+#[test]
+fn an_unknown_method_exits_2_and_lists_the_methods() {
+    let dir = scratch("unknown");
+    let tasks = env0();
+    let out = coherent(&[
+        "bench",
+        "--tasks",
+        tasks.to_str().expect("UTF-8 path"),
+        "--methods",
+        "pefa,telepathy",
+        "--out",
+        dir.join("r.jsonl").to_str().expect("UTF-8 path"),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("telepathy"), "{err}");
+    for m in ["pefa", "pefa-no-history", "mcts", "llm-mcts"] {
+        assert!(err.contains(m), "{m} not listed: {err}");
+    }
+}
+
+#[test]
+fn bad_input_exits_2_naming_the_file_and_line() {
+    let dir = scratch("bad");
+    let results = dir.join("r.jsonl");
+    std::fs::write(&results, "{\"method\": 1}\n{}\n").expect("write");
+    let out = coherent(&["bench", "--report", results.to_str().expect("UTF-8 path")]);
+    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("r.jsonl: line 1"), "{err}");
+
+    let tasks = env0();
+    let out = coherent(&[
+        "bench",
+        "--tasks",
+        tasks.to_str().expect("UTF-8 path"),
+        "--methods",
+        "pefa",
+        "--sim-errors",
+        "hallucinate=2",
+        "--out",
+        dir.join("s.jsonl").to_str().expect("UTF-8 path"),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--sim-errors"));
+    let missing = dir.join("no-such-subset.txt");
+    let out = coherent(&[
+        "bench",
+        "--tasks",
+        tasks.to_str().expect("UTF-8 path"),
+        "--methods",
+        "pefa",
+        "--subset",
+        missing.to_str().expect("UTF-8 path"),
+        "--out",
+        dir.join("t.jsonl").to_str().expect("UTF-8 path"),
+    ]);
+    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-subset.txt"));
+}
