@@ -15,6 +15,7 @@ use coherent_core::{Environment, NodeId, Relation, Task, describe, rules};
 use tokio::sync::Notify;
 
 use crate::answer;
+use crate::joint;
 use crate::llm::{Backend, Finish, LlmError, Query, Role, Situation};
 use crate::prompt::{self, AssignerView, ExecutorView};
 use crate::transcript::{Call, Outcome, Round, Status, Summary};
@@ -182,11 +183,6 @@ async fn round(
 ) -> Option<Round> {
     let start = Instant::now();
     let mut round = Round::new(step);
-    let situation = |subtask: Option<String>| Situation {
-        task: Arc::clone(task),
-        state: env.state().clone(),
-        subtask,
-    };
 
     // Proposal.
     let history: Vec<String> = history.iter().cloned().collect();
@@ -204,7 +200,11 @@ async fn round(
         schema_name: "proposal",
         schema: prompt::assigner_schema(task),
         max_tokens: config.assigner_max_tokens,
-        situation: situation(None),
+        situation: Situation {
+            task: Arc::clone(task),
+            state: env.state().clone(),
+            subtask: None,
+        },
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let proposal = match reply.and_then(|r| r.read(|text| answer::parse_proposal(task, text))) {
@@ -244,7 +244,11 @@ async fn round(
         schema_name: "decision",
         schema: prompt::executor_schema(&round.actions),
         max_tokens: config.executor_max_tokens,
-        situation: situation(Some(proposal.subtask.clone())),
+        situation: Situation {
+            task: Arc::clone(task),
+            state: env.state().clone(),
+            subtask: Some(proposal.subtask.clone()),
+        },
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let decision =
@@ -409,7 +413,7 @@ fn feedback(env: &(dyn Environment + Send), round: &Round, outcome: &Outcome) ->
     let robot = round
         .proposal
         .as_ref()
-        .map(|p| label_of(task, p.robot))
+        .map(|p| joint::label(task, p.robot))
         .unwrap_or_default();
     let action = round
         .decision
@@ -467,19 +471,13 @@ fn feedback(env: &(dyn Environment + Send), round: &Round, outcome: &Outcome) ->
     }
 }
 
-fn label_of(task: &Task, robot: NodeId) -> String {
-    task.idx(robot)
-        .map(|i| task.node(i).label())
-        .unwrap_or_else(|| format!("robot {robot}"))
-}
-
 /// The history line of a round, oldest first in the prompt.
 fn history_entry(task: &Task, round: &Round) -> String {
     match &round.proposal {
         Some(p) => format!(
             "Round {}: you asked {} to \"{}\". {}",
             round.step,
-            label_of(task, p.robot),
+            joint::label(task, p.robot),
             p.subtask,
             round.feedback
         ),
