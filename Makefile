@@ -3,9 +3,9 @@ PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
 
-.PHONY: test lint rust-test py-test venv demo bench
+.PHONY: test lint rust-test bench-build py-test venv demo bench
 
-test: lint rust-test py-test
+test: lint rust-test bench-build py-test
 
 lint:
 	cargo fmt --all --check
@@ -32,6 +32,10 @@ py-test: venv
 demo: venv
 	$(BIN)/pip install --quiet .
 	$(BIN)/coherent run examples/tasks/demo.json
+
+# The benches build (release) on every test run, so that they never rot.
+bench-build:
+	cargo bench --no-run
 
 # Criterion benchmarks of the planning loop (release build; minutes).
 bench:
