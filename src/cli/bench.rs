@@ -4,15 +4,16 @@
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
 use coherent_agents::episode::Method;
-use coherent_agents::retry::Backoff;
-use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode, report};
+use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
 use coherent_core::load;
 use coherent_core::planner::Limits;
+
+use super::llm::{AnswerFormat, Endpoint};
+use super::method_names;
 
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
@@ -108,25 +109,10 @@ enum BackendKind {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
-enum AnswerFormat {
-    JsonSchema,
-    JsonObject,
-    Text,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
 enum TableFormat {
     Markdown,
     Csv,
     Json,
-}
-
-fn method_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
-}
-
-fn seconds(s: f64, what: &str) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
 }
 
 pub fn bench(args: BenchArgs) -> Result<u8, String> {
@@ -297,7 +283,21 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         .map(ErrorRates::parse)
         .transpose()
         .map_err(|e| format!("--sim-errors: {e}"))?;
-    let http = http_config(&args.llm)?;
+    let l = &args.llm;
+    let http = Endpoint {
+        base_url: l.base_url.clone(),
+        api_key: l.api_key.clone().map(ApiKey::new),
+        model: l.model.clone(),
+        temperature: l.temperature,
+        seed: l.llm_seed,
+        format: l.answer_format,
+        connect_timeout: l.connect_timeout,
+        read_timeout: l.read_timeout,
+        timeout: l.timeout,
+        max_retries: l.max_retries,
+        requests: l.requests,
+    }
+    .config()?;
     let kind = match args.backend {
         BackendKind::Auto if rates.is_some() => BackendKind::Simulated,
         BackendKind::Auto if http.is_some() => BackendKind::Openai,
@@ -319,43 +319,4 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         }
         _ => BackendChoice::Builtin,
     })
-}
-
-/// The endpoint's settings when one is configured: a base URL, or a key and a model
-/// (then OpenAI's own endpoint), as `coherent run` reads them.
-fn http_config(args: &LlmArgs) -> Result<Option<OpenAiConfig>, String> {
-    let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
-    let key = args.api_key.clone().or_else(|| from_env("OPENAI_API_KEY"));
-    let model = args.model.clone().or_else(|| from_env("COHERENT_MODEL"));
-    let base_url = match args
-        .base_url
-        .clone()
-        .or_else(|| from_env("OPENAI_BASE_URL"))
-    {
-        Some(url) => url,
-        None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
-        None => return Ok(None),
-    };
-    let model = model.ok_or_else(|| {
-        format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
-    })?;
-    Ok(Some(OpenAiConfig {
-        api_key: key.map(ApiKey::new),
-        temperature: args.temperature,
-        seed: args.llm_seed,
-        connect_timeout: seconds(args.connect_timeout, "connect-timeout")?,
-        read_timeout: seconds(args.read_timeout, "read-timeout")?,
-        total_timeout: seconds(args.timeout, "timeout")?,
-        backoff: Backoff {
-            max_retries: args.max_retries,
-            ..Backoff::default()
-        },
-        concurrency: args.requests.max(1),
-        output: match args.answer_format {
-            AnswerFormat::JsonSchema => OutputMode::JsonSchema,
-            AnswerFormat::JsonObject => OutputMode::JsonObject,
-            AnswerFormat::Text => OutputMode::Text,
-        },
-        ..OpenAiConfig::new(base_url, model)
-    }))
 }

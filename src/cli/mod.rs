@@ -2,6 +2,7 @@
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
 mod bench;
+mod llm;
 mod render;
 mod run;
 
@@ -10,6 +11,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
+use coherent_agents::episode::Method;
 use coherent_core::planner::{self, Analysis, Limits};
 use coherent_core::{Error, Task, load, native, validate};
 
@@ -327,6 +329,11 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
             )
         }
     }
+}
+
+/// The method names `--method` and `--methods` accept.
+pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
 }
 
 /// The task `id` of `file` (or its only task).

@@ -4,22 +4,21 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::Duration;
 
-use clap::{Args, ValueEnum};
+use clap::Args;
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::llm::Backend;
-use coherent_agents::retry::Backoff;
 use coherent_agents::transcript::{self, Outcome, Round, Status};
 use coherent_agents::{
-    ApiKey, BuiltinBackend, Cancel, Episode, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode,
-    ReplayBackend,
+    ApiKey, BuiltinBackend, Cancel, Episode, ErrorRates, OpenAiClient, ReplayBackend,
 };
 use coherent_core::planner::Limits;
 use coherent_core::{Environment, SymbolicEnv, Task};
 
-use super::pick_task;
 use serde_json::json;
+
+use super::llm::{AnswerFormat, Endpoint};
+use super::{method_names, pick_task};
 
 /// Exit status when the episode ran but the goal was not reached.
 const FAILED: u8 = 1;
@@ -74,8 +73,8 @@ pub struct RunArgs {
     #[arg(long)]
     seed: Option<u64>,
     /// Answer format asked for first; a server that refuses it gets the next one.
-    #[arg(long, value_enum, default_value_t = Format::JsonSchema)]
-    format: Format,
+    #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
+    format: AnswerFormat,
     /// Seconds to wait for a connection.
     #[arg(long, default_value_t = 10.0)]
     connect_timeout: f64,
@@ -99,21 +98,6 @@ pub struct RunArgs {
     /// Most states one search of the built-in planner may visit.
     #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
     max_states: usize,
-}
-
-#[derive(Clone, Copy, ValueEnum)]
-enum Format {
-    JsonSchema,
-    JsonObject,
-    Text,
-}
-
-fn method_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
-}
-
-fn seconds(s: f64, what: &str) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
 }
 
 /// Where human-readable lines go: stdout, or stderr when stdout carries JSON.
@@ -299,46 +283,27 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     })
 }
 
-/// The HTTP backend when an endpoint is configured: a base URL, or a key and a model
-/// (then OpenAI's own endpoint).
+/// The HTTP backend when an endpoint is configured.
 fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
-    let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
-    let key = args.api_key.clone().or_else(|| from_env("OPENAI_API_KEY"));
-    let model = args.model.clone().or_else(|| from_env("COHERENT_MODEL"));
-    let base_url = match args
-        .base_url
-        .clone()
-        .or_else(|| from_env("OPENAI_BASE_URL"))
-    {
-        Some(url) => url,
-        None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
-        None => return Ok(None),
-    };
-    let model = model.ok_or_else(|| {
-        format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
-    })?;
-    let config = OpenAiConfig {
-        api_key: key.map(ApiKey::new),
+    let endpoint = Endpoint {
+        base_url: args.base_url.clone(),
+        api_key: args.api_key.clone().map(ApiKey::new),
+        model: args.model.clone(),
         temperature: args.temperature,
         seed: args.seed,
-        connect_timeout: seconds(args.connect_timeout, "connect-timeout")?,
-        read_timeout: seconds(args.read_timeout, "read-timeout")?,
-        total_timeout: seconds(args.timeout, "timeout")?,
-        backoff: Backoff {
-            max_retries: args.max_retries,
-            ..Backoff::default()
-        },
-        concurrency: args.concurrency,
-        output: match args.format {
-            Format::JsonSchema => OutputMode::JsonSchema,
-            Format::JsonObject => OutputMode::JsonObject,
-            Format::Text => OutputMode::Text,
-        },
-        ..OpenAiConfig::new(base_url, model)
+        format: args.format,
+        connect_timeout: args.connect_timeout,
+        read_timeout: args.read_timeout,
+        timeout: args.timeout,
+        max_retries: args.max_retries,
+        requests: args.concurrency,
     };
-    OpenAiClient::new(config)
-        .map(Some)
-        .map_err(|e| e.to_string())
+    match endpoint.config()? {
+        Some(config) => OpenAiClient::new(config)
+            .map(Some)
+            .map_err(|e| e.to_string()),
+        None => Ok(None),
+    }
 }
 
 fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {

@@ -1,0 +1,85 @@
+//! The model endpoint as `run` and `bench` take it: their flags (each names its own) and
+//! the environment (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL`), resolved in
+//! one place into the HTTP client's settings.
+
+use std::time::Duration;
+
+use clap::ValueEnum;
+use coherent_agents::retry::Backoff;
+use coherent_agents::{ApiKey, OpenAiConfig, OutputMode};
+
+/// The answer format asked for first; a server that refuses it gets the next one.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum AnswerFormat {
+    JsonSchema,
+    JsonObject,
+    Text,
+}
+
+impl From<AnswerFormat> for OutputMode {
+    fn from(f: AnswerFormat) -> OutputMode {
+        match f {
+            AnswerFormat::JsonSchema => OutputMode::JsonSchema,
+            AnswerFormat::JsonObject => OutputMode::JsonObject,
+            AnswerFormat::Text => OutputMode::Text,
+        }
+    }
+}
+
+/// What the flags say of the endpoint; unset ones come from the environment.
+#[derive(Debug)]
+pub struct Endpoint {
+    pub base_url: Option<String>,
+    /// Kept as an [`ApiKey`] from the start, so that `Debug` never shows it.
+    pub api_key: Option<ApiKey>,
+    pub model: Option<String>,
+    pub temperature: f32,
+    pub seed: Option<u64>,
+    pub format: AnswerFormat,
+    /// Seconds.
+    pub connect_timeout: f64,
+    pub read_timeout: f64,
+    pub timeout: f64,
+    pub max_retries: u32,
+    /// Requests in flight at once.
+    pub requests: usize,
+}
+
+impl Endpoint {
+    /// The client's settings when an endpoint is configured: a base URL, or a key and a
+    /// model (then OpenAI's own endpoint); `None` when there is none.
+    pub fn config(self) -> Result<Option<OpenAiConfig>, String> {
+        let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+        let key = self
+            .api_key
+            .or_else(|| from_env("OPENAI_API_KEY").map(ApiKey::new));
+        let model = self.model.or_else(|| from_env("COHERENT_MODEL"));
+        let base_url = match self.base_url.or_else(|| from_env("OPENAI_BASE_URL")) {
+            Some(url) => url,
+            None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
+            None => return Ok(None),
+        };
+        let model = model.ok_or_else(|| {
+            format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
+        })?;
+        Ok(Some(OpenAiConfig {
+            api_key: key,
+            temperature: self.temperature,
+            seed: self.seed,
+            connect_timeout: seconds(self.connect_timeout, "connect-timeout")?,
+            read_timeout: seconds(self.read_timeout, "read-timeout")?,
+            total_timeout: seconds(self.timeout, "timeout")?,
+            backoff: Backoff {
+                max_retries: self.max_retries,
+                ..Backoff::default()
+            },
+            concurrency: self.requests.max(1),
+            output: self.format.into(),
+            ..OpenAiConfig::new(base_url, model)
+        }))
+    }
+}
+
+fn seconds(s: f64, what: &str) -> Result<Duration, String> {
+    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
+}
