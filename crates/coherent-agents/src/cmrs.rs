@@ -61,11 +61,7 @@ async fn round(
         schema_name: "joint_action",
         schema: joint::central_schema(&lines),
         max_tokens: MAX_TOKENS,
-        situation: Situation {
-            task: Arc::clone(task),
-            state: env.state().clone(),
-            subtask: None,
-        },
+        situation: Situation::now(task, env, None),
     };
     let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
     let chosen = reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text)));

@@ -112,11 +112,7 @@ async fn round(
                 schema_name: "joint_action",
                 schema: speaker_schema(&lines),
                 max_tokens: MAX_TOKENS,
-                situation: Situation {
-                    task: Arc::clone(task),
-                    state: env.state().clone(),
-                    subtask: None,
-                },
+                situation: Situation::now(task, env, None),
             };
             let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
             let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());

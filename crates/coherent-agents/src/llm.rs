@@ -7,7 +7,7 @@ use std::future::Future;
 use std::pin::Pin;
 use std::sync::Arc;
 
-use coherent_core::{NodeId, State, Task};
+use coherent_core::{Environment, NodeId, State, Task};
 use serde::{Deserialize, Serialize};
 
 pub type BoxFuture<'a, T> = Pin<Box<dyn Future<Output = T> + Send + 'a>>;
@@ -53,6 +53,17 @@ pub struct Situation {
     pub state: State,
     /// The executor's subtask, as the assigner wrote it.
     pub subtask: Option<String>,
+}
+
+impl Situation {
+    /// Where `env` stands now.
+    pub fn now(task: &Arc<Task>, env: &dyn Environment, subtask: Option<String>) -> Situation {
+        Situation {
+            task: Arc::clone(task),
+            state: env.state().clone(),
+            subtask,
+        }
+    }
 }
 
 /// One request to a role.

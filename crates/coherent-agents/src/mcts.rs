@@ -447,11 +447,7 @@ async fn round(
                 schema_name: "joint_action",
                 schema: joint::central_schema(&lines),
                 max_tokens: config.max_tokens,
-                situation: Situation {
-                    task: Arc::clone(task),
-                    state: state.clone(),
-                    subtask: None,
-                },
+                situation: Situation::now(task, env, None),
             };
             let mut call = Call {
                 role: Role::Assigner,
@@ -529,33 +525,13 @@ async fn round(
             stats.visits[i], stats.simulations, stats.q[i], stats.prior[i]
         ),
     });
-    let (outcome, feedback) = match env.step(task.id(chosen.robot.node), &action) {
-        Ok(o) => match o.infeasible {
-            None => (Outcome::Executed, format!("{robot} did {action}.")),
-            Some(why) => {
-                let feedback = format!(
-                    "{robot} tried {action}, which cannot be done: {}",
-                    why.message
-                );
-                (
-                    Outcome::Infeasible {
-                        reason: why.reason.name().to_owned(),
-                        message: why.message,
-                    },
-                    feedback,
-                )
-            }
-        },
-        Err(e) => (
-            Outcome::Infeasible {
-                reason: "error".into(),
-                message: e.to_string(),
-            },
-            format!("{robot} could not try {action}: {e}"),
-        ),
+    round.outcome = pefa::execute(env, task.id(chosen.robot.node), &action);
+    round.feedback = match &round.outcome {
+        Outcome::Infeasible { message, .. } => {
+            format!("{robot} tried {action}, which cannot be done: {message}")
+        }
+        _ => format!("{robot} did {action}."),
     };
-    round.outcome = outcome;
-    round.feedback = feedback;
     Ok(Some(close(env, round, start)))
 }
 

@@ -200,11 +200,7 @@ async fn round(
         schema_name: "proposal",
         schema: prompt::assigner_schema(task),
         max_tokens: config.assigner_max_tokens,
-        situation: Situation {
-            task: Arc::clone(task),
-            state: env.state().clone(),
-            subtask: None,
-        },
+        situation: Situation::now(task, env, None),
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let proposal = match reply.and_then(|r| r.read(|text| answer::parse_proposal(task, text))) {
@@ -244,11 +240,7 @@ async fn round(
         schema_name: "decision",
         schema: prompt::executor_schema(&round.actions),
         max_tokens: config.executor_max_tokens,
-        situation: Situation {
-            task: Arc::clone(task),
-            state: env.state().clone(),
-            subtask: Some(proposal.subtask.clone()),
-        },
+        situation: Situation::now(task, env, Some(proposal.subtask.clone())),
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let decision =

@@ -1,7 +1,7 @@
 //! The benchmark harness and its tables: resume after a crash, reproducibility whatever
 //! the concurrency, the paper40 selection, and report numbers worked out by hand.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, ResultLine, Subset};
@@ -10,26 +10,10 @@ use coherent_agents::llm::BackendInfo;
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
 use coherent_agents::{Cancel, ErrorRates};
+use coherent_core::Task;
 use coherent_core::planner::Limits;
-use coherent_core::{Task, read_tasks};
 
-fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
-}
-
-fn released(scenes: &[usize]) -> Vec<Task> {
-    let mut out = Vec::new();
-    for n in scenes {
-        let path = data_dir().join(format!("env{n}.json"));
-        out.extend(
-            read_tasks(&path)
-                .expect("benchmark file loads")
-                .into_iter()
-                .flatten(),
-        );
-    }
-    out
-}
+mod common;
 
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("coherent-bench-{name}-{}", std::process::id()));
@@ -52,14 +36,14 @@ fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchCo
 }
 
 fn paper40_env0() -> Vec<Arc<Task>> {
-    bench::select(released(&[0]), &Subset::Paper40)
+    bench::select(common::scenes(&[0]), &Subset::Paper40)
         .expect("distinct tasks")
         .tasks
 }
 
 #[test]
 fn paper40_selects_32_released_tasks_and_names_the_8_of_env4_as_missing() {
-    let s = bench::select(released(&[0, 1, 2, 3]), &Subset::Paper40).expect("distinct tasks");
+    let s = bench::select(common::scenes(&[0, 1, 2, 3]), &Subset::Paper40).expect("distinct tasks");
     assert_eq!(s.tasks.len(), 32);
     for scene in ["env0", "env1", "env2", "env3"] {
         let n = s.tasks.iter().filter(|t| t.meta.scene == scene).count();
@@ -87,7 +71,7 @@ fn a_subset_file_picks_its_pairs_and_reports_absent_ones() {
     )
     .expect("write");
     let subset = Subset::read_file(&path).expect("parses");
-    let s = bench::select(released(&[0]), &subset).expect("distinct tasks");
+    let s = bench::select(common::scenes(&[0]), &subset).expect("distinct tasks");
     let ids: Vec<i64> = s.tasks.iter().map(|t| t.meta.task_id).collect();
     assert_eq!(ids, [2, 4]);
     assert_eq!(s.missing, [("env9".to_owned(), 1)]);

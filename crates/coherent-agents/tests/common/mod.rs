@@ -11,10 +11,10 @@ pub fn data_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
 }
 
-/// Every well-formed task of the four released files (env3's index 18 is malformed).
-pub fn released_tasks() -> Vec<Task> {
+/// Every well-formed task of the released files `env<n>.json` for `scenes`.
+pub fn scenes(scenes: &[usize]) -> Vec<Task> {
     let mut out = Vec::new();
-    for n in 0..4 {
+    for n in scenes {
         let path = data_dir().join(format!("env{n}.json"));
         out.extend(
             read_tasks(&path)
@@ -23,6 +23,12 @@ pub fn released_tasks() -> Vec<Task> {
                 .flatten(),
         );
     }
+    out
+}
+
+/// Every well-formed task of the four released files (env3's index 18 is malformed).
+pub fn released_tasks() -> Vec<Task> {
+    let out = scenes(&[0, 1, 2, 3]);
     assert_eq!(out.len(), 81, "81 well-formed released tasks");
     out
 }
