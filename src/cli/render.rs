@@ -9,7 +9,7 @@ use coherent_agents::episode;
 use coherent_agents::transcript::{self, Outcome};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task};
-use coherent_sim::{Layout, PhysicalEnv, render};
+use coherent_sim::{PhysicalEnv, layout, render};
 
 use super::pick_task;
 
@@ -44,7 +44,7 @@ pub fn render(args: &RenderArgs) -> Result<u8, String> {
         (None, None) => return Err("a task file is needed without --transcript".into()),
     };
     let task = Arc::new(task);
-    let layout = Layout::for_task(&task).map_err(|e| format!("layout: {}", e.0))?;
+    let layout = layout::for_task(&task).map_err(|e| format!("layout: {}", e.0))?;
     let paths = if args.plan {
         let analysis = planner::analyse(&task, &Limits::default());
         let plan = analysis.plan.ok_or_else(|| {

@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::error::{Result, Site, ensure};
+use crate::geometry::{self, Layout};
 use crate::graph::NodeKind;
 use crate::task::{RawGraph, RawPredicate, RuleSet, Source, Task, TaskMeta};
 use crate::vocab::Relation;
@@ -34,7 +35,7 @@ struct NativeTask {
     robots: Vec<NativeRobot>,
     graph: RawGraph,
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    geometry: Option<serde_json::Map<String, Value>>,
+    geometry: Option<Layout>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     source: Option<Source>,
 }
@@ -114,8 +115,22 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
         geometry: raw.geometry,
         source: raw.source,
     };
-    let task = Task::build(meta, &raw.graph, &goal, &root.key("graph"))?;
+    let mut task = Task::build(meta, &raw.graph, &goal, &root.key("graph"))?;
     check_robots(&task, &raw.robots, &root.key("robots"))?;
+    if let Some(layout) = task.meta.geometry.clone() {
+        if let Some(missing) = layout.missing_entry(&task) {
+            return Err(root.key("geometry").error(missing));
+        }
+        if task.meta.rules == RuleSet::Geometric {
+            geometry::derive_heights(&mut task, &layout, &root)?;
+        }
+    } else {
+        ensure!(
+            task.meta.rules != RuleSet::Geometric,
+            root.key("rules"),
+            "the geometric rule set derives heights from the geometry, and the task has none"
+        );
+    }
     Ok(task)
 }
 
@@ -189,9 +204,22 @@ pub fn to_value(task: &Task) -> Value {
                 kind: r.kind.class_name().to_owned(),
             })
             .collect(),
-        graph: task.initial_raw_graph(),
+        graph: written_graph(task),
         geometry: task.meta.geometry.clone(),
         source: task.meta.source.clone(),
     };
     serde_json::to_value(out).expect("plain data always serializes")
+}
+
+/// The initial graph, without the labels the geometric rules derive (a file under them
+/// may not set those by hand).
+fn written_graph(task: &Task) -> RawGraph {
+    let mut graph = task.initial_raw_graph();
+    if task.meta.rules == RuleSet::Geometric {
+        let derived = task.vocab.property_names(geometry::DERIVED);
+        for node in &mut graph.nodes {
+            node.properties.retain(|p| !derived.contains(p));
+        }
+    }
+    graph
 }

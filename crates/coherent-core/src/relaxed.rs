@@ -5,7 +5,7 @@
 //! which rules out teams without searching their (often huge) state spaces.
 
 use crate::graph::{Idx, NodeKind, RobotKind};
-use crate::task::{GoalPredicate, Task};
+use crate::task::{GoalPredicate, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// Whether every goal predicate of `goal` might hold with only robots of `kinds` acting.
@@ -329,6 +329,10 @@ impl Facts {
             }
             for &s in &surfaces {
                 changed |= self.add_at(Idx(h as u16), Relation::On, Idx(s as u16));
+                // Geometric rules: what an arm puts on a low top is not high any more.
+                if task.meta.rules == RuleSet::Geometric && !has(s, PropSet::HIGH_HEIGHT) {
+                    changed |= set(&mut self.low, h);
+                }
             }
             for &t in reached.iter().filter(|&&t| t != h) {
                 if has(t, PropSet::CONTAINERS) && self.open[t] {

@@ -4,7 +4,7 @@
 
 use crate::action::{Action, Verb};
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
-use crate::task::{Robot, Task};
+use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// A set of node indices.
@@ -415,7 +415,15 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
                 s.add(Edge::new(x, rel, t));
             }
             if kind == RobotKind::RobotArm {
-                s.set_on_high_surface(x, true);
+                // Compatible: always; geometric: when the place is high (a basket
+                // carries its own flag, see `set_basket_high`).
+                let high = match (task.meta.rules, a.target) {
+                    (RuleSet::Geometric, Some(t)) => {
+                        task.has(s, t, PropSet::HIGH_HEIGHT) || s.on_high_surface(t)
+                    }
+                    _ => true,
+                };
+                s.set_on_high_surface(x, high);
             } else {
                 s.add(Edge::new(me, Relation::Close, x));
             }

@@ -58,6 +58,11 @@ pub struct GoalPredicate {
 pub enum RuleSet {
     #[default]
     Compatible,
+    /// The project's own benchmark: the compatible rules, with the height labels derived
+    /// from the task's geometry ([`crate::geometry::derive_heights`]) and one quirk
+    /// dropped: what a fixed arm puts down is `ON_HIGH_SURFACE` only when the place it
+    /// puts it is high, not always (`docs/semantics-notes.md`).
+    Geometric,
 }
 
 /// Where an imported task came from, kept so that export gives back the original fields.
@@ -91,8 +96,9 @@ pub struct TaskMeta {
     pub instruction: String,
     pub gt_steps: Option<u32>,
     pub rules: RuleSet,
-    /// Geometry for the physics (rooms, furniture, robot specs); kept as read.
-    pub geometry: Option<serde_json::Map<String, serde_json::Value>>,
+    /// Geometry for the physics (rooms, furniture, robot specs) and, under the geometric
+    /// rules, for the height labels.
+    pub geometry: Option<crate::geometry::Layout>,
     pub source: Option<Source>,
 }
 

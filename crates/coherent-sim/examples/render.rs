@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits};
 use coherent_core::read_tasks;
-use coherent_sim::{Layout, execute_plan, render};
+use coherent_sim::{execute_plan, layout, render};
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -56,7 +56,7 @@ fn main() {
             eprintln!("env{scene}: no task executes");
             continue;
         };
-        let layout = Layout::for_task(&task).expect("layout");
+        let layout = layout::for_task(&task).expect("layout");
         let picture = render::svg(&task, &layout, &task.init, Some(&paths));
         let path = out_dir.join(format!("env{scene}.svg"));
         std::fs::write(&path, picture).expect("picture is written");

@@ -12,7 +12,7 @@ use coherent_core::{
     StateSet, Task,
 };
 
-use crate::layout::Layout;
+use crate::layout::{self, Layout};
 use crate::world::{FailureKind, PhysicsError, Placement, World, fail};
 
 /// A symbolic environment whose every action is also carried out in Rapier.
@@ -37,7 +37,7 @@ pub struct StepReport {
 impl PhysicalEnv {
     /// The task's layout (its geometry, or a generated one) in Rapier.
     pub fn new(task: Arc<Task>) -> Result<PhysicalEnv, PhysicsError> {
-        let layout = Layout::for_task(&task).map_err(|e| PhysicsError {
+        let layout = layout::for_task(&task).map_err(|e| PhysicsError {
             kind: FailureKind::Layout,
             message: e.0,
         })?;

@@ -1,152 +1,13 @@
-//! Where everything is: rooms, doors, furniture, objects and robot start poses. A task's
-//! `geometry` (native files) is this structure as JSON; without one (every imported
-//! original task) [`Layout::generate`] derives a deterministic layout from the graph.
+//! Where everything is. A task's `geometry` (native files, [`coherent_core::geometry`])
+//! is used as it is; without one (every imported original task) [`generate`] derives a
+//! deterministic layout from the graph.
 //!
 //! Frame: metres, `y` up, the floor at `y = 0`; positions are the bottom centre of a box.
 
-use coherent_core::{Idx, NodeId, NodeKind, PropSet, Relation, RobotKind, StateSet, Task};
-use serde::{Deserialize, Serialize};
-
-/// Sizes and limits of the robots, shared by the layout and the robot models.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct RobotSpecs {
-    /// Half extents of the legged robot's body box (x, y, z); it walks with its bottom
-    /// 2 cm above the floor.
-    pub dog_half: [f32; 3],
-    /// Shoulder of the arm on the dog's back, in the body frame (forward is +z).
-    pub dog_shoulder: [f32; 3],
-    /// Upper arm and forearm of the dog's arm (reach = their sum).
-    pub dog_links: [f32; 2],
-    pub dog_speed: f32,
-    /// Shoulder height of a fixed arm above its surface.
-    pub arm_shoulder: f32,
-    pub arm_links: [f32; 2],
-    pub quad_mass: f32,
-    /// Half width of the quadrotor's frame (rotors inside it) and of its basket.
-    pub quad_half: f32,
-    pub basket_half: f32,
-    pub cruise_altitude: f32,
-    pub flight_speed: f32,
-    /// Top heights of LOW_HEIGHT and HIGH_HEIGHT furniture.
-    pub low_top: f32,
-    pub high_top: f32,
-}
-
-impl Default for RobotSpecs {
-    fn default() -> RobotSpecs {
-        RobotSpecs {
-            dog_half: [0.3, 0.2, 0.3],
-            dog_shoulder: [0.0, 0.47, 0.15],
-            dog_links: [0.45, 0.40],
-            dog_speed: 1.0,
-            arm_shoulder: 0.3,
-            arm_links: [0.65, 0.6],
-            quad_mass: 1.5,
-            quad_half: 0.3,
-            basket_half: 0.22,
-            cruise_altitude: 1.9,
-            flight_speed: 1.0,
-            low_top: 0.45,
-            high_top: 1.4,
-        }
-    }
-}
-
-impl RobotSpecs {
-    pub fn dog_reach(&self) -> f32 {
-        self.dog_links[0] + self.dog_links[1]
-    }
-    pub fn arm_reach(&self) -> f32 {
-        self.arm_links[0] + self.arm_links[1]
-    }
-    /// Highest point the legged robot's hand gets to.
-    pub fn dog_max_height(&self) -> f32 {
-        self.dog_shoulder[1] + 0.02 + self.dog_half[1] * 0.0 + self.dog_reach()
-    }
-}
-
-/// A room: an axis-aligned footprint on a level.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RoomGeom {
-    pub id: i64,
-    /// Corners of the footprint, `[x, z]`.
-    pub min: [f32; 2],
-    pub max: [f32; 2],
-    /// Floor height of the level (0 for single-storey scenes).
-    #[serde(default)]
-    pub level: f32,
-}
-
-/// A door: an opening in the wall between two rooms with a hinged panel.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DoorGeom {
-    pub id: i64,
-    pub rooms: [i64; 2],
-    /// Centre of the opening on the wall line, `[x, z]`.
-    pub center: [f32; 2],
-    /// Whether the wall runs along x (the opening spans x); otherwise along z.
-    pub along_x: bool,
-    pub width: f32,
-    pub height: f32,
-}
-
-/// How a container opens.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Lid {
-    /// Always open (no panel).
-    None,
-    /// A lid hinged at the back of the top.
-    Top,
-    /// A door hinged on the left of the front (-z) face; the top stays a surface.
-    Front,
-}
-
-/// A piece of furniture or an object: a box (furniture, fixed) or a small body (GRABABLE
-/// things are dynamic). Containers are open boxes with walls of `wall` thickness.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct ItemGeom {
-    pub id: i64,
-    /// Bottom centre.
-    pub pos: [f32; 3],
-    /// Width (x), height (y), depth (z).
-    pub size: [f32; 3],
-    pub container: bool,
-    pub lid: Lid,
-    pub dynamic: bool,
-}
-
-/// A robot's start pose: base position (bottom centre) and heading about y.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct RobotGeom {
-    pub id: i64,
-    pub pos: [f32; 3],
-    #[serde(default)]
-    pub yaw: f32,
-}
-
-/// The geometry of a scene. As JSON it is the `geometry` object of a native task file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Layout {
-    #[serde(default)]
-    pub specs: RobotSpecs,
-    pub rooms: Vec<RoomGeom>,
-    pub doors: Vec<DoorGeom>,
-    pub items: Vec<ItemGeom>,
-    pub robots: Vec<RobotGeom>,
-    #[serde(default = "default_wall_height")]
-    pub wall_height: f32,
-}
-
-fn default_wall_height() -> f32 {
-    2.6
-}
+pub use coherent_core::geometry::{
+    DoorGeom, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, StairsGeom, landing_pad,
+};
+use coherent_core::{Idx, NodeKind, PropSet, Relation, RobotKind, StateSet, Task};
 
 /// Why a layout could not be made.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -169,372 +30,337 @@ const CELL: f32 = 3.0;
 /// Gap between things packed on a surface or in a container.
 const GAP: f32 = 0.06;
 pub const WALL: f32 = 0.04;
+/// Height of the generated layout's walls.
+const WALL_HEIGHT: f32 = 2.6;
 /// Where things that are in no room are set aside, `[x, z]`.
 pub const ASIDE: [f32; 2] = [-30.0, -30.0];
 
-impl Layout {
-    /// The task's own geometry when it has one, otherwise a generated layout.
-    pub fn for_task(task: &Task) -> Result<Layout, LayoutError> {
-        match &task.meta.geometry {
-            Some(map) => {
-                let value = serde_json::Value::Object(map.clone());
-                let layout: Layout = serde_path_to_error::deserialize(value)
-                    .map_err(|e| LayoutError(format!("$.geometry.{}: {}", e.path(), e.inner())))?;
-                layout.check(task)?;
-                Ok(layout)
-            }
-            None => Layout::generate(task),
-        }
+/// The task's own geometry when it has one (checked when the task was read), otherwise
+/// a generated layout.
+pub fn for_task(task: &Task) -> Result<Layout, LayoutError> {
+    match &task.meta.geometry {
+        Some(layout) => Ok(layout.clone()),
+        None => generate(task),
     }
+}
 
-    pub fn room(&self, id: NodeId) -> Option<&RoomGeom> {
-        self.rooms.iter().find(|r| r.id == id.0)
+/// A deterministic layout from the graph: rooms on a grid joined where doors say,
+/// one floor item per cell, things packed on their surface or in their container.
+pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
+    let specs = RobotSpecs::default();
+    let init = &task.init;
+    let rooms = task.rooms().to_vec();
+    if rooms.is_empty() {
+        return err("layout: the task has no room".into());
     }
-    pub fn item(&self, id: NodeId) -> Option<&ItemGeom> {
-        self.items.iter().find(|r| r.id == id.0)
-    }
-    pub fn door(&self, id: NodeId) -> Option<&DoorGeom> {
-        self.doors.iter().find(|r| r.id == id.0)
-    }
-    pub fn robot(&self, id: NodeId) -> Option<&RobotGeom> {
-        self.robots.iter().find(|r| r.id == id.0)
-    }
-
-    /// Every room, door, robot and placed thing of the task has geometry.
-    pub fn check(&self, task: &Task) -> Result<(), LayoutError> {
-        for n in task.indices() {
-            let node = task.node(n);
-            let id = node.id;
-            let ok = match node.kind {
-                NodeKind::Room => self.room(id).is_some(),
-                NodeKind::Door => self.door(id).is_some(),
-                NodeKind::Robot(_) => self.robot(id).is_some(),
-                NodeKind::Floor | NodeKind::Tool => true,
-                NodeKind::Object => self.item(id).is_some(),
-            };
-            if !ok {
-                return err(format!("geometry: no entry for {}", node.label()));
-            }
+    // Door -> its two rooms.
+    let mut doors: Vec<(Idx, Vec<Idx>)> = Vec::new();
+    for &(d, r) in task.doors() {
+        match doors.iter_mut().find(|(x, _)| *x == d) {
+            Some((_, rs)) => rs.push(r),
+            None => doors.push((d, vec![r])),
         }
-        Ok(())
     }
-
-    /// A deterministic layout from the graph: rooms on a grid joined where doors say,
-    /// one floor item per cell, things packed on their surface or in their container.
-    pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
-        let specs = RobotSpecs::default();
-        let init = &task.init;
-        let rooms = task.rooms().to_vec();
-        if rooms.is_empty() {
-            return err("layout: the task has no room".into());
+    // Grid places, breadth first from the room with the most doors.
+    let degree = |r: Idx| doors.iter().filter(|(_, rs)| rs.contains(&r)).count();
+    let hub = rooms
+        .iter()
+        .copied()
+        .max_by_key(|&r| (degree(r), std::cmp::Reverse(r)))
+        .unwrap_or(rooms[0]);
+    let mut cell: Vec<(Idx, (i32, i32))> = vec![(hub, (0, 0))];
+    let mut queue = vec![hub];
+    let mut qi = 0;
+    let place_of =
+        |cell: &[(Idx, (i32, i32))], r: Idx| cell.iter().find(|(x, _)| *x == r).map(|(_, p)| *p);
+    while qi < queue.len() || cell.len() < rooms.len() {
+        if qi == queue.len() {
+            // A room no door reaches: next free cell along x.
+            let r = rooms
+                .iter()
+                .copied()
+                .find(|&r| place_of(&cell, r).is_none())
+                .unwrap_or(hub);
+            let x = cell.iter().map(|(_, p)| p.0).max().unwrap_or(0) + 1;
+            cell.push((r, (x, 0)));
+            queue.push(r);
         }
-        // Door -> its two rooms.
-        let mut doors: Vec<(Idx, Vec<Idx>)> = Vec::new();
-        for &(d, r) in task.doors() {
-            match doors.iter_mut().find(|(x, _)| *x == d) {
-                Some((_, rs)) => rs.push(r),
-                None => doors.push((d, vec![r])),
+        let r = queue[qi];
+        qi += 1;
+        let p = place_of(&cell, r).unwrap_or((0, 0));
+        for (_, rs) in &doors {
+            if !rs.contains(&r) {
+                continue;
             }
-        }
-        // Grid places, breadth first from the room with the most doors.
-        let degree = |r: Idx| doors.iter().filter(|(_, rs)| rs.contains(&r)).count();
-        let hub = rooms
-            .iter()
-            .copied()
-            .max_by_key(|&r| (degree(r), std::cmp::Reverse(r)))
-            .unwrap_or(rooms[0]);
-        let mut cell: Vec<(Idx, (i32, i32))> = vec![(hub, (0, 0))];
-        let mut queue = vec![hub];
-        let mut qi = 0;
-        let place_of = |cell: &[(Idx, (i32, i32))], r: Idx| {
-            cell.iter().find(|(x, _)| *x == r).map(|(_, p)| *p)
-        };
-        while qi < queue.len() || cell.len() < rooms.len() {
-            if qi == queue.len() {
-                // A room no door reaches: next free cell along x.
-                let r = rooms
-                    .iter()
-                    .copied()
-                    .find(|&r| place_of(&cell, r).is_none())
-                    .unwrap_or(hub);
-                let x = cell.iter().map(|(_, p)| p.0).max().unwrap_or(0) + 1;
-                cell.push((r, (x, 0)));
-                queue.push(r);
-            }
-            let r = queue[qi];
-            qi += 1;
-            let p = place_of(&cell, r).unwrap_or((0, 0));
-            for (_, rs) in &doors {
-                if !rs.contains(&r) {
+            for &o in rs {
+                if o == r || place_of(&cell, o).is_some() {
                     continue;
                 }
-                for &o in rs {
-                    if o == r || place_of(&cell, o).is_some() {
-                        continue;
-                    }
-                    let free = [(1, 0), (-1, 0), (0, 1), (0, -1)]
-                        .into_iter()
-                        .map(|(dx, dz)| (p.0 + dx, p.1 + dz))
-                        .find(|q| cell.iter().all(|(_, c)| c != q));
-                    let Some(q) = free else {
-                        return err(format!(
-                            "layout: no free side of {} for {}",
-                            task.node(r).label(),
-                            task.node(o).label()
-                        ));
-                    };
-                    cell.push((o, q));
-                    queue.push(o);
-                }
+                let free = [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                    .into_iter()
+                    .map(|(dx, dz)| (p.0 + dx, p.1 + dz))
+                    .find(|q| cell.iter().all(|(_, c)| c != q));
+                let Some(q) = free else {
+                    return err(format!(
+                        "layout: no free side of {} for {}",
+                        task.node(r).label(),
+                        task.node(o).label()
+                    ));
+                };
+                cell.push((o, q));
+                queue.push(o);
             }
         }
+    }
 
-        // Floor items of each room (robots included), in file order.
-        let floor_items = |room: Idx| -> Vec<Idx> {
-            let floor = task.floor_of(room);
-            task.indices()
-                .filter(|&n| {
-                    let k = task.node(n).kind;
-                    (k == NodeKind::Object
-                        || k == NodeKind::Robot(RobotKind::RobotDog)
-                        || k == NodeKind::Robot(RobotKind::Quadrotor))
-                        && if k == NodeKind::Object {
-                            floor.is_some_and(|f| {
-                                init.has(coherent_core::Edge::new(n, Relation::On, f))
-                                    || init.has(coherent_core::Edge::new(n, Relation::Inside, f))
-                            })
-                        } else {
-                            // A robot is in the room its INSIDE edge names.
-                            init.has(coherent_core::Edge::new(n, Relation::Inside, room))
-                        }
-                })
-                .collect()
-        };
-        let mut k = 2usize;
-        for &r in &rooms {
-            let n = floor_items(r).len() + 1;
-            let mut kr = (n as f32).sqrt().ceil() as usize;
-            kr += kr % 2; // even, so that no item stands in front of a door
-            k = k.max(kr);
-        }
-        let side = k as f32 * CELL;
-        let room_geom: Vec<RoomGeom> = cell
-            .iter()
-            .map(|&(r, (i, j))| RoomGeom {
-                id: task.id(r).0,
-                min: [i as f32 * side, j as f32 * side],
-                max: [(i + 1) as f32 * side, (j + 1) as f32 * side],
-                level: 0.0,
+    // Floor items of each room (robots included), in file order.
+    let floor_items = |room: Idx| -> Vec<Idx> {
+        let floor = task.floor_of(room);
+        task.indices()
+            .filter(|&n| {
+                let k = task.node(n).kind;
+                (k == NodeKind::Object
+                    || k == NodeKind::Robot(RobotKind::RobotDog)
+                    || k == NodeKind::Robot(RobotKind::Quadrotor))
+                    && if k == NodeKind::Object {
+                        floor.is_some_and(|f| {
+                            init.has(coherent_core::Edge::new(n, Relation::On, f))
+                                || init.has(coherent_core::Edge::new(n, Relation::Inside, f))
+                        })
+                    } else {
+                        // A robot is in the room its INSIDE edge names.
+                        init.has(coherent_core::Edge::new(n, Relation::Inside, room))
+                    }
             })
-            .collect();
-        let mut door_geom = Vec::new();
-        for (d, rs) in &doors {
-            let label = task.node(*d).label();
-            let [a, b] = rs[..] else {
-                return err(format!(
-                    "layout: {label} leads to {} rooms, not 2",
-                    rs.len()
-                ));
-            };
-            let (Some(pa), Some(pb)) = (place_of(&cell, a), place_of(&cell, b)) else {
-                return err(format!("layout: {label} leads to an unplaced room"));
-            };
-            let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
-            if dx.abs() + dz.abs() != 1 {
-                return err(format!(
-                    "layout: {label} joins {} and {}, which are not side by side on the grid",
-                    task.node(a).label(),
-                    task.node(b).label()
-                ));
-            }
-            let ca = [(pa.0 as f32 + 0.5) * side, (pa.1 as f32 + 0.5) * side];
-            door_geom.push(DoorGeom {
-                id: task.id(*d).0,
-                rooms: [task.id(a).0, task.id(b).0],
-                center: [
-                    ca[0] + dx as f32 * side / 2.0,
-                    ca[1] + dz as f32 * side / 2.0,
-                ],
-                along_x: dz != 0,
-                width: 1.1,
-                height: 2.3,
-            });
+            .collect()
+    };
+    let mut k = 2usize;
+    for &r in &rooms {
+        let n = floor_items(r).len() + 1;
+        let mut kr = (n as f32).sqrt().ceil() as usize;
+        kr += kr % 2; // even, so that no item stands in front of a door
+        k = k.max(kr);
+    }
+    let side = k as f32 * CELL;
+    let room_geom: Vec<RoomGeom> = cell
+        .iter()
+        .map(|&(r, (i, j))| RoomGeom {
+            id: task.id(r).0,
+            min: [i as f32 * side, j as f32 * side],
+            max: [(i + 1) as f32 * side, (j + 1) as f32 * side],
+            level: 0.0,
+        })
+        .collect();
+    let mut door_geom = Vec::new();
+    for (d, rs) in &doors {
+        let label = task.node(*d).label();
+        let [a, b] = rs[..] else {
+            return err(format!(
+                "layout: {label} leads to {} rooms, not 2",
+                rs.len()
+            ));
+        };
+        let (Some(pa), Some(pb)) = (place_of(&cell, a), place_of(&cell, b)) else {
+            return err(format!("layout: {label} leads to an unplaced room"));
+        };
+        let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
+        if dx.abs() + dz.abs() != 1 {
+            return err(format!(
+                "layout: {label} joins {} and {}, which are not side by side on the grid",
+                task.node(a).label(),
+                task.node(b).label()
+            ));
         }
+        let ca = [(pa.0 as f32 + 0.5) * side, (pa.1 as f32 + 0.5) * side];
+        door_geom.push(DoorGeom {
+            id: task.id(*d).0,
+            rooms: [task.id(a).0, task.id(b).0],
+            center: [
+                ca[0] + dx as f32 * side / 2.0,
+                ca[1] + dz as f32 * side / 2.0,
+            ],
+            along_x: dz != 0,
+            width: 1.1,
+            height: 2.3,
+        });
+    }
 
-        let loc = locations(task);
-        let fitted = fitted_sizes(task, &specs, &loc);
-        let mut items: Vec<ItemGeom> = Vec::new();
-        let mut robots: Vec<RobotGeom> = Vec::new();
-        for &(r, (i, j)) in &cell {
-            for (slot, n) in floor_items(r).into_iter().enumerate() {
-                let (a, b) = (slot % k, slot / k);
-                let x = i as f32 * side + (a as f32 + 0.5) * CELL;
-                let z = j as f32 * side + (b as f32 + 0.5) * CELL;
-                match task.node(n).kind {
-                    NodeKind::Robot(_) => robots.push(RobotGeom {
-                        id: task.id(n).0,
-                        pos: [x, 0.0, z],
-                        yaw: 0.0,
-                    }),
-                    _ => {
-                        let (_, container, lid, dynamic) = shape_of(task, n, &specs);
-                        let size = fitted[n.get()];
-                        items.push(ItemGeom {
-                            id: task.id(n).0,
-                            pos: [x, 0.0, z],
-                            size,
-                            container,
-                            lid,
-                            dynamic,
-                        });
-                    }
-                }
-            }
-        }
-        // A quadrotor that starts on a piece of furniture: on the right end of its top.
-        for r in &task.robots {
-            if r.kind != RobotKind::Quadrotor {
-                continue;
-            }
-            let Some(s) = init.target(r.node, Relation::On) else {
-                continue;
-            };
-            if task.node(s).kind == NodeKind::Floor {
-                continue;
-            }
-            let (Some(sg), Some(rg)) = (
-                items.iter().find(|it| it.id == task.id(s).0),
-                robots.iter_mut().find(|g| g.id == task.id(r.node).0),
-            ) else {
-                continue;
-            };
-            rg.pos = [
-                sg.pos[0] + sg.size[0] / 2.0 - specs.quad_half - 0.02,
-                sg.pos[1] + sg.size[1],
-                sg.pos[2] - 0.1,
-            ];
-        }
-        // Fixed arms on their surfaces.
-        for r in &task.robots {
-            if r.kind != RobotKind::RobotArm {
-                continue;
-            }
-            let Some(s) = init.target(r.node, Relation::On) else {
-                return err(format!(
-                    "layout: {} stands on nothing",
-                    task.node(r.node).label()
-                ));
-            };
-            let Some(sg) = items.iter().find(|it| it.id == task.id(s).0) else {
-                return err(format!(
-                    "layout: {} stands on {}, which is not on a floor",
-                    task.node(r.node).label(),
-                    task.node(s).label()
-                ));
-            };
-            let (x0, z0) = arm_spot(sg);
-            robots.push(RobotGeom {
-                id: task.id(r.node).0,
-                pos: [x0, sg.pos[1] + sg.size[1], z0],
-                yaw: 0.0,
-            });
-        }
-        // Everything else, level by level: on a surface or in a container already placed.
-        let mut pending: Vec<Idx> = task
-            .indices()
-            .filter(|&n| task.node(n).kind == NodeKind::Object)
-            .filter(|&n| items.iter().all(|it| it.id != task.id(n).0))
-            .collect();
-        // Where each holder's things go: packed in its region, in file order.
-        let mut spots: Vec<(i64, bool, Vec<[f32; 2]>)> = Vec::new();
-        while !pending.is_empty() {
-            let before = pending.len();
-            let mut rest = Vec::new();
-            for n in pending {
-                let Some((holder, inside)) = loc[n.get()] else {
-                    // In no room at all (some released tasks have such things): set
-                    // aside on an unnamed pad outside the house, where nothing sees it.
-                    let (size, container, lid, dynamic) = shape_of(task, n, &specs);
-                    let k = items.len() as f32;
+    let loc = locations(task);
+    let fitted = fitted_sizes(task, &specs, &loc);
+    let mut items: Vec<ItemGeom> = Vec::new();
+    let mut robots: Vec<RobotGeom> = Vec::new();
+    for &(r, (i, j)) in &cell {
+        for (slot, n) in floor_items(r).into_iter().enumerate() {
+            let (a, b) = (slot % k, slot / k);
+            let x = i as f32 * side + (a as f32 + 0.5) * CELL;
+            let z = j as f32 * side + (b as f32 + 0.5) * CELL;
+            match task.node(n).kind {
+                NodeKind::Robot(_) => robots.push(RobotGeom {
+                    id: task.id(n).0,
+                    pos: [x, 0.0, z],
+                    yaw: 0.0,
+                }),
+                _ => {
+                    let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                    let size = fitted[n.get()];
                     items.push(ItemGeom {
                         id: task.id(n).0,
-                        pos: [
-                            ASIDE[0] - (k % 10.0) * 0.5,
-                            0.002,
-                            ASIDE[1] - (k / 10.0).floor() * 0.5,
-                        ],
+                        pos: [x, 0.0, z],
                         size,
                         container,
                         lid,
                         dynamic,
                     });
-                    continue;
-                };
-                let hg = match items.iter().find(|it| it.id == task.id(holder).0) {
-                    Some(h) => h.clone(),
-                    // A quadrotor's basket: the open box on the craft.
-                    None => match basket_geom(task, holder, &robots, &specs) {
-                        Some(h) => h,
-                        None => {
-                            rest.push(n);
-                            continue;
-                        }
-                    },
-                };
-                let (_, container, lid, dynamic) = shape_of(task, n, &specs);
-                let size = fitted[n.get()];
-                let group: Vec<Idx> = contents(&loc, holder, inside);
-                let slot = group.iter().position(|&x| x == n).unwrap_or(0);
-                let packed = match spots.iter().find(|c| c.0 == hg.id && c.1 == inside) {
-                    Some(c) => Some(c.2.clone()),
-                    None => {
-                        let sizes: Vec<[f32; 3]> = group.iter().map(|x| fitted[x.get()]).collect();
-                        let flags = holder_flags(task, &specs, &loc, holder);
-                        let got = pack(pack_region(&hg, inside, flags.0, flags.1), &sizes);
-                        if let Some(g) = &got {
-                            spots.push((hg.id, inside, g.clone()));
-                        }
-                        got
-                    }
-                };
-                let Some(at) = packed.and_then(|p| p.get(slot).copied()) else {
-                    return err(format!(
-                        "layout: no room left for {} {} {}",
-                        task.node(n).label(),
-                        if inside { "in" } else { "on" },
-                        task.node(holder).label()
-                    ));
-                };
-                let y = if inside {
-                    hg.pos[1] + wall_of(hg.size[1])
-                } else {
-                    hg.pos[1] + hg.size[1]
-                };
+                }
+            }
+        }
+    }
+    // A quadrotor that starts on a piece of furniture: on the right end of its top.
+    for r in &task.robots {
+        if r.kind != RobotKind::Quadrotor {
+            continue;
+        }
+        let Some(s) = init.target(r.node, Relation::On) else {
+            continue;
+        };
+        if task.node(s).kind == NodeKind::Floor {
+            continue;
+        }
+        let (Some(sg), Some(rg)) = (
+            items.iter().find(|it| it.id == task.id(s).0),
+            robots.iter_mut().find(|g| g.id == task.id(r.node).0),
+        ) else {
+            continue;
+        };
+        rg.pos = [
+            sg.pos[0] + sg.size[0] / 2.0 - specs.quad_half - 0.02,
+            sg.pos[1] + sg.size[1],
+            sg.pos[2] - 0.1,
+        ];
+    }
+    // Fixed arms on their surfaces.
+    for r in &task.robots {
+        if r.kind != RobotKind::RobotArm {
+            continue;
+        }
+        let Some(s) = init.target(r.node, Relation::On) else {
+            return err(format!(
+                "layout: {} stands on nothing",
+                task.node(r.node).label()
+            ));
+        };
+        let Some(sg) = items.iter().find(|it| it.id == task.id(s).0) else {
+            return err(format!(
+                "layout: {} stands on {}, which is not on a floor",
+                task.node(r.node).label(),
+                task.node(s).label()
+            ));
+        };
+        let (x0, z0) = arm_spot(sg);
+        robots.push(RobotGeom {
+            id: task.id(r.node).0,
+            pos: [x0, sg.pos[1] + sg.size[1], z0],
+            yaw: 0.0,
+        });
+    }
+    // Everything else, level by level: on a surface or in a container already placed.
+    let mut pending: Vec<Idx> = task
+        .indices()
+        .filter(|&n| task.node(n).kind == NodeKind::Object)
+        .filter(|&n| items.iter().all(|it| it.id != task.id(n).0))
+        .collect();
+    // Where each holder's things go: packed in its region, in file order.
+    let mut spots: Vec<(i64, bool, Vec<[f32; 2]>)> = Vec::new();
+    while !pending.is_empty() {
+        let before = pending.len();
+        let mut rest = Vec::new();
+        for n in pending {
+            let Some((holder, inside)) = loc[n.get()] else {
+                // In no room at all (some released tasks have such things): set
+                // aside on an unnamed pad outside the house, where nothing sees it.
+                let (size, container, lid, dynamic) = shape_of(task, n, &specs);
+                let k = items.len() as f32;
                 items.push(ItemGeom {
                     id: task.id(n).0,
-                    pos: [hg.pos[0] + at[0], y + 0.002, hg.pos[2] + at[1]],
+                    pos: [
+                        ASIDE[0] - (k % 10.0) * 0.5,
+                        0.002,
+                        ASIDE[1] - (k / 10.0).floor() * 0.5,
+                    ],
                     size,
                     container,
                     lid,
                     dynamic,
                 });
-            }
-            if rest.len() == before {
-                let names: Vec<String> = rest.iter().map(|&n| task.node(n).label()).collect();
-                return err(format!("layout: cannot place {}", names.join(", ")));
-            }
-            pending = rest;
+                continue;
+            };
+            let hg = match items.iter().find(|it| it.id == task.id(holder).0) {
+                Some(h) => h.clone(),
+                // A quadrotor's basket: the open box on the craft.
+                None => match basket_geom(task, holder, &robots, &specs) {
+                    Some(h) => h,
+                    None => {
+                        rest.push(n);
+                        continue;
+                    }
+                },
+            };
+            let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+            let size = fitted[n.get()];
+            let group: Vec<Idx> = contents(&loc, holder, inside);
+            let slot = group.iter().position(|&x| x == n).unwrap_or(0);
+            let packed = match spots.iter().find(|c| c.0 == hg.id && c.1 == inside) {
+                Some(c) => Some(c.2.clone()),
+                None => {
+                    let sizes: Vec<[f32; 3]> = group.iter().map(|x| fitted[x.get()]).collect();
+                    let flags = holder_flags(task, &specs, &loc, holder);
+                    let got = pack(pack_region(&hg, inside, flags.0, flags.1), &sizes);
+                    if let Some(g) = &got {
+                        spots.push((hg.id, inside, g.clone()));
+                    }
+                    got
+                }
+            };
+            let Some(at) = packed.and_then(|p| p.get(slot).copied()) else {
+                return err(format!(
+                    "layout: no room left for {} {} {}",
+                    task.node(n).label(),
+                    if inside { "in" } else { "on" },
+                    task.node(holder).label()
+                ));
+            };
+            let y = if inside {
+                hg.pos[1] + wall_of(hg.size[1])
+            } else {
+                hg.pos[1] + hg.size[1]
+            };
+            items.push(ItemGeom {
+                id: task.id(n).0,
+                pos: [hg.pos[0] + at[0], y + 0.002, hg.pos[2] + at[1]],
+                size,
+                container,
+                lid,
+                dynamic,
+            });
         }
-        let layout = Layout {
-            specs,
-            rooms: room_geom,
-            doors: door_geom,
-            items,
-            robots,
-            wall_height: default_wall_height(),
-        };
-        layout.check(task)?;
-        Ok(layout)
+        if rest.len() == before {
+            let names: Vec<String> = rest.iter().map(|&n| task.node(n).label()).collect();
+            return err(format!("layout: cannot place {}", names.join(", ")));
+        }
+        pending = rest;
+    }
+    let layout = Layout {
+        specs,
+        rooms: room_geom,
+        doors: door_geom,
+        stairs: Vec::new(),
+        items,
+        robots,
+        wall_height: WALL_HEIGHT,
+    };
+    match layout.missing_entry(task) {
+        Some(missing) => err(format!("layout: {missing}")),
+        None => Ok(layout),
     }
 }
 
@@ -550,12 +376,6 @@ pub fn arm_spot(surface: &ItemGeom) -> (f32, f32) {
 /// Thickness of a container's floor and walls of height `h`.
 pub fn wall_of(h: f32) -> f32 {
     WALL.min(h / 4.0)
-}
-
-/// Width kept free at the right (+x) end of a top where the quadrotor may land: its
-/// frame plus the landing search's clearance on each side, on the search's 10 cm grid.
-fn landing_pad(specs: &RobotSpecs) -> f32 {
-    2.0 * specs.quad_half + 0.4
 }
 
 /// Where each object is at the start: the holder its location edge names and whether

@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Task, load_tasks, native};
-use coherent_sim::{Layout, PhysicalEnv, execute_plan};
+use coherent_sim::{PhysicalEnv, execute_plan, layout};
 use serde_json::Value;
 
 fn demo() -> Task {
@@ -14,17 +14,17 @@ fn demo() -> Task {
     load_tasks(&path).expect("the demo task loads").remove(0)
 }
 
-/// `task` with `geometry` in its native file.
-fn with_geometry(task: &Task, geometry: Value) -> Task {
+/// `task` with `geometry` in its native file, read back.
+fn with_geometry(task: &Task, geometry: Value) -> coherent_core::Result<Task> {
     let mut value = native::to_value(task);
     value["geometry"] = geometry;
-    native::read("demo-with-geometry.json", &value).expect("the native file reads back")
+    native::read("demo-with-geometry.json", &value)
 }
 
 #[test]
 fn explicit_geometry_is_the_layout_and_the_plan_runs_on_it() {
     let task = demo();
-    let mut layout = Layout::generate(&task).expect("a generated layout");
+    let mut layout = layout::generate(&task).expect("a generated layout");
     // Move the coffee table (10) a metre along x: the world must follow the file.
     let table = layout
         .items
@@ -33,8 +33,8 @@ fn explicit_geometry_is_the_layout_and_the_plan_runs_on_it() {
         .expect("the coffee table has geometry");
     table.pos[0] += 1.0;
     let geometry = serde_json::to_value(&layout).expect("a layout serializes");
-    let task = Arc::new(with_geometry(&task, geometry));
-    assert_eq!(Layout::for_task(&task).expect("the geometry reads"), layout);
+    let task = Arc::new(with_geometry(&task, geometry).expect("the native file reads back"));
+    assert_eq!(layout::for_task(&task).expect("the geometry reads"), layout);
     let env = PhysicalEnv::new(Arc::clone(&task)).expect("the world builds");
     assert_eq!(env.layout(), &layout);
     let plan = planner::analyse(&task, &Limits::default())
@@ -47,16 +47,26 @@ fn explicit_geometry_is_the_layout_and_the_plan_runs_on_it() {
 #[test]
 fn bad_geometry_names_its_json_path() {
     let task = demo();
-    let mut geometry = serde_json::to_value(Layout::generate(&task).expect("a layout"))
+    let mut geometry = serde_json::to_value(layout::generate(&task).expect("a layout"))
         .expect("a layout serializes");
     geometry["items"][0]["size"] = Value::String("big".into());
-    let e = Layout::for_task(&with_geometry(&task, geometry)).expect_err("refused");
-    assert!(e.0.starts_with("$.geometry.items[0].size:"), "{e}");
+    let e = with_geometry(&task, geometry)
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        e.starts_with("demo-with-geometry.json: $.geometry.items[0].size:"),
+        "{e}"
+    );
 
     // Geometry that leaves out a robot is incomplete.
-    let mut geometry = serde_json::to_value(Layout::generate(&task).expect("a layout"))
+    let mut geometry = serde_json::to_value(layout::generate(&task).expect("a layout"))
         .expect("a layout serializes");
     geometry["robots"] = Value::Array(Vec::new());
-    let e = Layout::for_task(&with_geometry(&task, geometry)).expect_err("refused");
-    assert!(e.0.contains("no entry for"), "{e}");
+    let e = with_geometry(&task, geometry)
+        .expect_err("refused")
+        .to_string();
+    assert!(
+        e.starts_with("demo-with-geometry.json: $.geometry: no entry in robots for"),
+        "{e}"
+    );
 }

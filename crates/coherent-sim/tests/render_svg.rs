@@ -2,7 +2,7 @@
 //! only when given them.
 
 use coherent_core::NodeKind;
-use coherent_sim::{Layout, render};
+use coherent_sim::{layout, render};
 
 mod common;
 
@@ -45,7 +45,7 @@ fn the_balance_check_catches_unbalanced_tags() {
 fn svg_is_balanced_names_rooms_and_robots_and_draws_paths_when_given() {
     for (scene, id) in [("env0", 1), ("env1", 0), ("env2", 4), ("env3", 1)] {
         let task = common::task(scene, id);
-        let layout = Layout::for_task(&task).expect("layout");
+        let layout = layout::for_task(&task).expect("layout");
         let plain = render::svg(&task, &layout, &task.init, None);
         let tags = balanced(&plain).unwrap_or_else(|e| panic!("{scene} task {id}: {e}"));
         assert!(tags > 20, "{scene} task {id}: only {tags} tags");
