@@ -212,6 +212,15 @@ impl Layout {
     }
 }
 
+/// Thickness of a container's walls and floor (and of a box's lid) for a box of height
+/// `h`.
+pub fn wall_of(h: f32) -> f32 {
+    WALL.min(h / 4.0)
+}
+
+/// The thickest a container's walls get.
+pub const WALL: f32 = 0.04;
+
 /// Width of the square a landing quadrotor needs on a top: its frame plus the landing
 /// search's clearance on each side.
 pub fn landing_pad(specs: &RobotSpecs) -> f32 {
@@ -224,18 +233,19 @@ pub const DERIVED: PropSet =
 
 /// The `geometric` rule set's heights, derived from the layout and the robot specs:
 ///
-/// - a surface or container is `HIGH_HEIGHT` when its top, above its room's floor, plus
-///   the tallest movable thing of the scene is above the legged robot's highest hand
-///   point ([`RobotSpecs::dog_max_height`]): nothing placed on it could be grasped by
-///   the legged robot. Every other surface and container, and every floor, is
-///   `LOW_HEIGHT`;
+/// - a surface is `HIGH_HEIGHT` when its top, above its room's floor, plus the tallest
+///   movable thing of the scene is above the legged robot's highest hand point
+///   ([`RobotSpecs::dog_max_height`]): something placed on it might be out of the
+///   legged robot's grasp. A container that is not also a surface is judged by its
+///   inner floor instead of its top. Every other surface and container, and every
+///   floor, is `LOW_HEIGHT`;
 /// - a thing starts `ON_HIGH_SURFACE` when its top is above that hand point or when
 ///   what it stands on or in (followed down to the floor) is `HIGH_HEIGHT`.
 ///
 /// The file may not carry these three labels itself: a hand-set label is refused with
 /// its JSON path. The same derivation also checks the rest of what the rules take from
-/// geometry: every fixed arm reaches every point of its own surface's top, and every
-/// `LANDABLE` top is large enough for the quadrotor.
+/// geometry: every fixed arm reaches the top of everything that starts on its surface,
+/// and every `LANDABLE` top is large enough for the quadrotor.
 pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) -> Result<()> {
     let nodes_site = site.key("graph").key("nodes");
     for n in task.indices() {
@@ -270,6 +280,14 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
                 .map(|g| g.pos[1] + g.size[1] - level)
         })
         .collect();
+    // A container's inner floor above its room's floor: where what it holds stands.
+    let floors: Vec<Option<f32>> = task
+        .indices()
+        .map(|n| {
+            let g = layout.item(task.id(n))?;
+            tops[n.get()].map(|t| t - g.size[1] + wall_of(g.size[1]))
+        })
+        .collect();
     let holds = PropSet(PropSet::SURFACES.0 | PropSet::CONTAINERS.0);
     let labels: Vec<Option<PropSet>> = task
         .indices()
@@ -278,7 +296,12 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
             if node.kind == NodeKind::Floor {
                 Some(PropSet::LOW_HEIGHT)
             } else if node.properties.0 & holds.0 != 0 {
-                tops[n.get()].map(|t| {
+                let place = if node.properties.contains(PropSet::SURFACES) {
+                    tops[n.get()]
+                } else {
+                    floors[n.get()]
+                };
+                place.map(|t| {
                     if t + tallest > hand {
                         PropSet::HIGH_HEIGHT
                     } else {
@@ -303,43 +326,34 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
         task.init.set_on_high_surface(n, true);
     }
     for robot in task.robots.iter().filter(|r| r.kind == RobotKind::RobotArm) {
-        let Some(surface) = task.init.targets(robot.node, Relation::On).next() else {
-            continue;
-        };
-        let (Some(base), Some((i, top_geom))) = (
+        let (Some(surface), Some(base)) = (
+            task.init.targets(robot.node, Relation::On).next(),
             layout.robot(task.id(robot.node)),
-            layout
-                .items
-                .iter()
-                .enumerate()
-                .find(|(_, g)| g.id == task.id(surface).0),
         ) else {
             continue;
         };
         let shoulder = [base.pos[0], base.pos[1] + specs.arm_shoulder, base.pos[2]];
-        let top_y = top_geom.pos[1] + top_geom.size[1];
-        for dx in [-0.5, 0.5] {
-            for dz in [-0.5, 0.5] {
-                let corner = [
-                    top_geom.pos[0] + dx * top_geom.size[0],
-                    top_y,
-                    top_geom.pos[2] + dz * top_geom.size[2],
-                ];
-                let d = ((corner[0] - shoulder[0]).powi(2)
-                    + (corner[1] - shoulder[1]).powi(2)
-                    + (corner[2] - shoulder[2]).powi(2))
-                .sqrt();
-                if d > specs.arm_reach() {
-                    return Err(geometry.key("items").index(i).error(format!(
-                        "the corner ({:.2}, {:.2}, {:.2}) m of {}, the surface of {}, is {d:.2} m from the arm's shoulder; its reach is {:.2} m",
-                        corner[0],
-                        corner[1],
-                        corner[2],
-                        task.node(surface).label(),
-                        task.node(robot.node).label(),
-                        specs.arm_reach()
-                    )));
-                }
+        for x in task.init.sources(Relation::On, surface) {
+            let Some((i, g)) = layout
+                .items
+                .iter()
+                .enumerate()
+                .find(|(_, g)| g.id == task.id(x).0)
+            else {
+                continue;
+            };
+            let d = ((g.pos[0] - shoulder[0]).powi(2)
+                + (g.pos[1] + g.size[1] - shoulder[1]).powi(2)
+                + (g.pos[2] - shoulder[2]).powi(2))
+            .sqrt();
+            if d > specs.arm_reach() {
+                return Err(geometry.key("items").index(i).key("pos").error(format!(
+                    "{} on {} is {d:.2} m from the shoulder of {}; its reach is {:.2} m",
+                    task.node(x).label(),
+                    task.node(surface).label(),
+                    task.node(robot.node).label(),
+                    specs.arm_reach()
+                )));
             }
         }
     }

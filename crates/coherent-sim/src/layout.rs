@@ -5,7 +5,8 @@
 //! Frame: metres, `y` up, the floor at `y = 0`; positions are the bottom centre of a box.
 
 pub use coherent_core::geometry::{
-    DoorGeom, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, StairsGeom, landing_pad,
+    DoorGeom, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, StairsGeom, WALL,
+    landing_pad, wall_of,
 };
 use coherent_core::{Idx, NodeKind, PropSet, Relation, RobotKind, StateSet, Task};
 
@@ -29,7 +30,6 @@ fn err<T>(msg: String) -> Result<T, LayoutError> {
 const CELL: f32 = 3.0;
 /// Gap between things packed on a surface or in a container.
 const GAP: f32 = 0.06;
-pub const WALL: f32 = 0.04;
 /// Height of the generated layout's walls.
 const WALL_HEIGHT: f32 = 2.6;
 /// Where things that are in no room are set aside, `[x, z]`.
@@ -371,11 +371,6 @@ pub fn arm_spot(surface: &ItemGeom) -> (f32, f32) {
         surface.pos[0] - 0.2 * surface.size[0] / 1.8,
         surface.pos[2] + surface.size[2] / 2.0 - 0.15,
     )
-}
-
-/// Thickness of a container's floor and walls of height `h`.
-pub fn wall_of(h: f32) -> f32 {
-    WALL.min(h / 4.0)
 }
 
 /// Where each object is at the start: the holder its location edge names and whether
