@@ -271,7 +271,32 @@ impl State {
 
     /// Removes every outgoing edge of `n` with relation `rel`.
     pub(crate) fn remove_out(&mut self, n: Idx, rel: Relation) {
-        self.retain(|e| !(e.from() == n && e.rel() == rel));
+        self.remove_out_if(n, rel, |_| true);
+    }
+
+    /// Removes the outgoing `rel` edges of `n` whose target satisfies `gone`. They form
+    /// one run of the sorted edges: only that run is visited.
+    pub(crate) fn remove_out_if(
+        &mut self,
+        n: Idx,
+        rel: Relation,
+        mut gone: impl FnMut(Idx) -> bool,
+    ) {
+        let edges = self.edges();
+        let lo = edges.partition_point(|e| *e < Edge::new(n, rel, Idx(0)));
+        let len = edges[lo..]
+            .iter()
+            .take_while(|e| e.from() == n && e.rel() == rel)
+            .count();
+        let run = self.edges_start() + lo;
+        let mut kept = run;
+        for i in run..run + len {
+            if !gone(Edge(self.data[i]).to()) {
+                self.data[kept] = self.data[i];
+                kept += 1;
+            }
+        }
+        self.data.drain(kept..run + len);
     }
 }
 

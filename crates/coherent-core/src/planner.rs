@@ -139,8 +139,10 @@ pub fn search_from(
             };
         }
         let gc = g[i] + 1;
+        let contents = rules::Contents::new(task, &states[i]);
         for &robot in robots {
-            for action in rules::actions(task, &states[i], robot) {
+            let actions = rules::actions_in(task, &states[i], robot, &contents);
+            for action in actions {
                 child.clone_from(&states[i]);
                 rules::apply(task, &mut child, robot, action);
                 let step = Some(Step {

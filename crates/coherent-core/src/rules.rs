@@ -2,18 +2,24 @@
 //! actions it may take, and how one action changes the state. Imported original tasks
 //! run under these rules exactly, quirks included (see `docs/semantics-notes.md`).
 
+use std::borrow::Cow;
+use std::cell::OnceCell;
+
+use smallvec::SmallVec;
+
 use crate::action::{Action, Verb};
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
 use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
-/// A set of node indices.
+/// A set of node indices; up to 256 nodes without a heap allocation (the search builds
+/// several per expanded state).
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct NodeSet(Vec<u64>);
+pub struct NodeSet(SmallVec<[u64; 4]>);
 
 impl NodeSet {
     pub fn new(n: usize) -> NodeSet {
-        NodeSet(vec![0; n.div_ceil(64)])
+        NodeSet(smallvec::smallvec![0; n.div_ceil(64)])
     }
     pub fn contains(&self, n: Idx) -> bool {
         self.0[n.get() / 64] >> (n.get() % 64) & 1 == 1
@@ -51,21 +57,92 @@ pub fn room_of(task: &Task, s: &State, n: Idx) -> Option<Idx> {
         .find(|&t| task.node(t).kind == NodeKind::Room)
 }
 
+/// The location edges (`ON`, `INSIDE`) of one state grouped by target: what stands on
+/// or in each node. Visibility and the arm's reach walk down these lists instead of
+/// passing over every edge once per level; the planner builds them once per expanded
+/// state for the views of all its robots, which then also share what each room shows.
+#[derive(Clone)]
+pub(crate) struct Contents {
+    /// `edges[start[p]..start[p + 1]]` are the location edges pointing at node `p`.
+    start: Vec<u32>,
+    edges: Vec<Edge>,
+    /// What a robot in each room of `Task::rooms` sees, besides itself and what it
+    /// holds; found when a robot there first looks.
+    sights: Vec<OnceCell<NodeSet>>,
+}
+
+impl Contents {
+    pub fn new(task: &Task, s: &State) -> Contents {
+        let n = task.nodes.len();
+        // Counting sort by target: count, prefix sums, then place in edge order.
+        let mut start = vec![0u32; n + 2];
+        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
+            start[e.to().get() + 2] += 1;
+        }
+        for p in 2..start.len() {
+            start[p] += start[p - 1];
+        }
+        let mut edges = vec![Edge::new(Idx(0), Relation::On, Idx(0)); start[n + 1] as usize];
+        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
+            let at = &mut start[e.to().get() + 1];
+            edges[*at as usize] = *e;
+            *at += 1;
+        }
+        start.pop();
+        Contents {
+            start,
+            edges,
+            sights: vec![OnceCell::new(); task.rooms().len()],
+        }
+    }
+
+    /// The location edges pointing at `p`, in edge order.
+    pub fn of(&self, p: Idx) -> &[Edge] {
+        &self.edges[self.start[p.get()] as usize..self.start[p.get() + 1] as usize]
+    }
+}
+
 /// The visible set of SEMANTICS.md section 2.
 pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
-    let mut v = NodeSet::new(task.nodes.len());
-    if let Some(room) = room_of(task, s, robot) {
-        for e in s.edges() {
-            if e.rel() == Relation::Inside && e.to() == room {
-                v.insert(e.from());
+    visible_with(task, s, robot, &Contents::new(task, s))
+}
+
+fn visible_with(task: &Task, s: &State, robot: Idx, contents: &Contents) -> NodeSet {
+    let mut v = match room_of(task, s, robot).and_then(|room| sight(task, s, room, contents)) {
+        Some(sight) => sight.clone(),
+        None => {
+            let mut v = NodeSet::new(task.nodes.len());
+            for &r in task.rooms() {
+                v.insert(r);
+            }
+            v
+        }
+    };
+    v.insert(robot);
+    for h in s.targets(robot, Relation::Hold) {
+        v.insert(h);
+    }
+    v
+}
+
+/// What any robot in `room` sees (the rooms included), computed once per state; none
+/// when `room` is not one of the task's rooms.
+fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Option<&'c NodeSet> {
+    let at = task.rooms().iter().position(|&r| r == room)?;
+    Some(contents.sights[at].get_or_init(|| {
+        let mut v = NodeSet::new(task.nodes.len());
+        // Everything INSIDE the room, then whatever is ON or INSIDE something seen, at
+        // any depth: the least set closed under location edges, found by a walk down.
+        let mut todo: SmallVec<[Idx; 64]> = SmallVec::new();
+        for e in contents.of(room) {
+            if e.rel() == Relation::Inside && v.insert(e.from()) {
+                todo.push(e.from());
             }
         }
-        let mut grew = true;
-        while grew {
-            grew = false;
-            for e in s.edges() {
-                if e.rel().is_location() && v.contains(e.to()) {
-                    grew |= v.insert(e.from());
+        while let Some(p) = todo.pop() {
+            for e in contents.of(p) {
+                if v.insert(e.from()) {
+                    todo.push(e.from());
                 }
             }
         }
@@ -91,21 +168,19 @@ pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
                 v.insert(r.node);
                 if let Some(basket) = task.basket_of(r.node) {
                     v.insert(basket);
-                    for y in s.sources(Relation::Inside, basket) {
-                        v.insert(y);
+                    for e in contents.of(basket) {
+                        if e.rel() == Relation::Inside {
+                            v.insert(e.from());
+                        }
                     }
                 }
             }
         }
-    }
-    v.insert(robot);
-    for h in s.targets(robot, Relation::Hold) {
-        v.insert(h);
-    }
-    for &r in task.rooms() {
-        v.insert(r);
-    }
-    v
+        for &r in task.rooms() {
+            v.insert(r);
+        }
+        v
+    }))
 }
 
 /// The robot's observation: visible nodes and the edges between them.
@@ -128,6 +203,7 @@ pub(crate) struct View<'a> {
     pub task: &'a Task,
     pub s: &'a State,
     pub robot: Robot,
+    pub contents: Cow<'a, Contents>,
     pub visible: NodeSet,
     pub room: Option<Idx>,
     pub holding: Option<Idx>,
@@ -135,7 +211,17 @@ pub(crate) struct View<'a> {
 
 impl<'a> View<'a> {
     pub fn new(task: &'a Task, s: &'a State, robot: Robot) -> View<'a> {
-        let visible = visible(task, s, robot.node);
+        View::with(task, s, robot, Cow::Owned(Contents::new(task, s)))
+    }
+
+    /// The view with the state's [`Contents`] built already.
+    pub fn with(
+        task: &'a Task,
+        s: &'a State,
+        robot: Robot,
+        contents: Cow<'a, Contents>,
+    ) -> View<'a> {
+        let visible = visible_with(task, s, robot.node, &contents);
         let holding = s
             .targets(robot.node, Relation::Hold)
             .find(|&h| visible.contains(h));
@@ -143,6 +229,7 @@ impl<'a> View<'a> {
             task,
             s,
             robot,
+            contents,
             room: room_of(task, s, robot.node),
             visible,
             holding,
@@ -216,40 +303,47 @@ impl<'a> View<'a> {
 
     /// What a fixed arm reaches: things on its surface, then three levels of things
     /// ON/INSIDE those, then the direct children of surfaces and containers among them.
+    /// Each level is in node order, as one pass over the sorted edges finds it.
     pub fn arm_reach(&self) -> Vec<Idx> {
         let mut set = NodeSet::new(self.task.nodes.len());
         let mut reach = Vec::new();
         let Some(surface) = self.own(Relation::On) else {
             return reach;
         };
-        for x in self.s.sources(Relation::On, surface) {
-            if x != self.robot.node && self.sees(x) && set.insert(x) {
+        // Contents are in edge order, which is node order of the sources.
+        for e in self.contents.of(surface) {
+            let x = e.from();
+            if e.rel() == Relation::On && x != self.robot.node && self.sees(x) && set.insert(x) {
                 reach.push(x);
             }
         }
-        // One pass over the edges per level: the children of every member so far.
-        let grow = |from: &NodeSet, set: &mut NodeSet, reach: &mut Vec<Idx>| {
-            for e in self.s.edges() {
-                if e.rel().is_location()
-                    && from.contains(e.to())
-                    && self.sees(e.from())
-                    && set.insert(e.from())
-                {
-                    reach.push(e.from());
+        // The seen children of the parents reach[from..to] (and of those `holds`), added
+        // in node order.
+        let grow =
+            |reach: &mut Vec<Idx>, set: &mut NodeSet, from: usize, holds: &dyn Fn(Idx) -> bool| {
+                let (to, first) = (reach.len(), reach.len());
+                for i in from..to {
+                    let p = reach[i];
+                    if !holds(p) {
+                        continue;
+                    }
+                    for e in self.contents.of(p) {
+                        if self.sees(e.from()) && set.insert(e.from()) {
+                            reach.push(e.from());
+                        }
+                    }
                 }
-            }
-        };
+                reach[first..].sort_unstable();
+            };
+        // Children of earlier levels are in already: each level grows from the last one.
+        let mut level = 0;
         for _ in 0..3 {
-            let level = set.clone();
-            grow(&level, &mut set, &mut reach);
+            let next = reach.len();
+            grow(&mut reach, &mut set, level, &|_| true);
+            level = next;
         }
-        let mut holders = NodeSet::new(self.task.nodes.len());
-        for &o in &reach {
-            if self.has(o, PropSet::SURFACES) || self.has(o, PropSet::CONTAINERS) {
-                holders.insert(o);
-            }
-        }
-        grow(&holders, &mut set, &mut reach);
+        let holder = |o: Idx| self.has(o, PropSet::SURFACES) || self.has(o, PropSet::CONTAINERS);
+        grow(&mut reach, &mut set, 0, &holder);
         reach
     }
 }
@@ -257,6 +351,11 @@ impl<'a> View<'a> {
 /// Every action `robot` may take in state `s`, without duplicates.
 pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
     View::new(task, s, robot).actions()
+}
+
+/// [`actions`] with the state's [`Contents`] built already (once for all robots).
+pub(crate) fn actions_in(task: &Task, s: &State, robot: Robot, contents: &Contents) -> Vec<Action> {
+    View::with(task, s, robot, Cow::Borrowed(contents)).actions()
 }
 
 impl View<'_> {
@@ -268,14 +367,16 @@ impl View<'_> {
             RobotKind::RobotDog => dog_actions(self, &mut out),
             RobotKind::RobotArm => arm_actions(self, &mut out),
         }
-        // Lists are short: a quadratic pass beats hashing.
-        let mut unique = Vec::with_capacity(out.len());
-        for a in out {
-            if !unique.contains(&a) {
-                unique.push(a);
+        // Lists are short: a quadratic pass in place beats hashing.
+        let mut kept = 0;
+        for i in 0..out.len() {
+            if !out[..kept].contains(&out[i]) {
+                out[kept] = out[i];
+                kept += 1;
             }
         }
-        unique
+        out.truncate(kept);
+        out
     }
 }
 
@@ -377,7 +478,7 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
             s.add(Edge::new(me, Relation::Above, x));
             if let Some(b) = task.basket_of(me) {
                 s.remove(Edge::new(b, Relation::On, x));
-                let inside: Vec<Idx> = s.sources(Relation::Inside, b).collect();
+                let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, b).collect();
                 s.retain(|e| {
                     !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
                 });
@@ -446,13 +547,9 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
 }
 
 fn move_to_room(task: &Task, s: &mut State, me: Idx, room: Idx) {
-    let old: Vec<Idx> = s
-        .targets(me, Relation::Inside)
-        .filter(|&t| task.node(t).kind == NodeKind::Room)
-        .collect();
-    for r in old {
-        s.remove(Edge::new(me, Relation::Inside, r));
-    }
+    s.remove_out_if(me, Relation::Inside, |t| {
+        task.node(t).kind == NodeKind::Room
+    });
     s.add(Edge::new(me, Relation::Inside, room));
 }
 
@@ -460,7 +557,7 @@ fn move_to_room(task: &Task, s: &mut State, me: Idx, room: Idx) {
 /// `x` holds, to what `x` stands on or in (floors excepted), and to what stands on a
 /// surface `x`.
 fn dog_approach(task: &Task, s: &mut State, me: Idx, x: Idx) {
-    let mut close = vec![x];
+    let mut close: SmallVec<[Idx; 16]> = smallvec::smallvec![x];
     if task.has(s, x, PropSet::CONTAINERS) && s.states(x).is_open() {
         close.extend(s.sources(Relation::Inside, x));
     }
@@ -480,7 +577,7 @@ fn dog_approach(task: &Task, s: &mut State, me: Idx, x: Idx) {
 
 fn set_basket_high(s: &mut State, basket: Idx, on: bool) {
     s.set_on_high_surface(basket, on);
-    let inside: Vec<Idx> = s.sources(Relation::Inside, basket).collect();
+    let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, basket).collect();
     for y in inside {
         s.set_on_high_surface(y, on);
     }
