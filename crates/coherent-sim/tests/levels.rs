@@ -1,7 +1,7 @@
 //! Two storeys: a hall and a kitchen on the ground floor, a bedroom 3 m up, joined by a
-//! flight of stairs in the hall. The legged robot carries a book up the stairs, the
-//! quadrotor flies a cup up the stairwell, a scene without its stairs is refused, and
-//! two runs give bit-identical final poses.
+//! flight of stairs in the hall. The legged robot carries a book up the stairs and
+//! down again, the quadrotor flies a cup up the stairwell, a scene without usable
+//! stairs is refused, and two runs give bit-identical final poses.
 
 use std::sync::Arc;
 
@@ -205,6 +205,32 @@ fn the_legged_robot_carries_a_book_upstairs() {
     }
     // The dog's track is drawn in both panels, the arrow on the upper one.
     assert_eq!(svg.matches("data-robot=\"16\"").count(), 2);
+}
+
+/// The same book brought down: it starts on the bedside table with the legged robot in
+/// the bedroom, and goes to the hall table.
+#[test]
+fn the_legged_robot_carries_a_book_downstairs() {
+    let mut file = house(json!([on(12, 8)]));
+    for e in file["graph"]["edges"].as_array_mut().expect("edges") {
+        match (e["from_id"].as_i64(), e["relation_type"].as_str()) {
+            (Some(12), Some("ON")) => e["to_id"] = json!(10),
+            (Some(16), Some("ON")) => e["to_id"] = json!(5),
+            (Some(16), Some("INSIDE")) => e["to_id"] = json!(4),
+            _ => {}
+        }
+    }
+    file["geometry"]["items"][4]["pos"] = json!([3.6, 3.502, 0.9]);
+    file["geometry"]["robots"][1]["pos"] = json!([2.5, 3.0, 2.6]);
+    let (_, plan, report) = run(&file);
+    assert!(report.physics_ok, "{plan:?}: {:?}", report.physics_error);
+    let book = report
+        .final_poses
+        .iter()
+        .find(|(id, _)| id.0 == 12)
+        .expect("the book has a pose")
+        .1;
+    assert!((book[1] - 0.45).abs() < 0.03, "the book is at {book:?}");
 }
 
 /// The cup from the kitchen table into the basket and the quadrotor onto the dresser
