@@ -71,8 +71,8 @@ pub fn render(args: &RenderArgs) -> Result<u8, String> {
     Ok(0)
 }
 
-/// A robot's track on the floor plan, as `coherent_sim` records it.
-type RobotPath = (coherent_core::NodeId, Vec<[f32; 2]>);
+/// A robot's track, `[x, y, z]`, as `coherent_sim` records it.
+type RobotPath = (coherent_core::NodeId, Vec<[f32; 3]>);
 
 /// The robots' paths when the transcript's executed actions are carried out in physics.
 fn replay_paths(task: &Arc<Task>, t: &transcript::Transcript) -> Result<Vec<RobotPath>, String> {

@@ -342,8 +342,8 @@ pub struct PlanReport {
     pub wall_ms: f64,
     /// Final pose of every body, `(id, [x, y, z, qx, qy, qz, qw])`.
     pub final_poses: Vec<(NodeId, [f32; 7])>,
-    /// Each mobile robot's track on the floor plan.
-    pub paths: Vec<(NodeId, Vec<[f32; 2]>)>,
+    /// Each mobile robot's track, `[x, y, z]` (see `World::paths`).
+    pub paths: Vec<(NodeId, Vec<[f32; 3]>)>,
 }
 
 /// Executes `plan` (e.g. `planner::analyse(..).plan`) in Rapier with the task's layout,

@@ -1,12 +1,15 @@
-//! Paths for the legged robot: A* on a 10 cm occupancy grid of the floor plan, built
-//! from the colliders at the robot's height (closed door panels included), inflated by
-//! the robot's half width, then shortened by line of sight.
+//! Paths for the legged robot: A* on a 10 cm occupancy grid of one storey's floor plan,
+//! built from the colliders at the robot's height above that storey's floor (closed
+//! door panels included), inflated by the robot's half width, then shortened by line of
+//! sight. Storeys are joined by flights of stairs ([`crate::layout::Flight`]); the world
+//! chains per-storey routes through them.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
 use rapier3d::prelude::*;
 
+use crate::layout;
 use crate::world::World;
 
 const CELL: f32 = 0.1;
@@ -20,7 +23,8 @@ pub(crate) struct Grid {
 }
 
 impl Grid {
-    pub fn new(w: &World, dog: RigidBodyHandle) -> Grid {
+    /// The grid of the storey whose floor is at `level`.
+    pub fn new(w: &World, dog: RigidBodyHandle, level: f32) -> Grid {
         let (mut x0, mut z0, mut x1, mut z1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
         for r in &w.layout.rooms {
             x0 = x0.min(r.min[0]);
@@ -39,8 +43,8 @@ impl Grid {
         };
         let h = w.layout.specs.dog_half;
         let inflate = h[0].max(h[2]) + 0.03;
-        // Free inside rooms, minus a margin along the outer footprint.
-        for r in &w.layout.rooms {
+        // Free inside the storey's rooms, minus a margin along the outer footprint.
+        for r in w.layout.rooms.iter().filter(|r| r.level == level) {
             g.mark(
                 r.min[0] + inflate,
                 r.min[1] + inflate,
@@ -50,7 +54,12 @@ impl Grid {
             );
         }
         // Door openings are passable (their panels, when closed, block below).
-        for d in &w.layout.doors {
+        for d in w
+            .layout
+            .doors
+            .iter()
+            .filter(|d| layout::door_level(&w.layout, d) == level)
+        {
             let (ax, az) = if d.along_x {
                 (d.width / 2.0 - inflate, inflate + 0.15)
             } else {
@@ -64,13 +73,30 @@ impl Grid {
                 false,
             );
         }
+        // So is the opening where a flight arrives on this storey.
+        for f in w.flights.iter().filter(|f| f.upper == level) {
+            let half = f.width / 2.0 - inflate;
+            let deep = inflate + 0.15;
+            let (ax, az) = if f.along_x() {
+                (deep, half)
+            } else {
+                (half, deep)
+            };
+            g.mark(
+                f.head[0] - ax,
+                f.head[1] - az,
+                f.head[0] + ax,
+                f.head[1] + az,
+                false,
+            );
+        }
         for (_, c) in w.pw.colliders.iter() {
             if c.collision_groups().memberships == Group::NONE || c.parent() == Some(dog) {
                 continue;
             }
             let a = c.compute_aabb();
             // Only what stands at the robot's height; floors are below it.
-            if a.maxs.y < 0.03 || a.mins.y > 0.75 {
+            if a.maxs.y < level + 0.03 || a.mins.y > level + 0.75 {
                 continue;
             }
             g.mark(

@@ -1,16 +1,17 @@
 //! A top-down SVG picture of a scene: rooms with their names, doors with their state,
 //! furniture with its top height, objects, robots, a legend, and optionally each
-//! robot's path. [`svg`] is a pure function of the task, its layout, a symbolic state
-//! (door and lid states) and the paths.
+//! robot's path. A scene of several storeys is drawn as one panel per storey, side by
+//! side, with its flights of stairs. [`svg`] is a pure function of the task, its
+//! layout, a symbolic state (door and lid states) and the paths.
 
 use std::fmt::Write as _;
 
 use coherent_core::{Idx, NodeId, RobotKind, State, StateSet, Task};
 
-use crate::layout::Layout;
+use crate::layout::{self, Layout};
 
-/// Each robot's track on the floor plan, `[x, z]` points (as in `PlanReport::paths`).
-pub type Paths = [(NodeId, Vec<[f32; 2]>)];
+/// Each robot's track, `[x, y, z]` points (as in `PlanReport::paths`).
+pub type Paths = [(NodeId, Vec<[f32; 3]>)];
 
 /// Pixels per metre.
 const SCALE: f32 = 56.0;
@@ -20,6 +21,10 @@ const LEGEND_W: f32 = 250.0;
 const FONT_ROOM: f32 = 24.0;
 const FONT_ITEM: f32 = 15.0;
 const FONT_OBJECT: f32 = 14.0;
+/// Space between the panels of two storeys, in pixels.
+const PANEL_GAP: f32 = 90.0;
+/// Height of one step of a drawn flight, in metres.
+const STEP_RISE: f32 = 0.18;
 
 /// Colour and name of each robot kind's symbol.
 fn robot_style(kind: RobotKind) -> (&'static str, &'static str) {
@@ -175,7 +180,11 @@ fn around(x: f32, y: f32, len: usize, font: f32) -> Vec<(f32, f32)> {
 /// names, doors green when OPEN and red when CLOSED in `state`, furniture boxes with
 /// their name and top height in metres, objects as small marks with names, robots as
 /// a symbol per kind at their start pose, a legend, and each robot's path in `paths`
-/// (as in `PlanReport::paths`) as a polyline from a dot to an arrow.
+/// (as in `PlanReport::paths`) as a polyline from a dot to an arrow. With several
+/// storeys each is a panel titled with its level, left to right from the lowest; a
+/// flight of stairs is drawn in its lower storey's panel with its steps and an arrow
+/// up, and as a dashed stairwell in the upper one; paths are split where they change
+/// storey.
 pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -> String {
     // The house's extent (things set aside outside it are not drawn).
     let mut lo = [f32::INFINITY; 2];
@@ -190,12 +199,22 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
         lo = [0.0; 2];
         hi = [1.0; 2];
     }
-    let px = |x: f32| MARGIN + (x - lo[0]) * SCALE;
-    let pz = |z: f32| MARGIN + (z - lo[1]) * SCALE;
     let in_house = |x: f32, z: f32| x >= lo[0] && x <= hi[0] && z >= lo[1] && z <= hi[1];
     let house_w = (hi[0] - lo[0]) * SCALE;
     let house_h = (hi[1] - lo[1]) * SCALE;
-    let width = house_w + 2.0 * MARGIN + LEGEND_W;
+    // One panel per storey, the lowest on the left.
+    let mut storeys = layout::levels(layout);
+    if storeys.is_empty() {
+        storeys.push(0.0);
+    }
+    let panel_of_level = |level: f32| storeys.iter().position(|&l| l == level).unwrap_or(0);
+    // The panel of the storey a point `[x, y, z]` is on.
+    let panel = |p: [f32; 3]| layout::room_at(layout, p).map_or(0, |r| panel_of_level(r.level));
+    let ox = |k: usize| k as f32 * (house_w + PANEL_GAP);
+    let px = |x: f32, k: usize| MARGIN + (x - lo[0]) * SCALE + ox(k);
+    let pz = |z: f32| MARGIN + (z - lo[1]) * SCALE;
+    let total_w = house_w * storeys.len() as f32 + PANEL_GAP * (storeys.len() - 1) as f32;
+    let width = total_w + 2.0 * MARGIN + LEGEND_W;
     let height = (house_h + 2.0 * MARGIN).max(420.0);
     let node_of = |id: i64| task.idx(NodeId(id));
 
@@ -215,15 +234,32 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
         task.meta.task_id
     );
     let mut labels = Labels {
-        canvas: [2.0, 2.0, MARGIN + house_w + 15.0, height - 2.0],
+        canvas: [2.0, 2.0, MARGIN + total_w + 15.0, height - 2.0],
         placed: Vec::new(),
         out: String::new(),
     };
 
+    // Storeys' titles.
+    if storeys.len() > 1 {
+        let _ = writeln!(out, r#"<g class="storeys">"#);
+        for (k, level) in storeys.iter().enumerate() {
+            let (x, y) = (px(lo[0], k), MARGIN - 28.0);
+            let text = format!("level {level:.2} m");
+            let _ = writeln!(
+                out,
+                r##"<text x="{x:.1}" y="{y:.1}" font-size="{FONT_ROOM}" font-weight="bold" fill="#555">{text}</text>"##
+            );
+            labels
+                .placed
+                .push(text_box(x, y, text.chars().count(), FONT_ROOM));
+        }
+        let _ = writeln!(out, "</g>");
+    }
+
     // Rooms.
     let _ = writeln!(out, r#"<g class="rooms">"#);
     for r in &layout.rooms {
-        let (x0, y0) = (px(r.min[0]), pz(r.min[1]));
+        let (x0, y0) = (px(r.min[0], panel_of_level(r.level)), pz(r.min[1]));
         let (w, h) = ((r.max[0] - r.min[0]) * SCALE, (r.max[1] - r.min[1]) * SCALE);
         let _ = writeln!(
             out,
@@ -252,7 +288,8 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
     for d in &layout.doors {
         let open = node_of(d.id).is_none_or(|n| !state.states(n).contains(StateSet::CLOSED));
         let colour = if open { "#2e9e44" } else { "#d12f2f" };
-        let (cx, cy) = (px(d.center[0]), pz(d.center[1]));
+        let k = panel_of_level(layout::door_level(layout, d));
+        let (cx, cy) = (px(d.center[0], k), pz(d.center[1]));
         let half = d.width / 2.0 * SCALE;
         let (x1, y1, x2, y2) = if d.along_x {
             (cx - half, cy, cx + half, cy)
@@ -300,6 +337,93 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
     }
     let _ = writeln!(out, "</g>");
 
+    // Flights of stairs: steps and an arrow up in the lower storey's panel, the open
+    // stairwell dashed in the upper one.
+    let flights = layout::flights(layout).unwrap_or_default();
+    if !flights.is_empty() {
+        let _ = writeln!(
+            out,
+            r##"<defs><marker id="up" viewBox="0 0 10 10" refX="8" refY="5" markerWidth="6" markerHeight="6" orient="auto"><path d="M 0 0 L 10 5 L 0 10 z" fill="#444"/></marker></defs>"##
+        );
+        let _ = writeln!(out, r#"<g class="stairs">"#);
+    }
+    for f in &flights {
+        let rect = f.rect();
+        let (lower, upper) = (panel_of_level(f.lower), panel_of_level(f.upper));
+        let (w, h) = ((rect[2] - rect[0]) * SCALE, (rect[3] - rect[1]) * SCALE);
+        let (x0, y0) = (px(rect[0], lower), pz(rect[1]));
+        let _ = writeln!(
+            out,
+            r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{h:.1}" fill="#e6e6e6" stroke="#444" stroke-width="1.5"/>"##
+        );
+        let steps = ((f.upper - f.lower) / STEP_RISE).ceil().max(1.0) as usize;
+        let side = [
+            f.dir[1].abs() * f.width / 2.0,
+            f.dir[0].abs() * f.width / 2.0,
+        ];
+        for i in 1..steps {
+            let c = f.at(f.run * i as f32 / steps as f32, 0.0);
+            let _ = writeln!(
+                out,
+                r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#777" stroke-width="1"/>"##,
+                px(c[0] - side[0], lower),
+                pz(c[2] - side[1]),
+                px(c[0] + side[0], lower),
+                pz(c[2] + side[1])
+            );
+        }
+        let (a, b) = (f.at(0.2, 0.0), f.at(f.run - 0.2, 0.0));
+        let _ = writeln!(
+            out,
+            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#444" stroke-width="2.5" marker-end="url(#up)"/>"##,
+            px(a[0], lower),
+            pz(a[2]),
+            px(b[0], lower),
+            pz(b[2])
+        );
+        let name_of = |id: i64| {
+            task.idx(NodeId(id))
+                .map_or_else(|| format!("stairs {id}"), |n| name(task, n))
+        };
+        let text = format!("{} up to {:.2} m", name_of(f.id), f.upper);
+        let cand = around(
+            px((rect[0] + rect[2]) / 2.0, lower),
+            pz((rect[1] + rect[3]) / 2.0),
+            text.chars().count(),
+            FONT_ITEM,
+        );
+        labels.place(&text, FONT_ITEM, &cand, None, r##"fill="#333""##);
+        // The opening in the upper room's wall where the flight arrives.
+        let (a, b) = (
+            [f.head[0] - side[0], f.head[1] - side[1]],
+            [f.head[0] + side[0], f.head[1] + side[1]],
+        );
+        let _ = writeln!(
+            out,
+            r##"<line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}" stroke="#f7f7f2" stroke-width="5"/>"##,
+            px(a[0], upper),
+            pz(a[1]),
+            px(b[0], upper),
+            pz(b[1])
+        );
+        let x0 = px(rect[0], upper);
+        let _ = writeln!(
+            out,
+            r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{h:.1}" fill="none" stroke="#444" stroke-width="1.5" stroke-dasharray="5 4"/>"##
+        );
+        let text = format!("{} down to {:.2} m", name_of(f.id), f.lower);
+        let cand = around(
+            px((rect[0] + rect[2]) / 2.0, upper),
+            pz((rect[1] + rect[3]) / 2.0),
+            text.chars().count(),
+            FONT_ITEM,
+        );
+        labels.place(&text, FONT_ITEM, &cand, None, r##"fill="#333""##);
+    }
+    if !flights.is_empty() {
+        let _ = writeln!(out, "</g>");
+    }
+
     // Furniture: fixed boxes, largest first so that what stands on a table is drawn
     // over it.
     let mut fixed: Vec<&crate::layout::ItemGeom> = layout
@@ -315,7 +439,10 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
     let _ = writeln!(out, r#"<g class="furniture">"#);
     for it in &fixed {
         let (w, d) = (it.size[0] * SCALE, it.size[2] * SCALE);
-        let (x0, y0) = (px(it.pos[0]) - w / 2.0, pz(it.pos[2]) - d / 2.0);
+        let (x0, y0) = (
+            px(it.pos[0], panel(it.pos)) - w / 2.0,
+            pz(it.pos[2]) - d / 2.0,
+        );
         let fill = if it.container { "#dbe9f6" } else { "#ecdcc0" };
         let _ = writeln!(
             out,
@@ -361,16 +488,18 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
     let _ = writeln!(out, "</g>");
 
     // Robots (drawn before the objects' labels are placed, so that those avoid them).
-    let robot_at = |id: i64| -> Option<(f32, f32)> {
+    let robot_at = |id: i64| -> Option<(f32, f32, usize)> {
         let g = layout.robots.iter().find(|g| g.id == id)?;
-        Some((g.pos[0], g.pos[2]))
+        Some((g.pos[0], g.pos[2], panel(g.pos)))
     };
     let _ = writeln!(out, r#"<g class="robots">"#);
     let mut robot_marks = Vec::new();
     for r in &task.robots {
         let id = task.id(r.node).0;
-        let Some((x, z)) = robot_at(id) else { continue };
-        let (cx, cy) = (px(x), pz(z));
+        let Some((x, z, k)) = robot_at(id) else {
+            continue;
+        };
+        let (cx, cy) = (px(x, k), pz(z));
         let (colour, _) = robot_style(r.kind);
         match r.kind {
             RobotKind::Quadrotor => {
@@ -467,7 +596,7 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
         if !in_house(it.pos[0], it.pos[2]) {
             continue;
         }
-        let (cx, cy) = (px(it.pos[0]), pz(it.pos[2]));
+        let (cx, cy) = (px(it.pos[0], panel(it.pos)), pz(it.pos[2]));
         let (w, d) = (it.size[0] * SCALE, it.size[2] * SCALE);
         let (fill, stroke) = if it.container {
             ("#bfe3c7", "#2b7a3d")
@@ -516,21 +645,39 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
                 .and_then(|n| task.robot(n))
                 .map_or(RobotKind::RobotDog, |r| r.kind);
             let (colour, _) = robot_style(kind);
-            let list: Vec<String> = pts
-                .iter()
-                .map(|p| format!("{:.1},{:.1}", px(p[0]), pz(p[1])))
-                .collect();
-            let _ = writeln!(
-                out,
-                r#"<polyline class="path" data-robot="{}" points="{}" fill="none" stroke="{colour}" stroke-width="3" stroke-opacity="0.85" stroke-linejoin="round" marker-end="url(#arrow)"/>"#,
-                id.0,
-                list.join(" ")
-            );
+            // One polyline per stretch on a storey; the arrow ends the last.
+            let mut stretches: Vec<(usize, Vec<String>)> = Vec::new();
+            for p in pts {
+                let k = panel(*p);
+                let point = format!("{:.1},{:.1}", px(p[0], k), pz(p[2]));
+                match stretches.last_mut() {
+                    Some((at, list)) if *at == k => list.push(point),
+                    _ => stretches.push((k, vec![point])),
+                }
+            }
+            let last = stretches.len() - 1;
+            for (i, (_, list)) in stretches.iter().enumerate() {
+                if list.len() < 2 && i != last {
+                    continue;
+                }
+                let end = if i == last {
+                    r#" marker-end="url(#arrow)""#
+                } else {
+                    ""
+                };
+                let _ = writeln!(
+                    out,
+                    r#"<polyline class="path" data-robot="{}" points="{}" fill="none" stroke="{colour}" stroke-width="3" stroke-opacity="0.85" stroke-linejoin="round"{end}/>"#,
+                    id.0,
+                    list.join(" ")
+                );
+            }
+            let k = panel(pts[0]);
             let _ = writeln!(
                 out,
                 r#"<circle cx="{:.1}" cy="{:.1}" r="5" fill="{colour}"/>"#,
-                px(pts[0][0]),
-                pz(pts[0][1])
+                px(pts[0][0], k),
+                pz(pts[0][2])
             );
         }
         let _ = writeln!(out, "</g>");
@@ -542,7 +689,7 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
     out.push_str("</g>\n");
 
     // Legend.
-    let lx = MARGIN + house_w + 30.0;
+    let lx = MARGIN + total_w + 30.0;
     let mut ly = MARGIN;
     let _ = writeln!(
         out,

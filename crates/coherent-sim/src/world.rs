@@ -2,7 +2,7 @@
 //! physical execution of one action, and the relations read back from the bodies.
 
 use std::collections::HashMap;
-use std::f32::consts::{FRAC_PI_2, PI};
+use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 use std::sync::Arc;
 
 use coherent_core::{Action, Idx, NodeId, NodeKind, PropSet, Relation, RobotKind, Task, Verb};
@@ -10,10 +10,13 @@ use rapier3d::control::{CharacterLength, KinematicCharacterController};
 use rapier3d::na::DVector;
 use rapier3d::prelude::*;
 
-use crate::layout::{ASIDE, ItemGeom, Layout, Lid, WALL, wall_of};
+use crate::layout::{self, ASIDE, Flight, ItemGeom, Layout, Lid, WALL, wall_of};
 use crate::path;
 
 pub const DT: f32 = 1.0 / 60.0;
+/// A wall of the lower room closer than this to a side of a flight rises with the
+/// stairwell (the robots need no gap that narrow).
+const STAIRWELL_GAP: f32 = 0.35;
 
 /// A physical failure, with numbers.
 #[derive(Clone, Debug, PartialEq)]
@@ -125,6 +128,18 @@ struct Dog {
     yaw: f32,
 }
 
+/// A stretch of the legged robot's way: waypoints on one storey (the first is where
+/// it starts), or a flight walked from the approach at one end to the approach at the
+/// other (given).
+#[derive(Clone, Debug)]
+enum Leg {
+    Floor(Vec<Vector>),
+    Flight(Flight, Vector),
+}
+
+/// How far before the foot and past the head the legged robot lines up with a flight.
+const FLIGHT_APPROACH: f32 = 0.55;
+
 /// A grasp: the joints that hold the object (and what rides on it) to the hand.
 #[derive(Clone, Debug)]
 struct Grasp {
@@ -158,9 +173,15 @@ pub struct World {
     dog: Option<Dog>,
     grasps: Vec<Grasp>,
     kcc: KinematicCharacterController,
+    /// The legged robot on a flight: climbs slopes up to 45 degrees and keeps to the
+    /// surface going down.
+    stairs_kcc: KinematicCharacterController,
+    pub(crate) flights: Vec<Flight>,
+    flight_colliders: Vec<ColliderHandle>,
     pub sim_time: f64,
-    /// Each mobile robot's track on the floor plan, `[x, z]`, sampled as it moves.
-    pub paths: Vec<(NodeId, Vec<[f32; 2]>)>,
+    /// Each mobile robot's track, `[x, y, z]` of its body, sampled every 20 cm on the
+    /// floor plan and where it changes storey.
+    pub paths: Vec<(NodeId, Vec<[f32; 3]>)>,
     quad_target: (Vector, Vector),
 }
 
@@ -176,6 +197,10 @@ impl std::fmt::Debug for World {
 impl World {
     pub fn new(task: Arc<Task>, layout: Layout) -> Result<World, PhysicsError> {
         let n = task.nodes.len();
+        let flights = layout::flights(&layout).map_err(|e| PhysicsError {
+            kind: FailureKind::Layout,
+            message: e.0,
+        })?;
         let mut pw = PhysicsWorld::new();
         pw.integration_parameters.dt = DT;
         let mut w = World {
@@ -192,6 +217,17 @@ impl World {
             dog: None,
             grasps: Vec::new(),
             kcc: KinematicCharacterController::default(),
+            stairs_kcc: KinematicCharacterController {
+                // The robot's bottom stays 2 cm above what it walks on, as on a floor.
+                offset: CharacterLength::Absolute(0.02),
+                max_slope_climb_angle: FRAC_PI_4,
+                min_slope_slide_angle: FRAC_PI_4,
+                snap_to_ground: Some(CharacterLength::Absolute(0.2)),
+                autostep: None,
+                ..KinematicCharacterController::default()
+            },
+            flights,
+            flight_colliders: Vec::new(),
             sim_time: 0.0,
             paths: Vec::new(),
             quad_target: (Vector::ZERO, Vector::ZERO),
@@ -267,6 +303,7 @@ impl World {
                 (false, r.min[0], r.min[1], r.max[1]),
                 (false, r.max[0], r.min[1], r.max[1]),
             ];
+            let mut raised = Vec::new();
             for (along_x, at, a0, a1) in sides {
                 let mut cuts: Vec<(f32, f32, f32)> = self
                     .layout
@@ -274,6 +311,7 @@ impl World {
                     .iter()
                     .filter(|d| {
                         d.along_x == along_x
+                            && layout::door_level(&self.layout, d) == r.level
                             && (if along_x { d.center[1] } else { d.center[0] } - at).abs() < 1e-3
                     })
                     .map(|d| {
@@ -281,7 +319,39 @@ impl World {
                         (c - d.width / 2.0, c + d.width / 2.0, d.height)
                     })
                     .collect();
+                // Where a flight arrives: an opening the flight's width, the wall's full
+                // height.
+                cuts.extend(
+                    self.flights
+                        .iter()
+                        .filter(|f| {
+                            f.rooms[1] == r.id
+                                && f.along_x() != along_x
+                                && (if along_x { f.head[1] } else { f.head[0] } - at).abs() < 1e-3
+                        })
+                        .map(|f| {
+                            let c = if along_x { f.head[0] } else { f.head[1] };
+                            (c - f.width / 2.0, c + f.width / 2.0, wh)
+                        }),
+                );
                 cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+                // Beside a flight of this room, the wall rises to the top of the upper
+                // storey's walls: the stairwell is walled up to there.
+                for f in self
+                    .flights
+                    .iter()
+                    .filter(|f| f.rooms[0] == r.id && f.along_x() == along_x)
+                {
+                    let rect = f.rect();
+                    let (e0, e1, s0, s1) = if along_x {
+                        (rect[1], rect[3], rect[0], rect[2])
+                    } else {
+                        (rect[0], rect[2], rect[1], rect[3])
+                    };
+                    if (e0 - at).abs() < STAIRWELL_GAP || (e1 - at).abs() < STAIRWELL_GAP {
+                        raised.push((along_x, at, s0.max(a0), s1.min(a1), f.upper - r.level + wh));
+                    }
+                }
                 let mut start = a0;
                 let mut pieces = Vec::new();
                 for (c0, c1, h) in cuts {
@@ -291,7 +361,7 @@ impl World {
                 }
                 pieces.push((start, a1, 0.0, wh));
                 for (p0, p1, y0, y1) in pieces {
-                    if p1 - p0 < 1e-3 {
+                    if p1 - p0 < 1e-3 || y1 - y0 < 1e-3 {
                         continue;
                     }
                     let (m, half) = ((p0 + p1) / 2.0, (p1 - p0) / 2.0);
@@ -309,21 +379,40 @@ impl World {
                     );
                 }
             }
+            for (along_x, at, p0, p1, top) in raised {
+                let (m, half, y) = ((p0 + p1) / 2.0, (p1 - p0) / 2.0, (wh + top) / 2.0);
+                let (t, hx, hz) = if along_x {
+                    (Vector::new(m, r.level + y, at), half, WALL)
+                } else {
+                    (Vector::new(at, r.level + y, m), WALL, half)
+                };
+                self.add_collider(
+                    ColliderBuilder::cuboid(hx, (top - wh) / 2.0, hz)
+                        .translation(t)
+                        .collision_groups(groups(G_STATIC)),
+                    ground,
+                    None,
+                );
+            }
+        }
+        for f in self.flights.clone() {
+            self.build_flight(ground, &f)?;
         }
         for d in self.layout.doors.clone() {
             let door = self.node_of(d.id)?;
+            let level = layout::door_level(&self.layout, &d);
             let (w2, h2) = (d.width / 2.0 - 0.02, d.height / 2.0 - 0.01);
             // Hinge on the low end of the opening.
             let (pivot, centre, shape) = if d.along_x {
                 (
-                    Vector::new(d.center[0] - d.width / 2.0 + 0.02, 0.0, d.center[1]),
-                    Vector::new(d.center[0], h2 + 0.01, d.center[1]),
+                    Vector::new(d.center[0] - d.width / 2.0 + 0.02, level, d.center[1]),
+                    Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
                     ColliderBuilder::cuboid(w2, h2, 0.025),
                 )
             } else {
                 (
-                    Vector::new(d.center[0], 0.0, d.center[1] - d.width / 2.0 + 0.02),
-                    Vector::new(d.center[0], h2 + 0.01, d.center[1]),
+                    Vector::new(d.center[0], level, d.center[1] - d.width / 2.0 + 0.02),
+                    Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
                     ColliderBuilder::cuboid(0.025, h2, w2),
                 )
             };
@@ -334,9 +423,9 @@ impl World {
             self.add_collider(shape.collision_groups(groups(G_STATIC)), body, Some(door));
             self.body[door.get()] = Some(body);
             let handle_world = if d.along_x {
-                Vector::new(d.center[0] + d.width / 2.0 - 0.12, 0.9, d.center[1])
+                Vector::new(d.center[0] + d.width / 2.0 - 0.12, level + 0.9, d.center[1])
             } else {
-                Vector::new(d.center[0], 0.9, d.center[1] + d.width / 2.0 - 0.12)
+                Vector::new(d.center[0], level + 0.9, d.center[1] + d.width / 2.0 - 0.12)
             };
             self.hinges.push(Hinge {
                 node: door,
@@ -348,6 +437,37 @@ impl World {
                 handle: closed.inverse_transform_point(handle_world),
             });
         }
+        Ok(())
+    }
+
+    /// A flight of stairs: a solid wedge under the run whose sloped top passes through
+    /// the nosings of its steps, from the lower floor at the foot to the upper floor at
+    /// the head.
+    fn build_flight(&mut self, ground: RigidBodyHandle, f: &Flight) -> Result<(), PhysicsError> {
+        let side = Vector::new(f.dir[1].abs(), 0.0, f.dir[0].abs()) * (f.width / 2.0);
+        let foot = Vector::new(f.foot[0], f.lower, f.foot[1]);
+        let head = Vector::new(f.head[0], f.lower, f.head[1]);
+        let top = Vector::new(f.head[0], f.upper, f.head[1]);
+        let points = [
+            foot - side,
+            foot + side,
+            head - side,
+            head + side,
+            top - side,
+            top + side,
+        ];
+        let Some(wedge) = ColliderBuilder::convex_hull(&points) else {
+            return fail(
+                FailureKind::Layout,
+                format!("stairs {}: the flight has no volume", f.id),
+            );
+        };
+        let h = self.pw.colliders.insert_with_parent(
+            wedge.friction(0.9).collision_groups(groups(G_STATIC)),
+            ground,
+            &mut self.pw.bodies,
+        );
+        self.flight_colliders.push(h);
         Ok(())
     }
 
@@ -587,8 +707,7 @@ impl World {
                         integral: Vector::ZERO,
                         rotors,
                     });
-                    self.paths
-                        .push((self.task.id(r), vec![[rg.pos[0], rg.pos[2]]]));
+                    self.paths.push((self.task.id(r), vec![rg.pos]));
                 }
                 RobotKind::RobotDog => {
                     let h = specs.dog_half;
@@ -612,8 +731,7 @@ impl World {
                     });
                     let shoulder = v3(specs.dog_shoulder);
                     self.build_arm(r, body, shoulder, specs.dog_links)?;
-                    self.paths
-                        .push((self.task.id(r), vec![[rg.pos[0], rg.pos[2]]]));
+                    self.paths.push((self.task.id(r), vec![rg.pos]));
                 }
                 RobotKind::RobotArm => {
                     let pose = Pose::from_parts(v3(rg.pos), rot);
@@ -890,7 +1008,9 @@ impl World {
         };
         let arm = self.arms[ai].clone();
         if self.task.robot(robot).map(|r| r.kind) == Some(RobotKind::RobotDog) {
-            let top = self.layout.specs.dog_max_height();
+            // Relative to the floor the robot stands on (its body walks 2 cm above it).
+            let stand = self.pw.bodies[arm.root].translation().y - 0.02;
+            let top = stand + self.layout.specs.dog_max_height();
             let shoulder = self.shoulder(&arm);
             let top_here = shoulder.y + arm.reach;
             if target.y > top_here.max(top) + 0.01 {
@@ -1146,11 +1266,18 @@ impl World {
         };
         let t = self.pw.bodies[b].translation();
         let id = self.task.id(robot);
-        if let Some((_, p)) = self.paths.iter_mut().find(|(i, _)| *i == id) {
-            let last = p.last().copied().unwrap_or([f32::NAN; 2]);
-            if (last[0] - t.x).hypot(last[1] - t.z) > 0.2 {
-                p.push([t.x, t.z]);
-            }
+        let level = self.level_at(t);
+        let Some((_, p)) = self.paths.iter().find(|(i, _)| *i == id) else {
+            return;
+        };
+        let last = p.last().copied().unwrap_or([f32::NAN; 3]);
+        // Every 20 cm on the floor plan, and where the robot changes storey.
+        let moved = (last[0] - t.x).hypot(last[2] - t.z) > 0.2;
+        let changed = self.level_at(Vector::new(last[0], last[1], last[2])) != level;
+        if (moved || changed)
+            && let Some((_, p)) = self.paths.iter_mut().find(|(i, _)| *i == id)
+        {
+            p.push([t.x, t.y, t.z]);
         }
     }
 
@@ -1227,6 +1354,9 @@ impl World {
                         Some(o) => {
                             let angle = self.hinge_angle(o).unwrap_or(0.0).to_degrees();
                             format!("the panel of {} (open {angle:.0} degrees)", self.label(o))
+                        }
+                        None if self.flight_colliders.contains(&other) => {
+                            "a flight of stairs".to_owned()
                         }
                         None => "a wall".to_owned(),
                     };
@@ -1324,23 +1454,40 @@ impl World {
         self.layout.room(self.task.id(room)).map(|r| (r.min, r.max))
     }
 
-    /// The room whose footprint holds `(x, z)`.
-    pub fn room_at(&self, x: f32, z: f32) -> Option<Idx> {
-        self.layout
-            .rooms
-            .iter()
-            .find(|r| x >= r.min[0] && x <= r.max[0] && z >= r.min[1] && z <= r.max[1])
-            .and_then(|r| self.task.idx(NodeId(r.id)))
+    /// The room `p` is in: its footprint holds `p` on the storey `p` is on
+    /// ([`layout::room_at`]).
+    pub fn room_at(&self, p: Vector) -> Option<Idx> {
+        layout::room_at(&self.layout, [p.x, p.y, p.z]).and_then(|r| self.task.idx(NodeId(r.id)))
     }
 
-    fn quad_fly_to(&mut self, dest_xz: Vector, hover_y: f32) -> Result<(), PhysicsError> {
+    /// Floor height of the storey `p` is on (the lowest storey outside every room).
+    fn level_at(&self, p: Vector) -> f32 {
+        layout::room_at(&self.layout, [p.x, p.y, p.z]).map_or_else(
+            || layout::levels(&self.layout).first().copied().unwrap_or(0.0),
+            |r| r.level,
+        )
+    }
+
+    fn room_level(&self, room: Idx) -> f32 {
+        self.layout
+            .room(self.task.id(room))
+            .map_or(0.0, |r| r.level)
+    }
+
+    /// Flies to hover at `hover_y` over `dest` (a point on the destination's surface) at
+    /// the cruise altitude above each storey's floor: through the door between two rooms
+    /// of a storey, or up or down the stairwell between storeys (over the flight's first
+    /// 0.6 m, where nothing is above it, then along the run through the opening in the
+    /// upper room's wall).
+    fn quad_fly_to(&mut self, dest: Vector, hover_y: f32) -> Result<(), PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
         let cruise = self.layout.specs.cruise_altitude;
-        let mut wps = vec![Vector::new(p.x, cruise, p.z)];
-        let from_room = self.room_at(p.x, p.z);
-        let to_room = self.room_at(dest_xz.x, dest_xz.z);
+        let here = self.level_at(p) + cruise;
+        let mut wps = vec![Vector::new(p.x, here, p.z)];
+        let from_room = self.room_at(p);
+        let to_room = self.room_at(dest);
         if from_room != to_room
             && let (Some(a), Some(b)) = (from_room, to_room)
         {
@@ -1351,21 +1498,39 @@ impl World {
                 .iter()
                 .find(|d| d.rooms.contains(&ia) && d.rooms.contains(&ib))
                 .cloned();
-            let Some(d) = door else {
+            let flight = self
+                .flights
+                .iter()
+                .find(|f| f.rooms.contains(&ia) && f.rooms.contains(&ib))
+                .copied();
+            if let Some(d) = door {
+                let c = Vector::new(d.center[0], here, d.center[1]);
+                let normal = if d.along_x { Vector::Z } else { Vector::X };
+                let side = (Vector::new(p.x, here, p.z) - c).dot(normal).signum();
+                wps.push(c + normal * side * 1.6);
+                wps.push(c);
+                wps.push(c - normal * side * 1.6);
+            } else if let Some(f) = flight {
+                let (low, high) = (f.lower + cruise, f.upper + cruise);
+                let mut legs = [f.at(0.6, low), f.at(0.6, high), f.at(f.run + 1.6, high)];
+                if f.rooms[0] != ia {
+                    legs.reverse();
+                }
+                wps.extend(legs.map(v3));
+            } else {
                 return fail(
                     FailureKind::Blocked,
-                    format!("no door between {} and {}", self.label(a), self.label(b)),
+                    format!(
+                        "no door or stairs between {} and {}",
+                        self.label(a),
+                        self.label(b)
+                    ),
                 );
-            };
-            let c = Vector::new(d.center[0], cruise, d.center[1]);
-            let normal = if d.along_x { Vector::Z } else { Vector::X };
-            let side = (Vector::new(p.x, cruise, p.z) - c).dot(normal).signum();
-            wps.push(c + normal * side * 1.6);
-            wps.push(c);
-            wps.push(c - normal * side * 1.6);
+            }
         }
-        wps.push(Vector::new(dest_xz.x, cruise, dest_xz.z));
-        wps.push(Vector::new(dest_xz.x, hover_y, dest_xz.z));
+        let there = to_room.map_or(here, |r| self.room_level(r) + cruise);
+        wps.push(Vector::new(dest.x, there, dest.z));
+        wps.push(Vector::new(dest.x, hover_y, dest.z));
         self.fly(&wps)
     }
 
@@ -1450,30 +1615,141 @@ impl World {
         Some(self.shoulder(&self.arms[ai]))
     }
 
-    /// Walks the dog to `goal` (body origin on the floor plan) along a planned path,
-    /// then turns it to face `face`.
+    /// One occupancy grid per storey, for the legged robot.
+    fn grids(&self, dog: RigidBodyHandle) -> Vec<(f32, path::Grid)> {
+        layout::levels(&self.layout)
+            .into_iter()
+            .map(|level| (level, path::Grid::new(self, dog, level)))
+            .collect()
+    }
+
+    /// The legged robot's way from `start` to `goal` (body origins; each on the storey
+    /// its height says): a route on each storey, joined by the flights between them
+    /// (fewest flights first). `None` when there is no way.
+    fn dog_route(
+        &self,
+        grids: &[(f32, path::Grid)],
+        start: Vector,
+        goal: Vector,
+    ) -> Option<Vec<Leg>> {
+        let grid = |level: f32| grids.iter().find(|(l, _)| *l == level).map(|(_, g)| g);
+        let (from, to) = (self.level_at(start), self.level_at(goal));
+        // Breadth first over storeys, a flight being an edge either way.
+        let mut reached: Vec<(f32, Option<(usize, bool)>)> = vec![(from, None)];
+        let mut i = 0;
+        while i < reached.len() && !reached.iter().any(|(l, _)| *l == to) {
+            let level = reached[i].0;
+            for (k, f) in self.flights.iter().enumerate() {
+                for (up, a, b) in [(true, f.lower, f.upper), (false, f.upper, f.lower)] {
+                    if a == level && !reached.iter().any(|(l, _)| *l == b) {
+                        reached.push((b, Some((k, up))));
+                    }
+                }
+            }
+            i += 1;
+        }
+        let mut flights = Vec::new();
+        let mut level = to;
+        while let Some(&(_, Some((k, up)))) = reached.iter().find(|(l, _)| *l == level) {
+            flights.push((self.flights[k], up));
+            level = if up {
+                self.flights[k].lower
+            } else {
+                self.flights[k].upper
+            };
+        }
+        if level != from {
+            return None;
+        }
+        flights.reverse();
+        let mut legs = Vec::new();
+        let mut at = start;
+        for (f, up) in flights {
+            let (here, there) = if up {
+                (
+                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
+                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
+                )
+            } else {
+                (
+                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
+                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
+                )
+            };
+            let (here, there) = (v3(here), v3(there));
+            legs.push(Leg::Floor(grid(self.level_at(at))?.route(at, here)?));
+            legs.push(Leg::Flight(f, there));
+            at = there;
+        }
+        legs.push(Leg::Floor(grid(to)?.route(at, goal)?));
+        Some(legs)
+    }
+
+    /// Walks the dog to `goal` (body origin, on the storey its height says) along a
+    /// planned way, then turns it to face `face`.
     fn walk(&mut self, goal: Vector, face: Vector) -> Result<(), PhysicsError> {
         let Some(dog) = self.dog.clone() else {
             return fail(FailureKind::Layout, "no legged robot".into());
         };
         let start = self.pw.bodies[dog.body].translation();
-        let grid = path::Grid::new(self, dog.body);
-        let Some(route) = grid.route(start, goal) else {
+        let grids = self.grids(dog.body);
+        let Some(legs) = self.dog_route(&grids, start, goal) else {
             return fail(
                 FailureKind::Blocked,
                 format!(
-                    "no path for the legged robot from ({:.2}, {:.2}) to ({:.2}, {:.2}): closed doors or furniture block every way",
-                    start.x, start.z, goal.x, goal.z
+                    "no path for the legged robot from ({:.2}, {:.2}, {:.2}) to ({:.2}, {:.2}, {:.2}): closed doors, furniture or missing stairs block every way",
+                    start.x, start.y, start.z, goal.x, goal.y, goal.z
                 ),
             );
         };
+        for leg in legs {
+            match leg {
+                Leg::Floor(route) => self.walk_along(&dog, &route[1..], false)?,
+                Leg::Flight(f, there) => {
+                    self.walk_along(&dog, &[there], true)?;
+                    let y = self.pw.bodies[dog.body].translation().y;
+                    if (y - there.y).abs() > 0.03 {
+                        return fail(
+                            FailureKind::Blocked,
+                            format!(
+                                "the legged robot on stairs {} stopped at height {y:.2} m, not on the floor at {:.2} m",
+                                f.id,
+                                there.y - 0.02
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        let pos = self.pw.bodies[dog.body].translation();
+        let yaw = (face.x - pos.x).atan2(face.z - pos.z);
+        self.pw.bodies[dog.body]
+            .set_next_kinematic_position(Pose::from_parts(pos, Rotation::from_rotation_y(yaw)));
+        self.step();
+        self.step();
+        if let Some(d) = self.dog.as_mut() {
+            d.yaw = yaw;
+        }
+        Ok(())
+    }
+
+    /// Moves the dog through `waypoints` on the floor plan with the character
+    /// controller: at its height on a floor, or (`on_flight`) climbing and descending
+    /// the flight's slope with the controller's vertical motion.
+    fn walk_along(
+        &mut self,
+        dog: &Dog,
+        waypoints: &[Vector],
+        on_flight: bool,
+    ) -> Result<(), PhysicsError> {
         let speed = self.layout.specs.dog_speed;
         let h = self.layout.specs.dog_half;
         // A cylinder: turning the robot never makes it collide.
         let shape = Cylinder::new(h[1], h[0].max(h[2]));
         let shape_off = Vector::new(0.0, h[1], 0.0);
+        let kcc = if on_flight { self.stairs_kcc } else { self.kcc };
         let mut last_hit: Option<(ColliderHandle, Vector)> = None;
-        for wp in route.into_iter().skip(1) {
+        for &wp in waypoints {
             let mut stuck = 0;
             let from = self.pw.bodies[dog.body].translation();
             let budget = ((wp - from).length() / (speed * DT) * 3.0) as usize + 120;
@@ -1489,27 +1765,33 @@ impl World {
                     let filter = solid().exclude_rigid_body(dog.body);
                     let qp = self.pw.query_pipeline_with_filter(filter);
                     let cpose = Pose::from_translation(pos + shape_off);
-                    self.kcc
-                        .move_shape(DT, &qp, &shape, &cpose, want, |c| {
-                            last_hit = Some((c.handle, c.hit.witness1));
-                        })
-                        .translation
+                    kcc.move_shape(DT, &qp, &shape, &cpose, want, |c| {
+                        last_hit = Some((c.handle, c.hit.witness1));
+                    })
+                    .translation
                 };
+                let rise = if on_flight { moved.y } else { 0.0 };
                 let rb = &mut self.pw.bodies[dog.body];
                 rb.set_next_kinematic_position(Pose::from_parts(
-                    pos + Vector::new(moved.x, 0.0, moved.z),
+                    pos + Vector::new(moved.x, rise, moved.z),
                     Rotation::from_rotation_y(yaw),
                 ));
                 self.step();
                 self.record_path(dog.robot);
-                if moved.length() < 0.2 * want.length() {
+                let horizontal = Vector::new(moved.x, 0.0, moved.z).length();
+                if horizontal < 0.2 * want.length() {
                     stuck += 1;
                     if stuck > 30 {
                         return fail(
                             FailureKind::Blocked,
                             format!(
-                                "the legged robot is blocked at ({:.2}, {:.2}) on its way to ({:.2}, {:.2})",
-                                pos.x, pos.z, wp.x, wp.z
+                                "the legged robot is blocked at ({:.2}, {:.2}, {:.2}) on its way to ({:.2}, {:.2}){}",
+                                pos.x,
+                                pos.y,
+                                pos.z,
+                                wp.x,
+                                wp.z,
+                                self.hit_name(last_hit)
                             ),
                         );
                     }
@@ -1532,15 +1814,6 @@ impl World {
                     ),
                 );
             }
-        }
-        let pos = self.pw.bodies[dog.body].translation();
-        let yaw = (face.x - pos.x).atan2(face.z - pos.z);
-        self.pw.bodies[dog.body]
-            .set_next_kinematic_position(Pose::from_parts(pos, Rotation::from_rotation_y(yaw)));
-        self.step();
-        self.step();
-        if let Some(d) = self.dog.as_mut() {
-            d.yaw = yaw;
         }
         Ok(())
     }
@@ -1619,7 +1892,15 @@ impl World {
         let gap = h[0].max(h[2]) + 0.12;
         let c = aabb.center();
         let he = aabb.half_extents();
-        let grid = path::Grid::new(self, dog.body);
+        // The storey of what the thing stands on.
+        let level = self.level_at(Vector::new(c.x, aabb.mins.y, c.z));
+        let grids = self.grids(dog.body);
+        let Some((_, grid)) = grids.iter().find(|(l, _)| *l == level) else {
+            return fail(
+                FailureKind::Layout,
+                format!("no storey at {level:.2} m for {}", self.label(a)),
+            );
+        };
         let mut cands = Vec::new();
         for (nx, nz) in [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)] {
             let lateral = if nx == 0.0 {
@@ -1633,7 +1914,7 @@ impl World {
                 let free = [0.0f32, 0.1, 0.2, 0.3].into_iter().find_map(|extra| {
                     let p = Vector::new(
                         c.x + nx * (he.x + gap + extra),
-                        0.0,
+                        level + 0.02,
                         c.z + nz * (he.z + gap + extra),
                     ) + lateral * f;
                     grid.free(p).then_some(p)
@@ -1653,8 +1934,8 @@ impl World {
             dp.total_cmp(&dq)
         });
         for p in cands {
-            if grid.route(start, p).is_some() {
-                return Ok((Vector::new(p.x, start.y, p.z), target));
+            if self.dog_route(&grids, start, p).is_some() {
+                return Ok((p, target));
             }
         }
         fail(
@@ -1671,38 +1952,49 @@ impl World {
             return fail(FailureKind::Layout, "no legged robot".into());
         };
         let p = self.pw.bodies[dog.body].translation();
-        let here = self.room_at(p.x, p.z);
+        let here = self.room_at(p).map(|h| self.task.id(h).0);
         let rid = self.task.id(room).0;
-        let door = self
-            .layout
-            .doors
-            .iter()
-            .find(|d| {
-                d.rooms.contains(&rid) && here.is_some_and(|h| d.rooms.contains(&self.task.id(h).0))
-            })
-            .cloned();
+        let joins =
+            |rooms: &[i64; 2]| rooms.contains(&rid) && here.is_some_and(|h| rooms.contains(&h));
+        let door = self.layout.doors.iter().find(|d| joins(&d.rooms)).cloned();
+        let flight = self.flights.iter().find(|f| joins(&f.rooms)).copied();
         let Some((lo, hi)) = self.room_rect(room) else {
             return fail(
                 FailureKind::Layout,
                 format!("{} has no footprint", self.label(room)),
             );
         };
-        let grid = path::Grid::new(self, dog.body);
-        // A free spot inside the room, just past the door when there is one.
-        let seed = match &door {
-            Some(d) => {
-                let c = Vector::new(d.center[0], p.y, d.center[1]);
-                let mid = Vector::new((lo[0] + hi[0]) / 2.0, p.y, (lo[1] + hi[1]) / 2.0);
+        let level = self.room_level(room);
+        // The robot's height on the room's floor.
+        let y = if level == self.level_at(p) {
+            p.y
+        } else {
+            level + 0.02
+        };
+        // A free spot inside the room, just past the door or the flight when there is one.
+        let mid = Vector::new((lo[0] + hi[0]) / 2.0, y, (lo[1] + hi[1]) / 2.0);
+        let seed = match (&door, flight) {
+            (Some(d), _) => {
+                let c = Vector::new(d.center[0], y, d.center[1]);
                 c + (mid - c).normalize_or_zero() * 1.0
             }
-            None => Vector::new((lo[0] + hi[0]) / 2.0, p.y, (lo[1] + hi[1]) / 2.0),
+            (None, Some(f)) if f.rooms[1] == rid => v3(f.at(f.run + 1.0, y)),
+            (None, Some(f)) => v3(f.at(-1.0, y)),
+            (None, None) => mid,
+        };
+        let grids = self.grids(dog.body);
+        let Some((_, grid)) = grids.iter().find(|(l, _)| *l == level) else {
+            return fail(
+                FailureKind::Layout,
+                format!("no storey at {level:.2} m for {}", self.label(room)),
+            );
         };
         let mut goal = None;
         'search: for r in 0..20 {
             for k in 0..16 {
                 let a = k as f32 * PI / 8.0;
                 let q = seed + Vector::new(a.cos(), 0.0, a.sin()) * (r as f32 * 0.15);
-                if self.room_at(q.x, q.z) == Some(room) && grid.free(q) {
+                if self.room_at(q) == Some(room) && grid.free(q) {
                     goal = Some(q);
                     break 'search;
                 }
@@ -2083,13 +2375,14 @@ impl World {
                         );
                     };
                     let floor = self.task.floor_of(x);
-                    let mid = Vector::new((lo[0] + hi[0]) / 2.0, 0.0, (lo[1] + hi[1]) / 2.0);
+                    let level = self.room_level(x);
+                    let mid = Vector::new((lo[0] + hi[0]) / 2.0, level, (lo[1] + hi[1]) / 2.0);
                     let spot = match floor {
                         Some(f) => self.landing_spot(f, mid).unwrap_or(mid),
                         None => mid,
                     };
                     let cruise = self.layout.specs.cruise_altitude;
-                    self.quad_fly_to(spot, cruise)
+                    self.quad_fly_to(spot, level + cruise)
                 } else {
                     let p = self.quad_pos().unwrap_or(Vector::ZERO);
                     let spot = self.landing_spot(x, p)?;
@@ -2248,8 +2541,7 @@ impl World {
     /// The room each mobile robot's footprint is in.
     pub fn robot_room(&self, robot: Idx) -> Option<Idx> {
         let b = self.body[robot.get()]?;
-        let t = self.pw.bodies[b].translation();
-        self.room_at(t.x, t.z)
+        self.room_at(self.pw.bodies[b].translation())
     }
 
     /// `Some(true)` landed, `Some(false)` flying.
@@ -2274,7 +2566,7 @@ impl World {
                 .rooms()
                 .iter()
                 .find(|&&r| self.task.floor_of(r) == Some(s))
-                .is_some_and(|&r| self.room_at(p.x, p.z) == Some(r));
+                .is_some_and(|&r| self.room_at(p) == Some(r));
         }
         let Some((b, c, half)) = self.top[s.get()] else {
             return false;

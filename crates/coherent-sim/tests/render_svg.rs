@@ -63,7 +63,10 @@ fn svg_is_balanced_names_rooms_and_robots_and_draws_paths_when_given() {
         assert!(!plain.contains("class=\"path\""));
 
         let robot = task.robots[0].node;
-        let track = vec![(task.id(robot), vec![[1.0, 1.0], [2.0, 1.5], [3.0, 4.0]])];
+        let track = vec![(
+            task.id(robot),
+            vec![[1.0, 0.0, 1.0], [2.0, 0.0, 1.5], [3.0, 0.0, 4.0]],
+        )];
         let drawn = render::svg(&task, &layout, &task.init, Some(&track));
         balanced(&drawn).unwrap_or_else(|e| panic!("{scene} task {id} with a path: {e}"));
         assert_eq!(drawn.matches("class=\"path\"").count(), 1);
