@@ -290,7 +290,7 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         model: l.model.clone(),
         temperature: l.temperature,
         seed: l.llm_seed,
-        format: l.answer_format,
+        format: l.answer_format.into(),
         connect_timeout: l.connect_timeout,
         read_timeout: l.read_timeout,
         timeout: l.timeout,
