@@ -10,8 +10,9 @@ Figures, in --out (default ``figures/``):
   steps per method (the paper's Tables I and II), for ``builtin`` and ``simulated``;
 - ``timeline.png``, ``tokens.png``, ``scene.png``: one simulated PEFA episode with
   mistakes in it: who acted at each step, the model calls and tokens per step, and the
-  robots' paths in physics. With --base-url and --model, ``tokens.png`` is an episode of
-  that language model instead (the built-in and simulated backends report no tokens).
+  robots' paths in physics. With --base-url and --model, ``tokens.png`` is a short
+  episode (--llm-steps) of that language model on the same task instead: the built-in
+  and simulated backends report no tokens.
 
 The results files (``<backend>.jsonl`` in --out) are resumable: an interrupted run goes
 on where it stopped, and a finished one only redraws the figures.
@@ -47,6 +48,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=Path("figures"))
     parser.add_argument("--base-url", help="an OpenAI-compatible endpoint for tokens.png")
     parser.add_argument("--model", help="the model at --base-url")
+    parser.add_argument("--llm-steps", type=int, default=8, help="step budget of the model's episode")
     args = parser.parse_args()
 
     if args.tasks is None:
@@ -89,7 +91,7 @@ def main() -> None:
     save(plot.timeline(episode, ax=ax).figure, args.out / "timeline.png")
     if args.base_url:
         llm = coherent.LLM(base_url=args.base_url, model=args.model)
-        tokens_of = coherent.run(episode.task, llm=llm, out=args.out / "runs")
+        tokens_of = coherent.run(episode.task, llm=llm, max_steps=args.llm_steps, out=args.out / "runs")
     else:
         tokens_of = episode
     fig, ax = plt.subplots(figsize=(10, 3.4), layout="constrained")

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Literal, Union
 
 import matplotlib.pyplot as plt
 import numpy as np
+import pandas as pd
 from matplotlib.lines import Line2D
 from matplotlib.patches import Rectangle
 
@@ -66,7 +67,12 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
             cis = t.loc[method, [(c, f"{stat} ci95") for c in columns]].to_numpy(dtype=float)
             at = x - 0.4 + width * (i + 0.5)
             shown = ~np.isnan(means)
-            yerr = np.where(np.isnan(cis), 0.0, cis)[shown] if not np.isnan(cis).all() else None
+            yerr = None
+            if not np.isnan(cis).all():
+                # Intervals are clipped to what the quantity can be: SR in [0, 1], AS >= 0.
+                half = np.where(np.isnan(cis), 0.0, cis)
+                top = 1.0 if stat == "SR" else np.inf
+                yerr = np.array([np.minimum(half, means), np.minimum(half, top - means)])[:, shown]
             ax.bar(
                 at[shown],
                 means[shown],
@@ -92,10 +98,10 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
     handles, names = ax_as.get_legend_handles_labels()
     fig.legend(handles, names, loc="outside right center", frameon=False)
     seeds = len(rep.seeds)
-    note = f"{seeds} seeds, 95% intervals" if seeds > 1 else "1 seed"
-    backend = "; ".join(rep.backends) or "no model"
+    note = f"{seeds} seeds; error bars: 95% intervals over seeds" if seeds > 1 else "1 seed"
+    backend = "; ".join(rep.backends) or "none (no method here asks a model)"
     heading = title or ("Table I: by task type" if by == "type" else "Table II: by scene")
-    fig.suptitle(f"{heading}  ({note}; backend: {textwrap.shorten(backend, 80)})", fontsize=11)
+    fig.suptitle(f"{heading}\n{note}; backend: {textwrap.shorten(backend, 110)}", fontsize=10)
     return fig
 
 
@@ -117,17 +123,19 @@ def timeline(episode: Episode, ax: Axes | None = None) -> Axes:
     if ax is None:
         _, ax = plt.subplots(figsize=(max(6.0, 0.32 * len(frame) + 3), 0.55 * (len(robots) + has_none) + 1.8), layout="constrained")
     previous = None
-    for r in frame.itertuples():
-        subtask = (r.robot, r.subtask)
-        if previous is not None and subtask != previous:
-            ax.axvline(r.step - 0.5, color="0.8", linewidth=0.8, zorder=0)
-        previous = subtask
-        y = none_row if r.robot is None or r.robot is np.nan or str(r.robot) == "<NA>" else rows[int(r.robot)]
-        if r.outcome == "executed":
-            color = _method_color(METHODS[0]) if y == none_row else plt.get_cmap("tab10").colors[y % 10]
-            ax.plot(r.step, y, "*" if r.done else "o", color=color, markersize=13 if r.done else 7, zorder=3)
+    for step, robot, subtask, outcome, done in zip(
+        frame["step"], frame["robot"].astype(object), frame["subtask"], frame["outcome"], frame["done"]
+    ):
+        robot = None if robot is None or robot is pd.NA else int(robot)
+        if previous is not None and (robot, subtask) != previous:
+            ax.axvline(step - 0.5, color="0.8", linewidth=0.8, zorder=0)
+        previous = (robot, subtask)
+        y = none_row if robot is None else rows[robot]
+        if outcome == "executed":
+            color = plt.get_cmap("tab10").colors[y % 10]
+            ax.plot(step, y, "*" if done else "o", color=color, markersize=13 if done else 7, zorder=3)
         else:
-            ax.plot(r.step, y, "x", color=_FAILED, markersize=8, markeredgewidth=2, zorder=3)
+            ax.plot(step, y, "x", color=_FAILED, markersize=8, markeredgewidth=2, zorder=3)
     names = [_robot_label(task, robot) for robot in robots] + (["no proposal"] if has_none else [])
     ax.set_yticks(range(len(names)), names)
     ax.set_ylim(-0.6, len(names) - 0.4)
@@ -194,8 +202,8 @@ def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True)
     hi = np.max([r["max"] for r in layout["rooms"]], axis=0)
     if ax is None:
         span = hi - lo
-        scale = 9.0 / max(span[0], 1e-6)
-        _, ax = plt.subplots(figsize=(11.5, min(max(span[1] * scale, 4.0), 12.0) + 1.0), layout="constrained")
+        height = min(max(8.0 * span[1] / max(span[0], 1e-6), 3.5), 10.0)
+        _, ax = plt.subplots(figsize=(9.0, height + 2.0), layout="constrained")
     for room in layout["rooms"]:
         (x0, z0), (x1, z1) = room["min"], room["max"]
         ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, facecolor="#f4f1ea", edgecolor="0.3", linewidth=1.5, zorder=0))
@@ -209,6 +217,9 @@ def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True)
     def inside(x: float, z: float) -> bool:
         return bool(lo[0] <= x <= hi[0] and lo[1] <= z <= hi[1])
 
+    # The goal's objects are named; other objects are only drawn, to keep labels apart.
+    goal = {g["subject"] for g in task.to_native()["goal"]}
+    named: list[tuple[float, float]] = []
     for item in sorted(layout["items"], key=lambda i: i["dynamic"]):
         x, _, z = item["pos"]
         w, _, d = item["size"]
@@ -216,8 +227,21 @@ def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True)
         if node is None or not inside(x, z) or node["category"] == "Floor":
             continue
         if item["dynamic"]:
-            ax.add_patch(Rectangle((x - w / 2, z - d / 2), w, d, facecolor="#ff9f1c", edgecolor="#b35c00", zorder=3))
-            ax.annotate(node["class_name"], (x, z), xytext=(0, -4), textcoords="offset points", ha="center", va="top", fontsize=6, color="#7a3e00", zorder=4)
+            in_goal = item["id"] in goal
+            ax.add_patch(
+                Rectangle(
+                    (x - w / 2, z - d / 2), w, d,
+                    facecolor="#e4572e" if in_goal else "#ffb45c", edgecolor="#7a2a00", zorder=3,
+                )
+            )  # fmt: skip
+            if in_goal:
+                near = sum(1 for (a, b) in named if abs(a - x) < 1.2 and abs(b - z) < 0.4)
+                named.append((x, z))
+                ax.annotate(
+                    node["class_name"], (x, z), xytext=(0, -5 - 9 * near), textcoords="offset points",
+                    ha="center", va="top", fontsize=7, color="#7a2a00", fontweight="bold", zorder=7,
+                    bbox={"boxstyle": "round,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.7},
+                )  # fmt: skip
         else:
             ax.add_patch(Rectangle((x - w / 2, z - d / 2), w, d, facecolor="0.82", edgecolor="0.45", linewidth=0.8, zorder=2))
             ax.text(x, z + d / 2 - 0.05, node["class_name"], ha="center", va="top", fontsize=6.5, color="0.2", zorder=4)
@@ -228,7 +252,7 @@ def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True)
         track = tracks.get(robot)
         if track:
             xs, zs = zip(*track)
-            ax.plot(xs, zs, color=color, linewidth=2, alpha=0.85, zorder=5)
+            ax.plot(xs, zs, color=color, linewidth=2, alpha=0.85, zorder=5, gid=f"path {robot}")
             ax.plot(xs[-1], zs[-1], marker=_ROBOT_MARKERS[kind], color=color, markersize=9, markerfacecolor="white", markeredgewidth=2, zorder=6)
         start = next(r["pos"] for r in layout["robots"] if r["id"] == robot)
         ax.plot(start[0], start[2], marker=_ROBOT_MARKERS[kind], color=color, markersize=10, markeredgecolor="black", linestyle="", zorder=6, label=_robot_label(task, robot))
@@ -240,7 +264,9 @@ def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True)
     handles, names = ax.get_legend_handles_labels()
     if tracks:
         handles.append(Line2D([], [], color="0.3", linewidth=2, label="path (hollow: where it ends)"))
-    ax.legend(handles=handles, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=8)
+    handles.append(Rectangle((0, 0), 1, 1, facecolor="#e4572e", edgecolor="#7a2a00", label="object of the goal"))
+    handles.append(Rectangle((0, 0), 1, 1, facecolor="#ffb45c", edgecolor="#7a2a00", label="other object"))
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=4, frameon=False, fontsize=8)
     what = "" if not paths else (" - paths of the episode" if isinstance(source, Episode) else " - paths of the optimal plan")
     ax.set_title("\n".join(textwrap.wrap(f"{task.scene} task {task.task_id}{what}: {task.instruction}", 90)), fontsize=10)
     return ax

@@ -15,6 +15,9 @@ import pytest
 
 import coherent
 
+# Figures are drawn off screen.
+os.environ["MPLBACKEND"] = "Agg"
+
 REPO = Path(__file__).resolve().parents[2]
 DEMO = REPO / "examples" / "tasks" / "demo.json"
 ENV_DIR = Path(os.environ.get("COHERENT_ORIGINAL_ENV", REPO.parent / "shared" / "coherent-original" / "env"))
@@ -85,3 +88,17 @@ def local_model() -> Iterator[str]:
     server = xllamacpp.Server(params)
     yield server.listening_address
     del server
+
+
+# The key the model episode is run with: it must show up nowhere.
+MODEL_KEY = "sk-python-test-SECRET-7777"
+
+
+@pytest.fixture(scope="session")
+def model_episode(
+    local_model: str, env0_tasks: list[coherent.Task], tmp_path_factory: pytest.TempPathFactory
+) -> coherent.Episode:
+    """One step of PEFA by the small model on env0 task 2 (bread into the plate, milk box
+    into the microwave; GT 5), run once for every test that needs a model's episode."""
+    llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", api_key=MODEL_KEY)
+    return coherent.run(env0_tasks[2], llm=llm, max_steps=1, out=tmp_path_factory.mktemp("model"))

@@ -15,9 +15,7 @@ from pathlib import Path
 import pytest
 
 import coherent
-from conftest import DEMO
-
-KEY = "sk-python-test-SECRET-7777"
+from conftest import DEMO, MODEL_KEY
 
 
 @pytest.fixture(scope="module")
@@ -151,7 +149,7 @@ def test_run_argument_errors(demo: coherent.Task, tmp_path: Path) -> None:
 
 
 def test_llm_settings_and_secrecy(monkeypatch: pytest.MonkeyPatch) -> None:
-    llm = coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m", api_key=KEY, temperature=0.5, seed=3)
+    llm = coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m", api_key=MODEL_KEY, temperature=0.5, seed=3)
     assert (llm.base_url, llm.model, llm.temperature, llm.seed, llm.has_api_key) == (
         "http://127.0.0.1:8080/v1",
         "m",
@@ -159,7 +157,7 @@ def test_llm_settings_and_secrecy(monkeypatch: pytest.MonkeyPatch) -> None:
         3,
         True,
     )
-    assert KEY not in repr(llm) and "[hidden]" in repr(llm)
+    assert MODEL_KEY not in repr(llm) and "[hidden]" in repr(llm)
     assert not hasattr(llm, "api_key")
     for name in ("OPENAI_BASE_URL", "OPENAI_API_KEY", "COHERENT_MODEL"):
         monkeypatch.delenv(name, raising=False)
@@ -185,19 +183,17 @@ def _closed_port() -> int:
 
 
 def test_a_dead_server_is_a_backend_error(demo: coherent.Task, tmp_path: Path) -> None:
-    llm = coherent.LLM(base_url=f"http://127.0.0.1:{_closed_port()}/v1", model="m", api_key=KEY, max_retries=0)
+    llm = coherent.LLM(base_url=f"http://127.0.0.1:{_closed_port()}/v1", model="m", api_key=MODEL_KEY, max_retries=0)
     with pytest.raises(coherent.BackendError, match="connection") as info:
         coherent.run(demo, llm=llm, out=tmp_path)
     episode = info.value.episode
     assert isinstance(episode, coherent.Episode)
     assert episode.status == "backend_error" and episode.steps == 1
-    assert KEY not in episode.path.read_text()
+    assert MODEL_KEY not in episode.path.read_text()
 
 
-def test_a_real_model_runs_from_python(local_model: str, env0_tasks: list[coherent.Task], tmp_path: Path) -> None:
-    llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", api_key=KEY)
-    # env0 task 2: bread into the plate, milk box into the microwave (GT 5).
-    episode = coherent.run(env0_tasks[2], llm=llm, max_steps=1, out=tmp_path)
+def test_a_real_model_runs_from_python(local_model: str, model_episode: coherent.Episode) -> None:
+    episode = model_episode
     assert episode.status == "failure" and episode.steps == 1
     assert episode.backend == {"kind": "openai", "model": "smollm2-135m", "base_url": f"{local_model}/v1"}
     assert episode.prompt_tokens > 0 and episode.completion_tokens > 0
@@ -205,8 +201,8 @@ def test_a_real_model_runs_from_python(local_model: str, env0_tasks: list[cohere
     assert frame["prompt_tokens"].sum() == episode.prompt_tokens
     assert frame["completion_tokens"].sum() == episode.completion_tokens
     assert episode.header["temperature"] == 0.0
-    for path in tmp_path.iterdir():
-        assert KEY not in path.read_text(), f"{path} holds the API key"
+    for path in episode.path.parent.iterdir():
+        assert MODEL_KEY not in path.read_text(), f"{path} holds the API key"
 
 
 def _interrupt_soon(delay: float) -> threading.Timer:
