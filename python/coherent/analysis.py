@@ -71,8 +71,9 @@ def bench(
     tasks: PathLike | Iterable[Task],
     methods: Sequence[str],
     *,
-    backend: Literal["builtin", "simulated"] | LLM = "builtin",
+    backend: Literal["builtin", "simulated", "replay"] | LLM = "builtin",
     sim_errors: str | Mapping[str, float] | None = None,
+    replay_from: PathLike | None = None,
     seeds: int = 1,
     concurrency: int = 4,
     history: int = 5,
@@ -88,7 +89,10 @@ def bench(
     finished in it are skipped, so after Ctrl-C (``KeyboardInterrupt``) the same call
     finishes the rest. ``backend``: ``"builtin"`` (the optimal planner plays every
     role), ``"simulated"`` (the planner with seeded mistakes at the ``sim_errors``
-    rates, e.g. ``"all=0.1"``) or an :class:`LLM`. What the run did is in
+    rates, e.g. ``"all=0.1"``), an :class:`LLM`, or ``"replay"``: the episodes of the
+    earlier results file ``replay_from`` answer from their transcripts (no network), with
+    their recorded settings; a line's ``error`` says when one came out differently.
+    What the run did is in
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
     """
@@ -102,6 +106,7 @@ def bench(
         list(methods),
         backend=backend,
         sim_errors=sim_errors,
+        replay_from=replay_from,
         seeds=seeds,
         concurrency=concurrency,
         history=history,

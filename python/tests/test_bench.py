@@ -219,3 +219,29 @@ def test_bench_is_interruptible_and_resumes(env0_tasks: list[coherent.Task], tmp
     assert 0 < len(done) < 160
     frame = coherent.bench(tasks[:1], ["pefa"], backend="simulated", sim_errors="all=0.3", seeds=1, out=out)
     assert frame.attrs["outcome"]["written"] + frame.attrs["outcome"]["skipped"] == 1
+
+
+def test_bench_replays_an_earlier_run(few: list[coherent.Task], tmp_path: Path) -> None:
+    recorded = coherent.bench(
+        few, ["pefa", "dmrs-2d"], backend="simulated", sim_errors="all=0.2", seeds=2, out=tmp_path / "a.jsonl"
+    )
+    replayed = coherent.bench(few, ["pefa", "dmrs-2d"], backend="replay", replay_from=tmp_path / "a.jsonl", seeds=2, out=tmp_path / "b.jsonl")
+    assert set(replayed["backend_kind"]) == {"replay"}
+    assert replayed["error"].isna().all()
+    columns = ["method", "task_id", "seed", "episode_seed", "status", "steps", "llm_calls"]
+    key = ["method", "task_id", "seed"]
+    pd.testing.assert_frame_equal(
+        recorded[columns].sort_values(key).reset_index(drop=True),
+        replayed[columns].sort_values(key).reset_index(drop=True),
+    )
+    # An episode the earlier run does not have is skipped, and said so.
+    more = coherent.bench(few, ["cmrs"], backend="replay", replay_from=tmp_path / "a.jsonl", out=tmp_path / "c.jsonl")
+    assert len(more) == 0
+    assert len(more.attrs["outcome"]["skipped_tasks"]) == 3
+    assert "cmrs seed 0 has no finished episode" in more.attrs["outcome"]["skipped_tasks"][0]
+    with pytest.raises(ValueError, match="replay_from="):
+        coherent.bench(few, ["pefa"], backend="replay", out=tmp_path / "d.jsonl")
+    with pytest.raises(ValueError, match='replay_from needs backend="replay"'):
+        coherent.bench(few, ["pefa"], replay_from=tmp_path / "a.jsonl", out=tmp_path / "d.jsonl")
+    with pytest.raises(coherent.CoherentError, match="missing.jsonl"):
+        coherent.bench(few, ["pefa"], backend="replay", replay_from=tmp_path / "missing.jsonl", out=tmp_path / "d.jsonl")

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
+    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, Recorded, ResultLine, Subset,
 };
 use coherent_agents::{Cancel, report};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -75,8 +75,9 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 /// does. Returns what the run did.
 #[pyfunction]
 #[pyo3(signature = (
-    tasks, methods, *, backend = None, sim_errors = None, seeds = 1, concurrency = 4,
-    history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"), progress = false
+    tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
+    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
+    progress = false
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
@@ -85,6 +86,7 @@ pub(crate) fn run_bench<'py>(
     methods: Vec<String>,
     backend: Option<&Bound<'py, PyAny>>,
     sim_errors: Option<&Bound<'py, PyAny>>,
+    replay_from: Option<PathBuf>,
     seeds: u32,
     concurrency: usize,
     history: usize,
@@ -119,9 +121,18 @@ pub(crate) fn run_bench<'py>(
         Some(b) => match b.extract::<String>().as_deref() {
             Ok("builtin") => (BackendChoice::Builtin, None),
             Ok("simulated") => (BackendChoice::Simulated(rates.unwrap_or_default()), None),
+            Ok("replay") => {
+                let file = replay_from.as_deref().ok_or_else(|| {
+                    PyValueError::new_err(
+                        "backend=\"replay\" needs replay_from=, an earlier results file",
+                    )
+                })?;
+                let recorded = Recorded::read(file).map_err(|e| errors::coherent(py, e))?;
+                (BackendChoice::Replay(Arc::new(recorded)), None)
+            }
             _ => {
                 return Err(PyValueError::new_err(format!(
-                    "backend {}: expected \"builtin\", \"simulated\" or an LLM",
+                    "backend {}: expected \"builtin\", \"simulated\", \"replay\" or an LLM",
                     b.repr()?
                 )));
             }
@@ -130,6 +141,11 @@ pub(crate) fn run_bench<'py>(
     if rates.is_some() && !matches!(choice, BackendChoice::Simulated(_)) {
         return Err(PyValueError::new_err(
             "sim_errors needs backend=\"simulated\"",
+        ));
+    }
+    if replay_from.is_some() && !matches!(choice, BackendChoice::Replay(_)) {
+        return Err(PyValueError::new_err(
+            "replay_from needs backend=\"replay\"",
         ));
     }
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
