@@ -42,13 +42,16 @@ fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
         })
 }
 
+/// The tasks picked, and the `(scene, task_id)` pairs named but missing.
+type Selected = (Vec<PyTask>, Vec<(String, i64)>);
+
 /// The tasks `subset` picks from `tasks`, in the subset's order, and the
 /// `(scene, task_id)` pairs it names that are not among them.
 #[pyfunction]
 pub(crate) fn select(
     tasks: Vec<Bound<'_, PyTask>>,
     subset: &Bound<'_, PyAny>,
-) -> PyResult<(Vec<PyTask>, Vec<(String, i64)>)> {
+) -> PyResult<Selected> {
     let subset = subset_of(subset)?;
     let owned = tasks.iter().map(|t| (*t.get().task).clone()).collect();
     let selection = bench::select(owned, &subset).map_err(PyValueError::new_err)?;

@@ -341,6 +341,7 @@ enum Failure {
 
 /// Runs an episode on a worker thread (Ctrl-C cancels it between rounds or in a model
 /// call) and reads its transcript back.
+#[allow(clippy::too_many_arguments)]
 fn episode_off_the_gil(
     py: Python<'_>,
     task: Arc<Task>,

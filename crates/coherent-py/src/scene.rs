@@ -34,7 +34,7 @@ pub(crate) fn scene_layout<'py>(
 /// A task (its optimal plan) or an episode (its executed actions), as given to Python.
 enum Source {
     Plan(Arc<Task>),
-    Episode(Arc<Task>, Transcript),
+    Episode(Arc<Task>, Box<Transcript>),
 }
 
 fn source_of(source: &Bound<'_, PyAny>) -> PyResult<Source> {
@@ -45,7 +45,7 @@ fn source_of(source: &Bound<'_, PyAny>) -> PyResult<Source> {
         let e = episode.get();
         return Ok(Source::Episode(
             Arc::clone(&e.task.get().task),
-            e.transcript.clone(),
+            Box::new(e.transcript.clone()),
         ));
     }
     Err(PyTypeError::new_err(format!(
