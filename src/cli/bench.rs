@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use clap::{Args, ValueEnum};
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
+use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Recorded, Subset};
 use coherent_agents::episode::Method;
 use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
 use coherent_core::load;
@@ -31,9 +31,14 @@ pub struct BenchArgs {
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_names())]
     methods: Vec<String>,
     /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
-    /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`.
+    /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
+    /// `replay`: the transcripts of --replay-from.
     #[arg(long, value_enum, default_value_t = BackendKind::Auto)]
     backend: BackendKind,
+    /// With `--backend replay`: an earlier results file, whose episodes are replayed from
+    /// their transcripts (no network) and checked against them.
+    #[arg(long)]
+    replay_from: Option<PathBuf>,
     /// The simulated backend's error rates: `hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`
     /// or `all=0.1`; kinds not named are 0.
     #[arg(long)]
@@ -106,6 +111,7 @@ enum BackendKind {
     Builtin,
     Simulated,
     Openai,
+    Replay,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -290,7 +296,7 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         model: l.model.clone(),
         temperature: l.temperature,
         seed: l.llm_seed,
-        format: l.answer_format,
+        format: l.answer_format.into(),
         connect_timeout: l.connect_timeout,
         read_timeout: l.read_timeout,
         timeout: l.timeout,
@@ -307,9 +313,13 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
     if rates.is_some() && kind != BackendKind::Simulated {
         return Err("--sim-errors needs --backend simulated".into());
     }
-    Ok(match kind {
-        BackendKind::Simulated => BackendChoice::Simulated(rates.unwrap_or_default()),
-        BackendKind::Openai => {
+    Ok(match (kind, &args.replay_from) {
+        (BackendKind::Replay, Some(file)) => BackendChoice::Replay(Arc::new(Recorded::read(file)?)),
+        (BackendKind::Replay, None) | (_, Some(_)) => {
+            return Err("--backend replay and --replay-from FILE go together".into());
+        }
+        (BackendKind::Simulated, None) => BackendChoice::Simulated(rates.unwrap_or_default()),
+        (BackendKind::Openai, None) => {
             let config = http.ok_or(
                 "--backend openai needs an endpoint: --base-url or OPENAI_BASE_URL, and a model (--model or COHERENT_MODEL)",
             )?;
@@ -317,6 +327,6 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
                 OpenAiClient::new(config).map_err(|e| e.to_string())?,
             ))
         }
-        _ => BackendChoice::Builtin,
+        (BackendKind::Auto | BackendKind::Builtin, None) => BackendChoice::Builtin,
     })
 }

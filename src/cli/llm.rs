@@ -35,7 +35,8 @@ pub struct Endpoint {
     pub model: Option<String>,
     pub temperature: f32,
     pub seed: Option<u64>,
-    pub format: AnswerFormat,
+    /// The answer format asked for first.
+    pub format: OutputMode,
     /// Seconds.
     pub connect_timeout: f64,
     pub read_timeout: f64,
@@ -74,7 +75,7 @@ impl Endpoint {
                 ..Backoff::default()
             },
             concurrency: self.requests.max(1),
-            output: self.format.into(),
+            output: self.format,
             ..OpenAiConfig::new(base_url, model)
         }))
     }

@@ -2,9 +2,9 @@
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
 mod bench;
-mod llm;
-mod render;
-mod run;
+pub mod llm;
+pub mod render;
+pub mod run;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

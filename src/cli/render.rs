@@ -14,7 +14,7 @@ use coherent_sim::{PhysicalEnv, layout, render};
 use super::pick_task;
 
 #[derive(Args)]
-pub struct RenderArgs {
+pub(crate) struct RenderArgs {
     /// A native task file, or an original env file with --task (not needed with
     /// --transcript).
     #[arg(required_unless_present = "transcript")]
@@ -33,7 +33,7 @@ pub struct RenderArgs {
     transcript: Option<PathBuf>,
 }
 
-pub fn render(args: &RenderArgs) -> Result<u8, String> {
+pub(crate) fn render(args: &RenderArgs) -> Result<u8, String> {
     let recorded = match &args.transcript {
         Some(path) => Some((transcript::read(path)?, path)),
         None => None,
@@ -44,38 +44,52 @@ pub fn render(args: &RenderArgs) -> Result<u8, String> {
         (None, None) => return Err("a task file is needed without --transcript".into()),
     };
     let task = Arc::new(task);
-    let layout = layout::for_task(&task).map_err(|e| format!("layout: {}", e.0))?;
     let paths = if args.plan {
-        let analysis = planner::analyse(&task, &Limits::default());
-        let plan = analysis.plan.ok_or_else(|| {
-            format!(
-                "no plan to draw: {}",
-                analysis
-                    .reason
-                    .unwrap_or_else(|| "the search stopped".into())
-            )
-        })?;
-        let report = coherent_sim::execute_plan(&task, &plan);
-        if let Some(e) = &report.physics_error {
-            eprintln!("warning: the plan failed in physics, paths drawn up to there: {e}");
-        }
-        Some(report.paths)
+        Some(plan_paths(&task, &Limits::default())?)
     } else if let Some((t, _)) = &recorded {
         Some(replay_paths(&task, t)?)
     } else {
         None
     };
-    let svg = render::svg(&task, &layout, &task.init, paths.as_deref());
+    let svg = svg(&task, paths.as_deref())?;
     std::fs::write(&args.out, svg).map_err(|e| format!("{}: {e}", args.out.display()))?;
     println!("wrote {}", args.out.display());
     Ok(0)
 }
 
-/// A robot's track, `[x, y, z]`, as `coherent_sim` records it.
-type RobotPath = (coherent_core::NodeId, Vec<[f32; 3]>);
+/// The task's scene at its start from above, with `paths` drawn when given.
+pub fn svg(task: &Task, paths: Option<&[RobotPath]>) -> Result<String, String> {
+    let layout = layout::for_task(task).map_err(|e| format!("layout: {}", e.0))?;
+    Ok(render::svg(task, &layout, &task.init, paths))
+}
+
+/// A robot's track, `[x, y, z]` points, as `coherent_sim` records it.
+pub type RobotPath = (coherent_core::NodeId, Vec<[f32; 3]>);
+
+/// The robots' paths when the task's optimal plan is carried out in physics (up to a
+/// physical failure, which is reported on stderr).
+pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Vec<RobotPath>, String> {
+    let analysis = planner::analyse(task, limits);
+    let plan = analysis.plan.ok_or_else(|| {
+        format!(
+            "no plan to draw: {}",
+            analysis
+                .reason
+                .unwrap_or_else(|| "the search stopped".into())
+        )
+    })?;
+    let report = coherent_sim::execute_plan(task, &plan);
+    if let Some(e) = &report.physics_error {
+        eprintln!("warning: the plan failed in physics, paths drawn up to there: {e}");
+    }
+    Ok(report.paths)
+}
 
 /// The robots' paths when the transcript's executed actions are carried out in physics.
-fn replay_paths(task: &Arc<Task>, t: &transcript::Transcript) -> Result<Vec<RobotPath>, String> {
+pub fn replay_paths(
+    task: &Arc<Task>,
+    t: &transcript::Transcript,
+) -> Result<Vec<RobotPath>, String> {
     let mut env =
         PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
     for round in &t.rounds {

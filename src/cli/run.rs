@@ -28,7 +28,7 @@ const BACKEND_FAILED: u8 = 3;
 const INTERRUPTED: u8 = 130;
 
 #[derive(Args)]
-pub struct RunArgs {
+pub(crate) struct RunArgs {
     /// A native task file, or an original env file with --task (not needed with --replay).
     #[arg(required_unless_present = "replay")]
     task_file: Option<PathBuf>,
@@ -115,7 +115,7 @@ impl Lines {
     }
 }
 
-pub fn run(args: RunArgs) -> Result<u8, String> {
+pub(crate) fn run(args: RunArgs) -> Result<u8, String> {
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()
         .build()
@@ -160,30 +160,22 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                 let method = Method::from_name(&args.method)
                     .ok_or_else(|| format!("unknown method {:?}", args.method))?;
                 let budget = Budget::of(&task, args.max_steps, &limits)?;
-                let backend = http_backend(&args)?;
+                let http = http_backend(&args)?;
                 let settings = Settings {
                     method,
                     history: args.history,
                     max_steps: args.max_steps,
-                    temperature: backend.as_ref().map(|_| args.temperature),
+                    temperature: http.as_ref().map(|_| args.temperature),
                     seed: args.seed,
                     physics: args.physics,
                 };
-                let backend: Box<dyn Backend> = match (backend, &args.sim_errors) {
-                    (Some(_), Some(_)) => {
-                        return Err(
-                            "--sim-errors is for the simulated backend: leave out the endpoint"
-                                .into(),
-                        );
-                    }
-                    (Some(b), None) => Box::new(b),
-                    (None, Some(spec)) => Box::new(BuiltinBackend::simulated(
-                        limits.clone(),
-                        ErrorRates::parse(spec).map_err(|e| format!("--sim-errors: {e}"))?,
-                        args.seed.unwrap_or(0),
-                    )),
-                    (None, None) => Box::new(BuiltinBackend::new(limits.clone())),
-                };
+                let rates = args
+                    .sim_errors
+                    .as_deref()
+                    .map(ErrorRates::parse)
+                    .transpose()
+                    .map_err(|e| format!("--sim-errors: {e}"))?;
+                let backend = backend(http, rates, args.seed, &limits)?;
                 (task, settings, budget, backend)
             }
         };
@@ -209,15 +201,6 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
         task.meta.instruction,
         settings.method.name()
     ));
-    let path = episode::transcript_path(&args.out, &task, settings.method);
-    let mut env: Box<dyn Environment + Send> = if settings.physics {
-        Box::new(
-            coherent_sim::PhysicalEnv::new(Arc::clone(&task))
-                .map_err(|e| format!("physics: {}", e.message))?,
-        )
-    } else {
-        Box::new(SymbolicEnv::new(Arc::clone(&task)))
-    };
     let ctrl_c = {
         let cancel = cancel.clone();
         tokio::spawn(async move {
@@ -228,21 +211,27 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     };
     let max = budget.steps();
     let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
-    let result = episode::run(
+    let mut env =
+        environment(&task, settings.physics).map_err(|e| format!("physics: {}", e.message))?;
+    let result = run_episode(
         &task,
         env.as_mut(),
         backend.as_ref(),
         &settings,
         budget,
-        &path,
+        &args.out,
         &cancel,
         &mut progress,
     )
     .await;
     ctrl_c.abort();
-    let episode = result?;
+    let Ran {
+        episode,
+        transcript: path,
+        goal_satisfied,
+    } = result?;
     let s = &episode.summary;
-    lines.say(&summary_line(&episode, env.as_ref()));
+    lines.say(&summary_line(&episode, goal_satisfied));
     lines.say(&format!("transcript: {}", path.display()));
     if let Some(t) = &recorded {
         match episode::check_replay(t, &episode) {
@@ -283,6 +272,77 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     })
 }
 
+/// The backend that answers the model's roles: the HTTP client when there is one, else
+/// the simulated backend when error rates are given (seeded by `seed`), else the built-in
+/// planner.
+pub fn backend(
+    http: Option<OpenAiClient>,
+    sim_errors: Option<ErrorRates>,
+    seed: Option<u64>,
+    limits: &Limits,
+) -> Result<Box<dyn Backend>, String> {
+    Ok(match (http, sim_errors) {
+        (Some(_), Some(_)) => {
+            return Err(
+                "simulated errors are for the simulated backend: leave out the endpoint".into(),
+            );
+        }
+        (Some(client), None) => Box::new(client),
+        (None, Some(rates)) => Box::new(BuiltinBackend::simulated(
+            limits.clone(),
+            rates,
+            seed.unwrap_or(0),
+        )),
+        (None, None) => Box::new(BuiltinBackend::new(limits.clone())),
+    })
+}
+
+/// An episode as it ran: the rounds and summary, where its transcript is, and whether
+/// the goal holds at the end.
+#[derive(Debug)]
+pub struct Ran {
+    pub episode: Episode,
+    pub transcript: PathBuf,
+    pub goal_satisfied: bool,
+}
+
+/// The environment an episode runs in: Rapier with `physics`, else the rules alone.
+pub fn environment(
+    task: &Arc<Task>,
+    physics: bool,
+) -> Result<Box<dyn Environment + Send>, coherent_sim::PhysicsError> {
+    Ok(if physics {
+        Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?)
+    } else {
+        Box::new(SymbolicEnv::new(Arc::clone(task)))
+    })
+}
+
+/// Runs one episode as `coherent run` does, in `env` (see [`environment`]), writing its
+/// transcript into `out`.
+#[allow(clippy::too_many_arguments)]
+pub async fn run_episode(
+    task: &Arc<Task>,
+    env: &mut (dyn Environment + Send),
+    backend: &dyn Backend,
+    settings: &Settings,
+    budget: Budget,
+    out: &Path,
+    cancel: &Cancel,
+    progress: &mut (dyn FnMut(&Round) + Send),
+) -> Result<Ran, String> {
+    let path = episode::transcript_path(out, task, settings.method);
+    let episode = episode::run(
+        task, env, backend, settings, budget, &path, cancel, progress,
+    )
+    .await?;
+    Ok(Ran {
+        episode,
+        transcript: path,
+        goal_satisfied: env.goal_satisfied(),
+    })
+}
+
 /// The HTTP backend when an endpoint is configured.
 fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
     let endpoint = Endpoint {
@@ -291,7 +351,7 @@ fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
         model: args.model.clone(),
         temperature: args.temperature,
         seed: args.seed,
-        format: args.format,
+        format: args.format.into(),
         connect_timeout: args.connect_timeout,
         read_timeout: args.read_timeout,
         timeout: args.timeout,
@@ -364,7 +424,7 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
     )
 }
 
-fn summary_line(e: &Episode, env: &dyn Environment) -> String {
+fn summary_line(e: &Episode, goal_satisfied: bool) -> String {
     let s = &e.summary;
     let result = match s.status {
         Status::Success => "success",
@@ -373,7 +433,7 @@ fn summary_line(e: &Episode, env: &dyn Environment) -> String {
         Status::Interrupted => "interrupted",
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
-    let goal = if env.goal_satisfied() {
+    let goal = if goal_satisfied {
         "holds"
     } else {
         "not reached"

@@ -20,7 +20,8 @@ use crate::episode::{self, Budget, Method, Settings};
 use crate::llm::{Backend, BackendInfo};
 use crate::openai::OpenAiClient;
 use crate::pefa::Cancel;
-use crate::transcript::Status;
+use crate::replay::ReplayBackend;
+use crate::transcript::{self, Status};
 
 /// The paper's 40-task subset (SEMANTICS.md section 6): 8 tasks per scene, by the scene's
 /// file name and the task id.
@@ -139,6 +140,49 @@ pub enum BackendChoice {
     Simulated(ErrorRates),
     /// One client shared by every episode (its own concurrency limit holds across them).
     OpenAi(Arc<OpenAiClient>),
+    /// The transcripts of an earlier run: each episode answers from the recording with
+    /// its method, task and seed, with the recorded settings, and must come out the same.
+    Replay(Arc<Recorded>),
+}
+
+/// An earlier run's finished episodes, by key: the transcripts a replay answers from.
+#[derive(Debug)]
+pub struct Recorded {
+    /// The earlier results file.
+    pub results: PathBuf,
+    pub transcripts: HashMap<EpisodeKey, PathBuf>,
+    /// The backend of the recordings (the first one's, when they differ).
+    pub backend: BackendInfo,
+}
+
+impl Recorded {
+    /// The final episodes of the results file `results`.
+    pub fn read(results: &Path) -> Result<Recorded, String> {
+        let file = read_results(results)?;
+        let mut backend = None;
+        let mut transcripts = HashMap::new();
+        for line in file.lines.iter().filter(|l| l.is_final()) {
+            if line.uses_model {
+                backend.get_or_insert_with(|| line.backend.clone());
+            }
+            transcripts.insert(line.key(), PathBuf::from(&line.transcript));
+        }
+        if transcripts.is_empty() {
+            return Err(format!(
+                "{}: no finished episodes to replay",
+                results.display()
+            ));
+        }
+        Ok(Recorded {
+            results: results.to_owned(),
+            transcripts,
+            backend: backend.unwrap_or(BackendInfo {
+                kind: "none".into(),
+                model: String::new(),
+                base_url: None,
+            }),
+        })
+    }
 }
 
 impl BackendChoice {
@@ -149,6 +193,11 @@ impl BackendChoice {
                 BuiltinBackend::simulated(Limits::default(), *rates, 0).info()
             }
             BackendChoice::OpenAi(client) => client.info(),
+            BackendChoice::Replay(recorded) => BackendInfo {
+                kind: "replay".into(),
+                model: recorded.backend.model.clone(),
+                base_url: None,
+            },
         }
     }
 }
@@ -605,18 +654,41 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
     }
     let method = job.method;
     let seed = episode_seed(job.seed, method.name(), &task.meta.scene, task.meta.task_id);
+    let mut settings = Settings {
+        history: shared.history,
+        temperature: shared.temperature,
+        seed: Some(seed),
+        ..Settings::new(method)
+    };
+    let mut budget = budget;
+    let mut recording = None;
     let backend: Arc<dyn Backend> = match &shared.backend {
         BackendChoice::Builtin => Arc::new(BuiltinBackend::new(limits.clone())),
         BackendChoice::Simulated(rates) => {
             Arc::new(BuiltinBackend::simulated(limits.clone(), *rates, seed))
         }
         BackendChoice::OpenAi(client) => Arc::clone(client) as Arc<dyn Backend>,
-    };
-    let settings = Settings {
-        history: shared.history,
-        temperature: shared.temperature,
-        seed: Some(seed),
-        ..Settings::new(method)
+        BackendChoice::Replay(recorded) => {
+            let key = EpisodeKey {
+                method: method.name().to_owned(),
+                scene: task.meta.scene.clone(),
+                task_id: task.meta.task_id,
+                seed: job.seed,
+            };
+            let Some(path) = recorded.transcripts.get(&key) else {
+                return Ok(JobResult::TaskSkipped(format!(
+                    "{name}: {} seed {} has no finished episode in {}",
+                    method.name(),
+                    job.seed,
+                    recorded.results.display()
+                )));
+            };
+            let t = transcript::read(path)?;
+            (settings, budget) = episode::recorded_settings(&t)?;
+            let backend = Arc::new(ReplayBackend::new(&t));
+            recording = Some(t);
+            backend
+        }
     };
     let dir = shared.transcripts.join(format!("seed{}", job.seed));
     let path = episode::transcript_path(&dir, task, method);
@@ -646,6 +718,11 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         .map_err(|e| format!("an episode panicked: {e}"))??
     };
     drop(permit);
+    // A replay that comes out differently says so in its line's error.
+    let mismatch = recording
+        .as_ref()
+        .and_then(|t| episode::check_replay(t, &episode).err())
+        .map(|why| format!("replay mismatch: {why}"));
     let s = episode.summary;
     Ok(JobResult::Line(Box::new(ResultLine {
         method: method.name().to_owned(),
@@ -666,7 +743,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
         backend: shared.backend_info.clone(),
         uses_model: method.uses_model(),
-        error: s.error,
+        error: mismatch.or(s.error),
         transcript: path.display().to_string(),
     })))
 }

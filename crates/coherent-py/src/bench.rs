@@ -1,0 +1,241 @@
+//! The benchmark: picking a subset, running methods x tasks x seeds into a results file
+//! (`coherent_agents::bench`, as `coherent bench` does), and the paper's tables of the
+//! results (`coherent_agents::report`).
+
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use coherent_agents::bench::{
+    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, Recorded, ResultLine, Subset,
+};
+use coherent_agents::{Cancel, report};
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList, PyString};
+
+use crate::convert::{interruptible, py_to_json, to_py};
+use crate::errors;
+use crate::run::{PyLlm, method_of};
+use crate::task::PyTask;
+
+/// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
+fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
+    if let Ok(s) = subset.cast::<PyString>() {
+        match s.to_cow()?.as_ref() {
+            "all" => return Ok(Subset::All),
+            "paper40" => return Ok(Subset::Paper40),
+            _ => {}
+        }
+    }
+    if let Ok(path) = subset.extract::<PathBuf>() {
+        return Subset::read_file(&path).map_err(|e| errors::coherent(subset.py(), e));
+    }
+    subset
+        .extract::<Vec<(String, i64)>>()
+        .map(Subset::Listed)
+        .map_err(|_| {
+            PyTypeError::new_err(
+                "subset: expected \"all\", \"paper40\", a path to a file of `scene task_id` lines, \
+                 or a list of (scene, task_id) pairs",
+            )
+        })
+}
+
+/// The tasks picked, and the `(scene, task_id)` pairs named but missing.
+type Selected = (Vec<PyTask>, Vec<(String, i64)>);
+
+/// The tasks `subset` picks from `tasks`, in the subset's order, and the
+/// `(scene, task_id)` pairs it names that are not among them.
+#[pyfunction]
+pub(crate) fn select(
+    tasks: Vec<Bound<'_, PyTask>>,
+    subset: &Bound<'_, PyAny>,
+) -> PyResult<Selected> {
+    let subset = subset_of(subset)?;
+    let owned = tasks.iter().map(|t| (*t.get().task).clone()).collect();
+    let selection = bench::select(owned, &subset).map_err(PyValueError::new_err)?;
+    Ok((
+        selection.tasks.into_iter().map(PyTask::shared).collect(),
+        selection.missing,
+    ))
+}
+
+fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("total", o.total)?;
+    d.set_item("skipped", o.skipped)?;
+    d.set_item("written", o.written)?;
+    d.set_item("unfinished", o.unfinished)?;
+    d.set_item("interrupted", o.interrupted)?;
+    d.set_item("skipped_tasks", &o.skipped_tasks)?;
+    d.set_item("repaired_bytes", o.repaired_bytes)?;
+    Ok(d)
+}
+
+/// Runs every method on every task for every seed into the results file `out` (JSON
+/// lines, appended, resumable: finished episodes are skipped), as `coherent bench`
+/// does. Returns what the run did.
+#[pyfunction]
+#[pyo3(signature = (
+    tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
+    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
+    progress = false
+))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_bench<'py>(
+    py: Python<'py>,
+    tasks: Vec<Bound<'py, PyTask>>,
+    methods: Vec<String>,
+    backend: Option<&Bound<'py, PyAny>>,
+    sim_errors: Option<&Bound<'py, PyAny>>,
+    replay_from: Option<PathBuf>,
+    seeds: u32,
+    concurrency: usize,
+    history: usize,
+    max_states: usize,
+    out: PathBuf,
+    progress: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let methods = methods
+        .iter()
+        .map(|m| method_of(m))
+        .collect::<PyResult<Vec<_>>>()?;
+    if methods.is_empty() {
+        return Err(PyValueError::new_err("methods: name at least one method"));
+    }
+    if seeds == 0 {
+        return Err(PyValueError::new_err("seeds must be at least 1"));
+    }
+    if tasks.is_empty() {
+        return Err(PyValueError::new_err("tasks: no tasks to run"));
+    }
+    let rates = crate::run::error_rates(sim_errors)?;
+    let (choice, temperature) = match backend {
+        Some(b) if b.is_instance_of::<PyLlm>() => {
+            let llm = b.cast::<PyLlm>()?.get();
+            let client = llm.client(py)?;
+            (
+                BackendChoice::OpenAi(Arc::new(client)),
+                Some(llm.temperature_of()),
+            )
+        }
+        None => (BackendChoice::Builtin, None),
+        Some(b) => match b.extract::<String>().as_deref() {
+            Ok("builtin") => (BackendChoice::Builtin, None),
+            Ok("simulated") => (BackendChoice::Simulated(rates.unwrap_or_default()), None),
+            Ok("replay") => {
+                let file = replay_from.as_deref().ok_or_else(|| {
+                    PyValueError::new_err(
+                        "backend=\"replay\" needs replay_from=, an earlier results file",
+                    )
+                })?;
+                let recorded = Recorded::read(file).map_err(|e| errors::coherent(py, e))?;
+                (BackendChoice::Replay(Arc::new(recorded)), None)
+            }
+            _ => {
+                return Err(PyValueError::new_err(format!(
+                    "backend {}: expected \"builtin\", \"simulated\", \"replay\" or an LLM",
+                    b.repr()?
+                )));
+            }
+        },
+    };
+    if rates.is_some() && !matches!(choice, BackendChoice::Simulated(_)) {
+        return Err(PyValueError::new_err(
+            "sim_errors needs backend=\"simulated\"",
+        ));
+    }
+    if replay_from.is_some() && !matches!(choice, BackendChoice::Replay(_)) {
+        return Err(PyValueError::new_err(
+            "replay_from needs backend=\"replay\"",
+        ));
+    }
+    let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
+    let config = BenchConfig {
+        methods,
+        seeds,
+        concurrency: concurrency.max(1),
+        backend: choice,
+        history,
+        temperature,
+        max_states,
+        out,
+    };
+    let cancel = Cancel::default();
+    let stop = cancel.clone();
+    let result = interruptible(
+        py,
+        move || stop.cancel(),
+        move || {
+            let runtime = tokio::runtime::Builder::new_multi_thread()
+                .enable_all()
+                .build()
+                .map_err(|e| format!("cannot start the async runtime: {e}"))?;
+            let mut lines = Progress::new(false);
+            let mut show = |e: Event<'_>| {
+                if let Some(text) = lines.line(&e).filter(|_| progress) {
+                    let _ = std::io::stderr().write_all(text.as_bytes());
+                }
+            };
+            runtime.block_on(bench::run(&tasks, &config, &cancel, &mut show))
+        },
+    )?;
+    let outcome = result.map_err(|e| errors::coherent(py, e))?;
+    outcome_dict(py, &outcome)
+}
+
+/// The lines of a results file, as dicts; a last line cut off mid-write is left out.
+#[pyfunction]
+pub(crate) fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyList>> {
+    let file = py
+        .detach(|| bench::read_results(&path))
+        .map_err(|e| errors::coherent(py, e))?;
+    let list = PyList::empty(py);
+    for line in &file.lines {
+        list.append(to_py(py, line)?)?;
+    }
+    Ok(list)
+}
+
+/// Results lines (dicts with the results file's fields) as the harness's type; errors
+/// name the line and the field.
+fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine>> {
+    lines
+        .iter()
+        .enumerate()
+        .map(|(i, item)| {
+            let value = py_to_json(&item)?;
+            serde_json::from_value(value)
+                .map_err(|e| PyValueError::new_err(format!("results line {i}: {e}")))
+        })
+        .collect()
+}
+
+/// The paper's tables of results lines: Table I (by task type), Table II (by scene),
+/// the costs, as `coherent bench --report FILE --format json` gives them.
+#[pyfunction]
+pub(crate) fn report_tables<'py>(
+    py: Python<'py>,
+    lines: &Bound<'py, PyList>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let lines = result_lines(lines)?;
+    to_py(py, &report::build(&lines))
+}
+
+/// The tables as text: `"markdown"`, `"csv"` or `"json"`, as `coherent bench --report`
+/// prints them.
+#[pyfunction]
+#[pyo3(signature = (lines, format = "markdown"))]
+pub(crate) fn report_text(lines: &Bound<'_, PyList>, format: &str) -> PyResult<String> {
+    let lines = result_lines(lines)?;
+    let r = report::build(&lines);
+    match format {
+        "markdown" => Ok(report::markdown(&r)),
+        "csv" => Ok(report::csv(&r)),
+        "json" => Ok(report::json(&r)),
+        other => Err(PyValueError::new_err(format!(
+            "format {other:?}: expected \"markdown\", \"csv\" or \"json\""
+        ))),
+    }
+}

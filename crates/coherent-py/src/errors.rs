@@ -1,0 +1,173 @@
+//! The exception tree: `CoherentError` and a few subclasses, each raised for one kind of
+//! failure, with the attributes a caller needs to act on it.
+
+use coherent_core::Error;
+use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::sync::PyOnceLock;
+use pyo3::types::{PyDict, PyTuple, PyType};
+
+use crate::MODULE;
+
+/// Built with `type(...)` rather than `create_exception!` because two of them also
+/// derive from `ValueError` (bad input), which needs two bases.
+pub(crate) struct Exceptions {
+    pub base: Py<PyType>,
+    pub task_format: Py<PyType>,
+    pub unknown_robot: Py<PyType>,
+    pub action_parse: Py<PyType>,
+    pub physics: Py<PyType>,
+    pub backend: Py<PyType>,
+    pub replay_mismatch: Py<PyType>,
+}
+
+static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
+
+pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
+    EXCEPTIONS.get_or_try_init(py, || {
+        let make = |name: &str, bases: Vec<Bound<'_, PyType>>, doc: &str| -> PyResult<Py<PyType>> {
+            let namespace = PyDict::new(py);
+            namespace.set_item("__module__", MODULE)?;
+            namespace.set_item("__doc__", doc)?;
+            let bases = PyTuple::new(py, bases)?;
+            let ty = py.get_type::<PyType>().call1((name, bases, namespace))?;
+            Ok(ty.cast_into::<PyType>()?.unbind())
+        };
+        let value_error = py.get_type::<PyValueError>();
+        let base = make(
+            "CoherentError",
+            vec![py.get_type::<PyException>()],
+            "Base class of every error raised by coherent.",
+        )?;
+        let sub = |name: &str, value: bool, doc: &str| {
+            let mut bases = vec![base.bind(py).clone()];
+            if value {
+                bases.push(value_error.clone());
+            }
+            make(name, bases, doc)
+        };
+        Ok(Exceptions {
+            task_format: sub(
+                "TaskFormatError",
+                true,
+                "A task file or folder that cannot be read or does not follow its format.\n\n\
+                 The message names the file, the JSON path and the offending value; the\n\
+                 attributes `file` and `json_path` (None when the file could not be read at\n\
+                 all) hold the first two.",
+            )?,
+            unknown_robot: sub(
+                "UnknownRobotError",
+                false,
+                "A robot id that is not a robot of the task; the message lists its robots.",
+            )?,
+            action_parse: sub(
+                "ActionParseError",
+                true,
+                "An action string that does not follow the grammar `[verb] <name>(id)`.\n\n\
+                 Attributes: `action` (the text) and `reason`.",
+            )?,
+            physics: sub(
+                "PhysicsError",
+                false,
+                "The physical simulation cannot build a task's scene; the message says why,\n\
+                 with the numbers.",
+            )?,
+            backend: sub(
+                "BackendError",
+                false,
+                "The language model's endpoint is misconfigured, or its server failed for\n\
+                 good during an episode. Attribute `episode`: the episode up to there (its\n\
+                 transcript is on disk), or None when no episode started.",
+            )?,
+            replay_mismatch: sub(
+                "ReplayMismatchError",
+                false,
+                "A replayed episode did not come out as recorded. Attribute `episode`: the\n\
+                 replayed episode.",
+            )?,
+            base,
+        })
+    })
+}
+
+/// Converts a `coherent-core` error into the matching Python exception.
+pub(crate) fn core_err(py: Python<'_>, e: Error) -> PyErr {
+    let message = e.to_string();
+    let built = exceptions(py).and_then(|exc| {
+        let value = match &e {
+            Error::Io { file, .. } => {
+                let v = exc.task_format.bind(py).call1((message.clone(),))?;
+                v.setattr("file", file)?;
+                v.setattr("json_path", py.None())?;
+                v
+            }
+            Error::Malformed { file, path, .. } => {
+                let v = exc.task_format.bind(py).call1((message.clone(),))?;
+                v.setattr("file", file)?;
+                v.setattr("json_path", path.to_string())?;
+                v
+            }
+            Error::UnknownRobot(_) => exc.unknown_robot.bind(py).call1((message.clone(),))?,
+            Error::BadAction { action, reason } => {
+                let v = exc.action_parse.bind(py).call1((message.clone(),))?;
+                v.setattr("action", action)?;
+                v.setattr("reason", reason)?;
+                v
+            }
+        };
+        Ok(PyErr::from_value(value))
+    });
+    // Only when Python itself fails (e.g. out of memory): say that, keeping the message.
+    built.unwrap_or_else(|inner| {
+        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
+    })
+}
+
+/// Which class of the tree an error message belongs to.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Kind {
+    Coherent,
+    Physics,
+    Backend,
+    ReplayMismatch,
+}
+
+/// An exception of class `kind` with `message`, and `episode` as its attribute for the
+/// two classes that carry one.
+pub(crate) fn error(
+    py: Python<'_>,
+    kind: Kind,
+    message: impl Into<String>,
+    episode: Option<Py<PyAny>>,
+) -> PyErr {
+    let message = message.into();
+    let built = exceptions(py).and_then(|exc| {
+        let class = match kind {
+            Kind::Coherent => &exc.base,
+            Kind::Physics => &exc.physics,
+            Kind::Backend => &exc.backend,
+            Kind::ReplayMismatch => &exc.replay_mismatch,
+        };
+        let value = class.bind(py).call1((message.clone(),))?;
+        if matches!(kind, Kind::Backend | Kind::ReplayMismatch) {
+            value.setattr("episode", episode)?;
+        }
+        Ok(PyErr::from_value(value))
+    });
+    built.unwrap_or_else(|inner| {
+        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
+    })
+}
+
+/// A `CoherentError` with `message`, for the engine's errors that are plain text.
+pub(crate) fn coherent(py: Python<'_>, message: impl Into<String>) -> PyErr {
+    error(py, Kind::Coherent, message, None)
+}
+
+pub(crate) fn physics(py: Python<'_>, e: coherent_sim::PhysicsError) -> PyErr {
+    error(py, Kind::Physics, e.message, None)
+}
+
+pub(crate) fn backend(py: Python<'_>, message: impl Into<String>) -> PyErr {
+    error(py, Kind::Backend, message, None)
+}

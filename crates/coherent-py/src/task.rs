@@ -1,0 +1,286 @@
+//! `Task` and `Env`: a task's data, and stepping its world by hand.
+
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, OnceLock};
+
+use coherent_core::planner::{self, Limits};
+use coherent_core::{
+    Environment, NodeId, RawGraph, SymbolicEnv, Task, feasibility, native, original,
+};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::{interruptible, json_to_py, py_repr, to_py};
+use crate::errors::{self, core_err};
+
+/// A task: the scene graph at the start, the robots, the goal and the ground truth.
+#[pyclass(name = "Task", module = "coherent._coherent", frozen)]
+pub(crate) struct PyTask {
+    pub task: Arc<Task>,
+    /// The planner's task type, computed when first asked for.
+    kind: OnceLock<Option<&'static str>>,
+}
+
+impl PyTask {
+    pub fn new(task: Task) -> PyTask {
+        PyTask::shared(Arc::new(task))
+    }
+
+    pub fn shared(task: Arc<Task>) -> PyTask {
+        PyTask {
+            task,
+            kind: OnceLock::new(),
+        }
+    }
+}
+
+#[pymethods]
+impl PyTask {
+    /// The scene: the original file's stem (`env0`) or the native file's `scene`.
+    #[getter]
+    fn scene(&self) -> &str {
+        &self.task.meta.scene
+    }
+
+    #[getter]
+    fn task_id(&self) -> i64 {
+        self.task.meta.task_id
+    }
+
+    #[getter]
+    fn name(&self) -> &str {
+        &self.task.meta.name
+    }
+
+    #[getter]
+    fn instruction(&self) -> &str {
+        &self.task.meta.instruction
+    }
+
+    /// The ground truth's number of steps, when the file gives one.
+    #[getter]
+    fn gt_steps(&self) -> Option<u32> {
+        self.task.meta.gt_steps
+    }
+
+    /// `"mono"`, `"dual"` or `"trio"`: the fewest robot types that can reach the goal, by
+    /// the optimal planner (searched once, on first use); None when it finds no plan.
+    #[getter(r#type)]
+    fn task_type(&self, py: Python<'_>) -> PyResult<Option<&'static str>> {
+        if let Some(kind) = self.kind.get() {
+            return Ok(*kind);
+        }
+        let task = Arc::clone(&self.task);
+        let cancel = Arc::new(AtomicBool::new(false));
+        let limits = Limits {
+            cancel: Some(Arc::clone(&cancel)),
+            ..Limits::default()
+        };
+        let kind = interruptible(
+            py,
+            move || cancel.store(true, Ordering::Relaxed),
+            move || planner::analyse(&task, &limits).task_type.map(|k| k.name()),
+        )?;
+        Ok(*self.kind.get_or_init(|| kind))
+    }
+
+    /// Node ids of the robots, in graph order.
+    #[getter]
+    fn robots(&self) -> Vec<i64> {
+        robot_ids(&self.task)
+    }
+
+    /// Robot node id -> `"quadrotor"`, `"robot dog"` or `"robot arm"`.
+    #[getter]
+    fn robot_types<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for r in &self.task.robots {
+            dict.set_item(self.task.id(r.node).0, r.kind.class_name())?;
+        }
+        Ok(dict)
+    }
+
+    /// The goal predicates, as `on_<apple>(3)_<table>(5)` / `inside_<a>(i)_<b>(j)`.
+    #[getter]
+    fn goal(&self) -> Vec<String> {
+        self.task
+            .goal
+            .iter()
+            .map(|p| self.task.predicate_label(p))
+            .collect()
+    }
+
+    /// The task as a native task file (a JSON object).
+    fn to_native<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &native::to_value(&self.task))
+    }
+
+    /// The native task file's text, as `coherent import` writes it with `indent`.
+    #[pyo3(signature = (indent = false))]
+    fn to_json(&self, indent: bool) -> String {
+        let value = native::to_value(&self.task);
+        if indent {
+            serde_json::to_string_pretty(&value)
+        } else {
+            serde_json::to_string(&value)
+        }
+        .unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+    }
+
+    /// The task in the original format (one element of a scene file's list).
+    fn to_original<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
+        json_to_py(py, &original::to_value(&self.task))
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let meta = &self.task.meta;
+        format!(
+            "Task(scene={}, task_id={}, name={}, robots={:?}, goal={:?})",
+            py_repr(py, &meta.scene),
+            meta.task_id,
+            py_repr(py, &meta.name),
+            self.robots(),
+            self.goal()
+        )
+    }
+}
+
+pub(crate) fn robot_ids(task: &Task) -> Vec<i64> {
+    task.robots.iter().map(|r| task.id(r.node).0).collect()
+}
+
+/// Puts `graph`'s `nodes` and `edges` (the original format's field names) into `dict`.
+fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
+    dict.set_item("nodes", to_py(dict.py(), &graph.nodes)?)?;
+    dict.set_item("edges", to_py(dict.py(), &graph.edges)?)
+}
+
+/// A task's environment: robots observe and act one action at a time, by the rules, and
+/// with `physics=True` also in Rapier.
+#[pyclass(name = "Env", module = "coherent._coherent")]
+pub(crate) struct PyEnv {
+    env: Box<dyn Environment + Send + Sync>,
+    task: Py<PyTask>,
+    physics: bool,
+}
+
+#[pymethods]
+impl PyEnv {
+    #[new]
+    #[pyo3(signature = (task, physics = false))]
+    fn new(py: Python<'_>, task: Bound<'_, PyTask>, physics: bool) -> PyResult<PyEnv> {
+        let t = Arc::clone(&task.get().task);
+        let env: Box<dyn Environment + Send + Sync> = if physics {
+            let built = py.detach(|| coherent_sim::PhysicalEnv::new(t));
+            Box::new(built.map_err(|e| errors::physics(py, e))?)
+        } else {
+            Box::new(SymbolicEnv::new(t))
+        };
+        Ok(PyEnv {
+            env,
+            task: task.unbind(),
+            physics,
+        })
+    }
+
+    /// Whether actions are also carried out in physics.
+    #[getter]
+    fn physics(&self) -> bool {
+        self.physics
+    }
+
+    /// The task this environment runs.
+    #[getter]
+    fn task(&self, py: Python<'_>) -> Py<PyTask> {
+        self.task.clone_ref(py)
+    }
+
+    /// Node ids of the robots.
+    #[getter]
+    fn robots(&self) -> Vec<i64> {
+        robot_ids(self.env.task())
+    }
+
+    /// What `robot` sees: `{"room": id | None, "nodes": [...], "edges": [...]}`, nodes and
+    /// edges with the original format's field names.
+    fn observe<'py>(&self, py: Python<'py>, robot: i64) -> PyResult<Bound<'py, PyDict>> {
+        let obs = self
+            .env
+            .observe(NodeId(robot))
+            .map_err(|e| core_err(py, e))?;
+        let task = self.env.task();
+        let graph = task.raw_subgraph(self.env.state(), &obs.nodes, &obs.edges);
+        let dict = PyDict::new(py);
+        dict.set_item("room", obs.room.map(|r| task.id(r).0))?;
+        put_graph(&dict, &graph)?;
+        Ok(dict)
+    }
+
+    /// The action strings `robot` may use now.
+    fn actions(&self, py: Python<'_>, robot: i64) -> PyResult<Vec<String>> {
+        self.env.actions(NodeId(robot)).map_err(|e| core_err(py, e))
+    }
+
+    /// Why `robot` cannot do `action` now, by the rules, without doing it; None when it
+    /// can. An unparsable action gets the parser's reason.
+    fn why_not(&self, py: Python<'_>, robot: i64, action: &str) -> PyResult<Option<String>> {
+        let task = self.env.task();
+        let r = task
+            .robot_by_id(NodeId(robot))
+            .map_err(|e| core_err(py, e))?;
+        Ok(feasibility::check(task, self.env.state(), r, action)
+            .err()
+            .map(|why| why.message))
+    }
+
+    /// Tries `action` for `robot`: `(ok, reason, done)`. An infeasible or unparsable
+    /// action is not an error: `ok` is False and `reason` says why.
+    fn step(
+        &mut self,
+        py: Python<'_>,
+        robot: i64,
+        action: &str,
+    ) -> PyResult<(bool, Option<String>, bool)> {
+        let outcome = if self.physics {
+            let env = &mut self.env;
+            py.detach(|| env.step(NodeId(robot), action))
+        } else {
+            self.env.step(NodeId(robot), action)
+        }
+        .map_err(|e| core_err(py, e))?;
+        Ok((
+            outcome.executed(),
+            outcome.infeasible.map(|i| i.message),
+            outcome.done,
+        ))
+    }
+
+    fn goal_satisfied(&self) -> bool {
+        self.env.goal_satisfied()
+    }
+
+    /// The whole current graph: `{"nodes": [...], "edges": [...]}`.
+    fn graph<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        put_graph(&dict, &self.env.task().raw_graph(self.env.state()))?;
+        Ok(dict)
+    }
+
+    /// Back to the task's initial state.
+    fn reset(&mut self) {
+        self.env.reset();
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        let meta = &self.env.task().meta;
+        let flag = |b: bool| if b { "True" } else { "False" };
+        format!(
+            "Env(scene={}, task_id={}, robots={:?}, physics={}, goal_satisfied={})",
+            py_repr(py, &meta.scene),
+            meta.task_id,
+            self.robots(),
+            flag(self.physics),
+            flag(self.env.goal_satisfied())
+        )
+    }
+}

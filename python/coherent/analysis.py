@@ -1,0 +1,256 @@
+"""Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps.
+
+The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
+as ``coherent bench``); this module only shapes them into DataFrames.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Literal, Union
+
+from . import _coherent
+from ._coherent import LLM, Episode, Task
+
+if TYPE_CHECKING:
+    import pandas as pd
+
+PathLike = Union[str, "os.PathLike[str]"]
+Results = Union["pd.DataFrame", PathLike, Sequence[Mapping[str, Any]]]
+
+# The results file's `backend` object, spread over three columns of the DataFrame.
+_BACKEND_FIELDS = ("kind", "model", "base_url")
+
+
+def results(path: PathLike) -> pd.DataFrame:
+    """The results file of :func:`bench` (or ``coherent bench --out``) as a DataFrame,
+    one row per line; the ``backend`` object is spread over ``backend_kind``,
+    ``backend_model`` and ``backend_base_url``."""
+    return _frame(_coherent.read_results(path))
+
+
+def _frame(lines: list[dict[str, Any]]) -> pd.DataFrame:
+    import pandas as pd
+
+    rows = []
+    for line in lines:
+        row = {k: v for k, v in line.items() if k != "backend"}
+        for name in _BACKEND_FIELDS:
+            row[f"backend_{name}"] = line["backend"][name]
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _lines(data: Results) -> list[dict[str, Any]]:
+    """Results lines as the Rust side reads them, from a DataFrame, a file or dicts."""
+    if isinstance(data, (str, os.PathLike)):
+        return _coherent.read_results(data)
+    records = data.to_dict("records") if hasattr(data, "to_dict") else list(data)
+    lines = []
+    for record in records:
+        line = {k: _missing_to_none(v) for k, v in record.items()}
+        if "backend" not in line:
+            line["backend"] = {name: line.pop(f"backend_{name}", None) for name in _BACKEND_FIELDS}
+        lines.append(line)
+    return lines
+
+
+def _missing_to_none(value: Any) -> Any:
+    # pandas marks a missing value NaN (float columns) or NA/None (others).
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return None
+    if type(value).__name__ in ("NAType", "NaTType"):
+        return None
+    return value
+
+
+def bench(
+    tasks: PathLike | Iterable[Task],
+    methods: Sequence[str],
+    *,
+    backend: Literal["builtin", "simulated", "replay"] | LLM = "builtin",
+    sim_errors: str | Mapping[str, float] | None = None,
+    replay_from: PathLike | None = None,
+    seeds: int = 1,
+    concurrency: int = 4,
+    history: int = 5,
+    max_states: int = 5_000_000,
+    out: PathLike = "results.jsonl",
+    progress: bool = False,
+) -> pd.DataFrame:
+    """Runs every method on every task for every seed, as ``coherent bench`` does, and
+    returns the whole results file ``out`` as a DataFrame (see :func:`results`).
+
+    ``tasks`` is a list of tasks (e.g. from :func:`coherent.select`) or a path, of which
+    every well-formed task runs. The file is appended to and resumable: episodes already
+    finished in it are skipped, so after Ctrl-C (``KeyboardInterrupt``) the same call
+    finishes the rest. ``backend``: ``"builtin"`` (the optimal planner plays every
+    role), ``"simulated"`` (the planner with seeded mistakes at the ``sim_errors``
+    rates, e.g. ``"all=0.1"``), an :class:`LLM`, or ``"replay"``: the episodes of the
+    earlier results file ``replay_from`` answer from their transcripts (no network), with
+    their recorded settings; a line's ``error`` says when one came out differently.
+    What the run did is in
+    ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
+    ``df.attrs["malformed"]``.
+    """
+    malformed: list[_coherent.TaskFormatError] = []
+    if isinstance(tasks, (str, os.PathLike)):
+        chosen, malformed = _coherent.read_tasks(tasks)
+    else:
+        chosen = list(tasks)
+    outcome = _coherent.run_bench(
+        chosen,
+        list(methods),
+        backend=backend,
+        sim_errors=sim_errors,
+        replay_from=replay_from,
+        seeds=seeds,
+        concurrency=concurrency,
+        history=history,
+        max_states=max_states,
+        out=out,
+        progress=progress,
+    )
+    frame = results(out)
+    frame.attrs["outcome"] = outcome
+    frame.attrs["malformed"] = [str(e) for e in malformed]
+    return frame
+
+
+@dataclass(frozen=True)
+class Report:
+    """The paper's tables of a benchmark's results (:func:`report`).
+
+    ``table1`` (by task type: mono, dual, trio, Avg) and ``table2`` (by scene, then Avg)
+    have one row per method and a last ``ground truth`` row (its AS is the mean GT
+    steps), and columns ``(column, stat)`` with ``stat`` one of ``SR``, ``SR ci95``,
+    ``AS``, ``AS ci95`` (the half-width of a 95% interval over seeds; NaN with one
+    seed). ``costs`` has a row per method: LLM calls and tokens per episode and per
+    step.
+    """
+
+    table1: pd.DataFrame
+    table2: pd.DataFrame
+    costs: pd.DataFrame
+    backends: list[str]
+    seeds: list[int]
+    unfinished: int
+    """Episodes without a final result (backend error or interrupted), left out."""
+    untyped_tasks: int
+    """Tasks the planner finds no plan for: counted in Avg only."""
+    lines: list[dict[str, Any]] = field(repr=False)
+
+    def markdown(self) -> str:
+        """The tables as ``coherent bench --report`` prints them."""
+        return _coherent.report_text(self.lines, "markdown")
+
+    def csv(self) -> str:
+        """The tables as ``coherent bench --report --format csv`` prints them."""
+        return _coherent.report_text(self.lines, "csv")
+
+    def _repr_markdown_(self) -> str:
+        return self.markdown()
+
+
+def report(data: Results) -> Report:
+    """Table I and Table II of the paper, and the costs, from benchmark results: a
+    DataFrame of :func:`bench` or :func:`results`, a results file, or its lines."""
+    import pandas as pd
+
+    lines = _lines(data)
+    r = _coherent.report_tables(lines)
+    costs = pd.DataFrame(r["costs"]).set_index("method") if r["costs"] else pd.DataFrame()
+    return Report(
+        table1=_table(r["table1"]),
+        table2=_table(r["table2"]),
+        costs=costs,
+        backends=r["backends"],
+        seeds=r["seeds"],
+        unfinished=r["unfinished"],
+        untyped_tasks=r["untyped_tasks"],
+        lines=lines,
+    )
+
+
+def _table(t: dict[str, Any]) -> pd.DataFrame:
+    import pandas as pd
+
+    nan = float("nan")
+
+    def stat(cell: dict[str, Any] | None, name: str, part: str) -> float:
+        if cell is None:
+            return nan
+        value = cell[name][part]
+        return nan if value is None else float(value)
+
+    data: dict[tuple[str, str], list[float]] = {}
+    for j, column in enumerate(t["columns"]):
+        cells = [row["cells"][j] for row in t["rows"]]
+        gt = t["gt"][j]
+        data[(column, "SR")] = [stat(c, "sr", "mean") for c in cells] + [nan]
+        data[(column, "SR ci95")] = [stat(c, "sr", "ci95") for c in cells] + [nan]
+        data[(column, "AS")] = [stat(c, "as", "mean") for c in cells] + [nan if gt is None else float(gt)]
+        data[(column, "AS ci95")] = [stat(c, "as", "ci95") for c in cells] + [nan]
+    index = pd.Index([row["method"] for row in t["rows"]] + ["ground truth"], name="method")
+    frame = pd.DataFrame(data, index=index)
+    frame.columns = pd.MultiIndex.from_tuples(list(data), names=["column", "stat"])
+    frame.attrs["title"] = t["title"]
+    frame.attrs["tasks"] = dict(zip(t["columns"], t["tasks"]))
+    return frame
+
+
+def episode_frame(episode: Episode) -> pd.DataFrame:
+    """One row per step of ``episode``: the robot the assigner chose and its type, the
+    subtask, the action, the outcome (``executed``, ``infeasible``, ``declined``,
+    ``no_proposal``, ``no_decision``, ``backend_error``) and why, whether the executor
+    judged the subtask complete, whether the goal holds after it, the model calls and
+    tokens, and the time."""
+    import pandas as pd
+
+    types = episode.task.robot_types
+    rows = []
+    for r in episode.transcript:
+        proposal, decision, outcome = r["proposal"], r["decision"], r["outcome"]
+        answers = [c["answer"] for c in r["calls"] if c["answer"] is not None]
+        robot = proposal["robot"] if proposal else None
+        rows.append(
+            {
+                "step": r["step"],
+                "robot": robot,
+                "robot_type": types.get(robot) if robot is not None else None,
+                "subtask": proposal["subtask"] if proposal else None,
+                "action": decision["action"] if decision else None,
+                "outcome": outcome["kind"],
+                "reason": outcome.get("reason") or outcome.get("why") or outcome.get("message"),
+                "subtask_complete": bool(decision and decision["subtask_complete"]),
+                "done": r["done"],
+                "llm_calls": len(r["calls"]),
+                "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers),
+                "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers),
+                "latency_ms": sum(a["latency_ms"] for a in answers),
+                "wall_ms": r["wall_ms"],
+            }
+        )
+    frame = pd.DataFrame(rows, columns=_EPISODE_COLUMNS)
+    return frame.astype({"robot": "Int64"})
+
+
+_EPISODE_COLUMNS = [
+    "step",
+    "robot",
+    "robot_type",
+    "subtask",
+    "action",
+    "outcome",
+    "reason",
+    "subtask_complete",
+    "done",
+    "llm_calls",
+    "prompt_tokens",
+    "completion_tokens",
+    "latency_ms",
+    "wall_ms",
+]

@@ -1,0 +1,110 @@
+"""coherent.plot: each figure draws what it says, from real results and episodes."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("matplotlib")
+
+import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.container import BarContainer  # noqa: E402
+
+import coherent  # noqa: E402
+from coherent import plot  # noqa: E402
+from conftest import DEMO  # noqa: E402
+
+
+@pytest.fixture(scope="module")
+def results(env0_tasks: list[coherent.Task], tmp_path_factory: pytest.TempPathFactory) -> coherent.Report:
+    tasks, _ = coherent.select(env0_tasks, "paper40")
+    out = tmp_path_factory.mktemp("plot") / "r.jsonl"
+    frame = coherent.bench(tasks, ["pefa", "cmrs", "mcts"], backend="simulated", sim_errors="all=0.1", seeds=2, out=out)
+    return coherent.report(frame)
+
+
+@pytest.fixture(scope="module")
+def episode(tmp_path_factory: pytest.TempPathFactory) -> coherent.Episode:
+    demo = coherent.load_tasks(DEMO)[0]
+    return coherent.run(demo, sim_errors="all=0.2", seed=1, out=tmp_path_factory.mktemp("runs"))
+
+
+@pytest.fixture(autouse=True)
+def close_figures() -> None:
+    yield
+    plt.close("all")
+
+
+@pytest.mark.parametrize(("by", "columns"), [("type", ["Mono", "Dual", "Trio", "Average"]), ("scene", ["env0", "Average"])])
+def test_table(results: coherent.Report, tmp_path: Path, by: str, columns: list[str]) -> None:
+    fig = plot.table(results, by=by)  # type: ignore[arg-type]
+    sr, avg = fig.axes
+    assert [t.get_text().split("\n")[0] for t in sr.get_xticklabels()] == columns
+    assert sr.get_ylabel() == "success rate (SR)" and avg.get_ylabel() == "average steps (AS)"
+    # One bar per method and column; error bars with two seeds.
+    assert len(sr.patches) == 3 * len(columns)
+    bars = [c for c in sr.containers if isinstance(c, BarContainer)]
+    assert len(bars) == 3 and all(b.errorbar is not None for b in bars)
+    assert ("Table I" if by == "type" else "Table II") in fig.texts[0].get_text()
+    assert "2 seeds" in fig.texts[0].get_text()
+    names = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert names == ["ground truth", "pefa", "cmrs", "mcts"]
+    fig.savefig(tmp_path / "table.png")
+    assert (tmp_path / "table.png").stat().st_size > 10_000
+
+
+def test_table_from_a_frame_and_its_errors(results: coherent.Report) -> None:
+    frame = coherent.results(results.lines[0]["transcript"].split(".transcripts")[0] + ".jsonl")
+    fig = plot.table(frame, by="scene", title="mine")
+    assert fig.texts[0].get_text().startswith("mine")
+    with pytest.raises(ValueError, match="by="):
+        plot.table(results, by="robot")  # type: ignore[arg-type]
+
+
+def test_timeline(episode: coherent.Episode) -> None:
+    ax = plot.timeline(episode)
+    frame = episode.to_dataframe()
+    labels = [t.get_text() for t in ax.get_yticklabels()]
+    assert labels[:3] == ["robot arm (6)", "quadrotor (11)", "robot dog (13)"]
+    markers = [line for line in ax.get_lines() if line.get_marker() in ("o", "x", "*")]
+    assert len(markers) == len(frame)
+    failed = [line for line in markers if line.get_marker() == "x"]
+    assert len(failed) == (frame["outcome"] != "executed").sum() > 0
+    assert [line.get_marker() for line in markers].count("*") == int(episode.success)
+    assert f"demo-apartment task 0, pefa: {episode.status} in {episode.steps} steps (GT 22)" == ax.get_title()
+
+
+def test_tokens_of_a_backend_without_tokens(episode: coherent.Episode) -> None:
+    ax = plot.tokens(episode)
+    assert len(ax.patches) == 2 * episode.steps
+    assert any("reports no tokens" in t.get_text() for t in ax.texts)
+    assert f"{episode.llm_calls} calls" in ax.get_title()
+
+
+def test_tokens_of_a_model(model_episode: coherent.Episode) -> None:
+    ax = plot.tokens(model_episode)
+    prompt, completion = ax.patches
+    assert prompt.get_height() == model_episode.prompt_tokens > 0
+    assert completion.get_height() == model_episode.completion_tokens > 0
+    assert not ax.texts
+    assert "smollm2-135m" in ax.get_title()
+
+
+def test_scene_map(episode: coherent.Episode) -> None:
+    ax = plot.scene(episode)
+    names = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert names[:3] == ["robot arm (6)", "quadrotor (11)", "robot dog (13)"]
+    assert "path (hollow: where it ends)" in names
+    tracks = coherent.robot_paths(episode)
+    drawn = {line.get_gid() for line in ax.get_lines() if (line.get_gid() or "").startswith("path")}
+    assert drawn == {f"path {robot}" for robot, track in tracks.items() if track}
+    room_names = {t.get_text() for t in ax.texts}
+    assert {"kitchen", "living room"} <= room_names
+    assert "paths of the episode" in ax.get_title()
+
+
+def test_scene_map_without_paths(env0_tasks: list[coherent.Task]) -> None:
+    fig, ax = plt.subplots()
+    assert plot.scene(env0_tasks[0], ax=ax, paths=False) is ax
+    assert not [line for line in ax.get_lines() if line.get_gid()]
