@@ -200,11 +200,10 @@ class Scene:
             return self.room_of[n]
         return next(r for r, f in self.floor.items() if f == n)
 
-    def build(self, task_id, goal, dog_room, dog_spot, quad_on, moved):
-        """The native task: the scene with the robots' start and the moves of `moved`
-        (object -> (holder, inside)) applied."""
-        holder = dict(self.holder)
-        holder.update(moved)
+    def build(self, task_id, goal, dog_room, dog_spot, quad_on):
+        """The native task: the scene, with the legged robot starting at `dog_spot` in
+        `dog_room` and the quadrotor landed on `quad_on`."""
+        holder = self.holder
         items = {k: dict(v, pos=list(v["pos"])) for k, v in self.items.items()}
         edges = list(self.edges)
         # Objects packed on or in their holders, in id order, holders first.
@@ -634,12 +633,10 @@ def candidates(s: Scene, rng: random.Random, count: int):
     return out
 
 
-def plan(coherent: str, files: list[Path]) -> list[dict]:
-    with tempfile.TemporaryDirectory() as tmp:
-        for f in files:
-            shutil.copy(f, Path(tmp) / f.name)
-        run = subprocess.run([coherent, "plan", tmp, "--json", "--max-states", "400000"], capture_output=True,
-                             text=True, check=False)
+def plan(coherent: str, folder: str) -> list[dict]:
+    """`coherent plan --json` on every task file in `folder`, one result per task."""
+    run = subprocess.run([coherent, "plan", folder, "--json", "--max-states", "400000"],
+                         capture_output=True, text=True, check=False)
     if run.returncode not in (0, 1):
         sys.exit(f"coherent plan failed:\n{run.stderr}")
     return [json.loads(line) for line in run.stdout.splitlines() if line.startswith("{")]
@@ -660,13 +657,10 @@ def main() -> None:
             continue
         cands = candidates(s, rng, args.candidates)
         with tempfile.TemporaryDirectory() as tmp:
-            files = []
             for i, (goal, dog_room, dog_spot, quad_on) in enumerate(cands):
-                task = s.build(1000 + i, goal, dog_room, dog_spot, quad_on, {})
-                f = Path(tmp) / f"{i:04d}.json"
-                f.write_text(json.dumps(task))
-                files.append(f)
-            results = {r["task_id"]: r for r in plan(args.coherent, files)}
+                task = s.build(1000 + i, goal, dog_room, dog_spot, quad_on)
+                (Path(tmp) / f"{i:04d}.json").write_text(json.dumps(task))
+            results = {r["task_id"]: r for r in plan(args.coherent, tmp)}
         kept: dict[str, list] = {t: [] for t in GT_RANGE}
         for i, c in enumerate(cands):
             r = results.get(1000 + i)
@@ -686,7 +680,7 @@ def main() -> None:
         task_id = 0
         for ty in ("mono", "dual", "trio"):
             for j, ((goal, dog_room, dog_spot, quad_on), gt) in enumerate(kept[ty]):
-                task = s.build(task_id, goal, dog_room, dog_spot, quad_on, {})
+                task = s.build(task_id, goal, dog_room, dog_spot, quad_on)
                 task["name"] = f"{ty}-{j}"
                 task["ground_truth"] = {"steps": gt}
                 (scene_dir / f"task-{task_id:02d}.json").write_text(

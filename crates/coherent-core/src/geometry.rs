@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, Site};
 use crate::graph::{Idx, NodeId, NodeKind, RobotKind};
+use crate::rules;
 use crate::task::Task;
 use crate::vocab::{PropSet, Relation};
 
@@ -320,7 +321,10 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
     }
     let high: Vec<Idx> = task
         .indices()
-        .filter(|&n| tops[n.get()].is_some_and(|t| t > hand) || stands_high(task, n))
+        .filter(|&n| {
+            tops[n.get()].is_some_and(|t| t > hand)
+                || below(task, n).any(|x| task.node(x).properties.contains(PropSet::HIGH_HEIGHT))
+        })
         .collect();
     for n in high {
         task.init.set_on_high_surface(n, true);
@@ -374,44 +378,24 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
     Ok(())
 }
 
-/// The room `n` is in, following what it stands on or in down to a room.
-fn room_of(task: &Task, n: Idx) -> Option<Idx> {
-    let mut at = n;
-    for _ in 0..task.nodes.len() {
-        let next = task
-            .init
-            .out(at)
-            .iter()
-            .filter(|e| e.rel().is_location())
-            .map(|e| e.to())
-            .min_by_key(|&t| task.node(t).kind != NodeKind::Room)?;
-        if task.node(next).kind == NodeKind::Room {
-            return Some(next);
-        }
-        at = next;
-    }
-    None
-}
-
-/// Whether something under `n` (what it stands on or in, and so on down) is
-/// `HIGH_HEIGHT`.
-fn stands_high(task: &Task, n: Idx) -> bool {
-    let mut at = n;
-    for _ in 0..task.nodes.len() {
-        let Some(next) = task
-            .init
+/// What `n` stands on or in, then what that stands on or in, and so on down (rooms
+/// excepted) at the start.
+fn below(task: &Task, n: Idx) -> impl Iterator<Item = Idx> + '_ {
+    std::iter::successors(Some(n), move |&at| {
+        task.init
             .out(at)
             .iter()
             .filter(|e| e.rel().is_location())
             .map(|e| e.to())
             .find(|&t| task.node(t).kind != NodeKind::Room)
-        else {
-            return false;
-        };
-        if task.node(next).properties.contains(PropSet::HIGH_HEIGHT) {
-            return true;
-        }
-        at = next;
-    }
-    false
+    })
+    .skip(1)
+    .take(task.nodes.len())
+}
+
+/// The room `n` is in at the start: its own, or that of what it stands on or in.
+fn room_of(task: &Task, n: Idx) -> Option<Idx> {
+    std::iter::once(n)
+        .chain(below(task, n))
+        .find_map(|x| rules::room_of(task, &task.init, x))
 }
