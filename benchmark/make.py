@@ -405,7 +405,7 @@ def s2_apartment() -> Scene:
     bed = s.furniture("bed", bedroom, (-2.5, 1.0), (1.8, 0.55, 1.6), landable=True)
     dresser = s.furniture("dresser", bedroom, (-3.5, 4.6), (1.0, 0.8, 0.5), container=True,
                           lid="front", closed=True)
-    shoes = s.furniture("shoe cabinet", hall, (0.2, 4.5), (0.35, 0.9, 0.8), container=True,
+    shoes = s.furniture("shoe cabinet", hall, (1.25, 8.7), (0.8, 0.9, 0.5), container=True,
                         lid="front", closed=False)
     s.arm(bar, (5.2, 0.95))
     s.obj("cup", "Tableware", (0.08, 0.10, 0.08), bar)
