@@ -12,7 +12,7 @@ use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
 use coherent_core::load;
 use coherent_core::planner::Limits;
 
-use super::llm::{AnswerFormat, Endpoint};
+use super::llm::{AnswerFormat, Endpoint, Patience};
 use super::method_names;
 
 /// Exit status after Ctrl-C, as shells report SIGINT.
@@ -88,18 +88,8 @@ struct LlmArgs {
     /// Answer format asked for first; a server that refuses it gets the next one.
     #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
     answer_format: AnswerFormat,
-    /// Seconds to wait for a connection.
-    #[arg(long, default_value_t = 10.0)]
-    connect_timeout: f64,
-    /// Seconds of silence allowed while reading a response.
-    #[arg(long, default_value_t = 120.0)]
-    read_timeout: f64,
-    /// Seconds one request may take in all.
-    #[arg(long, default_value_t = 300.0)]
-    timeout: f64,
-    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
-    #[arg(long, default_value_t = 4)]
-    max_retries: u32,
+    #[command(flatten)]
+    patience: Patience,
     /// Requests in flight at once, across all episodes.
     #[arg(long, default_value_t = 4)]
     requests: usize,
@@ -297,10 +287,7 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         temperature: l.temperature,
         seed: l.llm_seed,
         format: l.answer_format.into(),
-        connect_timeout: l.connect_timeout,
-        read_timeout: l.read_timeout,
-        timeout: l.timeout,
-        max_retries: l.max_retries,
+        patience: l.patience,
         requests: l.requests,
     }
     .config()?;

@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use clap::ValueEnum;
+use clap::{Args, ValueEnum};
 use coherent_agents::retry::Backoff;
 use coherent_agents::{ApiKey, OpenAiConfig, OutputMode};
 
@@ -26,6 +26,24 @@ impl From<AnswerFormat> for OutputMode {
     }
 }
 
+/// How long the client waits and how often it retries: the same flags for `run` and
+/// `bench`.
+#[derive(Args, Clone, Copy, Debug)]
+pub struct Patience {
+    /// Seconds to wait for a connection.
+    #[arg(long, default_value_t = 10.0)]
+    pub connect_timeout: f64,
+    /// Seconds of silence allowed while reading a response.
+    #[arg(long, default_value_t = 120.0)]
+    pub read_timeout: f64,
+    /// Seconds one request may take in all.
+    #[arg(long, default_value_t = 300.0)]
+    pub timeout: f64,
+    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
+    #[arg(long, default_value_t = 4)]
+    pub max_retries: u32,
+}
+
 /// What the flags say of the endpoint; unset ones come from the environment.
 #[derive(Debug)]
 pub struct Endpoint {
@@ -37,11 +55,7 @@ pub struct Endpoint {
     pub seed: Option<u64>,
     /// The answer format asked for first.
     pub format: OutputMode,
-    /// Seconds.
-    pub connect_timeout: f64,
-    pub read_timeout: f64,
-    pub timeout: f64,
-    pub max_retries: u32,
+    pub patience: Patience,
     /// Requests in flight at once.
     pub requests: usize,
 }
@@ -67,11 +81,11 @@ impl Endpoint {
             api_key: key,
             temperature: self.temperature,
             seed: self.seed,
-            connect_timeout: seconds(self.connect_timeout, "connect-timeout")?,
-            read_timeout: seconds(self.read_timeout, "read-timeout")?,
-            total_timeout: seconds(self.timeout, "timeout")?,
+            connect_timeout: seconds(self.patience.connect_timeout, "connect-timeout")?,
+            read_timeout: seconds(self.patience.read_timeout, "read-timeout")?,
+            total_timeout: seconds(self.patience.timeout, "timeout")?,
             backoff: Backoff {
-                max_retries: self.max_retries,
+                max_retries: self.patience.max_retries,
                 ..Backoff::default()
             },
             concurrency: self.requests.max(1),

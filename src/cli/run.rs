@@ -17,7 +17,7 @@ use coherent_core::{Environment, SymbolicEnv, Task};
 
 use serde_json::json;
 
-use super::llm::{AnswerFormat, Endpoint};
+use super::llm::{AnswerFormat, Endpoint, Patience};
 use super::{method_names, pick_task};
 
 /// Exit status when the episode ran but the goal was not reached.
@@ -75,18 +75,8 @@ pub(crate) struct RunArgs {
     /// Answer format asked for first; a server that refuses it gets the next one.
     #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
     format: AnswerFormat,
-    /// Seconds to wait for a connection.
-    #[arg(long, default_value_t = 10.0)]
-    connect_timeout: f64,
-    /// Seconds of silence allowed while reading a response.
-    #[arg(long, default_value_t = 120.0)]
-    read_timeout: f64,
-    /// Seconds one request may take in all.
-    #[arg(long, default_value_t = 300.0)]
-    timeout: f64,
-    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
-    #[arg(long, default_value_t = 4)]
-    max_retries: u32,
+    #[command(flatten)]
+    patience: Patience,
     /// Requests in flight at once.
     #[arg(long, default_value_t = 4)]
     concurrency: usize,
@@ -352,10 +342,7 @@ fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
         temperature: args.temperature,
         seed: args.seed,
         format: args.format.into(),
-        connect_timeout: args.connect_timeout,
-        read_timeout: args.read_timeout,
-        timeout: args.timeout,
-        max_retries: args.max_retries,
+        patience: args.patience,
         requests: args.concurrency,
     };
     match endpoint.config()? {

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent::cli::llm::Endpoint;
+use coherent::cli::llm::{Endpoint, Patience};
 use coherent::cli::run::{self as cli_run, Ran};
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::llm::Backend;
@@ -65,10 +65,12 @@ impl PyLlm {
             temperature,
             seed,
             format,
-            connect_timeout,
-            read_timeout,
-            timeout,
-            max_retries,
+            patience: Patience {
+                connect_timeout,
+                read_timeout,
+                timeout,
+                max_retries,
+            },
             requests: concurrency,
         };
         let config = endpoint.config().map_err(|e| errors::backend(py, e))?.ok_or_else(|| {
