@@ -77,6 +77,19 @@ def _set(key: str, value: Any) -> Callable[[Task], None]:
     return lambda t: t.__setitem__(key, value)
 
 
+def _generated_geometry(t: Task) -> None:
+    """The layout coherent-sim generates for the task, written in as its geometry."""
+    import tempfile
+
+    import coherent
+
+    with tempfile.TemporaryDirectory() as tmp:
+        file = Path(tmp) / "task.json"
+        file.write_text(json.dumps(t), encoding="utf-8")
+        (task,) = coherent.load_tasks(file)
+    t["geometry"] = coherent.scene_layout(task)
+
+
 def _drop_optional(t: Task) -> None:
     for key in ("name", "rules", "ground_truth", "source"):
         del t[key]
@@ -91,7 +104,7 @@ ACCEPTED: dict[str, Callable[[Task], None]] = {
     "optional fields left out": _drop_optional,
     "ground_truth null": _set("ground_truth", None),
     "source null": _set("source", None),
-    "geometry object": _set("geometry", {"rooms": []}),
+    "geometry object": _generated_geometry,
     "unknown property name": lambda t: t["graph"]["nodes"][1]["properties"].append("SHINY"),
     "env_id of any type": lambda t: t["source"].__setitem__("env_id", "scene zero"),
 }
@@ -124,6 +137,7 @@ REJECTED: dict[str, tuple[Callable[[Task], None], str]] = {
     ),
     "unknown edge field": (lambda t: t["graph"]["edges"][0].__setitem__("weight", 1), "$.graph.edges[0].weight"),
     "geometry a number": (_set("geometry", 5), "$.geometry"),
+    "geometry without doors": (_set("geometry", {"rooms": []}), "$.geometry: missing field `doors`"),
     "unknown agent class": (
         lambda t: next(n for n in t["graph"]["nodes"] if n["category"] == "Agents").__setitem__(
             "class_name", "humanoid"
