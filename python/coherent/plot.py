@@ -22,6 +22,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 from matplotlib.patches import Rectangle
 
 from . import _coherent
@@ -143,6 +144,7 @@ def timeline(episode: Episode, ax: Axes | None = None) -> Axes:
     if len(frame):
         ax.set_xlim(0.4, frame["step"].max() + 0.6)
     ax.set_xlabel("step")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.grid(axis="y", alpha=0.25)
     legend = [
         Line2D([], [], marker="o", color="0.35", linestyle="", label="action ran"),
@@ -176,8 +178,10 @@ def tokens(episode: Episode, ax: Axes | None = None) -> Axes:
     calls.plot(steps, frame["llm_calls"].to_numpy(), "o-", color="0.25", markersize=4, linewidth=1, label="model calls")
     calls.set_ylabel("model calls")
     calls.set_ylim(0, max(int(frame["llm_calls"].max()) if len(frame) else 1, 1) * 1.25)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    calls.yaxis.set_major_locator(MaxNLocator(integer=True))
     handles = ax.get_legend_handles_labels()[0] + calls.get_legend_handles_labels()[0]
-    ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=3, fontsize=8, frameon=False)
     if len(frame) and not (prompt.sum() + completion.sum()):
         ax.text(0.5, 0.5, "this backend reports no tokens", transform=ax.transAxes, ha="center", color="0.4")
         ax.set_ylim(0, 1)
