@@ -43,10 +43,16 @@ QUOTA = {
     "s4-restaurant": {"mono": 7, "dual": 6, "trio": 7},
     "s5-house": {"mono": 6, "dual": 6, "trio": 8},
 }
+# Dual tasks in range are the rarest draw (most dual templates turn out mono or trio,
+# or longer than 12 steps), so their templates are drawn more often.
+DRAW_WEIGHT = {"mono": 1.0, "dual": 3.0, "trio": 1.5}
 # The 40-task subset, in the paper's proportions: per scene 2 mono, 3 dual, 3 trio.
 SUBSET40 = {"mono": 2, "dual": 3, "trio": 3}
 GAP = 0.06
 WALL = 0.04
+# A counter with a fixed arm (width x, height y, depth z): its top is high for the legged
+# robot, its right metre is the quadrotor's landing pad and its back strip the arm's.
+ARM_TABLE = (2.0, 1.1, 1.2)
 
 
 class Scene:
@@ -102,8 +108,8 @@ class Scene:
                 "rooms": [a, b],
                 "center": list(center),
                 "along_x": along_x,
-                "width": 0.9,
-                "height": 2.1,
+                "width": 1.3,
+                "height": 2.3,
             }
         )
         return d
@@ -169,9 +175,13 @@ class Scene:
         self.holder[n] = (holder, inside)
         return n
 
-    def arm(self, table, xz):
+    def arm(self, table):
+        """A fixed arm on `table`, left of centre in the strip kept free at the back, so
+        that it reaches the far corner of the table and the quadrotor's landing pad."""
         a = self._node("Agents", "robot arm")
-        self.arms.append((a, table, list(xz)))
+        g = self.items[table]
+        xz = [g["pos"][0] - 0.2, g["pos"][2] + g["size"][2] / 2 - 0.175]
+        self.arms.append((a, table, xz))
         return a
 
     def team(self):
@@ -191,6 +201,44 @@ class Scene:
         out += [n for n, node in enumerate(self.nodes)
                 if "LANDABLE" in node["properties"] and n in self.room_of]
         return out
+
+    def clear(self, room, x, z, r):
+        """Whether a disc of radius `r` at (x, z) is inside `room`, `r` from its walls, and
+        `r` from its furniture and any flight of stairs in it."""
+        rm = self.rooms[room]
+        if not (rm["min"][0] + r <= x <= rm["max"][0] - r
+                and rm["min"][1] + r <= z <= rm["max"][1] - r):
+            return False
+        boxes = [(g["pos"][0], g["pos"][2], g["size"][0] / 2, g["size"][2] / 2)
+                 for n, g in self.items.items() if self.room_of.get(n) == room]
+        for f in self.stairs:
+            if room in f["rooms"]:
+                (x0, z0), (x1, z1) = f["foot"], f["head"]
+                w = f["width"] / 2
+                boxes.append(((x0 + x1) / 2, (z0 + z1) / 2,
+                              abs(x1 - x0) / 2 + (w if x0 == x1 else 0),
+                              abs(z1 - z0) / 2 + (w if z0 == z1 else 0)))
+        for cx, cz, hx, hz in boxes:
+            dx = max(abs(x - cx) - hx, 0.0)
+            dz = max(abs(z - cz) - hz, 0.0)
+            if (dx * dx + dz * dz) ** 0.5 < r:
+                return False
+        return True
+
+    def open_floor(self, room, avoid=None):
+        """A spot on `room`'s floor with 0.7 m clear all round and 1.2 m from `avoid` (the
+        legged robot's start), the nearest to its middle on a 10 cm grid: where the
+        quadrotor lands on that floor."""
+        rm = self.rooms[room]
+        mx, mz = (rm["min"][0] + rm["max"][0]) / 2, (rm["min"][1] + rm["max"][1]) / 2
+        spots = [(rm["min"][0] + i / 10, rm["min"][1] + k / 10)
+                 for i in range(int((rm["max"][0] - rm["min"][0]) * 10) + 1)
+                 for k in range(int((rm["max"][1] - rm["min"][1]) * 10) + 1)]
+        spots = [p for p in spots if self.clear(room, p[0], p[1], 0.7)
+                 and (avoid is None or (p[0] - avoid[0]) ** 2 + (p[1] - avoid[1]) ** 2 > 1.44)]
+        if not spots:
+            raise ValueError(f"{self.name}: no open floor in {self.nodes[room]['class_name']}")
+        return min(spots, key=lambda p: ((p[0] - mx) ** 2 + (p[1] - mz) ** 2, p))
 
     def where(self, n):
         """The room a furniture item, floor or object is in."""
@@ -244,10 +292,13 @@ class Scene:
             qpos = [sg["pos"][0] + sg["size"][0] / 2 - 0.5, sg["pos"][1] + sg["size"][1],
                     sg["pos"][2]]
         else:
-            r = self.rooms[q_room]
-            qpos = [r["min"][0] + 0.8, r["level"], r["min"][1] + 0.8]
+            x, z = self.open_floor(q_room, dog_spot if q_room == dog_room else None)
+            qpos = [x, self.rooms[q_room]["level"], z]
         robots_geom.append({"id": self.quadrotor, "pos": [round(v, 3) for v in qpos],
                             "yaw": 0.0})
+        if not self.clear(dog_room, dog_spot[0], dog_spot[1], 0.6):
+            raise ValueError(f"{self.name}: the legged robot's start {dog_spot} in "
+                             f"{self.nodes[dog_room]['class_name']} is not clear")
         edges += [(self.dog, "ON", self.floor[dog_room]), (self.dog, "INSIDE", dog_room)]
         level = self.rooms[dog_room]["level"]
         robots_geom.append({"id": self.dog, "pos": [dog_spot[0], level, dog_spot[1]],
@@ -329,17 +380,17 @@ class Scene:
 def s1_apartment() -> Scene:
     s = Scene("s1-apartment", "Apartment A: kitchen, living room, bedroom, bathroom")
     kitchen = s.room("kitchen", (0, 0), (5, 4), dog_spots=[(2.5, 2.0)])
-    living = s.room("living room", (5, 0), (11, 5), dog_spots=[(8.0, 2.5)])
-    bedroom = s.room("bedroom", (5, 5), (10, 9), dog_spots=[(7.5, 7.0)])
+    living = s.room("living room", (5, 0), (11, 5), dog_spots=[(8.0, 3.0)])
+    bedroom = s.room("bedroom", (5, 5), (10, 9), dog_spots=[(8.0, 6.5)])
     bath = s.room("bathroom", (0, 4), (5, 7), dog_spots=[(2.5, 5.5)])
     s.door(kitchen, living, (5, 2.0), False, closed=False)
     s.door(living, bedroom, (8.0, 5), True, closed=True)
     s.door(kitchen, bath, (1.5, 4), True, closed=True)
-    island = s.furniture("kitchen island", kitchen, (2.5, 0.7), (1.7, 1.1, 1.0), landable=True)
+    island = s.furniture("kitchen island", kitchen, (2.5, 0.7), ARM_TABLE, landable=True)
     fridge = s.furniture("fridge", kitchen, (0.5, 3.4), (0.7, 1.8, 0.7), surface=False,
                          container=True, lid="front", closed=True, category="Appliances")
     dining = s.furniture("dining table", kitchen, (3.8, 3.0), (1.4, 0.75, 1.0), landable=True)
-    cabinet = s.furniture("kitchen cabinet", kitchen, (4.5, 0.4), (0.8, 0.9, 0.6), container=True,
+    cabinet = s.furniture("kitchen cabinet", kitchen, (2.6, 3.6), (0.8, 0.9, 0.6), container=True,
                           lid="front", closed=True)
     coffee = s.furniture("coffee table", living, (8.0, 1.5), (1.2, 0.45, 1.0), landable=True)
     sofa = s.furniture("sofa", living, (8.0, 0.5), (2.0, 0.45, 0.8))
@@ -348,16 +399,17 @@ def s1_apartment() -> Scene:
     box = s.furniture("storage box", living, (10.4, 0.6), (0.6, 0.45, 0.5), surface=False,
                       container=True, lid="top", closed=True)
     bed = s.furniture("bed", bedroom, (6.5, 8.0), (1.8, 0.55, 1.6), landable=True)
-    night = s.furniture("nightstand", bedroom, (9.5, 8.5), (0.5, 0.55, 0.5))
-    wardrobe = s.furniture("wardrobe", bedroom, (9.4, 6.0), (1.0, 1.9, 0.6), surface=False,
+    night = s.furniture("nightstand", bedroom, (8.0, 8.7), (0.5, 0.55, 0.5))
+    wardrobe = s.furniture("wardrobe", bedroom, (9.4, 8.6), (1.0, 1.9, 0.6), surface=False,
                            container=True, lid="front", closed=True)
     sink = s.furniture("sink counter", bath, (3.8, 6.6), (1.2, 0.85, 0.6))
     laundry = s.furniture("laundry basket", bath, (1.0, 6.5), (0.5, 0.5, 0.5), surface=False,
                           container=True)
-    s.arm(island, (2.5, 1.05))
+    s.arm(island)
     s.obj("mug", "Tableware", (0.09, 0.10, 0.09), island)
     s.obj("plate", "Tableware", (0.24, 0.03, 0.24), island)
     s.obj("bread", "Food", (0.25, 0.12, 0.12), island)
+    s.obj("bread basket", "Containers", (0.32, 0.12, 0.26), island, container=True)
     s.obj("apple", "Fruit", (0.08, 0.08, 0.08), fridge, inside=True)
     s.obj("milk", "Drinks", (0.09, 0.25, 0.09), fridge, inside=True)
     s.obj("bowl", "Tableware", (0.16, 0.07, 0.16), dining)
@@ -380,7 +432,7 @@ def s1_apartment() -> Scene:
 def s2_apartment() -> Scene:
     s = Scene("s2-apartment", "Apartment B: a hall with kitchen, living room, study, bedroom")
     hall = s.room("hall", (0, 0), (2.5, 9), dog_spots=[(1.25, 4.5)])
-    kitchen = s.room("kitchen", (2.5, 0), (7.5, 4), dog_spots=[(5.0, 2.2)])
+    kitchen = s.room("kitchen", (2.5, 0), (7.5, 4), dog_spots=[(3.6, 2.2)])
     living = s.room("living room", (2.5, 4), (8.5, 9), dog_spots=[(4.0, 6.5)])
     study = s.room("study", (-4, 5), (0, 9), dog_spots=[(-2.0, 7.0)])
     bedroom = s.room("bedroom", (-4, 0), (0, 5), dog_spots=[(-2.0, 3.2)])
@@ -388,11 +440,11 @@ def s2_apartment() -> Scene:
     s.door(hall, living, (2.5, 6.5), False, closed=False)
     s.door(hall, study, (0, 7.0), False, closed=True)
     s.door(hall, bedroom, (0, 2.5), False, closed=True)
-    bar = s.furniture("bar counter", kitchen, (5.2, 0.6), (1.7, 1.1, 1.0), landable=True)
+    bar = s.furniture("bar counter", kitchen, (5.2, 0.7), ARM_TABLE, landable=True)
     fridge = s.furniture("fridge", kitchen, (7.0, 3.5), (0.7, 1.8, 0.7), surface=False,
                          container=True, lid="front", closed=True, category="Appliances")
     pantry = s.furniture("pantry shelf", kitchen, (4.2, 3.75), (1.0, 1.5, 0.4))
-    table = s.furniture("kitchen table", kitchen, (5.8, 2.6), (1.8, 0.75, 1.0), landable=True)
+    table = s.furniture("kitchen table", kitchen, (5.3, 2.6), (1.8, 0.75, 1.0), landable=True)
     sofa = s.furniture("sofa", living, (5.5, 8.5), (2.0, 0.45, 0.8))
     coffee = s.furniture("coffee table", living, (5.5, 7.2), (1.8, 0.45, 1.0), landable=True)
     tv = s.furniture("tv stand", living, (5.5, 4.35), (1.4, 0.5, 0.5))
@@ -400,17 +452,18 @@ def s2_apartment() -> Scene:
                         container=True, lid="top", closed=True)
     desk = s.furniture("desk", study, (-2.0, 8.5), (1.4, 0.75, 0.7))
     shelf = s.furniture("wall shelf", study, (-3.7, 6.5), (0.5, 1.6, 1.0))
-    filing = s.furniture("filing cabinet", study, (-0.5, 5.5), (0.5, 1.0, 0.6), container=True,
+    filing = s.furniture("filing cabinet", study, (-0.5, 8.6), (0.5, 1.0, 0.6), container=True,
                          lid="front", closed=True)
     bed = s.furniture("bed", bedroom, (-2.5, 1.0), (1.8, 0.55, 1.6), landable=True)
     dresser = s.furniture("dresser", bedroom, (-3.5, 4.6), (1.0, 0.8, 0.5), container=True,
                           lid="front", closed=True)
     shoes = s.furniture("shoe cabinet", hall, (1.25, 8.7), (0.8, 0.9, 0.5), container=True,
                         lid="front", closed=False)
-    s.arm(bar, (5.2, 0.95))
+    s.arm(bar)
     s.obj("cup", "Tableware", (0.08, 0.10, 0.08), bar)
     s.obj("cereal box", "Food", (0.2, 0.28, 0.07), bar)
     s.obj("banana", "Fruit", (0.2, 0.04, 0.06), bar)
+    s.obj("snack bowl", "Tableware", (0.3, 0.08, 0.26), bar, container=True)
     s.obj("yogurt", "Food", (0.07, 0.08, 0.07), fridge, inside=True)
     s.obj("juice", "Drinks", (0.09, 0.25, 0.09), fridge, inside=True)
     s.obj("jar", "Food", (0.1, 0.15, 0.1), pantry)
@@ -436,7 +489,7 @@ def s3_grocery() -> Scene:
     office = s.room("office", (0, 8), (4, 11), dog_spots=[(2.0, 9.5)])
     s.door(sales, storage, (12, 4.0), False, closed=True)
     s.door(sales, office, (2.0, 8), True, closed=True)
-    deli = s.furniture("deli counter", sales, (9.5, 0.6), (1.7, 1.1, 1.0), landable=True)
+    deli = s.furniture("deli counter", sales, (9.5, 0.7), ARM_TABLE, landable=True)
     produce = s.furniture("produce stand", sales, (3.0, 4.0), (1.6, 0.8, 1.0), landable=True)
     low_shelf = s.furniture("low shelf", sales, (6.5, 6.0), (2.0, 0.6, 0.5))
     top_shelf = s.furniture("top shelf", sales, (6.5, 7.7), (2.0, 1.6, 0.5))
@@ -445,18 +498,19 @@ def s3_grocery() -> Scene:
     checkout = s.furniture("checkout counter", sales, (3.5, 1.0), (1.8, 0.9, 1.0), landable=True)
     bin_ = s.furniture("bargain bin", sales, (9.5, 4.0), (0.8, 0.6, 0.6), surface=False,
                        container=True)
-    bench = s.furniture("packing bench", storage, (14.5, 0.6), (1.7, 1.1, 1.0), landable=True)
+    bench = s.furniture("packing bench", storage, (14.5, 0.7), ARM_TABLE, landable=True)
     rack = s.furniture("storage rack", storage, (16.5, 5.0), (0.6, 1.7, 1.4))
     pallet = s.furniture("pallet", storage, (14.0, 7.0), (1.8, 0.15, 1.0), landable=True)
     crate = s.furniture("crate", storage, (16.3, 7.4), (0.6, 0.4, 0.5), surface=False,
                         container=True)
     desk = s.furniture("office desk", office, (2.0, 10.5), (1.4, 0.75, 0.7))
-    safe = s.furniture("safe", office, (3.6, 9.0), (0.5, 0.6, 0.5), container=True, lid="front",
+    safe = s.furniture("safe", office, (3.6, 10.6), (0.5, 0.6, 0.5), container=True, lid="front",
                        closed=True)
-    s.arm(deli, (9.5, 0.95))
-    s.arm(bench, (14.5, 0.95))
+    s.arm(deli)
+    s.arm(bench)
     s.obj("cheese", "Food", (0.12, 0.06, 0.1), deli)
     s.obj("ham", "Food", (0.2, 0.08, 0.1), deli)
+    s.obj("deli tray", "Containers", (0.32, 0.05, 0.26), deli, container=True)
     s.obj("orange", "Fruit", (0.08, 0.08, 0.08), produce)
     s.obj("lettuce", "Vegetables", (0.18, 0.15, 0.18), produce)
     s.obj("pasta", "Food", (0.2, 0.05, 0.08), low_shelf)
@@ -469,6 +523,8 @@ def s3_grocery() -> Scene:
     s.obj("candy", "Food", (0.1, 0.03, 0.15), bin_, inside=True)
     s.obj("flour", "Food", (0.16, 0.25, 0.1), bench)
     s.obj("tape", "Office", (0.1, 0.05, 0.1), bench)
+    s.obj("cardboard box", "Containers", (0.32, 0.25, 0.26), bench, container=True,
+          lid="top", closed=True)
     s.obj("canned beans", "Food", (0.08, 0.11, 0.08), rack)
     s.obj("potato sack", "Vegetables", (0.35, 0.25, 0.25), pallet)
     s.obj("apples", "Fruit", (0.3, 0.15, 0.2), crate, inside=True)
@@ -480,19 +536,19 @@ def s3_grocery() -> Scene:
 
 def s4_restaurant() -> Scene:
     s = Scene("s4-restaurant", "Restaurant: dining hall, kitchen, storeroom")
-    hall = s.room("dining hall", (0, 0), (10, 8), dog_spots=[(5.0, 4.0), (2.0, 2.0)])
+    hall = s.room("dining hall", (0, 0), (10, 8), dog_spots=[(5.0, 4.0), (3.8, 3.8)])
     kitchen = s.room("kitchen", (10, 0), (16, 6), dog_spots=[(13.0, 3.0)])
     store = s.room("storeroom", (10, 6), (16, 9), dog_spots=[(13.0, 7.5)])
     s.door(hall, kitchen, (10, 3.0), False, closed=False)
     s.door(kitchen, store, (13.0, 6), True, closed=True)
-    bar = s.furniture("bar counter", hall, (7.5, 7.4), (1.7, 1.1, 1.0), landable=True)
+    bar = s.furniture("bar counter", hall, (7.5, 7.3), ARM_TABLE, landable=True)
     t1 = s.furniture("table one", hall, (2.0, 2.0), (1.8, 0.75, 1.0), landable=True)
     t2 = s.furniture("table two", hall, (2.0, 5.5), (1.8, 0.75, 1.0), landable=True)
     t3 = s.furniture("table three", hall, (5.5, 1.5), (1.8, 0.75, 1.0), landable=True)
     bar_shelf = s.furniture("bar shelf", hall, (9.75, 6.0), (0.4, 1.6, 1.2))
     station = s.furniture("service station", hall, (0.4, 7.5), (0.7, 0.9, 0.8), container=True,
                           lid="front", closed=True)
-    pass_ = s.furniture("pass counter", kitchen, (12.5, 0.6), (1.7, 1.1, 1.0), landable=True)
+    pass_ = s.furniture("pass counter", kitchen, (12.5, 0.7), ARM_TABLE, landable=True)
     stove = s.furniture("stove", kitchen, (15.5, 1.5), (0.8, 0.9, 0.7), category="Appliances")
     fridge = s.furniture("kitchen fridge", kitchen, (15.5, 4.5), (0.8, 1.9, 0.8), surface=False,
                          container=True, lid="front", closed=True, category="Appliances")
@@ -500,10 +556,11 @@ def s4_restaurant() -> Scene:
     shelf = s.furniture("dry store shelf", store, (15.6, 7.5), (0.5, 1.5, 1.6))
     sack = s.furniture("rice bin", store, (11.0, 8.4), (0.6, 0.7, 0.5), surface=False,
                        container=True, lid="top", closed=True)
-    s.arm(bar, (7.5, 7.75))
-    s.arm(pass_, (12.5, 0.95))
+    s.arm(bar)
+    s.arm(pass_)
     s.obj("wine glass", "Tableware", (0.08, 0.2, 0.08), bar)
     s.obj("cocktail shaker", "Tableware", (0.09, 0.25, 0.09), bar)
+    s.obj("ice bucket", "Tableware", (0.3, 0.22, 0.26), bar, container=True)
     s.obj("menu", "Books", (0.22, 0.01, 0.3), t1)
     s.obj("salt shaker", "Tableware", (0.05, 0.1, 0.05), t1)
     s.obj("candle", "Decor", (0.07, 0.12, 0.07), t2)
@@ -512,6 +569,7 @@ def s4_restaurant() -> Scene:
     s.obj("tablecloth", "Linen", (0.3, 0.06, 0.25), station, inside=True)
     s.obj("soup bowl", "Tableware", (0.16, 0.07, 0.16), pass_)
     s.obj("steak", "Food", (0.2, 0.04, 0.12), pass_)
+    s.obj("serving tray", "Tableware", (0.32, 0.04, 0.26), pass_, container=True)
     s.obj("frying pan", "Cookware", (0.3, 0.06, 0.3), stove)
     s.obj("butter", "Food", (0.1, 0.05, 0.07), fridge, inside=True)
     s.obj("cream", "Drinks", (0.08, 0.18, 0.08), fridge, inside=True)
@@ -526,19 +584,19 @@ def s4_restaurant() -> Scene:
 def s5_house() -> Scene:
     s = Scene("s5-house", "Two-floor house with a garden: stairs from the hall to the landing")
     hall = s.room("hall", (0, 0), (4, 8), dog_spots=[(2.8, 1.5)])
-    kitchen = s.room("kitchen", (4, 0), (9, 5), dog_spots=[(6.5, 2.5)])
-    living = s.room("living room", (4, 5), (10, 10), dog_spots=[(7.0, 7.5)])
+    kitchen = s.room("kitchen", (4, 0), (9, 5), dog_spots=[(6.5, 2.15)])
+    living = s.room("living room", (4, 5), (10, 10), dog_spots=[(7.0, 6.6)])
     garden = s.room("garden", (-7, 0), (0, 10), dog_spots=[(-3.5, 5.0)])
     landing = s.room("landing", (0, 6.5), (4, 10), level=3.0, dog_spots=[(2.8, 8.5)])
-    bedroom = s.room("bedroom", (4, 5), (10, 10), level=3.0, dog_spots=[(7.0, 7.5)])
+    bedroom = s.room("bedroom", (4, 5), (10, 10), level=3.0, dog_spots=[(6.0, 7.0)])
     bath = s.room("bathroom", (4, 0), (9, 5), level=3.0, dog_spots=[(6.5, 2.5)])
     s.door(hall, kitchen, (4, 2.5), False, closed=False)
     s.door(hall, living, (4, 6.0), False, closed=False)
-    s.door(hall, garden, (0, 3.0), False, closed=True)
-    s.flight(hall, landing, (1.0, 2.0), (1.0, 6.5), 1.0)
+    s.door(hall, garden, (0, 1.0), False, closed=True)
+    s.flight(hall, landing, (0.55, 2.0), (0.55, 6.5), 1.0)
     s.door(landing, bedroom, (4, 8.0), False, closed=True)
     s.door(bedroom, bath, (7.0, 5), True, closed=False)
-    counter = s.furniture("kitchen counter", kitchen, (6.5, 0.6), (1.7, 1.1, 1.0), landable=True)
+    counter = s.furniture("kitchen counter", kitchen, (6.5, 0.7), ARM_TABLE, landable=True)
     fridge = s.furniture("fridge", kitchen, (8.5, 4.5), (0.7, 1.8, 0.7), surface=False,
                          container=True, lid="front", closed=True, category="Appliances")
     dining = s.furniture("dining table", kitchen, (6.0, 3.5), (1.4, 0.75, 1.0), landable=True)
@@ -553,16 +611,18 @@ def s5_house() -> Scene:
     planter = s.furniture("planter", garden, (-1.0, 8.0), (1.0, 0.5, 0.6), surface=False,
                           container=True)
     bed = s.furniture("bed", bedroom, (7.0, 8.8), (1.8, 0.55, 1.6), landable=True)
-    wardrobe = s.furniture("wardrobe", bedroom, (9.4, 6.0), (1.0, 1.9, 0.6), surface=False,
+    wardrobe = s.furniture("wardrobe", bedroom, (9.4, 9.5), (1.0, 1.9, 0.6), surface=False,
                            container=True, lid="front", closed=True)
     bedside = s.furniture("bedside table", bedroom, (5.0, 9.5), (0.5, 0.55, 0.5))
     vanity = s.furniture("vanity", bath, (6.0, 0.5), (1.6, 0.85, 0.6), landable=False)
     cabinet = s.furniture("mirror cabinet", bath, (8.7, 2.5), (0.4, 1.6, 0.8), container=True,
                           lid="front", closed=True)
     shelf = s.furniture("landing shelf", landing, (3.6, 9.5), (0.6, 0.9, 0.8))
-    s.arm(counter, (6.5, 0.95))
+    s.arm(counter)
     s.obj("kettle", "Appliances", (0.2, 0.25, 0.15), counter)
     s.obj("teapot", "Tableware", (0.18, 0.15, 0.14), counter)
+    s.obj("bread bin", "Containers", (0.32, 0.18, 0.26), counter, container=True, lid="top",
+          closed=True)
     s.obj("eggs", "Food", (0.2, 0.07, 0.1), fridge, inside=True)
     s.obj("lemonade", "Drinks", (0.09, 0.28, 0.09), fridge, inside=True)
     s.obj("fruit bowl", "Tableware", (0.25, 0.1, 0.25), dining, container=True)
@@ -588,16 +648,26 @@ SCENES = [s1_apartment, s2_apartment, s3_grocery, s4_restaurant, s5_house]
 
 # ---------------------------------------------------------------------------------------
 # Candidate tasks
+#
+# A random goal over all objects and places is mostly a one-robot errand or impossible
+# (nothing can reach a high shelf without an arm on it). So candidates are drawn from
+# templates that need one, two or three kinds of robot, and the planner, not the
+# template, decides each task's type: a template only makes a type likely.
+
+HAND = 1.34  # the legged robot's hand with the default specs (geometry::RobotSpecs)
+
 
 def movables(s: Scene):
     return [n for n, node in enumerate(s.nodes) if "GRABABLE" in node["properties"]]
 
 
 def destinations(s: Scene):
+    """Every place something can be put: (node, "ON") for a surface, (node, "INSIDE")
+    for a container; rooms, floors, robots and doors are not places."""
     out = []
     for n, node in enumerate(s.nodes):
         p = node["properties"]
-        if node["category"] in ("Rooms", "Floor", "Agents", "Doors"):
+        if node["category"] in ("Rooms", "Floor", "Agents", "AgentTool", "Doors"):
             continue
         if "SURFACES" in p:
             out.append((n, "ON"))
@@ -606,22 +676,148 @@ def destinations(s: Scene):
     return out
 
 
-def candidates(s: Scene, rng: random.Random, count: int):
-    objs = movables(s)
-    dests = destinations(s)
+class Places:
+    """What each robot can get at in a scene, from the same height rule as the
+    `geometric` rule set: a surface is high when its top above the floor plus the
+    tallest object is above the legged robot's hand."""
+
+    def __init__(self, s: Scene):
+        self.s = s
+        tallest = max(s.items[n]["size"][1] for n in movables(s))
+        self.high = set()
+        for n, g in s.items.items():
+            if n not in s.room_of:
+                continue
+            props = s.nodes[n]["properties"]
+            top = g["size"][1] if "SURFACES" in props else min(WALL, g["size"][1] / 4)
+            if top + tallest > HAND:
+                self.high.add(n)
+        self.tables = {t: a for a, t, _ in s.arms}
+        self.table_objs = {t: [] for t in self.tables}
+        self.low_objs = []
+        for n in movables(s):
+            base = self.base(n)
+            if base in self.tables:
+                self.table_objs[base].append(n)
+            elif base not in self.high:
+                self.low_objs.append(n)
+        self.table_dests = {t: [(t, "ON")] for t in self.tables}
+        self.low_dests = []
+        for n, rel in destinations(s):
+            base = self.base(n)
+            if base in self.tables:
+                if n != base:
+                    self.table_dests[base].append((n, rel))
+            elif base not in self.high:
+                self.low_dests.append((n, rel))
+
+    def base(self, n):
+        """The furniture a thing is on or in, through any objects between."""
+        while n in self.s.holder:
+            n = self.s.holder[n][0]
+        return n
+
+
+def fits(s: Scene, x: int, t: int, rel: str) -> bool:
+    """Whether object `x` fits on or in `t` with room to spare: in a container, inside its
+    walls and under its rim; on a surface, within its top; in the quadrotor's basket
+    (0.40 m square inside its walls, 0.20 m under the craft's hub), within 0.34 m each
+    way and 0.18 m high."""
+    w, h, d = s.items[x]["size"]
+    if t == s.basket:
+        return max(w, d) <= 0.34 and h <= 0.18
+    tw, th, td = s.items[t]["size"]
+    if rel == "INSIDE":
+        wall = 2 * min(WALL, th / 4) + 0.03
+        return w <= tw - wall and d <= td - wall and h <= th
+    return w <= tw - 0.1 and d <= td - 0.1
+
+
+def predicate(s: Scene, rng: random.Random, objs, dests, used):
+    """One goal predicate moving an object of `objs` (not in `used`) to a place of
+    `dests` other than where it is, that it fits; None when there is none."""
+    for _ in range(20):
+        x = rng.choice(objs)
+        t, rel = rng.choice(dests)
+        if x in used or t == x or t in used or s.holder.get(x) == (t, rel == "INSIDE"):
+            continue
+        if not fits(s, x, t, rel):
+            continue
+        # A movable container (and the basket) takes one goal object: two rarely fit.
+        if rel == "INSIDE" and (t == s.basket or s.items[t]["dynamic"]):
+            if ("into", t) in used:
+                continue
+            used.add(("into", t))
+        # Nothing into itself through a chain of holders.
+        n = t
+        while n in s.holder and n != x:
+            n = s.holder[n][0]
+        if n == x:
+            continue
+        used.add(x)
+        return (x, rel, t)
+    return None
+
+
+def template(s: Scene, pl: Places, rng: random.Random, kind: str):
+    """A goal drawn from the templates of `kind` (mono, dual or trio), or None."""
+    used: set = set()
+    tables = list(pl.tables)
+    basket = [(s.basket, "INSIDE")]
+    low = lambda: predicate(s, rng, pl.low_objs, pl.low_dests, used)  # noqa: E731
+    if kind == "mono":
+        k = rng.choice([1, 1, 2])
+        if rng.random() < 0.2:
+            t = rng.choice(tables)
+            return [predicate(s, rng, pl.table_objs[t], pl.table_dests[t], used)
+                    for _ in range(2)]
+        return [low() for _ in range(k)]
+    if kind == "dual":
+        form = rng.choice(["dog+arm", "dog+quadrotor", "arm+quadrotor"]
+                          if len(tables) > 1 else ["dog+arm", "dog+quadrotor"])
+        if form == "dog+arm":
+            t = rng.choice(tables)
+            goal = [predicate(s, rng, pl.table_objs[t], pl.table_dests[t], used), low()]
+            if rng.random() < 0.4:
+                goal.append(low())
+            return goal
+        if form == "dog+quadrotor":
+            goal = [predicate(s, rng, pl.low_objs, basket, used)]
+            if rng.random() < 0.6:
+                goal.append(low())
+            return goal
+        a, b = rng.sample(tables, 2)
+        goal = [predicate(s, rng, pl.table_objs[a], pl.table_dests[b], used)]
+        if rng.random() < 0.5:
+            goal.append(predicate(s, rng, pl.table_objs[b], pl.table_dests[b], used))
+        return goal
+    t = rng.choice(tables)
+    if rng.random() < 0.5:
+        goal = [predicate(s, rng, pl.low_objs, pl.table_dests[t], used)]
+    else:
+        goal = [predicate(s, rng, pl.table_objs[t], pl.low_dests, used)]
+    extra = rng.random()
+    if extra < 0.35:
+        goal.append(low())
+    elif extra < 0.6:
+        goal.append(predicate(s, rng, pl.table_objs[t], pl.table_dests[t], used))
+    return goal
+
+
+def candidates(s: Scene, rng: random.Random, per_kind: dict[str, int]):
+    """Candidate (goal, dog room, dog spot, quadrotor's landing place) tuples, about
+    `per_kind[kind]` from each kind's templates, no two alike."""
+    pl = Places(s)
     landables = s.landables()
     seen = set()
     out = []
-    while len(out) < count:
-        k = rng.choice([1, 1, 1, 2, 2])
-        subjects = rng.sample(objs, k)
-        goal = []
-        for x in subjects:
-            t, rel = rng.choice(dests)
-            if t == x or s.holder.get(x) == (t, rel == "INSIDE"):
-                break
-            goal.append((x, rel, t))
-        else:
+    for kind, count in per_kind.items():
+        drawn = tries = 0
+        while drawn < count and tries < 50 * count:
+            tries += 1
+            goal = template(s, pl, rng, kind)
+            if not goal or None in goal:
+                continue
             dog_room = rng.choice([r for r in s.rooms if s.spots_for_dog[r]])
             dog_spot = rng.choice(s.spots_for_dog[dog_room])
             quad_on = rng.choice(landables)
@@ -630,49 +826,76 @@ def candidates(s: Scene, rng: random.Random, count: int):
                 continue
             seen.add(key)
             out.append((goal, dog_room, dog_spot, quad_on))
+            drawn += 1
     return out
 
 
-def plan(coherent: str, folder: str) -> list[dict]:
+def plan(coherent: str, folder: str, *flags: str) -> list[dict]:
     """`coherent plan --json` on every task file in `folder`, one result per task."""
-    run = subprocess.run([coherent, "plan", folder, "--json", "--max-states", "400000"],
+    run = subprocess.run([coherent, "plan", folder, "--json", "--max-states", "400000", *flags],
                          capture_output=True, text=True, check=False)
     if run.returncode not in (0, 1):
         sys.exit(f"coherent plan failed:\n{run.stderr}")
     return [json.loads(line) for line in run.stdout.splitlines() if line.startswith("{")]
 
 
+def in_range(r: dict | None) -> bool:
+    """Whether a planner result is solvable, typed, and within its type's GT range."""
+    if not r or not r.get("solvable") or not r.get("task_type"):
+        return False
+    lo, hi = GT_RANGE[r["task_type"]]
+    return lo <= r["optimal_steps"] <= hi
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--coherent", default="target/release/coherent")
-    ap.add_argument("--candidates", type=int, default=160)
+    ap.add_argument("--draws", type=int, default=6,
+                    help="candidates drawn per task wanted, from each type's templates")
     ap.add_argument("--scenes", nargs="*", help="only these scenes (names)")
     args = ap.parse_args()
-    rng = random.Random(SEED)
     out_dir = HERE / "tasks"
-    subset = []
     for make in SCENES:
         s = make()
         if args.scenes and s.name not in args.scenes:
             continue
-        cands = candidates(s, rng, args.candidates)
+        quota = QUOTA[s.name]
+        # One stream per scene: a scene's tasks do not depend on which others are made.
+        rng = random.Random(f"{SEED}-{s.name}")
+        cands = candidates(s, rng, {t: round(args.draws * DRAW_WEIGHT[t] * q)
+                                    for t, q in quota.items()})
         with tempfile.TemporaryDirectory() as tmp:
             for i, (goal, dog_room, dog_spot, quad_on) in enumerate(cands):
                 task = s.build(1000 + i, goal, dog_room, dog_spot, quad_on)
                 (Path(tmp) / f"{i:04d}.json").write_text(json.dumps(task))
             results = {r["task_id"]: r for r in plan(args.coherent, tmp)}
+        # The candidates of the right size for their type, carried out in physics.
+        fit = [i for i, _ in enumerate(cands) if in_range(results.get(1000 + i))]
+        with tempfile.TemporaryDirectory() as tmp:
+            for i in fit:
+                (Path(tmp) / f"{i:04d}.json").write_text(json.dumps(s.build(1000 + i, *cands[i])))
+            physical = {r["task_id"] for r in plan(args.coherent, tmp, "--physics")
+                        if r.get("physics_ok")}
         kept: dict[str, list] = {t: [] for t in GT_RANGE}
-        for i, c in enumerate(cands):
-            r = results.get(1000 + i)
-            if not r or not r.get("solvable"):
+        goals = set()
+        for i in fit:
+            if 1000 + i not in physical:
                 continue
+            r = results[1000 + i]
             ty, gt = r["task_type"], r["optimal_steps"]
-            lo, hi = GT_RANGE[ty]
-            if lo <= gt <= hi and len(kept[ty]) < QUOTA[s.name][ty]:
-                kept[ty].append((c, gt))
+            goal = tuple(sorted(cands[i][0]))
+            # Each goal once per scene, so that no two tasks share a goal at all.
+            if len(kept[ty]) < quota[ty] and goal not in goals:
+                goals.add(goal)
+                kept[ty].append((cands[i], gt))
+        print(f"{s.name}: {len(cands)} candidates, {len(fit)} of a type and size wanted, "
+              f"{len(physical)} of those carried out in physics")
         counts = {t: len(v) for t, v in kept.items()}
         print(f"{s.name}: kept {counts} of quota {QUOTA[s.name]}; "
               f"types drawn {Counter(r.get('task_type') for r in results.values())}")
+        for ty in GT_RANGE:
+            gts = Counter(r["optimal_steps"] for r in results.values() if r.get("task_type") == ty)
+            print(f"  {ty} ground truths drawn: {dict(sorted(gts.items()))}")
         scene_dir = out_dir / s.name
         if scene_dir.exists():
             shutil.rmtree(scene_dir)
@@ -685,12 +908,20 @@ def main() -> None:
                 task["ground_truth"] = {"steps": gt}
                 (scene_dir / f"task-{task_id:02d}.json").write_text(
                     json.dumps(task, indent=1) + "\n")
-                if j < SUBSET40[ty]:
-                    subset.append(f"{s.name} {task_id}")
                 task_id += 1
-    (HERE / "subset-40.txt").write_text(
-        "# The 40-task subset: per scene 2 mono, 3 dual, 3 trio (the paper's proportions).\n"
-        + "\n".join(subset) + "\n")
+    write_subset()
+
+
+def write_subset() -> None:
+    """benchmark/subset-40.txt from the task files: per scene the first two mono, three
+    dual and three trio tasks (the paper's proportions)."""
+    lines = ["# The 40-task subset: per scene 2 mono, 3 dual, 3 trio (the paper's proportions)."]
+    for f in sorted((HERE / "tasks").glob("*/task-*.json")):
+        task = json.loads(f.read_text())
+        ty, j = task["name"].split("-")
+        if int(j) < SUBSET40[ty]:
+            lines.append(f"{task['scene']} {task['task_id']}")
+    (HERE / "subset-40.txt").write_text("\n".join(lines) + "\n")
 
 
 if __name__ == "__main__":

@@ -169,6 +169,9 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
     """Every well-formed task at ``path``, and an error for each malformed one; raises
     only when a file cannot be read or is not JSON."""
 
+def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
+    """The project's own benchmark, compiled in: every task, or its 40-task subset."""
+
 def plan(task: Task, max_states: int = 5_000_000) -> _PlanResult:
     """Plans ``task`` optimally (one line of ``coherent plan --json``). Ctrl-C interrupts
     it and stops the search."""

@@ -6,6 +6,7 @@ from __future__ import annotations
 import runpy
 import subprocess
 import sys
+from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -48,10 +49,17 @@ def test_step_by_hand_runs(capsys: pytest.CaptureFixture[str]) -> None:
     assert "return 1.0, terminated True, truncated False, after 22 steps" in out
 
 
-@pytest.mark.skip(reason="issue 6: the native benchmark_tasks function is wired when the benchmark lands")
 def test_benchmark_tasks_and_its_40_subset() -> None:
     every = coherent.benchmark.tasks()
     subset = coherent.benchmark.tasks(subset="40")
+    assert len(every) == 100
     assert len(subset) == 40
     keys = {(t.scene, t.task_id) for t in every}
+    assert len(keys) == 100
     assert {(t.scene, t.task_id) for t in subset} <= keys
+    # Per scene 2 mono, 3 dual and 3 trio tasks, as the planner types them.
+    types = Counter((t.scene, coherent.plan(t)["task_type"]) for t in subset)
+    assert set(types.values()) == {2, 3} and len(types) == 15
+    assert all(n == (2 if ty == "mono" else 3) for (_, ty), n in types.items())
+    with pytest.raises(ValueError, match="subset"):
+        coherent.benchmark.tasks(subset="41")

@@ -9,7 +9,7 @@ use clap::{Args, ValueEnum};
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Recorded, Subset};
 use coherent_agents::episode::Method;
 use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
-use coherent_core::load;
+use coherent_core::benchmark;
 use coherent_core::planner::Limits;
 
 use super::llm::{AnswerFormat, Endpoint, Patience};
@@ -20,10 +20,12 @@ const INTERRUPTED: u8 = 130;
 
 #[derive(Args)]
 pub struct BenchArgs {
-    /// Original env files, native task files, or a folder of them.
+    /// Original env files, native task files, or a folder of them; `native`: the project's
+    /// own benchmark, compiled in.
     #[arg(long, required_unless_present = "report")]
     tasks: Option<PathBuf>,
-    /// `all` (every well-formed task), `paper40` (the paper's 40-task subset) or a FILE of
+    /// `all` (every well-formed task), `paper40` (the paper's 40-task subset of its
+    /// released tasks), `native40` (the 40-task subset of our own benchmark) or a FILE of
     /// `scene task_id` lines.
     #[arg(long, default_value = "all")]
     subset: String,
@@ -157,11 +159,12 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
     let subset = match args.subset.as_str() {
         "all" => Subset::All,
         "paper40" => Subset::Paper40,
+        "native40" => Subset::Listed(benchmark::subset40()),
         file => Subset::read_file(std::path::Path::new(file))?,
     };
     let mut tasks = Vec::new();
     let mut malformed = 0;
-    for r in load::read_tasks(tasks_path).map_err(|e| e.to_string())? {
+    for r in super::read_tasks(tasks_path).map_err(|e| e.to_string())? {
         match r {
             Ok(t) => tasks.push(t),
             Err(e) => {

@@ -13,7 +13,7 @@ use std::sync::Arc;
 use clap::{Parser, Subcommand};
 use coherent_agents::episode::Method;
 use coherent_core::planner::{self, Analysis, Limits};
-use coherent_core::{Error, Task, load, native, validate};
+use coherent_core::{Error, Task, benchmark, load, native, validate};
 
 #[derive(Parser)]
 #[command(
@@ -41,7 +41,8 @@ enum Command {
     Bench(Box<bench::BenchArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
     Validate {
-        /// Original env files, native task files or folders of them.
+        /// Original env files, native task files or folders of them; `native`: the
+        /// project's own benchmark, compiled in.
         #[arg(required = true)]
         files: Vec<PathBuf>,
         /// Most states one search may visit.
@@ -59,7 +60,8 @@ enum Command {
     /// Plan optimally: shortest plan, task type, or why a task cannot be solved. Exit 1
     /// when a plan fails in physics (--physics), 2 on malformed input.
     Plan {
-        /// An original env file, a native task file or a folder of them.
+        /// An original env file, a native task file or a folder of them; `native`: the
+        /// project's own benchmark, compiled in.
         file: PathBuf,
         /// Only these task ids (repeatable).
         #[arg(long = "task")]
@@ -137,11 +139,20 @@ where
     }
 }
 
+/// The tasks at `path` ([`load::read_tasks`]), or, when `path` is `native` and no such
+/// file exists, the project's own benchmark, compiled in.
+pub(crate) fn read_tasks(path: &Path) -> coherent_core::Result<Vec<coherent_core::Result<Task>>> {
+    if path.as_os_str() == benchmark::NAME && !path.exists() {
+        return Ok(benchmark::tasks()?.into_iter().map(Ok).collect());
+    }
+    load::read_tasks(path)
+}
+
 /// Tasks of every file; malformed ones are reported on stderr and counted.
 fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
     let mut tasks = Vec::new();
     for path in files {
-        match load::read_tasks(path) {
+        match read_tasks(path) {
             Ok(results) => {
                 for r in results {
                     match r {
@@ -338,7 +349,7 @@ pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
 
 /// The task `id` of `file` (or its only task).
 pub(crate) fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
-    let results = load::read_tasks(file).map_err(|e| e.to_string())?;
+    let results = read_tasks(file).map_err(|e| e.to_string())?;
     let name = file.display();
     match id {
         Some(id) => {

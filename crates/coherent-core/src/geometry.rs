@@ -322,8 +322,10 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
     let high: Vec<Idx> = task
         .indices()
         .filter(|&n| {
-            tops[n.get()].is_some_and(|t| t > hand)
-                || below(task, n).any(|x| task.node(x).properties.contains(PropSet::HIGH_HEIGHT))
+            let tall = layout
+                .item(task.id(n))
+                .is_some_and(|g| g.dynamic && tops[n.get()].is_some_and(|t| t > hand));
+            tall || below(task, n).any(|x| task.node(x).properties.contains(PropSet::HIGH_HEIGHT))
         })
         .collect();
     for n in high {

@@ -4,9 +4,10 @@
 //! format ([`native`]). [`rules`] gives observations, action lists and transitions,
 //! [`feasibility`] says why an action cannot be done, [`planner`] finds shortest plans
 //! and task types, [`validate`] lists semantic problems, and [`Environment`] is what
-//! planners and physics plug into.
+//! planners and physics plug into. [`benchmark`] is the project's own benchmark, compiled in.
 
 pub mod action;
+pub mod benchmark;
 pub mod describe;
 pub mod env;
 pub mod error;

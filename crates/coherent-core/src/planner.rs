@@ -12,7 +12,7 @@ use std::time::{Duration, Instant};
 use hashbrown::HashTable;
 use rustc_hash::FxBuildHasher;
 
-use crate::action::Action;
+use crate::action::{Action, Verb};
 use crate::graph::{Idx, NodeKind, RobotKind, State};
 use crate::rules;
 use crate::task::{GoalPredicate, Robot, Task, predicate_holds};
@@ -110,6 +110,7 @@ pub fn search_from(
     table.insert_unique(hashes[0], 0, |&i| hashes[i as usize]);
     let mut buckets: Vec<Vec<u32>> = Vec::new();
     push(&mut buckets, usize::from(h[0]), 0);
+    let useful = Useful::new(task, start, goal);
     let mut child = start.clone();
     let mut expanded = 0usize;
     let mut f = 0usize;
@@ -142,7 +143,7 @@ pub fn search_from(
         let contents = rules::Contents::new(task, &states[i]);
         for &robot in robots {
             let actions = rules::actions_in(task, &states[i], robot, &contents);
-            for action in actions {
+            for action in actions.into_iter().filter(|a| useful.allows(task, a)) {
                 child.clone_from(&states[i]);
                 rules::apply(task, &mut child, robot, action);
                 let step = Some(Step {
@@ -195,6 +196,38 @@ pub fn search_from(
         plan: None,
         states_expanded: expanded,
         truncated: false,
+    }
+}
+
+/// The actions worth searching: every goal is a set of `ON`/`INSIDE` edges, so some
+/// shortest plan never closes anything, grabs only goal subjects and targets and what
+/// holds them, and opens only doors and containers among those (`docs/planner.md`,
+/// "Pruning").
+struct Useful {
+    /// Goal subjects and targets, and what holds them at the start, transitively.
+    things: Vec<bool>,
+}
+
+impl Useful {
+    fn new(task: &Task, start: &State, goal: &[GoalPredicate]) -> Useful {
+        let mut things = vec![false; task.nodes.len()];
+        let mut todo: Vec<Idx> = goal.iter().flat_map(|p| [p.subject, p.target]).collect();
+        while let Some(n) = todo.pop() {
+            if !std::mem::replace(&mut things[n.get()], true) {
+                todo.extend(start.targets(n, Relation::On));
+                todo.extend(start.targets(n, Relation::Inside));
+            }
+        }
+        Useful { things }
+    }
+
+    fn allows(&self, task: &Task, a: &Action) -> bool {
+        match a.verb {
+            Verb::Close => false,
+            Verb::Open => task.node(a.object).kind == NodeKind::Door || self.things[a.object.get()],
+            Verb::Grab => self.things[a.object.get()],
+            _ => true,
+        }
     }
 }
 

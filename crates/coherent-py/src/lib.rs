@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 use coherent_agents::episode::Method;
 use coherent_core::planner::{self, Limits};
-use coherent_core::{action, load};
+use coherent_core::{action, benchmark, load};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -59,6 +59,33 @@ fn read_tasks(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<PyTask>, Vec<Py<Py
         }
     }
     Ok((tasks, errors))
+}
+
+/// The project's own benchmark, compiled in: every task, or with `subset="40"` its
+/// 40-task subset (per scene 2 mono, 3 dual, 3 trio).
+#[pyfunction]
+#[pyo3(signature = (subset = None))]
+fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>> {
+    let wanted = match subset {
+        None => None,
+        Some("40") => Some(benchmark::subset40()),
+        Some(other) => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "subset must be None or \"40\", not {other:?}"
+            )));
+        }
+    };
+    let tasks = py.detach(benchmark::tasks).map_err(|e| core_err(py, e))?;
+    Ok(tasks
+        .into_iter()
+        .filter(|t| {
+            wanted.as_ref().is_none_or(|w| {
+                w.iter()
+                    .any(|(scene, id)| *scene == t.meta.scene && *id == t.meta.task_id)
+            })
+        })
+        .map(PyTask::new)
+        .collect())
 }
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
@@ -160,6 +187,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<run::PyEpisode>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
+    m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
     m.add_function(wrap_pyfunction!(validate_task, m)?)?;
     m.add_function(wrap_pyfunction!(parse_action, m)?)?;

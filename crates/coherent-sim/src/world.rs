@@ -1884,10 +1884,25 @@ impl World {
                 kind: FailureKind::Layout,
                 message: format!("{} has no body", self.label(x)),
             })?;
-        let target = self
-            .node_aabb(x)
-            .map(|b| b.center())
-            .unwrap_or(aabb.center());
+        // Aim at what the move brings within reach: the things on a surface (the dog is
+        // to handle them next), else the thing itself.
+        let on_top: Vec<Vector> = if self.top[x.get()].is_some() {
+            self.task
+                .indices()
+                .filter(|&n| self.body[n.get()].is_some())
+                .filter(|&n| matches!(self.placement(n), Placement::On(s) if s == x))
+                .filter_map(|n| self.node_aabb(n).map(|b| b.center()))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let target = if on_top.is_empty() {
+            self.node_aabb(x)
+                .map(|b| b.center())
+                .unwrap_or(aabb.center())
+        } else {
+            on_top.iter().copied().sum::<Vector>() / on_top.len() as f32
+        };
         let h = self.layout.specs.dog_half;
         let gap = h[0].max(h[2]) + 0.12;
         let c = aabb.center();
@@ -1900,6 +1915,12 @@ impl World {
                 FailureKind::Layout,
                 format!("no storey at {level:.2} m for {}", self.label(a)),
             );
+        };
+        // A spot in the thing's own room: the far side of a wall is not beside it.
+        let home = if self.task.node(a).kind == NodeKind::Door {
+            None
+        } else {
+            self.room_at(Vector::new(c.x, aabb.mins.y + 0.05, c.z))
         };
         let mut cands = Vec::new();
         for (nx, nz) in [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)] {
@@ -1917,7 +1938,7 @@ impl World {
                         level + 0.02,
                         c.z + nz * (he.z + gap + extra),
                     ) + lateral * f;
-                    grid.free(p).then_some(p)
+                    (grid.free(p) && (home.is_none() || self.room_at(p) == home)).then_some(p)
                 });
                 cands.extend(free);
             }
@@ -2083,6 +2104,8 @@ impl World {
         );
         let mut best: Option<(f32, Vector)> = None;
         let mut nearest_any = f32::INFINITY;
+        // What filled the last spot tried within reach (None: an unnamed body).
+        let mut in_the_way: Option<Option<Idx>> = None;
         for i in -nx..=nx {
             for k in -nz..=nz {
                 let local = centre + Vector::new(i as f32 * step, 0.003, k as f32 * step);
@@ -2100,16 +2123,15 @@ impl World {
                     filter = filter.exclude_rigid_body(b);
                 }
                 let qp = self.pw.query_pipeline_with_filter(filter);
-                let blocked = qp.intersect_shape(probe, &shape).any(|(ch, col)| {
-                    col.collision_groups().memberships != Group::NONE
-                        && (inside || self.owner.get(&ch) != Some(&holder))
-                        && self
-                            .task
-                            .node(self.owner.get(&ch).copied().unwrap_or(holder))
-                            .kind
-                            != NodeKind::Door
+                let blocker = qp.intersect_shape(probe, &shape).find_map(|(ch, col)| {
+                    let owner = self.owner.get(&ch).copied();
+                    (col.collision_groups().memberships != Group::NONE
+                        && (inside || owner != Some(holder))
+                        && self.task.node(owner.unwrap_or(holder)).kind != NodeKind::Door)
+                        .then_some(owner)
                 });
-                if blocked {
+                if let Some(owner) = blocker {
+                    in_the_way = Some(owner);
                     continue;
                 }
                 if best.is_none_or(|(d0, _)| d < d0) {
@@ -2133,11 +2155,16 @@ impl World {
             None => fail(
                 FailureKind::Blocked,
                 format!(
-                    "no free spot for {} {} {} within reach of {}",
+                    "no free spot for {} {} {} within reach of {}{}",
                     self.label(h),
                     if inside { "in" } else { "on" },
                     self.label(holder),
-                    self.label(robot)
+                    self.label(robot),
+                    match in_the_way {
+                        Some(Some(n)) => format!(" ({} is in the way)", self.label(n)),
+                        Some(None) => " (a robot is in the way)".to_owned(),
+                        None => String::new(),
+                    }
                 ),
             ),
         }
