@@ -4,13 +4,16 @@
     python3 benchmark/make.py --coherent target/release/coherent
 
 Each scene is written below as rooms, doors, stairs, furniture, objects and robots in
-metres. From each scene the script draws candidate tasks (a goal of one to three
-predicates, with the robots starting in varied places), has `coherent plan` solve
-every candidate, and keeps, per scene, tasks of the three types the planner computes
-(mono, dual, trio: the fewest robot types that reach the goal) with ground truth in
-each type's range (mono 4-8 steps, dual 8-12, trio 10-16). Nothing about a task's type
-or its ground truth is hand-set: both come from the planner's output, and the files
-record the planner's `optimal_steps` as `ground_truth`.
+metres. From each scene the script draws candidate tasks from goal templates (a goal
+of one to three predicates, with the robots starting in varied places), has `coherent
+plan` solve every candidate, carries the optimal plans of the wanted ones out in physics
+(`coherent plan --physics`), and keeps, per scene, tasks of the three types the planner
+computes (mono, dual, trio: the fewest robot types that reach the goal) with ground
+truth in each type's range (mono 4-8 steps, dual 8-12, trio 10-16) and a plan that runs
+in physics. Nothing about a task's type or its ground truth is hand-set: both come from
+the planner's output, and the files record the planner's `optimal_steps` as
+`ground_truth`. The renders in benchmark/renders are `coherent render --plan` of task 19
+of each scene (see benchmark/README.md).
 
 The height labels (HIGH_HEIGHT, LOW_HEIGHT, ON_HIGH_SURFACE) are not written either:
 the tasks run under the `geometric` rule set, which derives them from the geometry and
@@ -850,7 +853,7 @@ def in_range(r: dict | None) -> bool:
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--coherent", default="target/release/coherent")
-    ap.add_argument("--draws", type=int, default=6,
+    ap.add_argument("--draws", type=int, default=16,
                     help="candidates drawn per task wanted, from each type's templates")
     ap.add_argument("--scenes", nargs="*", help="only these scenes (names)")
     args = ap.parse_args()

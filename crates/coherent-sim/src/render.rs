@@ -449,7 +449,8 @@ pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -
             r##"<rect x="{x0:.1}" y="{y0:.1}" width="{w:.1}" height="{d:.1}" fill="{fill}" stroke="#7a5c2e" stroke-width="1.5"/>"##
         );
         let Some(n) = node_of(it.id) else { continue };
-        let top = it.pos[1] + it.size[1];
+        // Above the floor it stands on, as the geometric rules measure it.
+        let top = it.pos[1] + it.size[1] - storeys[panel(it.pos)];
         let mut text = format!("{}\ntop {:.2} m", name(task, n), top);
         if it.container && it.lid != crate::layout::Lid::None {
             let st = state.states(n);
