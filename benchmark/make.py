@@ -53,6 +53,17 @@ DRAW_WEIGHT = {"mono": 1.0, "dual": 3.0, "trio": 1.5}
 SUBSET40 = {"mono": 2, "dual": 3, "trio": 3}
 GAP = 0.06
 WALL = 0.04
+# The robots, written into every task so that the files say what they assume (these are
+# coherent_core::geometry::RobotSpecs' defaults; docs/physics.md explains each field):
+# the legged robot's body, shoulder and arm links (its hand reaches 1.34 m), the fixed
+# arm's shoulder above its counter and links (1.25 m reach), the quadrotor's mass, frame,
+# basket, cruise altitude and speed.
+SPECS = {
+    "dog_half": [0.3, 0.2, 0.3], "dog_shoulder": [0.0, 0.47, 0.15], "dog_links": [0.45, 0.4],
+    "dog_speed": 1.0, "arm_shoulder": 0.3, "arm_links": [0.65, 0.6], "quad_mass": 1.5,
+    "quad_half": 0.3, "basket_half": 0.22, "cruise_altitude": 1.9, "flight_speed": 1.0,
+    "low_top": 0.45, "high_top": 1.4,
+}
 # A counter with a fixed arm (width x, height y, depth z): its top is high for the legged
 # robot, its right metre is the quadrotor's landing pad and its back strip the arm's.
 ARM_TABLE = (2.0, 1.1, 1.2)
@@ -326,6 +337,7 @@ class Scene:
                           for a, r, b in edges],
             },
             "geometry": {
+                "specs": SPECS,
                 "rooms": list(self.rooms.values()),
                 "doors": self.doors,
                 **({"stairs": self.stairs} if self.stairs else {}),
