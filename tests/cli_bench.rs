@@ -1,5 +1,6 @@
 //! `coherent bench` as a separate process: an end-to-end run on the paper40 tasks of
-//! env0, resume, `--report` in every format, and the exit status of bad input.
+//! env0, resume, `--report` in every format, our own benchmark's native40 subset, and
+//! the exit status of bad input.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -36,6 +37,15 @@ fn show(out: &Output) -> String {
     )
 }
 
+/// Asserts that `out` exited 0 and that its stdout says each of `texts`.
+fn says(out: &Output, texts: &[&str]) {
+    assert_eq!(out.status.code(), Some(0), "{}", show(out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    for text in texts {
+        assert!(stdout.contains(text), "no {text:?} in:\n{}", show(out));
+    }
+}
+
 #[test]
 fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
     let dir = scratch("e2e");
@@ -55,27 +65,18 @@ fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
         out.to_str().expect("UTF-8 path"),
     ];
     let first = coherent(&args);
-    assert_eq!(first.status.code(), Some(0), "{}", show(&first));
-    let text = String::from_utf8_lossy(&first.stdout);
-    assert!(
-        text.contains("tasks: 8 of subset paper40 present"),
-        "{}",
-        show(&first)
-    );
-    assert!(text.contains("missing: 32 of 40"), "{}", show(&first));
-    assert!(
-        text.contains("16 episodes: 0 already finished, 16 run now"),
-        "{}",
-        show(&first)
-    );
-    assert!(text.contains("### Table I"), "{}", show(&first));
-    // The built-in backend is the optimal planner: PEFA solves all 8.
-    assert!(text.contains("| pefa | 1.000 / "), "{}", show(&first));
-    assert!(text.contains("| Ground truth |"), "{}", show(&first));
-    assert!(
-        text.contains("Backend: builtin: optimal-planner"),
-        "{}",
-        show(&first)
+    says(
+        &first,
+        &[
+            "tasks: 8 of subset paper40 present",
+            "missing: 32 of 40",
+            "16 episodes: 0 already finished, 16 run now",
+            "### Table I",
+            // The built-in backend is the optimal planner: PEFA solves all 8.
+            "| pefa | 1.000 / ",
+            "| Ground truth |",
+            "Backend: builtin: optimal-planner",
+        ],
     );
     let lines = std::fs::read_to_string(&out).expect("results file");
     assert_eq!(lines.lines().count(), 16);
@@ -109,13 +110,7 @@ fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
     assert!(Path::new(transcript).exists());
 
     let second = coherent(&args);
-    assert_eq!(second.status.code(), Some(0), "{}", show(&second));
-    let text = String::from_utf8_lossy(&second.stdout);
-    assert!(
-        text.contains("16 episodes: 16 already finished, 0 run now"),
-        "{}",
-        show(&second)
-    );
+    says(&second, &["16 episodes: 16 already finished, 0 run now"]);
     let lines = std::fs::read_to_string(&out).expect("results file");
     assert_eq!(lines.lines().count(), 16, "nothing ran twice");
 
@@ -132,6 +127,35 @@ fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
     let value: serde_json::Value = serde_json::from_slice(&json.stdout).expect("JSON report");
     assert_eq!(value["table1"]["rows"][0]["method"], "pefa");
     assert_eq!(value["table1"]["rows"][0]["cells"][3]["sr"]["mean"], 1.0);
+}
+
+/// Our own benchmark, compiled in: its 40-task subset by name, with no files at hand.
+#[test]
+fn bench_runs_the_native40_subset_of_our_benchmark() {
+    let dir = scratch("native");
+    let out = dir.join("results.jsonl");
+    let run = coherent(&[
+        "bench",
+        "--tasks",
+        "native",
+        "--subset",
+        "native40",
+        "--methods",
+        "pefa",
+        "--backend",
+        "builtin",
+        "--out",
+        out.to_str().expect("UTF-8 path"),
+    ]);
+    says(
+        &run,
+        &[
+            "tasks: 40 of subset native40 (40 listed) present",
+            "40 episodes: 0 already finished, 40 run now",
+            "| pefa | 1.000 / 7.2 | 1.000 / 10.5 | 1.000 / 14.5 | 1.000 / 11.2 |",
+            "s5-house (n=8)",
+        ],
+    );
 }
 
 #[test]

@@ -264,18 +264,25 @@ async fn too_many_requests_waits_for_retry_after_then_succeeds() {
     assert_eq!(r.episode.summary.completion_tokens, 20);
 }
 
-#[tokio::test]
-async fn a_server_error_is_retried() {
-    let server = serve(vec![Fault::Reply(500, vec![], "oops".into())]).await;
-    let r = run("500", &server, 1).await;
+/// One fault, then a good answer: the first call succeeds on its second attempt and
+/// the action is carried out.
+async fn recovers_after_one(fault: Fault, name: &str) {
+    let server = serve(vec![fault]).await;
+    let r = run(name, &server, 1).await;
     assert_eq!(
         r.episode.rounds[0].calls[0]
             .answer
             .as_ref()
             .map(|a| a.attempts),
-        Some(2)
+        Some(2),
+        "{name}"
     );
-    assert_eq!(r.episode.rounds[0].outcome, Outcome::Executed);
+    assert_eq!(r.episode.rounds[0].outcome, Outcome::Executed, "{name}");
+}
+
+#[tokio::test]
+async fn a_server_error_is_retried() {
+    recovers_after_one(Fault::Reply(500, vec![], "oops".into()), "500").await;
 }
 
 #[tokio::test]
@@ -318,16 +325,7 @@ async fn a_server_that_always_hangs_ends_the_episode_in_bounded_time() {
 
 #[tokio::test]
 async fn a_closed_connection_is_retried() {
-    let server = serve(vec![Fault::Close]).await;
-    let r = run("close", &server, 1).await;
-    assert_eq!(
-        r.episode.rounds[0].calls[0]
-            .answer
-            .as_ref()
-            .map(|a| a.attempts),
-        Some(2)
-    );
-    assert_eq!(r.episode.rounds[0].outcome, Outcome::Executed);
+    recovers_after_one(Fault::Close, "close").await;
 }
 
 #[tokio::test]

@@ -141,6 +141,17 @@ fn read(file: &Value) -> coherent_core::Result<Task> {
     native::read("two-storey-house.json", file)
 }
 
+/// Where node `id` ended up: the position part of its final pose.
+fn position(report: &PlanReport, id: i64) -> [f32; 3] {
+    let pose = report
+        .final_poses
+        .iter()
+        .find(|(n, _)| n.0 == id)
+        .unwrap_or_else(|| panic!("node {id} has a final pose"))
+        .1;
+    [pose[0], pose[1], pose[2]]
+}
+
 /// The task's optimal plan carried out in physics.
 fn run(file: &Value) -> (Arc<Task>, Vec<String>, PlanReport) {
     let task = Arc::new(read(file).expect("the two-storey task reads"));
@@ -178,12 +189,7 @@ fn the_legged_robot_carries_a_book_upstairs() {
         "{plan:?}"
     );
     assert!(report.physics_ok, "{plan:?}: {:?}", report.physics_error);
-    let book = report
-        .final_poses
-        .iter()
-        .find(|(id, _)| id.0 == 12)
-        .expect("the book has a pose")
-        .1;
+    let book = position(&report, 12);
     // On the bedside table, whose top is 3.5 m up.
     assert!((book[1] - 3.5).abs() < 0.03, "the book is at {book:?}");
     // The dog's track climbs from the ground floor to the bedroom's.
@@ -224,12 +230,7 @@ fn the_legged_robot_carries_a_book_downstairs() {
     file["geometry"]["robots"][1]["pos"] = json!([2.5, 3.0, 2.6]);
     let (_, plan, report) = run(&file);
     assert!(report.physics_ok, "{plan:?}: {:?}", report.physics_error);
-    let book = report
-        .final_poses
-        .iter()
-        .find(|(id, _)| id.0 == 12)
-        .expect("the book has a pose")
-        .1;
+    let book = position(&report, 12);
     assert!((book[1] - 0.45).abs() < 0.03, "the book is at {book:?}");
 }
 
@@ -248,12 +249,7 @@ fn the_quadrotor_flies_a_cup_up_the_stairwell() {
         "{plan:?}"
     );
     assert!(report.physics_ok, "{plan:?}: {:?}", report.physics_error);
-    let cup = report
-        .final_poses
-        .iter()
-        .find(|(id, _)| id.0 == 13)
-        .expect("the cup has a pose")
-        .1;
+    let cup = position(&report, 13);
     // In the basket on the dresser, whose top is 3.8 m up.
     assert!(cup[1] > 3.8 && cup[1] < 4.0, "the cup is at {cup:?}");
 }
