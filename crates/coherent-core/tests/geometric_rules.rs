@@ -1,6 +1,6 @@
-//! The geometric rule set: height labels come from geometry and robot specs, hand-set
-//! labels are refused with their JSON path, and a fixed arm's put-down is high only
-//! where the place is.
+//! The geometric rule set: height labels come from geometry and robot specs (tall
+//! furniture is judged by the place it offers), hand-set labels are refused with their
+//! JSON path, and a fixed arm's put-down is high only where the place is.
 
 use coherent_core::{NodeId, PropSet, Task, native, rules};
 use serde_json::{Value, json};
@@ -113,6 +113,60 @@ fn heights_come_from_geometry_and_specs() {
             .properties
             .contains(PropSet::LOW_HEIGHT)
     );
+}
+
+/// A wardrobe 1.90 m tall is taller than the legged robot's hand, but what it offers is
+/// its inner floor: it is low, not out of reach, and the robot may walk to it and open
+/// it. A movable thing is judged by its own top.
+#[test]
+fn tall_furniture_is_not_out_of_reach_for_being_tall() {
+    let mut v = kitchen();
+    v["graph"]["nodes"]
+        .as_array_mut()
+        .expect("nodes")
+        .push(json!(
+            {"id": 8, "category": "Furniture", "class_name": "wardrobe",
+             "properties": ["CONTAINERS", "CAN_OPEN"], "states": ["CLOSED"]}
+        ));
+    v["graph"]["edges"]
+        .as_array_mut()
+        .expect("edges")
+        .push(json!(
+            {"from_id": 8, "to_id": 1, "relation_type": "ON"}
+        ));
+    v["geometry"]["items"]
+        .as_array_mut()
+        .expect("items")
+        .push(json!(
+            {"id": 8, "pos": [4.4, 0, 0.4], "size": [1.0, 1.9, 0.6],
+             "container": true, "lid": "front", "dynamic": false}
+        ));
+    let task = read(&v).expect("the kitchen with a wardrobe reads");
+    let wardrobe = idx(&task, 8);
+    assert!(task.node(wardrobe).properties.contains(PropSet::LOW_HEIGHT));
+    assert!(!task.init.on_high_surface(wardrobe));
+    let dog = *task
+        .robots
+        .iter()
+        .find(|r| r.node == idx(&task, 7))
+        .expect("the dog is a robot");
+    let moves: Vec<String> = rules::actions(&task, &task.init, dog)
+        .iter()
+        .map(|a| a.render(&task))
+        .collect();
+    assert!(
+        moves.contains(&"[movetowards] <wardrobe>(8)".to_owned()),
+        "{moves:?}"
+    );
+
+    // A movable thing standing on the floor (always low) whose own top is above the
+    // hand is out of reach: a bottle 1.5 m tall.
+    let mut tall_bottle = kitchen();
+    tall_bottle["graph"]["edges"][6]["to_id"] = json!(1);
+    tall_bottle["geometry"]["items"][3]["pos"][1] = json!(0.0);
+    tall_bottle["geometry"]["items"][3]["size"][1] = json!(1.5);
+    let task = read(&tall_bottle).expect("it reads");
+    assert!(task.init.on_high_surface(idx(&task, 6)));
 }
 
 #[test]
