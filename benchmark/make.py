@@ -377,11 +377,14 @@ class Scene:
         return f"<{self.nodes[n]['class_name']}>({n})"
 
     def instruction(self, goal):
+        """The goal in English, each place with its room ("on the landing", "in the
+        kitchen"); the quadrotor's basket goes wherever the quadrotor is."""
         parts = []
         for s, rel, t in goal:
             room = self.nodes[self.where(t)]["class_name"] if t != self.basket else None
             where = "in" if rel == "INSIDE" else "on"
-            place = f"{self.label(t)}" + (f" in the {room}" if room else "")
+            at = "on" if room in ("landing", "sales floor") else "in"
+            place = f"{self.label(t)}" + (f" {at} the {room}" if room else "")
             parts.append(f"the {self.label(s)} {where} the {place}")
         text = "Put " + ", ".join(parts[:-1]) + (" and " if len(parts) > 1 else "") + parts[-1]
         return text + "."
