@@ -16,12 +16,13 @@ fn step(c: &mut Criterion) {
         group.bench_function(format!("env{n}"), |b| {
             b.iter(|| {
                 let s = black_box(&task.init);
-                let mut first = None;
-                for &robot in &task.robots {
-                    let actions = rules::actions(&task, s, robot);
-                    first = first.or_else(|| actions.first().map(|a| (robot, *a)));
-                    black_box(actions);
-                }
+                let lists = rules::team_actions(&task, s, &task.robots);
+                let first = task
+                    .robots
+                    .iter()
+                    .zip(&lists)
+                    .find_map(|(&robot, actions)| actions.first().map(|a| (robot, *a)));
+                black_box(&lists);
                 let mut next = s.clone();
                 if let Some((robot, action)) = first {
                     rules::apply(&task, &mut next, robot, action);

@@ -172,14 +172,9 @@ impl Planner {
                 match mistake {
                     Some((Mistake::WrongRobot, rng)) => robot = other_robot(task, robot, rng),
                     Some((Mistake::Suboptimal, rng)) => {
-                        let joint: Vec<(Idx, String)> = task
-                            .robots
-                            .iter()
-                            .flat_map(|r| {
-                                rules::actions(task, state, *r)
-                                    .into_iter()
-                                    .map(|a| (r.node, a.render(task)))
-                            })
+                        let joint: Vec<(Idx, String)> = crate::joint::joint_actions(task, state)
+                            .into_iter()
+                            .map(|j| (j.robot.node, j.action.render(task)))
                             .collect();
                         (robot, action) = joint[rng.below(joint.len())].clone();
                     }

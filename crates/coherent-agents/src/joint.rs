@@ -41,8 +41,9 @@ impl JointAction {
 pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
     task.robots
         .iter()
-        .flat_map(|&robot| {
-            rules::actions(task, s, robot)
+        .zip(rules::team_actions(task, s, &task.robots))
+        .flat_map(|(&robot, actions)| {
+            actions
                 .into_iter()
                 .map(move |action| JointAction { robot, action })
         })

@@ -353,6 +353,16 @@ pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
     View::new(task, s, robot).actions()
 }
 
+/// The action lists of several robots in state `s`, in the order of `robots`: what one
+/// planning round asks of the rules. The state's [`Contents`] is built once for all.
+pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>> {
+    let contents = Contents::new(task, s);
+    robots
+        .iter()
+        .map(|&robot| actions_in(task, s, robot, &contents))
+        .collect()
+}
+
 /// [`actions`] with the state's [`Contents`] built already (once for all robots).
 pub(crate) fn actions_in(task: &Task, s: &State, robot: Robot, contents: &Contents) -> Vec<Action> {
     View::with(task, s, robot, Cow::Borrowed(contents)).actions()
