@@ -113,7 +113,8 @@ class Task:
     @property
     def instruction(self) -> str: ...
     @property
-    def gt_steps(self) -> int | None: ...
+    def gt(self) -> int | None:
+        """The ground truth's number of steps, when the task file gives one."""
     @property
     def type(self) -> _TaskType | None:
         """The fewest robot types that can reach the goal, by the optimal planner (searched
