@@ -196,5 +196,5 @@ def test_classes_live_in_the_native_module() -> None:
 
 
 def test_wheel_is_abi3() -> None:
-    # One wheel for every CPython from 3.9: the extension is built for the stable ABI.
+    # One wheel for every CPython from 3.11: the extension is built for the stable ABI.
     assert Path(_coherent.__file__).name in ("_coherent.abi3.so", "_coherent.pyd")
