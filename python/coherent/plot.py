@@ -55,9 +55,10 @@ def _method_color(method: str) -> str:
 
 
 def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: str | None = None) -> Figure:
-    """Success rate (left) and average steps (right) per method, by task type (Table I)
-    or by scene (Table II), as grouped bars with the 95% interval over seeds as error
-    bars (none with one seed); dashes mark the ground truth's average steps."""
+    """Success rate (left, or above with more than four columns) and average steps per
+    method, by task type (Table I) or by scene (Table II), as grouped bars with the 95%
+    interval over seeds as error bars (none with one seed); dashes mark the ground
+    truth's average steps."""
     if by not in ("type", "scene"):
         raise ValueError(f'by={by!r}: expected "type" or "scene"')
     rep = results if isinstance(results, Report) else report(results)
@@ -68,7 +69,11 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
     labels = [f"{_COLUMN_NAMES.get(c, c)}\n(n={tasks[c]})" for c in columns]
     x = np.arange(len(columns), dtype=float)
     width = 0.8 / max(len(methods), 1)
-    fig, (ax_sr, ax_as) = plt.subplots(1, 2, figsize=(max(9.0, 2.4 * len(columns) + 3), 4.6), layout="constrained")
+    # Side by side; one above the other when there are many columns (scenes), to stay readable at page width.
+    if len(columns) > 4:
+        fig, (ax_sr, ax_as) = plt.subplots(2, 1, figsize=(max(9.0, 1.5 * len(columns) + 3), 7.8), layout="constrained")
+    else:
+        fig, (ax_sr, ax_as) = plt.subplots(1, 2, figsize=(max(9.0, 2.4 * len(columns) + 3), 4.6), layout="constrained")
     for ax, stat in ((ax_sr, "SR"), (ax_as, "AS")):
         for i, method in enumerate(methods):
             means = t.loc[method, [(c, stat) for c in columns]].to_numpy(dtype=float)
