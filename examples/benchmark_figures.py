@@ -1,5 +1,5 @@
 """Runs a 40-task subset with the built-in and the simulated backends and writes the
-paper's figures as PNG files.
+paper's figures as PNG files (matplotlib: ``pip install ".[plot]"``).
 
     python examples/benchmark_figures.py                    # the project's benchmark, 40 tasks
     python examples/benchmark_figures.py --tasks ../shared/coherent-original/env --subset paper40
@@ -13,6 +13,9 @@ Figures, in --out (default ``figures/``):
   robots' paths in physics. With --base-url and --model, ``tokens.png`` is a short
   episode (--llm-steps) of that language model on the same task instead: the built-in
   and simulated backends report no tokens.
+- ``storeys.png``, when a scene of the tasks has several storeys: the robots' paths in
+  physics along the optimal plan of its task with the longest ground truth, a panel per
+  storey.
 
 The results files (``<backend>.jsonl`` in --out) are resumable: an interrupted run goes
 on where it stopped, and a finished one only redraws the figures.
@@ -96,7 +99,11 @@ def main() -> None:
         tokens_of = episode
     fig, ax = plt.subplots(figsize=(10, 3.4), layout="constrained")
     save(plot.tokens(tokens_of, ax=ax).figure, args.out / "tokens.png")
-    save(plot.scene(episode).figure, args.out / "scene.png")
+    save(plot.scene(episode)[0].figure, args.out / "scene.png")
+    storeyed = [t for t in tasks if len({room["level"] for room in coherent.scene_layout(t)["rooms"]}) > 1]
+    if storeyed:
+        longest = max(storeyed, key=lambda t: t.gt or 0)
+        save(plot.scene(longest)[0].figure, args.out / "storeys.png")
 
 
 def telling_episode(results: pd.DataFrame) -> coherent.Episode:

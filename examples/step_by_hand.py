@@ -16,7 +16,7 @@ task = coherent.load_tasks(DEMO)[0]
 print(task)
 print(task.instruction)
 print("robots:", task.robot_types)
-print("goal:", task.goal, "| type:", task.type, "| ground truth:", task.gt_steps, "steps")
+print("goal:", task.goal, "| type:", task.type, "| ground truth:", task.gt, "steps")
 
 # %% [markdown]
 # ## What a robot sees and may do

@@ -113,7 +113,8 @@ class Task:
     @property
     def instruction(self) -> str: ...
     @property
-    def gt_steps(self) -> int | None: ...
+    def gt(self) -> int | None:
+        """The ground truth's number of steps, when the task file gives one."""
     @property
     def type(self) -> _TaskType | None:
         """The fewest robot types that can reach the goal, by the optimal planner (searched
@@ -352,12 +353,13 @@ def report_text(lines: list[dict[str, Any]], format: Literal["markdown", "csv", 
     """The tables as ``coherent bench --report`` prints them."""
 
 def scene_layout(task: Task) -> dict[str, Any]:
-    """The scene's geometry (the native format's ``geometry`` object): ``rooms``,
-    ``doors``, ``items``, ``robots``; metres, ``[x, z]`` on the floor plan."""
+    """The scene's geometry (the native format's ``geometry`` object): ``rooms`` (each
+    on its storey's ``level``), ``doors``, ``stairs`` (when any), ``items``, ``robots``;
+    metres, ``[x, z]`` on the floor plan, ``y`` up."""
 
-def robot_paths(source: Task | Episode) -> dict[int, list[tuple[float, float]]]:
-    """Each mobile robot's ``(x, z)`` track in physics along a task's optimal plan or an
-    episode's executed actions."""
+def robot_paths(source: Task | Episode) -> dict[int, list[tuple[float, float, float]]]:
+    """Each mobile robot's ``(x, y, z)`` track in physics (``y`` up) along a task's
+    optimal plan or an episode's executed actions."""
 
 def render_svg(source: Task | Episode, *, paths: bool = True) -> str:
     """The scene from above as SVG (``coherent render``), with the robots' paths."""

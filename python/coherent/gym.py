@@ -67,7 +67,7 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
     def __init__(self, task: Task, *, physics: bool = False, max_steps: int | None = None) -> None:
         self.env = Env(task, physics=physics)
         self.robots = self.env.robots
-        gt = task.gt_steps
+        gt = task.gt
         self.max_steps = max_steps if max_steps is not None else (2 * gt if gt else None)
         self.observation_space = spaces.Text(max_length=MAX_OBSERVATION, min_length=0, charset=CHARSET)
         self.action_space = spaces.Tuple(

@@ -7,20 +7,24 @@ coherent[plot]``):
 - :func:`timeline`: which robot acted at each step of an episode, failed steps marked,
   subtask boundaries;
 - :func:`tokens`: prompt and completion tokens (and model calls) per step;
-- :func:`scene`: the scene from above with the robots' paths.
+- :func:`scene`: the scene from above, a panel per storey, with the robots' paths.
 
-Each returns the matplotlib ``Figure`` (:func:`table`) or ``Axes`` (the others, drawn
-into ``ax`` when given), to save with ``savefig`` or adjust further.
+Each returns the matplotlib ``Figure`` (:func:`table`), ``Axes`` (:func:`timeline`,
+:func:`tokens`) or list of ``Axes``, one per storey (:func:`scene`), drawn into ``ax``
+when given, to save with ``savefig`` or adjust further.
 """
 
 from __future__ import annotations
 
 import textwrap
-from typing import TYPE_CHECKING, Literal, Union
+from collections.abc import Sequence
+from itertools import groupby
+from typing import TYPE_CHECKING, Any, Literal, Union
 
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from matplotlib.axes import Axes
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 from matplotlib.patches import Rectangle
@@ -30,14 +34,17 @@ from ._coherent import METHODS, Episode, Task
 from .analysis import Report, Results, report
 
 if TYPE_CHECKING:
-    from matplotlib.axes import Axes
+    from matplotlib.artist import Artist
     from matplotlib.figure import Figure
+    from matplotlib.text import Text
 
 ReportLike = Union[Report, Results]
 
 _COLUMN_NAMES = {"mono": "Mono", "dual": "Dual", "trio": "Trio", "Avg": "Average"}
 _ROBOT_MARKERS = {"quadrotor": "^", "robot dog": "s", "robot arm": "o"}
 _FAILED = "#d62728"
+# A white box behind a label that crosses lines and boxes.
+_HALO = {"boxstyle": "round,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.7}
 
 
 def _method_color(method: str) -> str:
@@ -48,9 +55,10 @@ def _method_color(method: str) -> str:
 
 
 def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: str | None = None) -> Figure:
-    """Success rate (left) and average steps (right) per method, by task type (Table I)
-    or by scene (Table II), as grouped bars with the 95% interval over seeds as error
-    bars (none with one seed); dashes mark the ground truth's average steps."""
+    """Success rate (left, or above with more than four columns) and average steps per
+    method, by task type (Table I) or by scene (Table II), as grouped bars with the 95%
+    interval over seeds as error bars (none with one seed); dashes mark the ground
+    truth's average steps."""
     if by not in ("type", "scene"):
         raise ValueError(f'by={by!r}: expected "type" or "scene"')
     rep = results if isinstance(results, Report) else report(results)
@@ -61,7 +69,11 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
     labels = [f"{_COLUMN_NAMES.get(c, c)}\n(n={tasks[c]})" for c in columns]
     x = np.arange(len(columns), dtype=float)
     width = 0.8 / max(len(methods), 1)
-    fig, (ax_sr, ax_as) = plt.subplots(1, 2, figsize=(max(9.0, 2.4 * len(columns) + 3), 4.6), layout="constrained")
+    # Side by side; one above the other when there are many columns (scenes), to stay readable at page width.
+    if len(columns) > 4:
+        fig, (ax_sr, ax_as) = plt.subplots(2, 1, figsize=(max(9.0, 1.5 * len(columns) + 3), 7.8), layout="constrained")
+    else:
+        fig, (ax_sr, ax_as) = plt.subplots(1, 2, figsize=(max(9.0, 2.4 * len(columns) + 3), 4.6), layout="constrained")
     for ax, stat in ((ax_sr, "SR"), (ax_as, "AS")):
         for i, method in enumerate(methods):
             means = t.loc[method, [(c, stat) for c in columns]].to_numpy(dtype=float)
@@ -194,83 +206,184 @@ def tokens(episode: Episode, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def scene(source: Task | Episode, ax: Axes | None = None, *, paths: bool = True) -> Axes:
-    """The scene from above: rooms, doors, furniture (grey, with names), objects (small
-    orange squares), robots where they start; with ``paths``, each mobile robot's path
-    in physics along the task's optimal plan or the episode's executed actions."""
+def _level_at(rooms: list[dict[str, Any]], point: Sequence[float]) -> float | None:
+    """The floor level of the storey ``point`` ``(x, y, z)`` is on, as ``coherent render``
+    finds it: the highest room whose footprint holds the point and whose floor is not
+    above it (by more than 5 cm); None outside every room."""
+    x, y, z = point
+    under = [
+        r["level"]
+        for r in rooms
+        if r["min"][0] <= x <= r["max"][0] and r["min"][1] <= z <= r["max"][1] and r["level"] <= y + 0.05
+    ]
+    return max(under, default=None)
+
+
+def scene(source: Task | Episode, ax: Axes | Sequence[Axes] | None = None, *, paths: bool = True) -> list[Axes]:
+    """The scene from above, one panel per storey, lowest first (``coherent render``'s
+    panels): rooms, doors, stairs, furniture (grey, with names), objects (small orange
+    squares), robots where they start; with ``paths``, each mobile robot's path in
+    physics along the task's optimal plan or the episode's executed actions, each stretch
+    on the panel of the storey it is on. ``ax`` is one Axes per storey (a single Axes for
+    a scene of one storey); returns the panels."""
     task = source.task if isinstance(source, Episode) else source
     layout = _coherent.scene_layout(task)
     nodes = {n["id"]: n for n in task.to_native()["graph"]["nodes"]}
     tracks = _coherent.robot_paths(source) if paths else {}
-    lo = np.min([r["min"] for r in layout["rooms"]], axis=0)
-    hi = np.max([r["max"] for r in layout["rooms"]], axis=0)
+    rooms = layout["rooms"]
+    levels = sorted({r["level"] for r in rooms})
+    room_level = {r["id"]: r["level"] for r in rooms}
+    lo = np.min([r["min"] for r in rooms], axis=0)
+    hi = np.max([r["max"] for r in rooms], axis=0)
     if ax is None:
         span = hi - lo
         height = min(max(8.0 * span[1] / max(span[0], 1e-6), 3.5), 10.0)
-        _, ax = plt.subplots(figsize=(9.0, height + 2.0), layout="constrained")
-    for room in layout["rooms"]:
+        width = 9.0 if len(levels) == 1 else 8.0 * len(levels)
+        _, grid = plt.subplots(1, len(levels), figsize=(width, height + 2.0), layout="constrained", squeeze=False)
+        axes = list(grid[0])
+    else:
+        axes = [ax] if isinstance(ax, Axes) else list(ax)
+        if len(axes) != len(levels):
+            raise ValueError(f"{task.scene}: ax must be one Axes per storey ({len(levels)}), not {len(axes)}")
+
+    def panel(level: float | None) -> int:
+        # Outside every room (or on no storey) is the lowest storey's, as in `coherent render`.
+        return levels.index(level) if level in levels else 0
+
+    # Labels stay where they are drawn (`fixed`) or take the first free spot of theirs.
+    fixed: list[Artist] = []
+    movable: list[tuple[Text, list[tuple[float, float, str]]]] = []
+    for room in rooms:
         (x0, z0), (x1, z1) = room["min"], room["max"]
-        ax.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, facecolor="#f4f1ea", edgecolor="0.3", linewidth=1.5, zorder=0))
+        at = axes[panel(room["level"])]
+        at.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, facecolor="#f4f1ea", edgecolor="0.3", linewidth=1.5, zorder=0))
         name = nodes[room["id"]]["class_name"]
-        ax.text(x0 + 0.12, z1 - 0.12, name, ha="left", va="top", fontsize=9, fontweight="bold", color="0.25")
+        fixed.append(at.text(x0 + 0.12, z1 - 0.12, name, ha="left", va="top", fontsize=9, fontweight="bold", color="0.25"))
     for door in layout["doors"]:
         (cx, cz), half = door["center"], door["width"] / 2
         xs, zs = ([cx - half, cx + half], [cz, cz]) if door["along_x"] else ([cx, cx], [cz - half, cz + half])
-        ax.plot(xs, zs, color="#8c564b", linewidth=5, solid_capstyle="butt", zorder=1)
+        at = axes[panel(room_level.get(door["rooms"][0]))]
+        at.plot(xs, zs, color="#8c564b", linewidth=5, solid_capstyle="butt", zorder=1)
+    # A flight of stairs: its steps and an arrow up on the lower storey, the stairwell
+    # dashed on the upper one; named beside it.
+    for flight in layout.get("stairs", []):
+        (fx, fz), (hx, hz), half = flight["foot"], flight["head"], flight["width"] / 2
+        along_x = fx != hx
+        x0, x1 = sorted((fx, hx)) if along_x else (fx - half, fx + half)
+        z0, z1 = (fz - half, fz + half) if along_x else sorted((fz, hz))
+        lower, upper = (room_level[r] for r in flight["rooms"])
+        name = nodes[flight["id"]]["class_name"] if flight["id"] in nodes else "stairs"
+        beside: dict[str, Any] = (
+            {"x": (x0 + x1) / 2, "y": z1 + 0.1, "ha": "center", "va": "bottom"}
+            if along_x
+            else {"x": x1 + 0.1, "y": (z0 + z1) / 2, "ha": "left", "va": "center", "rotation": 90}
+        )
+        down, up = axes[panel(lower)], axes[panel(upper)]
+        steps = "|" if along_x else "-"
+        down.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, facecolor="0.88", edgecolor="0.3", hatch=steps, zorder=1))
+        down.annotate("", (hx, hz), xytext=(fx, fz), arrowprops={"arrowstyle": "-|>", "color": "0.3"}, zorder=2)
+        fixed.append(down.text(s=f"{name} up to {upper:.2f} m", fontsize=7, color="0.2", zorder=7, bbox=_HALO, **beside))
+        up.add_patch(Rectangle((x0, z0), x1 - x0, z1 - z0, fill=False, edgecolor="0.3", linestyle="--", zorder=1))
+        fixed.append(up.text(s=f"{name} down to {lower:.2f} m", fontsize=7, color="0.2", zorder=7, bbox=_HALO, **beside))
 
     def inside(x: float, z: float) -> bool:
         return bool(lo[0] <= x <= hi[0] and lo[1] <= z <= hi[1])
 
     # The goal's objects are named; other objects are only drawn, to keep labels apart.
     goal = {g["subject"] for g in task.to_native()["goal"]}
-    named: list[tuple[float, float]] = []
+    named: list[tuple[int, float, float]] = []
     for item in sorted(layout["items"], key=lambda i: i["dynamic"]):
         x, _, z = item["pos"]
         w, _, d = item["size"]
         node = nodes.get(item["id"])
         if node is None or not inside(x, z) or node["category"] == "Floor":
             continue
+        k = panel(_level_at(rooms, item["pos"]))
         if item["dynamic"]:
             in_goal = item["id"] in goal
-            ax.add_patch(
+            fixed.append(axes[k].add_patch(
                 Rectangle(
                     (x - w / 2, z - d / 2), w, d,
                     facecolor="#e4572e" if in_goal else "#ffb45c", edgecolor="#7a2a00", zorder=3,
                 )
-            )  # fmt: skip
+            ))  # fmt: skip
             if in_goal:
-                near = sum(1 for (a, b) in named if abs(a - x) < 1.2 and abs(b - z) < 0.4)
-                named.append((x, z))
-                ax.annotate(
+                near = sum(1 for (j, a, b) in named if j == k and abs(a - x) < 1.2 and abs(b - z) < 0.4)
+                named.append((k, x, z))
+                fixed.append(axes[k].annotate(
                     node["class_name"], (x, z), xytext=(0, -5 - 9 * near), textcoords="offset points",
-                    ha="center", va="top", fontsize=7, color="#7a2a00", fontweight="bold", zorder=7,
-                    bbox={"boxstyle": "round,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.7},
-                )  # fmt: skip
+                    ha="center", va="top", fontsize=7, color="#7a2a00", fontweight="bold", zorder=7, bbox=_HALO,
+                ))  # fmt: skip
         else:
-            ax.add_patch(Rectangle((x - w / 2, z - d / 2), w, d, facecolor="0.82", edgecolor="0.45", linewidth=0.8, zorder=2))
-            ax.text(x, z + d / 2 - 0.05, node["class_name"], ha="center", va="top", fontsize=6.5, color="0.2", zorder=4)
+            axes[k].add_patch(Rectangle((x - w / 2, z - d / 2), w, d, facecolor="0.82", edgecolor="0.45", linewidth=0.8, zorder=2))
+            # Inside the box at its top or bottom, or just outside it.
+            label = axes[k].text(x, z, node["class_name"], ha="center", fontsize=6.5, color="0.2", zorder=7, bbox=_HALO)
+            top, bottom = z + d / 2, z - d / 2
+            spots = [(x, top - 0.05, "top"), (x, bottom + 0.05, "bottom"), (x, bottom - 0.05, "top"), (x, top + 0.05, "bottom")]
+            movable.append((label, spots))
     colors = plt.get_cmap("tab10").colors
+    legend: dict[str, Artist] = {}
     for i, robot in enumerate(task.robots):
         color = colors[i % len(colors)]
         kind = task.robot_types[robot]
-        track = tracks.get(robot)
-        if track:
-            xs, zs = zip(*track)
-            ax.plot(xs, zs, color=color, linewidth=2, alpha=0.85, zorder=5, gid=f"path {robot}")
-            ax.plot(xs[-1], zs[-1], marker=_ROBOT_MARKERS[kind], color=color, markersize=9, markerfacecolor="white", markeredgewidth=2, zorder=6)
+        marker = _ROBOT_MARKERS[kind]
+        # One line per stretch on a storey; the hollow marker where the last one ends.
+        track = tracks.get(robot, [])
+        stretches = [(k, list(points)) for k, points in groupby(track, key=lambda p: panel(_level_at(rooms, p)))]
+        for k, points in stretches:
+            xs, zs = [p[0] for p in points], [p[2] for p in points]
+            axes[k].plot(xs, zs, color=color, linewidth=2, alpha=0.85, zorder=5, gid=f"path {robot}")
+        if stretches:
+            k, points = stretches[-1]
+            x, _, z = points[-1]
+            fixed += axes[k].plot(
+                x, z, marker=marker, color=color, markersize=9, markerfacecolor="white", markeredgewidth=2, zorder=6
+            )
         start = next(r["pos"] for r in layout["robots"] if r["id"] == robot)
-        ax.plot(start[0], start[2], marker=_ROBOT_MARKERS[kind], color=color, markersize=10, markeredgecolor="black", linestyle="", zorder=6, label=_robot_label(task, robot))
-    ax.set_xlim(lo[0] - 0.3, hi[0] + 0.3)
-    ax.set_ylim(lo[1] - 0.3, hi[1] + 0.3)
-    ax.set_aspect("equal")
-    ax.set_xlabel("x (m)")
-    ax.set_ylabel("z (m)")
-    handles, names = ax.get_legend_handles_labels()
+        (mark,) = axes[panel(_level_at(rooms, start))].plot(
+            start[0], start[2], marker=marker, color=color, markersize=10, markeredgecolor="black", linestyle="", zorder=6
+        )
+        legend[_robot_label(task, robot)] = mark
+        fixed.append(mark)
     if tracks:
-        handles.append(Line2D([], [], color="0.3", linewidth=2, label="path (hollow: where it ends)"))
-    handles.append(Rectangle((0, 0), 1, 1, facecolor="#e4572e", edgecolor="#7a2a00", label="object of the goal"))
-    handles.append(Rectangle((0, 0), 1, 1, facecolor="#ffb45c", edgecolor="#7a2a00", label="other object"))
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.07), ncol=4, frameon=False, fontsize=8)
+        legend["path (hollow: where it ends)"] = Line2D([], [], color="0.3", linewidth=2)
+    legend["object of the goal"] = Rectangle((0, 0), 1, 1, facecolor="#e4572e", edgecolor="#7a2a00")
+    legend["other object"] = Rectangle((0, 0), 1, 1, facecolor="#ffb45c", edgecolor="#7a2a00")
+    for at in axes:
+        at.set_xlim(lo[0] - 0.3, hi[0] + 0.3)
+        at.set_ylim(lo[1] - 0.3, hi[1] + 0.3)
+        at.set_aspect("equal")
+        at.set_xlabel("x (m)")
+        at.set_ylabel("z (m)")
     what = "" if not paths else (" - paths of the episode" if isinstance(source, Episode) else " - paths of the optimal plan")
-    ax.set_title("\n".join(textwrap.wrap(f"{task.scene} task {task.task_id}{what}: {task.instruction}", 90)), fontsize=10)
-    return ax
+    heading = f"{task.scene} task {task.task_id}{what}: {task.instruction}"
+    key = {"handles": list(legend.values()), "labels": list(legend), "ncol": 4, "frameon": False, "fontsize": 8}
+    if len(axes) == 1:
+        axes[0].legend(loc="upper center", bbox_to_anchor=(0.5, -0.07), **key)
+        axes[0].set_title("\n".join(textwrap.wrap(heading, 90)), fontsize=10)
+    else:
+        fig = axes[0].figure
+        fig.legend(loc="outside lower center", **key)
+        fig.suptitle("\n".join(textwrap.wrap(heading, 45 * len(axes))), fontsize=10)
+        for at, level in zip(axes, levels):
+            at.set_title(f"level {level:.2f} m", fontsize=10)
+    _place_labels(axes[0].figure, fixed, movable)
+    return axes
+
+
+def _place_labels(fig: Figure, fixed: list[Artist], movable: list[tuple[Text, list[tuple[float, float, str]]]]) -> None:
+    """Moves each label of ``movable`` to the first of its spots (x, y and vertical
+    alignment, in its axes' data) where it overlaps neither the ``fixed`` artists nor
+    the labels placed before it; to its first spot when none is free. Measured on the
+    figure as it is laid out now."""
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    taken = [artist.get_window_extent(renderer) for artist in fixed]
+    for label, spots in movable:
+        for x, y, va in [*spots, spots[0]]:
+            label.set_position((x, y))
+            label.set_verticalalignment(va)
+            box = label.get_window_extent(renderer)
+            if not any(box.overlaps(other) for other in taken):
+                break
+        taken.append(box)

@@ -57,7 +57,7 @@ def test_a_refused_action_and_truncation(task0: coherent.Task) -> None:
 
 
 def test_default_budget_is_twice_the_ground_truth(task0: coherent.Task) -> None:
-    assert CoherentEnv(task0).max_steps == 2 * task0.gt_steps
+    assert CoherentEnv(task0).max_steps == 2 * task0.gt
 
 
 def test_unknown_robot(task0: coherent.Task) -> None:

@@ -24,7 +24,7 @@ def test_task_attributes(task0: coherent.Task) -> None:
     assert task0.task_id == 0
     assert task0.name == "MultiAgent_0"
     assert task0.instruction == "The <quadrotor>(22) lands on the <high kitchen table>(35)."
-    assert task0.gt_steps == 5
+    assert task0.gt == 5
     assert task0.robots == [22, 23, 24, 50]
     assert task0.robot_types == {22: "quadrotor", 23: "robot dog", 24: "robot arm", 50: "robot arm"}
     assert task0.goal == ["on_<quadrotor>(22)_<high kitchen table>(35)"]

@@ -9,6 +9,7 @@ import pytest
 pytest.importorskip("matplotlib")
 
 import matplotlib.pyplot as plt  # noqa: E402
+from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.container import BarContainer  # noqa: E402
 
 import coherent  # noqa: E402
@@ -92,7 +93,7 @@ def test_tokens_of_a_model(model_episode: coherent.Episode) -> None:
 
 
 def test_scene_map(episode: coherent.Episode) -> None:
-    ax = plot.scene(episode)
+    (ax,) = plot.scene(episode)
     names = [t.get_text() for t in ax.get_legend().get_texts()]
     assert names[:3] == ["robot arm (6)", "quadrotor (11)", "robot dog (13)"]
     assert "path (hollow: where it ends)" in names
@@ -106,5 +107,45 @@ def test_scene_map(episode: coherent.Episode) -> None:
 
 def test_scene_map_without_paths(env0_tasks: list[coherent.Task]) -> None:
     fig, ax = plt.subplots()
-    assert plot.scene(env0_tasks[0], ax=ax, paths=False) is ax
+    assert plot.scene(env0_tasks[0], ax=ax, paths=False) == [ax]
     assert not [line for line in ax.get_lines() if line.get_gid()]
+    with pytest.raises(ValueError, match=r"env0: ax must be one Axes per storey \(1\), not 2"):
+        plot.scene(env0_tasks[0], ax=plt.subplots(1, 2)[1], paths=False)
+
+
+def test_scene_map_of_two_storeys() -> None:
+    # s5-house task 13: the robot dog walks down the stairs, then to the living room.
+    task = next(t for t in coherent.benchmark.tasks(subset="40") if (t.scene, t.task_id) == ("s5-house", 13))
+    ground, upstairs = plot.scene(task)
+    assert (ground.get_title(), upstairs.get_title()) == ("level 0.00 m", "level 3.00 m")
+    fig = ground.figure
+    assert fig.get_suptitle().startswith("s5-house task 13 - paths of the optimal plan")
+    assert "robot dog (58)" in [t.get_text() for t in fig.legends[0].get_texts()]
+    layout = coherent.scene_layout(task)
+    names = {n["id"]: n["class_name"] for n in task.to_native()["graph"]["nodes"]}
+    for ax, level in ((ground, 0.0), (upstairs, 3.0)):
+        texts = {t.get_text() for t in ax.texts}
+        assert {names[r["id"]] for r in layout["rooms"] if r["level"] == level} <= texts
+    assert "stairs up to 3.00 m" in {t.get_text() for t in ground.texts}
+    assert "stairs down to 0.00 m" in {t.get_text() for t in upstairs.texts}
+
+    def drawn(ax: Axes, robot: int) -> list[tuple[float, float]]:
+        return [(x, z) for line in ax.get_lines() if line.get_gid() == f"path {robot}" for x, z in line.get_xydata()]
+
+    def in_room_of(level: float, x: float, z: float) -> bool:
+        return any(
+            r["level"] == level and r["min"][0] <= x <= r["max"][0] and r["min"][1] <= z <= r["max"][1]
+            for r in layout["rooms"]
+        )
+
+    tracks = coherent.robot_paths(task)
+    for robot, track in tracks.items():
+        below, above = drawn(ground, robot), drawn(upstairs, robot)
+        # Every point once, on the panel of its storey.
+        assert sorted(below + above) == sorted((x, z) for x, _, z in track)
+        assert all((x, z) in below for x, y, z in track if y < 0.5)
+        assert all((x, z) in above for x, y, z in track if y > 2.95 and in_room_of(3.0, x, z))
+    dog = next(r for r, kind in task.robot_types.items() if kind == "robot dog")
+    assert drawn(ground, dog) and drawn(upstairs, dog)
+    with pytest.raises(ValueError, match=r"s5-house: ax must be one Axes per storey \(2\), not 1"):
+        plot.scene(task, ax=ground, paths=False)

@@ -31,7 +31,10 @@ def test_robot_paths_of_the_plan_and_of_an_episode(demo: coherent.Task, tmp_path
     mobile = {r for r, kind in demo.robot_types.items() if kind != "robot arm"}
     assert set(planned) == mobile
     for track in planned.values():
-        assert len(track) > 1 and all(len(p) == 2 for p in track)
+        assert len(track) > 1 and all(len(p) == 3 for p in track)
+    # (x, y, z) with y up: the quadrotor flies.
+    flown = [y for r, track in planned.items() if demo.robot_types[r] == "quadrotor" for _, y, _ in track]
+    assert max(flown) > 0.5
     episode = coherent.run(demo, out=tmp_path)
     # The built-in backend follows the optimal plan: the same actions, the same paths.
     assert coherent.robot_paths(episode) == planned

@@ -19,8 +19,9 @@ use crate::run::PyEpisode;
 use crate::task::PyTask;
 
 /// The geometry of `task`'s scene (its own, or the one generated from its graph), as the
-/// `geometry` object of a native task file: `rooms`, `doors`, `items`, `robots`,
-/// `specs`, `wall_height`; metres, `[x, z]` on the floor plan, `y` up.
+/// `geometry` object of a native task file: `rooms` (each on its storey's `level`),
+/// `doors`, `stairs` (when any), `items`, `robots`, `specs`, `wall_height`; metres,
+/// `[x, z]` on the floor plan, `y` up.
 #[pyfunction]
 pub(crate) fn scene_layout<'py>(
     py: Python<'py>,
@@ -77,17 +78,26 @@ fn paths_of(py: Python<'_>, source: Source) -> PyResult<(Arc<Task>, Vec<RobotPat
     result.map_err(|e| errors::error(py, Kind::Physics, e, None))
 }
 
-/// Each mobile robot's track on the floor plan, `{robot id: [(x, z), ...]}`, when a
-/// task's optimal plan or an episode's executed actions are carried out in physics.
+/// A robot's track as Python gets it: `(x, y, z)` points.
+type Track = Vec<(f32, f32, f32)>;
+
+/// Each mobile robot's track, `{robot id: [(x, y, z), ...]}` (`y` up, as in the
+/// layout), when a task's optimal plan or an episode's executed actions are carried out
+/// in physics.
 #[pyfunction]
 pub(crate) fn robot_paths(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
-) -> PyResult<BTreeMap<i64, Vec<(f32, f32)>>> {
+) -> PyResult<BTreeMap<i64, Track>> {
     let (_, paths) = paths_of(py, source_of(source)?)?;
     Ok(paths
         .into_iter()
-        .map(|(id, points)| (id.0, points.into_iter().map(|[x, _, z]| (x, z)).collect()))
+        .map(|(id, points)| {
+            (
+                id.0,
+                points.into_iter().map(|[x, y, z]| (x, y, z)).collect(),
+            )
+        })
         .collect())
 }
 

@@ -59,7 +59,7 @@ impl PyTask {
 
     /// The ground truth's number of steps, when the file gives one.
     #[getter]
-    fn gt_steps(&self) -> Option<u32> {
+    fn gt(&self) -> Option<u32> {
         self.task.meta.gt_steps
     }
 
