@@ -151,7 +151,8 @@ class Scene:
             props.append("CAN_OPEN")
             states.append("CLOSED" if closed else "OPEN")
         elif container:
-            states.append("OPEN")
+            # No door or lid: always open (as the quadrotor's basket), never closed.
+            states.append("OPEN_FOREVER")
         n = self._node(category, name, props, states)
         level = self.rooms[room]["level"]
         self.items[n] = {
@@ -176,7 +177,8 @@ class Scene:
             props.append("CAN_OPEN")
             states.append("CLOSED" if closed else "OPEN")
         elif container:
-            states.append("OPEN")
+            # No door or lid: always open (as the quadrotor's basket), never closed.
+            states.append("OPEN_FOREVER")
         n = self._node(category, name, props, states)
         self.items[n] = {
             "id": n,

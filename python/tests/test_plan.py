@@ -119,18 +119,32 @@ def _interrupt_soon(delay: float) -> threading.Timer:
 
 
 @pytest.fixture()
-def exhaustive_task(env0_path: Path, tmp_path: Path) -> coherent.Task:
-    """env1 task 20 (the mirror onto the high dining table) with only the robot dog left:
-    nothing rules the goal out statically, so the planner must search the dog's whole
-    state space (millions of states, many seconds) to find it unreachable."""
-    tasks = json.loads((env0_path.parent / "env1.json").read_text(encoding="utf-8"))
-    task = tasks[20]
-    graph = task["init_graph"]
-    gone = {n["id"] for n in graph["nodes"] if n["category"] in ("Agents", "AgentTool") and n["class_name"] != "robot dog"}
-    graph["nodes"] = [n for n in graph["nodes"] if n["id"] not in gone]
-    graph["edges"] = [e for e in graph["edges"] if e["from_id"] not in gone and e["to_id"] not in gone]
-    path = tmp_path / "env1-dog-only.json"
-    path.write_text(json.dumps([task]), encoding="utf-8")
+def exhaustive_task(tmp_path: Path) -> coherent.Task:
+    """Our benchmark's s1-apartment with only the robot dog left, asked to move five
+    things, one of them the mug on the kitchen island, which is out of its reach. Nothing
+    rules the goal out statically, so the planner must search every state of the dog
+    and those five things (about 900,000, seconds) to find it unreachable."""
+    task = json.loads(next(t for t in coherent.benchmark.tasks() if t.scene == "s1-apartment").to_json())
+    names = {n["class_name"]: n["id"] for n in task["graph"]["nodes"]}
+    gone = {names["robot arm"], names["quadrotor"], names["basket"]}
+    task["graph"]["nodes"] = [n for n in task["graph"]["nodes"] if n["id"] not in gone]
+    task["graph"]["edges"] = [
+        e for e in task["graph"]["edges"] if e["from_id"] not in gone and e["to_id"] not in gone
+    ]
+    task["geometry"]["robots"] = [r for r in task["geometry"]["robots"] if r["id"] not in gone]
+    task["robots"] = [r for r in task["robots"] if r["id"] not in gone]
+    moves = [
+        ("apple", "bed"),
+        ("milk", "sink counter"),
+        ("pan", "dining table"),
+        ("towel", "coffee table"),
+        ("mug", "nightstand"),
+    ]
+    task["goal"] = [
+        {"relation": "ON", "subject": names[a], "target": names[b], "count": 1} for a, b in moves
+    ]
+    path = tmp_path / "s1-dog-only.json"
+    path.write_text(json.dumps(task), encoding="utf-8")
     return coherent.load_tasks(path)[0]
 
 
