@@ -86,8 +86,8 @@ __all__ = [
     "validate",
 ]
 
-# Submodules with optional dependencies load on first use: `coherent.plot` needs
-# matplotlib, `coherent.gym` gymnasium.
+# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import),
+# `coherent.gym` gymnasium (an optional dependency: `pip install coherent[gym]`).
 _SUBMODULES = ("analysis", "benchmark", "gym", "plot")
 
 
