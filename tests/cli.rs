@@ -197,6 +197,26 @@ fn validate_unsolvable_task_exits_1_and_says_why() {
     assert!(stdout(&out).contains("CONTAINERS"), "{}", show(&out));
 }
 
+/// A flight of stairs narrower than the legged robot needs: the task is solvable, but
+/// `validate` reports the broken scene rule with the numbers (exit 1).
+#[test]
+fn validate_reports_stairs_that_break_the_scene_rules() {
+    let dir = TempDir::new("stairs");
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("benchmark/tasks/s5-house/task-00.json");
+    let mut task: Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).expect("a benchmark task"))
+            .expect("JSON");
+    task["geometry"]["stairs"][0]["width"] = json!(0.6);
+    let file = dir.write_json("narrow-stairs.json", &task);
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 1, "{}", show(&out));
+    assert!(
+        stdout(&out).contains("geometry: stairs 17: 0.60 m wide; a flight is at least 1 m wide"),
+        "{}",
+        show(&out)
+    );
+}
+
 /// Drops `elapsed_ms`, the one field that differs from run to run.
 fn without_elapsed(line: &str) -> Value {
     let mut v: Value =
