@@ -1507,9 +1507,40 @@ impl World {
                 let c = Vector::new(d.center[0], here, d.center[1]);
                 let normal = if d.along_x { Vector::Z } else { Vector::X };
                 let side = (Vector::new(p.x, here, p.z) - c).dot(normal).signum();
-                wps.push(c + normal * side * 1.6);
+                // An open door's panel stands out from the wall as far as the door is
+                // wide: leave the wall straight out to beyond it before turning to the
+                // doorway, and come back to it the same way on the far side.
+                let clear = (d.width + self.layout.specs.quad_half + 0.2).max(1.6);
+                // Points kept 0.8 m inside `room` (its middle line when it is narrower):
+                // a narrow room, a hallway, is crossed, not flown out of.
+                let fit = |v: f32, lo: f32, hi: f32| {
+                    if hi - lo > 1.6 {
+                        v.clamp(lo + 0.8, hi - 0.8)
+                    } else {
+                        (lo + hi) / 2.0
+                    }
+                };
+                let within = |mut o: Vector, room: Idx| {
+                    if let Some((lo, hi)) = self.room_rect(room) {
+                        o.x = fit(o.x, lo[0], hi[0]);
+                        o.z = fit(o.z, lo[1], hi[1]);
+                    }
+                    o
+                };
+                let out = |q: Vector, s: f32, room: Idx| {
+                    let short = clear - (q - c).dot(normal) * s;
+                    if short <= 0.0 {
+                        q
+                    } else {
+                        within(q + normal * s * short, room)
+                    }
+                };
+                wps.push(out(Vector::new(p.x, here, p.z), side, a));
+                wps.push(within(c + normal * side * clear, a));
                 wps.push(c);
-                wps.push(c - normal * side * 1.6);
+                wps.push(within(c - normal * side * clear, b));
+                let there = self.room_level(b) + cruise;
+                wps.push(out(Vector::new(dest.x, there, dest.z), -side, b));
             } else if let Some(f) = flight {
                 let (low, high) = (f.lower + cruise, f.upper + cruise);
                 let mut legs = [f.at(0.6, low), f.at(0.6, high), f.at(f.run + 1.6, high)];
