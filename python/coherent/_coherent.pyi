@@ -321,7 +321,7 @@ def load_episode(path: _PathLike) -> Episode:
     """The finished episode recorded in a transcript file."""
 
 def select(
-    tasks: Sequence[Task], subset: Literal["all", "paper40"] | _PathLike | Sequence[tuple[str, int]]
+    tasks: Sequence[Task], subset: Literal["all", "paper40", "native40"] | _PathLike | Sequence[tuple[str, int]]
 ) -> tuple[list[Task], list[tuple[str, int]]]:
     """The tasks a subset picks (``"paper40"``, a file of ``scene task_id`` lines, or
     pairs), in its order, and the pairs it names that are missing."""

@@ -9,7 +9,6 @@ use clap::{Args, ValueEnum};
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Recorded, Subset};
 use coherent_agents::episode::Method;
 use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
-use coherent_core::benchmark;
 use coherent_core::planner::Limits;
 
 use super::llm::{AnswerFormat, Endpoint, Patience};
@@ -156,11 +155,9 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         return Err("--seeds must be at least 1".into());
     }
     let backend = backend(&args)?;
-    let subset = match args.subset.as_str() {
-        "all" => Subset::All,
-        "paper40" => Subset::Paper40,
-        "native40" => Subset::Listed(benchmark::subset40()),
-        file => Subset::read_file(std::path::Path::new(file))?,
+    let subset = match Subset::named(&args.subset) {
+        Some(named) => named,
+        None => Subset::read_file(std::path::Path::new(&args.subset))?,
     };
     let mut tasks = Vec::new();
     let mut malformed = 0;

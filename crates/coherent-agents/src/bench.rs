@@ -45,6 +45,18 @@ pub enum Subset {
 }
 
 impl Subset {
+    /// The subset a name stands for: `all`, `paper40` (the paper's subset of its released
+    /// tasks) or `native40` (the 40-task subset of the project's own benchmark, listed by
+    /// `coherent_core::benchmark::subset40`); None for any other name.
+    pub fn named(name: &str) -> Option<Subset> {
+        match name {
+            "all" => Some(Subset::All),
+            "paper40" => Some(Subset::Paper40),
+            "native40" => Some(Subset::Listed(coherent_core::benchmark::subset40())),
+            _ => None,
+        }
+    }
+
     /// Reads a subset file; errors name the file and the line.
     pub fn read_file(path: &Path) -> Result<Subset, String> {
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;

@@ -21,12 +21,10 @@ use crate::task::PyTask;
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
 fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
-    if let Ok(s) = subset.cast::<PyString>() {
-        match s.to_cow()?.as_ref() {
-            "all" => return Ok(Subset::All),
-            "paper40" => return Ok(Subset::Paper40),
-            _ => {}
-        }
+    if let Ok(s) = subset.cast::<PyString>()
+        && let Some(named) = Subset::named(&s.to_cow()?)
+    {
+        return Ok(named);
     }
     if let Ok(path) = subset.extract::<PathBuf>() {
         return Subset::read_file(&path).map_err(|e| errors::coherent(subset.py(), e));
@@ -36,8 +34,8 @@ fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
         .map(Subset::Listed)
         .map_err(|_| {
             PyTypeError::new_err(
-                "subset: expected \"all\", \"paper40\", a path to a file of `scene task_id` lines, \
-                 or a list of (scene, task_id) pairs",
+                "subset: expected \"all\", \"paper40\", \"native40\", a path to a file of \
+                 `scene task_id` lines, or a list of (scene, task_id) pairs",
             )
         })
 }

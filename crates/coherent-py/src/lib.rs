@@ -18,6 +18,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use coherent_agents::bench::{self as agents_bench, Subset};
 use coherent_agents::episode::Method;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{action, benchmark, load};
@@ -66,9 +67,9 @@ fn read_tasks(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<PyTask>, Vec<Py<Py
 #[pyfunction]
 #[pyo3(signature = (subset = None))]
 fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>> {
-    let wanted = match subset {
-        None => None,
-        Some("40") => Some(benchmark::subset40()),
+    let subset = match subset {
+        None => Subset::All,
+        Some("40") => Subset::named("native40").expect("a subset name"),
         Some(other) => {
             return Err(pyo3::exceptions::PyValueError::new_err(format!(
                 "subset must be None or \"40\", not {other:?}"
@@ -76,16 +77,9 @@ fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>
         }
     };
     let tasks = py.detach(benchmark::tasks).map_err(|e| core_err(py, e))?;
-    Ok(tasks
-        .into_iter()
-        .filter(|t| {
-            wanted.as_ref().is_none_or(|w| {
-                w.iter()
-                    .any(|(scene, id)| *scene == t.meta.scene && *id == t.meta.task_id)
-            })
-        })
-        .map(PyTask::new)
-        .collect())
+    let selection =
+        agents_bench::select(tasks, &subset).map_err(pyo3::exceptions::PyValueError::new_err)?;
+    Ok(selection.tasks.into_iter().map(PyTask::shared).collect())
 }
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
