@@ -8,10 +8,10 @@ use std::sync::Arc;
 use clap::{Args, ValueEnum};
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Recorded, Subset};
 use coherent_agents::episode::Method;
-use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, report};
+use coherent_agents::{ApiKey, Cancel, OpenAiClient, report};
 use coherent_core::planner::Limits;
 
-use super::llm::{AnswerFormat, Endpoint, Patience};
+use super::llm::{AnswerFormat, Endpoint, Patience, sim_errors};
 use super::method_names;
 
 /// Exit status after Ctrl-C, as shells report SIGINT.
@@ -273,12 +273,7 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
 
 /// The backend the flags and environment ask for.
 fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
-    let rates = args
-        .sim_errors
-        .as_deref()
-        .map(ErrorRates::parse)
-        .transpose()
-        .map_err(|e| format!("--sim-errors: {e}"))?;
+    let rates = sim_errors(args.sim_errors.as_deref())?;
     let l = &args.llm;
     let http = Endpoint {
         base_url: l.base_url.clone(),

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use coherent_agents::retry::Backoff;
-use coherent_agents::{ApiKey, OpenAiConfig, OutputMode};
+use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode};
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -97,4 +97,12 @@ impl Endpoint {
 
 fn seconds(s: f64, what: &str) -> Result<Duration, String> {
     Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
+}
+
+/// The simulated backend's error rates of a `--sim-errors` flag, if given; a bad value is
+/// an error naming the flag.
+pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, String> {
+    flag.map(ErrorRates::parse)
+        .transpose()
+        .map_err(|e| format!("--sim-errors: {e}"))
 }

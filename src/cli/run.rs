@@ -17,7 +17,7 @@ use coherent_core::{Environment, SymbolicEnv, Task};
 
 use serde_json::json;
 
-use super::llm::{AnswerFormat, Endpoint, Patience};
+use super::llm::{AnswerFormat, Endpoint, Patience, sim_errors};
 use super::{method_names, pick_task};
 
 /// Exit status when the episode ran but the goal was not reached.
@@ -159,12 +159,7 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                     seed: args.seed,
                     physics: args.physics,
                 };
-                let rates = args
-                    .sim_errors
-                    .as_deref()
-                    .map(ErrorRates::parse)
-                    .transpose()
-                    .map_err(|e| format!("--sim-errors: {e}"))?;
+                let rates = sim_errors(args.sim_errors.as_deref())?;
                 let backend = backend(http, rates, args.seed, &limits)?;
                 (task, settings, budget, backend)
             }
