@@ -11,7 +11,6 @@ fn main() {
     let mut files: Vec<PathBuf> = Vec::new();
     if let Ok(scenes) = std::fs::read_dir(root.join("tasks")) {
         for scene in scenes.flatten() {
-            println!("cargo:rerun-if-changed={}", scene.path().display());
             let Ok(entries) = std::fs::read_dir(scene.path()) else {
                 continue;
             };

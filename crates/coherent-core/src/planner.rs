@@ -140,9 +140,10 @@ pub fn search_from(
             };
         }
         let gc = g[i] + 1;
-        let contents = rules::Contents::new(task, &states[i]);
-        for &robot in robots {
-            let actions = rules::actions_in(task, &states[i], robot, &contents);
+        for (&robot, actions) in robots
+            .iter()
+            .zip(rules::team_actions(task, &states[i], robots))
+        {
             for action in actions.into_iter().filter(|a| useful.allows(task, a)) {
                 child.clone_from(&states[i]);
                 rules::apply(task, &mut child, robot, action);

@@ -359,13 +359,8 @@ pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>
     let contents = Contents::new(task, s);
     robots
         .iter()
-        .map(|&robot| actions_in(task, s, robot, &contents))
+        .map(|&robot| View::with(task, s, robot, Cow::Borrowed(&contents)).actions())
         .collect()
-}
-
-/// [`actions`] with the state's [`Contents`] built already (once for all robots).
-pub(crate) fn actions_in(task: &Task, s: &State, robot: Robot, contents: &Contents) -> Vec<Action> {
-    View::with(task, s, robot, Cow::Borrowed(contents)).actions()
 }
 
 impl View<'_> {
