@@ -53,42 +53,24 @@ impl Grid {
                 false,
             );
         }
-        // Door openings are passable (their panels, when closed, block below).
-        for d in w
+        // Door openings are passable (their panels, when closed, block below), and so is
+        // the opening where a flight arrives on this storey: a box across the opening
+        // (its middle, its width, whether it runs along x), 15 cm deep into each side.
+        let doors = w
             .layout
             .doors
             .iter()
             .filter(|d| layout::door_level(&w.layout, d) == level)
-        {
-            let (ax, az) = if d.along_x {
-                (d.width / 2.0 - inflate, inflate + 0.15)
-            } else {
-                (inflate + 0.15, d.width / 2.0 - inflate)
-            };
-            g.mark(
-                d.center[0] - ax,
-                d.center[1] - az,
-                d.center[0] + ax,
-                d.center[1] + az,
-                false,
-            );
-        }
-        // So is the opening where a flight arrives on this storey.
-        for f in w.flights.iter().filter(|f| f.upper == level) {
-            let half = f.width / 2.0 - inflate;
-            let deep = inflate + 0.15;
-            let (ax, az) = if f.along_x() {
-                (deep, half)
-            } else {
-                (half, deep)
-            };
-            g.mark(
-                f.head[0] - ax,
-                f.head[1] - az,
-                f.head[0] + ax,
-                f.head[1] + az,
-                false,
-            );
+            .map(|d| (d.center, d.width, d.along_x));
+        let heads = w
+            .flights
+            .iter()
+            .filter(|f| f.upper == level)
+            .map(|f| (f.head, f.width, !f.along_x()));
+        for (c, width, along_x) in doors.chain(heads) {
+            let (half, deep) = (width / 2.0 - inflate, inflate + 0.15);
+            let (ax, az) = if along_x { (half, deep) } else { (deep, half) };
+            g.mark(c[0] - ax, c[1] - az, c[0] + ax, c[1] + az, false);
         }
         for (_, c) in w.pw.colliders.iter() {
             if c.collision_groups().memberships == Group::NONE || c.parent() == Some(dog) {
