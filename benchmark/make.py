@@ -256,10 +256,15 @@ class Scene:
             raise ValueError(f"{self.name}: no open floor in {self.nodes[room]['class_name']}")
         return min(spots, key=lambda p: ((p[0] - mx) ** 2 + (p[1] - mz) ** 2, p))
 
-    def where(self, n):
-        """The room a furniture item, floor or object is in."""
+    def base(self, n):
+        """The furniture (or floor) a thing is on or in, through any objects between."""
         while n in self.holder:
             n = self.holder[n][0]
+        return n
+
+    def where(self, n):
+        """The room a furniture item, floor or object is in."""
+        n = self.base(n)
         if n in self.room_of:
             return self.room_of[n]
         return next(r for r, f in self.floor.items() if f == n)
@@ -702,7 +707,6 @@ class Places:
     tallest object is above the legged robot's hand."""
 
     def __init__(self, s: Scene):
-        self.s = s
         tallest = max(s.items[n]["size"][1] for n in movables(s))
         self.high = set()
         for n, g in s.items.items():
@@ -716,7 +720,7 @@ class Places:
         self.table_objs = {t: [] for t in self.tables}
         self.low_objs = []
         for n in movables(s):
-            base = self.base(n)
+            base = s.base(n)
             if base in self.tables:
                 self.table_objs[base].append(n)
             elif base not in self.high:
@@ -724,18 +728,12 @@ class Places:
         self.table_dests = {t: [(t, "ON")] for t in self.tables}
         self.low_dests = []
         for n, rel in destinations(s):
-            base = self.base(n)
+            base = s.base(n)
             if base in self.tables:
                 if n != base:
                     self.table_dests[base].append((n, rel))
             elif base not in self.high:
                 self.low_dests.append((n, rel))
-
-    def base(self, n):
-        """The furniture a thing is on or in, through any objects between."""
-        while n in self.s.holder:
-            n = self.s.holder[n][0]
-        return n
 
 
 def fits(s: Scene, x: int, t: int, rel: str) -> bool:
