@@ -1,4 +1,6 @@
-//! The `coherent` package: the command line over `coherent-core` (and, as they land,
-//! `coherent-sim` and `coherent-agents`).
+//! The `coherent` package: the session layer over `coherent-core`, `coherent-sim` and
+//! `coherent-agents` ([`session`]), and the command line on top of it ([`cli`]). The
+//! Python bindings (`coherent-py`) call the same session layer.
 
 pub mod cli;
+pub mod session;

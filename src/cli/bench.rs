@@ -3,16 +3,18 @@
 
 use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
-use std::sync::Arc;
 
 use clap::{Args, ValueEnum};
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Recorded, Subset};
+use coherent_agents::Cancel;
+use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
 use coherent_agents::episode::Method;
-use coherent_agents::{ApiKey, Cancel, OpenAiClient, report};
 use coherent_core::planner::Limits;
 
-use super::llm::{AnswerFormat, Endpoint, Patience, sim_errors};
+use super::llm::{LlmArgs, sim_errors};
 use super::method_names;
+use crate::session;
+use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
+use crate::session::bench::{self as session_bench, TableFormat as Tables};
 
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
@@ -67,33 +69,9 @@ pub struct BenchArgs {
     max_states: usize,
     #[command(flatten)]
     llm: LlmArgs,
-}
-
-/// How to reach an OpenAI-compatible endpoint, as for `coherent run`.
-#[derive(Args)]
-struct LlmArgs {
-    /// OpenAI-compatible endpoint up to the version [env: OPENAI_BASE_URL]
-    #[arg(long)]
-    base_url: Option<String>,
-    /// API key [env: OPENAI_API_KEY]. Prefer the variable: flags show up in `ps`.
-    #[arg(long)]
-    api_key: Option<String>,
-    /// Model name [env: COHERENT_MODEL].
-    #[arg(long)]
-    model: Option<String>,
-    #[arg(long, default_value_t = 0.0)]
-    temperature: f32,
-    /// The model's sampling seed (sent to the server).
-    #[arg(long)]
-    llm_seed: Option<u64>,
-    /// Answer format asked for first; a server that refuses it gets the next one.
-    #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
-    answer_format: AnswerFormat,
-    #[command(flatten)]
-    patience: Patience,
-    /// Requests in flight at once, across all episodes.
-    #[arg(long, default_value_t = 4)]
-    requests: usize,
+    /// The old spelling of --seed (hidden; for one release).
+    #[arg(long = "llm-seed", hide = true)]
+    old_llm_seed: Option<u64>,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -112,7 +90,7 @@ enum TableFormat {
     Json,
 }
 
-pub fn bench(args: BenchArgs) -> Result<u8, String> {
+pub fn bench(mut args: BenchArgs) -> Result<u8, String> {
     if let Some(path) = &args.report {
         let file = bench::read_results(path)?;
         if file.truncated_bytes > 0 {
@@ -125,20 +103,22 @@ pub fn bench(args: BenchArgs) -> Result<u8, String> {
         print_tables(&file.lines, args.format);
         return Ok(0);
     }
-    let runtime = tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .build()
-        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
-    runtime.block_on(run_async(args))
+    if let Some(seed) = args.old_llm_seed {
+        args.llm.seed = Some(seed);
+    }
+    session::block_on(run_async(args))?
 }
 
 fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
-    let r = report::build(lines);
-    let text = match format {
-        TableFormat::Markdown => report::markdown(&r),
-        TableFormat::Csv => report::csv(&r),
-        TableFormat::Json => report::json(&r) + "\n",
+    let format = match format {
+        TableFormat::Markdown => Tables::Markdown,
+        TableFormat::Csv => Tables::Csv,
+        TableFormat::Json => Tables::Json,
     };
+    let mut text = session_bench::tables(lines, format);
+    if format == Tables::Json {
+        text.push('\n');
+    }
     let _ = std::io::stdout().write_all(text.as_bytes());
 }
 
@@ -155,22 +135,13 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         return Err("--seeds must be at least 1".into());
     }
     let backend = backend(&args)?;
-    let subset = match Subset::named(&args.subset) {
-        Some(named) => named,
-        None => Subset::read_file(std::path::Path::new(&args.subset))?,
-    };
-    let mut tasks = Vec::new();
-    let mut malformed = 0;
-    for r in super::read_tasks(tasks_path).map_err(|e| e.to_string())? {
-        match r {
-            Ok(t) => tasks.push(t),
-            Err(e) => {
-                malformed += 1;
-                eprintln!("skipped a malformed task: {e}");
-            }
-        }
+    let subset = session_bench::subset(&args.subset)?;
+    let chosen = session_bench::choose(tasks_path, &subset)?;
+    for e in &chosen.malformed {
+        eprintln!("skipped a malformed task: {e}");
     }
-    let selection = bench::select(tasks, &subset)?;
+    let malformed = chosen.malformed.len();
+    let selection = chosen.selection;
     let name = match &subset {
         Subset::All => "all".to_owned(),
         Subset::Paper40 => "paper40".to_owned(),
@@ -273,42 +244,28 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
 
 /// The backend the flags and environment ask for.
 fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
-    let rates = sim_errors(args.sim_errors.as_deref())?;
-    let l = &args.llm;
-    let http = Endpoint {
-        base_url: l.base_url.clone(),
-        api_key: l.api_key.clone().map(ApiKey::new),
-        model: l.model.clone(),
-        temperature: l.temperature,
-        seed: l.llm_seed,
-        format: l.answer_format.into(),
-        patience: l.patience,
-        requests: l.requests,
-    }
-    .config()?;
     let kind = match args.backend {
-        BackendKind::Auto if rates.is_some() => BackendKind::Simulated,
-        BackendKind::Auto if http.is_some() => BackendKind::Openai,
-        BackendKind::Auto => BackendKind::Builtin,
-        k => k,
+        BackendKind::Auto => Kind::Auto,
+        BackendKind::Builtin => Kind::Builtin,
+        BackendKind::Simulated => Kind::Simulated,
+        BackendKind::Openai => Kind::OpenAi,
+        BackendKind::Replay => Kind::Replay,
     };
-    if rates.is_some() && kind != BackendKind::Simulated {
-        return Err("--sim-errors needs --backend simulated".into());
+    BackendRequest {
+        kind,
+        endpoint: args.llm.config()?,
+        sim_errors: sim_errors(args.sim_errors.as_deref())?,
+        replay_from: args.replay_from.clone(),
     }
-    Ok(match (kind, &args.replay_from) {
-        (BackendKind::Replay, Some(file)) => BackendChoice::Replay(Arc::new(Recorded::read(file)?)),
-        (BackendKind::Replay, None) | (_, Some(_)) => {
-            return Err("--backend replay and --replay-from FILE go together".into());
+    .choose()
+    .map_err(|e| match e {
+        BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
+            "--sim-errors needs --backend simulated".into()
         }
-        (BackendKind::Simulated, None) => BackendChoice::Simulated(rates.unwrap_or_default()),
-        (BackendKind::Openai, None) => {
-            let config = http.ok_or(
-                "--backend openai needs an endpoint: --base-url or OPENAI_BASE_URL, and a model (--model or COHERENT_MODEL)",
-            )?;
-            BackendChoice::OpenAi(Arc::new(
-                OpenAiClient::new(config).map_err(|e| e.to_string())?,
-            ))
+        BackendProblem::ReplayNeedsFile | BackendProblem::FileNeedsReplay => {
+            "--backend replay and --replay-from FILE go together".into()
         }
-        (BackendKind::Auto | BackendKind::Builtin, None) => BackendChoice::Builtin,
+        BackendProblem::NoEndpoint => "--backend openai needs an endpoint: --base-url or OPENAI_BASE_URL, and a model (--model or COHERENT_MODEL)".into(),
+        BackendProblem::Setup(why) => why,
     })
 }

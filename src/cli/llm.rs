@@ -1,12 +1,11 @@
-//! The model endpoint as `run` and `bench` take it: their flags (each names its own) and
-//! the environment (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL`), resolved in
-//! one place into the HTTP client's settings.
-
-use std::time::Duration;
+//! The model endpoint's flags, one struct that `run` and `bench` both flatten so that the
+//! same setting has the same flag; resolving them (with the environment) is the session
+//! layer's ([`crate::session::endpoint`]).
 
 use clap::{Args, ValueEnum};
-use coherent_agents::retry::Backoff;
 use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode};
+
+use crate::session::endpoint::{Endpoint, Patience};
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -26,77 +25,67 @@ impl From<AnswerFormat> for OutputMode {
     }
 }
 
-/// How long the client waits and how often it retries: the same flags for `run` and
-/// `bench`.
-#[derive(Args, Clone, Copy, Debug)]
-pub struct Patience {
-    /// Seconds to wait for a connection.
-    #[arg(long, default_value_t = 10.0)]
-    pub connect_timeout: f64,
-    /// Seconds of silence allowed while reading a response.
-    #[arg(long, default_value_t = 120.0)]
-    pub read_timeout: f64,
-    /// Seconds one request may take in all.
-    #[arg(long, default_value_t = 300.0)]
-    pub timeout: f64,
-    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
-    #[arg(long, default_value_t = 4)]
-    pub max_retries: u32,
-}
-
-/// What the flags say of the endpoint; unset ones come from the environment.
-#[derive(Debug)]
-pub struct Endpoint {
-    pub base_url: Option<String>,
-    /// Kept as an [`ApiKey`] from the start, so that `Debug` never shows it.
-    pub api_key: Option<ApiKey>,
-    pub model: Option<String>,
+/// How to reach an OpenAI-compatible endpoint, the same flags in `run` and `bench` (the old
+/// spellings, `run`'s `--format` and `--concurrency` and `bench`'s `--llm-seed`, are
+/// hidden aliases there for one release).
+#[derive(Args, Debug)]
+pub(crate) struct LlmArgs {
+    /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1
+    /// [env: OPENAI_BASE_URL]
+    #[arg(long)]
+    base_url: Option<String>,
+    /// API key [env: OPENAI_API_KEY]. Prefer the variable: flags show up in `ps`.
+    #[arg(long)]
+    api_key: Option<String>,
+    /// Model name [env: COHERENT_MODEL].
+    #[arg(long)]
+    model: Option<String>,
+    #[arg(long, default_value_t = 0.0)]
     pub temperature: f32,
+    /// The model's sampling seed (sent to the server); for `run`, also the seed of the
+    /// simulated backend's mistakes, of MCTS and of DMRS's speaking order.
+    #[arg(long)]
     pub seed: Option<u64>,
-    /// The answer format asked for first.
-    pub format: OutputMode,
-    pub patience: Patience,
-    /// Requests in flight at once.
+    /// Answer format asked for first; a server that refuses it gets the next one.
+    #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
+    pub answer_format: AnswerFormat,
+    /// Seconds to wait for a connection.
+    #[arg(long, default_value_t = Patience::default().connect_timeout)]
+    connect_timeout: f64,
+    /// Seconds of silence allowed while reading a response.
+    #[arg(long, default_value_t = Patience::default().read_timeout)]
+    read_timeout: f64,
+    /// Seconds one request may take in all.
+    #[arg(long, default_value_t = Patience::default().timeout)]
+    timeout: f64,
+    /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
+    #[arg(long, default_value_t = Patience::default().max_retries)]
+    max_retries: u32,
+    /// Requests in flight at once (across all episodes of a benchmark).
+    #[arg(long, default_value_t = 4)]
     pub requests: usize,
 }
 
-impl Endpoint {
-    /// The client's settings when an endpoint is configured: a base URL, or a key and a
-    /// model (then OpenAI's own endpoint); `None` when there is none.
-    pub fn config(self) -> Result<Option<OpenAiConfig>, String> {
-        let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
-        let key = self
-            .api_key
-            .or_else(|| from_env("OPENAI_API_KEY").map(ApiKey::new));
-        let model = self.model.or_else(|| from_env("COHERENT_MODEL"));
-        let base_url = match self.base_url.or_else(|| from_env("OPENAI_BASE_URL")) {
-            Some(url) => url,
-            None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
-            None => return Ok(None),
-        };
-        let model = model.ok_or_else(|| {
-            format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
-        })?;
-        Ok(Some(OpenAiConfig {
-            api_key: key,
+impl LlmArgs {
+    /// The client's settings, when the flags or the environment configure an endpoint.
+    pub fn config(&self) -> Result<Option<OpenAiConfig>, String> {
+        Endpoint {
+            base_url: self.base_url.clone(),
+            api_key: self.api_key.clone().map(ApiKey::new),
+            model: self.model.clone(),
             temperature: self.temperature,
             seed: self.seed,
-            connect_timeout: seconds(self.patience.connect_timeout, "connect-timeout")?,
-            read_timeout: seconds(self.patience.read_timeout, "read-timeout")?,
-            total_timeout: seconds(self.patience.timeout, "timeout")?,
-            backoff: Backoff {
-                max_retries: self.patience.max_retries,
-                ..Backoff::default()
+            format: self.answer_format.into(),
+            patience: Patience {
+                connect_timeout: self.connect_timeout,
+                read_timeout: self.read_timeout,
+                timeout: self.timeout,
+                max_retries: self.max_retries,
             },
-            concurrency: self.requests.max(1),
-            output: self.format,
-            ..OpenAiConfig::new(base_url, model)
-        }))
+            requests: self.requests,
+        }
+        .config()
     }
-}
-
-fn seconds(s: f64, what: &str) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
 }
 
 /// The simulated backend's error rates of a `--sim-errors` flag, if given; a bad value is

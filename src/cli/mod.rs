@@ -2,18 +2,20 @@
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
 mod bench;
-pub mod llm;
-pub mod render;
-pub mod run;
+mod llm;
+mod render;
+mod run;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
 
 use clap::{Parser, Subcommand};
 use coherent_agents::episode::Method;
-use coherent_core::planner::{self, Analysis, Limits};
-use coherent_core::{Error, Task, benchmark, load, native, validate};
+use coherent_core::Error;
+use coherent_core::Task;
+use coherent_core::planner::{Analysis, Limits};
+
+use crate::session::{check, tasks};
 
 #[derive(Parser)]
 #[command(
@@ -139,48 +141,14 @@ where
     }
 }
 
-/// The tasks at `path` ([`load::read_tasks`]), or, when `path` is `native` and no such
-/// file exists, the project's own benchmark, compiled in.
-pub(crate) fn read_tasks(path: &Path) -> coherent_core::Result<Vec<coherent_core::Result<Task>>> {
-    if path.as_os_str() == benchmark::NAME && !path.exists() {
-        return Ok(benchmark::tasks()?.into_iter().map(Ok).collect());
-    }
-    load::read_tasks(path)
-}
-
 /// Tasks of every file; malformed ones are reported on stderr and counted.
 fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
-    let mut tasks = Vec::new();
-    for path in files {
-        match read_tasks(path) {
-            Ok(results) => {
-                for r in results {
-                    match r {
-                        Ok(t) => tasks.push(t),
-                        Err(e) => {
-                            *malformed += 1;
-                            eprintln!("error: {e}");
-                        }
-                    }
-                }
-            }
-            Err(e) => {
-                *malformed += 1;
-                eprintln!("error: {e}");
-            }
-        }
+    let (tasks, errors) = tasks::read_all(files);
+    for e in &errors {
+        eprintln!("error: {e}");
     }
+    *malformed += errors.len();
     tasks
-}
-
-fn task_name(t: &Task) -> String {
-    let file = t
-        .meta
-        .source
-        .as_ref()
-        .map(|s| format!(" ({})", s.file))
-        .unwrap_or_default();
-    format!("{} task {}{file}", t.meta.scene, t.meta.task_id)
 }
 
 fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
@@ -188,18 +156,12 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
     let tasks = read_all(files, &mut malformed);
     let mut with_problems = 0;
     for t in &tasks {
-        let analysis = planner::analyse(t, limits);
-        let mut found = validate::findings(t, &analysis);
-        // Stairs follow rules of their own that only physics needs (docs/physics.md,
-        // "Storeys and stairs"); a scene author hears of a broken one here.
-        if let Some(Err(e)) = t.meta.geometry.as_ref().map(coherent_sim::layout::flights) {
-            found.push(format!("geometry: {e}"));
-        }
+        let found = check::findings(t, limits);
         if !found.is_empty() {
             with_problems += 1;
         }
         for f in found {
-            println!("{}: {f}", task_name(t));
+            println!("{}: {f}", tasks::task_name(t));
         }
     }
     println!(
@@ -219,31 +181,10 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
 fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
     let mut malformed = 0;
     let tasks = read_all(files, &mut malformed);
-    let mut written = std::collections::HashSet::new();
-    for t in &tasks {
-        let dir = out.join(&t.meta.scene);
-        let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
-        if !written.insert(path.clone()) {
-            return Err(Error::Io {
-                file: path.display().to_string(),
-                message: format!(
-                    "two tasks map to this file (scene {:?}, task_id {}); import them into different folders",
-                    t.meta.scene, t.meta.task_id
-                ),
-            });
-        }
-        let io = |e: std::io::Error| Error::Io {
-            file: path.display().to_string(),
-            message: e.to_string(),
-        };
-        std::fs::create_dir_all(&dir).map_err(io)?;
-        let text = serde_json::to_string_pretty(&native::to_value(t))
-            .expect("JSON values always serialize");
-        std::fs::write(&path, text + "\n").map_err(io)?;
-    }
+    let written = check::import(&tasks, out)?;
     println!(
         "wrote {} native task files to {}",
-        tasks.len(),
+        written.len(),
         out.display()
     );
     Ok(if malformed > 0 { 2 } else { 0 })
@@ -275,25 +216,14 @@ fn plan(
     let mut total_ms = 0.0;
     let mut physics_failed = false;
     for t in &tasks {
-        let analysis = planner::analyse(t, limits);
-        total_ms += analysis.elapsed.as_secs_f64() * 1e3;
-        let report = match (&analysis.plan, physics) {
-            (Some(plan), true) => Some(coherent_sim::execute_plan(&Arc::new(t.clone()), plan)),
-            _ => None,
-        };
-        physics_failed |= report.as_ref().is_some_and(|r| !r.physics_ok);
+        let planned = check::plan(t, limits, physics);
+        total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
+        physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
         let line = if as_json {
-            let mut value = analysis.to_json(t);
-            if let Some(r) = &report {
-                value["physics_ok"] = r.physics_ok.into();
-                value["physics_error"] = r.physics_error.clone().into();
-                value["sim_seconds"] = r.sim_seconds.into();
-                value["physics_wall_ms"] = ((r.wall_ms * 1e3).round() / 1e3).into();
-            }
-            value.to_string()
+            planned.to_json(t).to_string()
         } else {
-            let mut text = plan_text(t, &analysis);
-            if let Some(r) = &report {
+            let mut text = plan_text(t, &planned.analysis);
+            if let Some(r) = &planned.physics {
                 text.push_str(&match &r.physics_error {
                     None => format!(
                         "\n  physics: ok, {:.1} s simulated in {:.0} ms",
@@ -350,35 +280,4 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
 /// The method names `--method` and `--methods` accept.
 pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
     clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
-}
-
-/// The task `id` of `file` (or its only task).
-pub(crate) fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
-    let results = read_tasks(file).map_err(|e| e.to_string())?;
-    let name = file.display();
-    match id {
-        Some(id) => {
-            let mut malformed = Vec::new();
-            for r in results {
-                match r {
-                    Ok(t) if t.meta.task_id == id => return Ok(t),
-                    Ok(_) => {}
-                    Err(e) => malformed.push(e.to_string()),
-                }
-            }
-            let mut message = format!("{name}: no well-formed task with task_id {id}");
-            for e in malformed {
-                message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
-            }
-            Err(message)
-        }
-        None => {
-            let mut results = results;
-            match results.len() {
-                1 => results.pop().expect("one task").map_err(|e| e.to_string()),
-                0 => Err(format!("{name}: no tasks")),
-                n => Err(format!("{name}: {n} tasks; choose one with --task ID")),
-            }
-        }
-    }
 }

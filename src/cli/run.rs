@@ -1,24 +1,26 @@
 //! `coherent run`: one episode of a planning method on one task, one line per step, a
-//! summary, and a transcript.
+//! summary, and a transcript. The episode itself is the session layer's
+//! ([`crate::session::episode`]); this file has the flags and the printing.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use clap::Args;
-use coherent_agents::episode::{self, Budget, Method, Settings};
-use coherent_agents::llm::Backend;
-use coherent_agents::transcript::{self, Outcome, Round, Status};
-use coherent_agents::{
-    ApiKey, BuiltinBackend, Cancel, Episode, ErrorRates, OpenAiClient, ReplayBackend,
-};
+use coherent_agents::Cancel;
+use coherent_agents::episode::{Budget, Method, Settings};
+use coherent_agents::llm::BackendInfo;
+use coherent_agents::transcript::{Outcome, Round, Status, Summary};
+use coherent_core::Task;
 use coherent_core::planner::Limits;
-use coherent_core::{Environment, SymbolicEnv, Task};
 
 use serde_json::json;
 
-use super::llm::{AnswerFormat, Endpoint, Patience, sim_errors};
-use super::{method_names, pick_task};
+use super::llm::{AnswerFormat, LlmArgs, sim_errors};
+use super::method_names;
+use crate::session::backend::{BackendKind, BackendRequest};
+use crate::session::episode::{self, EpisodeSpec, Prepared};
+use crate::session::{self, tasks};
 
 /// Exit status when the episode ran but the goal was not reached.
 const FAILED: u8 = 1;
@@ -58,28 +60,14 @@ pub(crate) struct RunArgs {
     /// whose message has the numbers.
     #[arg(long)]
     physics: bool,
-    /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1
-    /// [env: OPENAI_BASE_URL]
-    #[arg(long)]
-    base_url: Option<String>,
-    /// API key [env: OPENAI_API_KEY]. Prefer the variable: flags show up in `ps`.
-    #[arg(long)]
-    api_key: Option<String>,
-    /// Model name [env: COHERENT_MODEL].
-    #[arg(long)]
-    model: Option<String>,
-    #[arg(long, default_value_t = 0.0)]
-    temperature: f32,
-    #[arg(long)]
-    seed: Option<u64>,
-    /// Answer format asked for first; a server that refuses it gets the next one.
-    #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
-    format: AnswerFormat,
     #[command(flatten)]
-    patience: Patience,
-    /// Requests in flight at once.
-    #[arg(long, default_value_t = 4)]
-    concurrency: usize,
+    llm: LlmArgs,
+    /// The old spelling of --answer-format (hidden; for one release).
+    #[arg(long = "format", value_enum, hide = true)]
+    old_format: Option<AnswerFormat>,
+    /// The old spelling of --requests (hidden; for one release).
+    #[arg(long = "concurrency", hide = true)]
+    old_concurrency: Option<usize>,
     /// Without an endpoint: the simulated backend instead of the built-in one, making
     /// these mistakes (`hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`,
     /// or `all=0.1`), seeded by --seed.
@@ -105,87 +93,74 @@ impl Lines {
     }
 }
 
-pub(crate) fn run(args: RunArgs) -> Result<u8, String> {
-    let runtime = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
-    runtime.block_on(run_async(args))
+pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
+    if let Some(format) = args.old_format {
+        args.llm.answer_format = format;
+    }
+    if let Some(n) = args.old_concurrency {
+        args.llm.requests = n;
+    }
+    let cancel = Cancel::default();
+    let prepared = prepare(&args, &cancel)?;
+    session::block_on(run_prepared(prepared, &args, cancel))?
 }
 
-async fn run_async(args: RunArgs) -> Result<u8, String> {
-    let lines = Lines { json: args.json };
-    let cancel = Cancel::default();
-    let limits = Limits {
-        cancel: Some(cancel.flag()),
-        ..Limits::max_states(args.max_states)
-    };
-    let recorded = match &args.replay {
-        Some(path) => Some(transcript::read(path)?),
-        None => None,
-    };
-    let (task, settings, budget, backend): (Task, Settings, Budget, Box<dyn Backend>) =
-        match (&recorded, &args.replay) {
-            (Some(t), Some(path)) => {
-                let task = episode::recorded_task(t, path)?;
-                if let Some(file) = &args.task_file {
-                    let given = pick_task(file, args.task_id)?;
-                    if coherent_core::native::to_value(&given) != t.header.task {
-                        return Err(format!(
-                            "{}: the task differs from the one recorded in {}",
-                            file.display(),
-                            path.display()
-                        ));
-                    }
-                }
-                let (settings, budget) = episode::recorded_settings(t)?;
-                (task, settings, budget, Box::new(ReplayBackend::new(t)))
-            }
-            _ => {
-                let file = args
-                    .task_file
-                    .as_deref()
-                    .ok_or("a task file is needed without --replay")?;
-                let task = pick_task(file, args.task_id)?;
-                let method = Method::from_name(&args.method)
-                    .ok_or_else(|| format!("unknown method {:?}", args.method))?;
-                let budget = Budget::of(&task, args.max_steps, &limits)?;
-                let http = http_backend(&args)?;
-                let settings = Settings {
-                    method,
-                    history: args.history,
-                    max_steps: args.max_steps,
-                    temperature: http.as_ref().map(|_| args.temperature),
-                    seed: args.seed,
-                    physics: args.physics,
-                };
-                let rates = sim_errors(args.sim_errors.as_deref())?;
-                let backend = backend(http, rates, args.seed, &limits)?;
-                (task, settings, budget, backend)
-            }
+/// The episode the flags ask for: a replay of a transcript, or a new one.
+fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
+    if let Some(path) = &args.replay {
+        let given = match &args.task_file {
+            Some(file) => Some(tasks::pick_task(file, args.task_id)?),
+            None => None,
         };
-    lines.say(&if settings.method.uses_model() {
-        backend_line(backend.as_ref(), args.replay.as_deref())
-    } else {
-        format!("backend: none ({} asks no model)", settings.method.name())
-    });
-    let task = Arc::new(task);
-    let gt = task
-        .meta
-        .gt_steps
-        .map_or("none".to_owned(), |g| g.to_string());
-    let budget_note = match budget {
-        Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
-        Budget::Given(n) => format!("{n} steps"),
-        Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
+        return episode::prepare_replay(path, given.as_ref(), args.out.clone())
+            .map_err(|e| e.to_string());
+    }
+    let file = args
+        .task_file
+        .as_deref()
+        .ok_or("a task file is needed without --replay")?;
+    let task = tasks::pick_task(file, args.task_id)?;
+    let method = Method::from_name(&args.method)
+        .ok_or_else(|| format!("unknown method {:?}", args.method))?;
+    let endpoint = args.llm.config()?;
+    let temperature = endpoint.as_ref().map(|_| args.llm.temperature);
+    let backend = BackendRequest {
+        kind: BackendKind::Auto,
+        endpoint,
+        sim_errors: sim_errors(args.sim_errors.as_deref())?,
+        replay_from: None,
+    }
+    .choose()
+    .map_err(|e| e.to_string())?;
+    let spec = EpisodeSpec {
+        task: Arc::new(task),
+        settings: Settings {
+            method,
+            history: args.history,
+            temperature,
+            seed: args.llm.seed,
+            physics: args.physics,
+        },
+        max_steps: args.max_steps,
+        backend,
+        max_states: args.max_states,
+        out: args.out.clone(),
     };
-    lines.say(&format!(
-        "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
-        task.meta.scene,
-        task.meta.task_id,
-        task.meta.instruction,
-        settings.method.name()
-    ));
+    episode::prepare(spec, cancel).map_err(|e| e.to_string())
+}
+
+async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Result<u8, String> {
+    let lines = Lines { json: args.json };
+    let info = prepared.backend_info();
+    lines.say(&if prepared.settings.method.uses_model() {
+        backend_line(&info, prepared.replaying())
+    } else {
+        format!(
+            "backend: none ({} asks no model)",
+            prepared.settings.method.name()
+        )
+    });
+    lines.say(&task_line(&prepared));
     let ctrl_c = {
         let cancel = cancel.clone();
         tokio::spawn(async move {
@@ -194,41 +169,25 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
             }
         })
     };
-    let max = budget.steps();
+    let task = Arc::clone(&prepared.task);
+    let max = prepared.budget.steps();
     let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
-    let mut env =
-        environment(&task, settings.physics).map_err(|e| format!("physics: {}", e.message))?;
-    let result = run_episode(
-        &task,
-        env.as_mut(),
-        backend.as_ref(),
-        &settings,
-        budget,
-        &args.out,
-        &cancel,
-        &mut progress,
-    )
-    .await;
+    let result = prepared.run(&cancel, &mut progress).await;
     ctrl_c.abort();
-    let Ran {
-        episode,
-        transcript: path,
-        goal_satisfied,
-    } = result?;
-    let s = &episode.summary;
-    lines.say(&summary_line(&episode, goal_satisfied));
-    lines.say(&format!("transcript: {}", path.display()));
-    if let Some(t) = &recorded {
-        match episode::check_replay(t, &episode) {
-            Ok(()) => lines.say(&format!(
-                "replay: all {} rounds match the recording",
-                episode.rounds.len()
-            )),
-            Err(why) => {
-                lines.say(&format!("replay: {why}"));
-                return Ok(BACKEND_FAILED);
-            }
+    let ran = result.map_err(|e| e.to_string())?;
+    let s = ran.summary();
+    lines.say(&summary_line(s, ran.goal_satisfied));
+    lines.say(&format!("transcript: {}", ran.path.display()));
+    match &ran.replay {
+        Some(Ok(())) => lines.say(&format!(
+            "replay: all {} rounds match the recording",
+            ran.transcript.rounds.len()
+        )),
+        Some(Err(why)) => {
+            lines.say(&format!("replay: {why}"));
+            return Ok(BACKEND_FAILED);
         }
+        None => {}
     }
     if args.json {
         println!(
@@ -244,8 +203,8 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                 "completion_tokens": s.completion_tokens,
                 "wall_ms": s.wall_ms,
                 "error": s.error,
-                "backend": backend.info(),
-                "transcript": path.display().to_string(),
+                "backend": info,
+                "transcript": ran.path.display().to_string(),
             })
         );
     }
@@ -257,99 +216,27 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
     })
 }
 
-/// The backend that answers the model's roles: the HTTP client when there is one, else
-/// the simulated backend when error rates are given (seeded by `seed`), else the built-in
-/// planner.
-pub fn backend(
-    http: Option<OpenAiClient>,
-    sim_errors: Option<ErrorRates>,
-    seed: Option<u64>,
-    limits: &Limits,
-) -> Result<Box<dyn Backend>, String> {
-    Ok(match (http, sim_errors) {
-        (Some(_), Some(_)) => {
-            return Err(
-                "simulated errors are for the simulated backend: leave out the endpoint".into(),
-            );
-        }
-        (Some(client), None) => Box::new(client),
-        (None, Some(rates)) => Box::new(BuiltinBackend::simulated(
-            limits.clone(),
-            rates,
-            seed.unwrap_or(0),
-        )),
-        (None, None) => Box::new(BuiltinBackend::new(limits.clone())),
-    })
-}
-
-/// An episode as it ran: the rounds and summary, where its transcript is, and whether
-/// the goal holds at the end.
-#[derive(Debug)]
-pub struct Ran {
-    pub episode: Episode,
-    pub transcript: PathBuf,
-    pub goal_satisfied: bool,
-}
-
-/// The environment an episode runs in: Rapier with `physics`, else the rules alone.
-pub fn environment(
-    task: &Arc<Task>,
-    physics: bool,
-) -> Result<Box<dyn Environment + Send>, coherent_sim::PhysicsError> {
-    Ok(if physics {
-        Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?)
-    } else {
-        Box::new(SymbolicEnv::new(Arc::clone(task)))
-    })
-}
-
-/// Runs one episode as `coherent run` does, in `env` (see [`environment`]), writing its
-/// transcript into `out`.
-#[allow(clippy::too_many_arguments)]
-pub async fn run_episode(
-    task: &Arc<Task>,
-    env: &mut (dyn Environment + Send),
-    backend: &dyn Backend,
-    settings: &Settings,
-    budget: Budget,
-    out: &Path,
-    cancel: &Cancel,
-    progress: &mut (dyn FnMut(&Round) + Send),
-) -> Result<Ran, String> {
-    let path = episode::transcript_path(out, task, settings.method);
-    let episode = episode::run(
-        task, env, backend, settings, budget, &path, cancel, progress,
-    )
-    .await?;
-    Ok(Ran {
-        episode,
-        transcript: path,
-        goal_satisfied: env.goal_satisfied(),
-    })
-}
-
-/// The HTTP backend when an endpoint is configured.
-fn http_backend(args: &RunArgs) -> Result<Option<OpenAiClient>, String> {
-    let endpoint = Endpoint {
-        base_url: args.base_url.clone(),
-        api_key: args.api_key.clone().map(ApiKey::new),
-        model: args.model.clone(),
-        temperature: args.temperature,
-        seed: args.seed,
-        format: args.format.into(),
-        patience: args.patience,
-        requests: args.concurrency,
+fn task_line(p: &Prepared) -> String {
+    let task = &p.task;
+    let gt = task
+        .meta
+        .gt_steps
+        .map_or("none".to_owned(), |g| g.to_string());
+    let budget_note = match p.budget {
+        Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
+        Budget::Given(n) => format!("{n} steps"),
+        Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
     };
-    match endpoint.config()? {
-        Some(config) => OpenAiClient::new(config)
-            .map(Some)
-            .map_err(|e| e.to_string()),
-        None => Ok(None),
-    }
+    format!(
+        "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
+        task.meta.scene,
+        task.meta.task_id,
+        task.meta.instruction,
+        p.settings.method.name()
+    )
 }
 
-fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {
-    let info = backend.info();
+fn backend_line(info: &BackendInfo, replay: Option<&Path>) -> String {
     match (info.kind.as_str(), replay) {
         ("replay", Some(path)) => format!(
             "backend: replay of {} (recorded with model {}; no network)",
@@ -363,7 +250,7 @@ fn backend_line(backend: &dyn Backend, replay: Option<&Path>) -> String {
         ),
         ("openai", _) => format!(
             "backend: OpenAI-compatible endpoint {} with model {}",
-            info.base_url.unwrap_or_default(),
+            info.base_url.clone().unwrap_or_default(),
             info.model
         ),
         _ => "backend: built-in (the optimal planner plays the assigner and the executors; \
@@ -406,8 +293,7 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
     )
 }
 
-fn summary_line(e: &Episode, goal_satisfied: bool) -> String {
-    let s = &e.summary;
+fn summary_line(s: &Summary, goal_satisfied: bool) -> String {
     let result = match s.status {
         Status::Success => "success",
         Status::Failure => "failure: step budget spent",

@@ -198,6 +198,20 @@ impl Recorded {
 }
 
 impl BackendChoice {
+    /// The backend of one episode with seed `seed` (the simulated backend's mistakes are
+    /// seeded per episode); `None` for a replay, whose backend depends on the episode's
+    /// recording.
+    pub fn for_episode(&self, limits: &Limits, seed: u64) -> Option<Arc<dyn Backend>> {
+        Some(match self {
+            BackendChoice::Builtin => Arc::new(BuiltinBackend::new(limits.clone())),
+            BackendChoice::Simulated(rates) => {
+                Arc::new(BuiltinBackend::simulated(limits.clone(), *rates, seed))
+            }
+            BackendChoice::OpenAi(client) => Arc::clone(client) as Arc<dyn Backend>,
+            BackendChoice::Replay(_) => return None,
+        })
+    }
+
     pub fn info(&self) -> BackendInfo {
         match self {
             BackendChoice::Builtin => BuiltinBackend::new(Limits::default()).info(),
@@ -675,11 +689,6 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
     let mut budget = budget;
     let mut recording = None;
     let backend: Arc<dyn Backend> = match &shared.backend {
-        BackendChoice::Builtin => Arc::new(BuiltinBackend::new(limits.clone())),
-        BackendChoice::Simulated(rates) => {
-            Arc::new(BuiltinBackend::simulated(limits.clone(), *rates, seed))
-        }
-        BackendChoice::OpenAi(client) => Arc::clone(client) as Arc<dyn Backend>,
         BackendChoice::Replay(recorded) => {
             let key = EpisodeKey {
                 method: method.name().to_owned(),
@@ -701,6 +710,9 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
             recording = Some(t);
             backend
         }
+        choice => choice
+            .for_episode(&limits, seed)
+            .expect("every backend but a replay serves any episode"),
     };
     let dir = shared.transcripts.join(format!("seed{}", job.seed));
     let path = episode::transcript_path(&dir, task, method);
@@ -728,6 +740,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         })
         .await
         .map_err(|e| format!("an episode panicked: {e}"))??
+        .0
     };
     drop(permit);
     // A replay that comes out differently says so in its line's error.

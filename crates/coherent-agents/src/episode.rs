@@ -79,8 +79,6 @@ pub struct Settings {
     /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
     /// baselines, the executed actions in their prompts (the paper: 5 for both).
     pub history: usize,
-    /// Overrides the budget of 2 x GT.
-    pub max_steps: Option<u32>,
     pub temperature: Option<f32>,
     /// The model's sampling seed; also the MCTS search's and the DMRS speaking order's
     /// (0 when unset).
@@ -94,7 +92,6 @@ impl Settings {
         Settings {
             method,
             history: 5,
-            max_steps: None,
             temperature: None,
             seed: None,
             physics: false,
@@ -185,6 +182,8 @@ fn utc_stamp(secs: u64) -> String {
 
 /// Runs `method` on `env` with `backend`, writing the transcript to `transcript` (header
 /// first, then each round as it ends, then the summary). `progress` sees each round.
+/// Returns the episode and the transcript's header, so that a caller holds the whole
+/// transcript without reading it back.
 #[allow(clippy::too_many_arguments)]
 pub async fn run(
     task: &Arc<Task>,
@@ -195,7 +194,7 @@ pub async fn run(
     transcript: &Path,
     cancel: &Cancel,
     progress: &mut (dyn FnMut(&Round) + Send),
-) -> Result<Episode, String> {
+) -> Result<(Episode, Header), String> {
     let history = match settings.method {
         Method::PefaNoHistory => 0,
         _ => settings.history,
@@ -228,7 +227,7 @@ pub async fn run(
             .map_or(0, |d| d.as_millis() as u64),
     };
     let io = |e: std::io::Error| format!("{}: {e}", transcript.display());
-    let mut writer = Writer::create(transcript, header).map_err(io)?;
+    let mut writer = Writer::create(transcript, header.clone()).map_err(io)?;
     let mut on_round = |r: &Round| {
         progress(r);
         writer.write(&Record::Round(Box::new(r.clone())))
@@ -277,7 +276,7 @@ pub async fn run(
     writer
         .write(&Record::Summary(episode.summary.clone()))
         .map_err(io)?;
-    Ok(episode)
+    Ok((episode, header))
 }
 
 /// The settings and budget a transcript was recorded with, to replay it.
@@ -287,7 +286,6 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
     let settings = Settings {
         method,
         history: t.header.history,
-        max_steps: Some(t.header.max_steps),
         temperature: t.header.temperature,
         seed: t.header.seed,
         physics: t.header.physics,

@@ -1,15 +1,18 @@
-//! The benchmark: picking a subset, running methods x tasks x seeds into a results file
-//! (`coherent_agents::bench`, as `coherent bench` does), and the paper's tables of the
-//! results (`coherent_agents::report`).
+//! The benchmark: picking a subset, running methods x tasks x seeds into a results file,
+//! and the paper's tables of the results, through the session layer
+//! (`coherent::session::bench`) as `coherent bench` does.
 
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use coherent::session;
+use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
+use coherent::session::bench::{self as session_bench, TableFormat};
+use coherent_agents::Cancel;
 use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, Recorded, ResultLine, Subset,
+    self, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
 };
-use coherent_agents::{Cancel, report};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -108,29 +111,16 @@ pub(crate) fn run_bench<'py>(
     if tasks.is_empty() {
         return Err(PyValueError::new_err("tasks: no tasks to run"));
     }
-    let rates = crate::run::error_rates(sim_errors)?;
-    let (choice, temperature) = match backend {
-        Some(b) if b.is_instance_of::<PyLlm>() => {
-            let llm = b.cast::<PyLlm>()?.get();
-            let client = llm.client(py)?;
-            (
-                BackendChoice::OpenAi(Arc::new(client)),
-                Some(llm.temperature_of()),
-            )
-        }
-        None => (BackendChoice::Builtin, None),
+    let (kind, endpoint) = match backend {
+        Some(b) if b.is_instance_of::<PyLlm>() => (
+            BackendKind::OpenAi,
+            Some(b.cast::<PyLlm>()?.get().config.clone()),
+        ),
+        None => (BackendKind::Builtin, None),
         Some(b) => match b.extract::<String>().as_deref() {
-            Ok("builtin") => (BackendChoice::Builtin, None),
-            Ok("simulated") => (BackendChoice::Simulated(rates.unwrap_or_default()), None),
-            Ok("replay") => {
-                let file = replay_from.as_deref().ok_or_else(|| {
-                    PyValueError::new_err(
-                        "backend=\"replay\" needs replay_from=, an earlier results file",
-                    )
-                })?;
-                let recorded = Recorded::read(file).map_err(|e| errors::coherent(py, e))?;
-                (BackendChoice::Replay(Arc::new(recorded)), None)
-            }
+            Ok("builtin") => (BackendKind::Builtin, None),
+            Ok("simulated") => (BackendKind::Simulated, None),
+            Ok("replay") => (BackendKind::Replay, None),
             _ => {
                 return Err(PyValueError::new_err(format!(
                     "backend {}: expected \"builtin\", \"simulated\", \"replay\" or an LLM",
@@ -139,16 +129,26 @@ pub(crate) fn run_bench<'py>(
             }
         },
     };
-    if rates.is_some() && !matches!(choice, BackendChoice::Simulated(_)) {
-        return Err(PyValueError::new_err(
-            "sim_errors needs backend=\"simulated\"",
-        ));
+    let temperature = endpoint.as_ref().map(|c| c.temperature);
+    let choice = BackendRequest {
+        kind,
+        endpoint,
+        sim_errors: crate::run::error_rates(sim_errors)?,
+        replay_from,
     }
-    if replay_from.is_some() && !matches!(choice, BackendChoice::Replay(_)) {
-        return Err(PyValueError::new_err(
-            "replay_from needs backend=\"replay\"",
-        ));
-    }
+    .choose()
+    .map_err(|e| match e {
+        BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
+            PyValueError::new_err("sim_errors needs backend=\"simulated\"")
+        }
+        BackendProblem::ReplayNeedsFile => {
+            PyValueError::new_err("backend=\"replay\" needs replay_from=, an earlier results file")
+        }
+        BackendProblem::FileNeedsReplay => {
+            PyValueError::new_err("replay_from needs backend=\"replay\"")
+        }
+        other => errors::coherent(py, other.to_string()),
+    })?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
     let config = BenchConfig {
         methods,
@@ -166,17 +166,13 @@ pub(crate) fn run_bench<'py>(
         py,
         move || stop.cancel(),
         move || {
-            let runtime = tokio::runtime::Builder::new_multi_thread()
-                .enable_all()
-                .build()
-                .map_err(|e| format!("cannot start the async runtime: {e}"))?;
             let mut lines = Progress::new(false);
             let mut show = |e: Event<'_>| {
                 if let Some(text) = lines.line(&e).filter(|_| progress) {
                     let _ = std::io::stderr().write_all(text.as_bytes());
                 }
             };
-            runtime.block_on(bench::run(&tasks, &config, &cancel, &mut show))
+            session::block_on(session_bench::run(&tasks, &config, &cancel, &mut show))?
         },
     )?;
     let outcome = result.map_err(|e| errors::coherent(py, e))?;
@@ -218,7 +214,7 @@ pub(crate) fn report_tables<'py>(
     lines: &Bound<'py, PyList>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let lines = result_lines(lines)?;
-    to_py(py, &report::build(&lines))
+    to_py(py, &coherent_agents::report::build(&lines))
 }
 
 /// The tables as text: `"markdown"`, `"csv"` or `"json"`, as `coherent bench --report`
@@ -227,13 +223,10 @@ pub(crate) fn report_tables<'py>(
 #[pyo3(signature = (lines, format = "markdown"))]
 pub(crate) fn report_text(lines: &Bound<'_, PyList>, format: &str) -> PyResult<String> {
     let lines = result_lines(lines)?;
-    let r = report::build(&lines);
-    match format {
-        "markdown" => Ok(report::markdown(&r)),
-        "csv" => Ok(report::csv(&r)),
-        "json" => Ok(report::json(&r)),
-        other => Err(PyValueError::new_err(format!(
-            "format {other:?}: expected \"markdown\", \"csv\" or \"json\""
-        ))),
-    }
+    let format = TableFormat::from_name(format).ok_or_else(|| {
+        PyValueError::new_err(format!(
+            "format {format:?}: expected \"markdown\", \"csv\" or \"json\""
+        ))
+    })?;
+    Ok(session_bench::tables(&lines, format))
 }

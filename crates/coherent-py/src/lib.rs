@@ -1,9 +1,10 @@
 //! Python bindings of `coherent`: the `coherent._coherent` extension module.
 //!
 //! Thin on purpose: these files convert types and errors and release the GIL around
-//! long work; behaviour lives in `coherent-core`, `coherent-sim`, `coherent-agents` and
-//! the `coherent` command line (`coherent::cli`), whose functions `run` and `render`
-//! share with Python.
+//! long work; behaviour lives in the session layer (`coherent::session`), which the
+//! `coherent` command uses too, and in `coherent-core`, `coherent-sim` and
+//! `coherent-agents` below it. `cli_main` starts that very command for the console
+//! script.
 
 mod bench;
 mod convert;
@@ -18,9 +19,10 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use coherent::session::check;
 use coherent_agents::bench::{self as agents_bench, Subset};
 use coherent_agents::episode::Method;
-use coherent_core::planner::{self, Limits};
+use coherent_core::planner::Limits;
 use coherent_core::{action, benchmark, load};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -103,12 +105,13 @@ fn plan<'py>(
     let json = interruptible(
         py,
         move || stop.store(true, Ordering::Relaxed),
-        move || planner::analyse(&task, &limits).to_json(&task),
+        move || check::plan(&task, &limits, false).to_json(&task),
     )?;
     json_to_py(py, &json)
 }
 
-/// Semantic problems of `task` (empty when it is clean), as `coherent validate` lists them.
+/// Problems of `task` (empty when it is clean), as `coherent validate` lists them: the
+/// rules' findings and the geometry's.
 #[pyfunction(name = "validate")]
 #[pyo3(signature = (task, max_states = 5_000_000))]
 fn validate_task(
@@ -126,10 +129,7 @@ fn validate_task(
     interruptible(
         py,
         move || stop.store(true, Ordering::Relaxed),
-        move || {
-            let analysis = planner::analyse(&task, &limits);
-            coherent_core::validate::findings(&task, &analysis)
-        },
+        move || check::findings(&task, &limits),
     )
 }
 

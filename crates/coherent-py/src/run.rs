@@ -1,19 +1,17 @@
 //! Episodes: `LLM` (an endpoint's settings), `run`, `replay`, `load_episode` and the
-//! `Episode` they give. The loop is `coherent run`'s (`coherent::cli::run`).
+//! `Episode` they give. The episode is the session layer's
+//! (`coherent::session::episode`), as for `coherent run`.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent::cli::llm::{Endpoint, Patience};
-use coherent::cli::run::{self as cli_run, Ran};
-use coherent_agents::episode::{self, Budget, Method, Settings};
-use coherent_agents::llm::Backend;
+use coherent::session;
+use coherent::session::backend::{BackendKind, BackendRequest};
+use coherent::session::endpoint::{Endpoint, Patience};
+use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
+use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
-use coherent_agents::{
-    ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode, ReplayBackend,
-};
-use coherent_core::Task;
-use coherent_core::planner::Limits;
+use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -27,7 +25,7 @@ use crate::task::PyTask;
 /// `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and logs.
 #[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
 pub(crate) struct PyLlm {
-    config: OpenAiConfig,
+    pub config: OpenAiConfig,
 }
 
 #[pymethods]
@@ -125,16 +123,6 @@ impl PyLlm {
     }
 }
 
-impl PyLlm {
-    pub fn client(&self, py: Python<'_>) -> PyResult<OpenAiClient> {
-        OpenAiClient::new(self.config.clone()).map_err(|e| errors::backend(py, e.to_string()))
-    }
-
-    pub fn temperature_of(&self) -> f32 {
-        self.config.temperature
-    }
-}
-
 /// An episode as recorded in its transcript: the settings, every round, the summary.
 #[pyclass(name = "Episode", module = "coherent._coherent", frozen)]
 pub(crate) struct PyEpisode {
@@ -168,9 +156,22 @@ impl PyEpisode {
     }
 }
 
+impl PyEpisode {
+    /// The episode as it ran, from memory: its transcript and the very task it ran.
+    fn from_ran(ran: Ran, task: Py<PyTask>) -> PyEpisode {
+        let summary = ran.summary().clone();
+        PyEpisode {
+            transcript: ran.transcript,
+            summary,
+            path: ran.path,
+            task,
+        }
+    }
+}
+
 #[pymethods]
 impl PyEpisode {
-    /// The task, as recorded in the transcript.
+    /// The task the episode ran (for a loaded transcript, as recorded in it).
     #[getter]
     fn task(&self, py: Python<'_>) -> Py<PyTask> {
         self.task.clone_ref(py)
@@ -335,60 +336,26 @@ pub(crate) fn method_of(name: &str) -> PyResult<Method> {
     })
 }
 
-/// Why an episode could not run.
-enum Failure {
-    Physics(coherent_sim::PhysicsError),
-    Other(String),
-}
-
-/// Runs an episode on a worker thread (Ctrl-C cancels it between rounds or in a model
-/// call) and reads its transcript back.
-#[allow(clippy::too_many_arguments)]
+/// Runs a prepared episode on a worker thread (Ctrl-C cancels it between rounds or in a
+/// model call); `prepare` runs there too, since sizing a budget may plan.
 fn episode_off_the_gil(
     py: Python<'_>,
-    task: Arc<Task>,
-    backend: Box<dyn Backend>,
-    settings: Settings,
-    budget: impl FnOnce(&Limits) -> Result<Budget, String> + Send + 'static,
-    out: PathBuf,
-    cancel: Cancel,
-    max_states: usize,
-) -> PyResult<PyEpisode> {
+    prepare: impl FnOnce(&Cancel) -> Result<Prepared, Failure> + Send + 'static,
+) -> PyResult<Ran> {
+    let cancel = Cancel::default();
     let stop = cancel.clone();
     let ran = interruptible(
         py,
         move || stop.cancel(),
         move || -> Result<Ran, Failure> {
-            let limits = Limits {
-                cancel: Some(cancel.flag()),
-                ..Limits::max_states(max_states)
-            };
-            let budget = budget(&limits).map_err(Failure::Other)?;
-            let mut env =
-                cli_run::environment(&task, settings.physics).map_err(Failure::Physics)?;
-            let runtime = tokio::runtime::Builder::new_current_thread()
-                .enable_all()
-                .build()
-                .map_err(|e| Failure::Other(format!("cannot start the async runtime: {e}")))?;
-            runtime
-                .block_on(cli_run::run_episode(
-                    &task,
-                    env.as_mut(),
-                    backend.as_ref(),
-                    &settings,
-                    budget,
-                    &out,
-                    &cancel,
-                    &mut |_| {},
-                ))
-                .map_err(Failure::Other)
+            let prepared = prepare(&cancel)?;
+            session::block_on(prepared.run(&cancel, &mut |_| {}))?
         },
     )?;
-    let ran = ran.map_err(|f| match f {
+    ran.map_err(|f| match f {
         Failure::Physics(e) => errors::physics(py, e),
         Failure::Other(e) => errors::coherent(py, e),
-    })?;
-    PyEpisode::read(py, &ran.transcript)
+    })
 }
 
 /// Raises `BackendError` when the backend failed for good, with the episode attached.
@@ -437,28 +404,30 @@ pub(crate) fn run(
     max_states: usize,
 ) -> PyResult<Py<PyEpisode>> {
     let method = method_of(method)?;
-    let rates = error_rates(sim_errors)?;
-    let http = llm.map(|l| l.get().client(py)).transpose()?;
-    let settings = Settings {
-        method,
-        history,
+    let backend = BackendRequest {
+        kind: BackendKind::Auto,
+        endpoint: llm.map(|l| l.get().config.clone()),
+        sim_errors: error_rates(sim_errors)?,
+        replay_from: None,
+    }
+    .choose()
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let spec = EpisodeSpec {
+        task: Arc::clone(&task.get().task),
+        settings: Settings {
+            method,
+            history,
+            temperature: llm.map(|l| l.get().config.temperature),
+            seed,
+            physics,
+        },
         max_steps,
-        temperature: llm.map(|l| l.get().temperature_of()),
-        seed,
-        physics,
+        backend,
+        max_states,
+        out,
     };
-    let cancel = Cancel::default();
-    let limits = Limits {
-        cancel: Some(cancel.flag()),
-        ..Limits::max_states(max_states)
-    };
-    let backend = cli_run::backend(http, rates, seed, &limits).map_err(PyValueError::new_err)?;
-    let task = Arc::clone(&task.get().task);
-    let planned = Arc::clone(&task);
-    let budget = move |limits: &Limits| Budget::of(&planned, max_steps, limits);
-    let episode =
-        episode_off_the_gil(py, task, backend, settings, budget, out, cancel, max_states)?;
-    backend_failure(py, episode)
+    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel))?;
+    backend_failure(py, PyEpisode::from_ran(ran, task.clone().unbind()))
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network), and checks that
@@ -466,27 +435,14 @@ pub(crate) fn run(
 #[pyfunction]
 #[pyo3(signature = (transcript, *, out = PathBuf::from("runs")))]
 pub(crate) fn replay(py: Python<'_>, transcript: PathBuf, out: PathBuf) -> PyResult<Py<PyEpisode>> {
-    let recorded = transcript::read(&transcript).map_err(|e| errors::coherent(py, e))?;
-    let task =
-        episode::recorded_task(&recorded, &transcript).map_err(|e| errors::coherent(py, e))?;
-    let (settings, budget) =
-        episode::recorded_settings(&recorded).map_err(|e| errors::coherent(py, e))?;
-    let backend = Box::new(ReplayBackend::new(&recorded));
-    let episode = episode_off_the_gil(
-        py,
-        Arc::new(task),
-        backend,
-        settings,
-        move |_| Ok(budget),
-        out,
-        Cancel::default(),
-        Limits::DEFAULT_MAX_STATES,
-    )?;
-    let replayed = coherent_agents::Episode {
-        rounds: episode.transcript.rounds.clone(),
-        summary: episode.summary.clone(),
-    };
-    if let Err(why) = episode::check_replay(&recorded, &replayed) {
+    let path = transcript.clone();
+    let ran = episode_off_the_gil(py, move |_| {
+        session_episode::prepare_replay(&path, None, out)
+    })?;
+    let mismatch = ran.replay.clone().and_then(Result::err);
+    let task = Py::new(py, PyTask::shared(Arc::clone(&ran.task)))?;
+    let episode = PyEpisode::from_ran(ran, task);
+    if let Some(why) = mismatch {
         let message = format!("{}: {why}", transcript.display());
         let episode = Py::new(py, episode)?.into_any();
         return Err(errors::error(

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-use coherent::cli::render::{self, RobotPath};
+use coherent::session::render::{self, Paths, RobotPath};
 use coherent_agents::transcript::Transcript;
 use coherent_core::Task;
 use coherent_core::planner::Limits;
@@ -75,7 +75,12 @@ fn paths_of(py: Python<'_>, source: Source) -> PyResult<(Arc<Task>, Vec<RobotPat
             }
         },
     )?;
-    result.map_err(|e| errors::error(py, Kind::Physics, e, None))
+    let (task, Paths { paths, warning }) =
+        result.map_err(|e| errors::error(py, Kind::Physics, e, None))?;
+    if let Some(why) = warning {
+        eprintln!("warning: {why}");
+    }
+    Ok((task, paths))
 }
 
 /// A robot's track as Python gets it: `(x, y, z)` points.

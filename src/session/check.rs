@@ -1,0 +1,91 @@
+//! Checking and planning tasks: the findings `coherent validate` and
+//! `coherent.validate()` report, the optimal plan with its physical execution, and the
+//! import into native files.
+
+use std::collections::HashSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_core::planner::{self, Analysis, Limits};
+use coherent_core::{Error, Task, native, validate};
+use coherent_sim::PlanReport;
+
+/// Every problem of `task`, empty when it is clean: the rules' findings (unknown ids,
+/// unreachable goals, wrong ground truths, ...) from the optimal planner's analysis, and
+/// the geometry's (stairs follow rules of their own that only physics needs; a scene
+/// author hears of a broken flight here).
+pub fn findings(task: &Task, limits: &Limits) -> Vec<String> {
+    let analysis = planner::analyse(task, limits);
+    let mut found = validate::findings(task, &analysis);
+    if let Some(Err(e)) = task
+        .meta
+        .geometry
+        .as_ref()
+        .map(coherent_sim::layout::flights)
+    {
+        found.push(format!("geometry: {e}"));
+    }
+    found
+}
+
+/// A task's optimal plan, and, when asked, that plan carried out in Rapier.
+#[derive(Debug)]
+pub struct Planned {
+    pub analysis: Analysis,
+    pub physics: Option<PlanReport>,
+}
+
+impl Planned {
+    /// One line of `coherent plan --json`, `coherent.plan()`'s dict.
+    pub fn to_json(&self, task: &Task) -> serde_json::Value {
+        let mut value = self.analysis.to_json(task);
+        if let Some(r) = &self.physics {
+            value["physics_ok"] = r.physics_ok.into();
+            value["physics_error"] = r.physics_error.clone().into();
+            value["sim_seconds"] = r.sim_seconds.into();
+            value["physics_wall_ms"] = ((r.wall_ms * 1e3).round() / 1e3).into();
+        }
+        value
+    }
+}
+
+/// Plans `task` optimally; with `physics`, also carries the plan out in Rapier and
+/// checks it against the rules after every step.
+pub fn plan(task: &Task, limits: &Limits, physics: bool) -> Planned {
+    let analysis = planner::analyse(task, limits);
+    let physics = match (&analysis.plan, physics) {
+        (Some(plan), true) => Some(coherent_sim::execute_plan(&Arc::new(task.clone()), plan)),
+        _ => None,
+    };
+    Planned { analysis, physics }
+}
+
+/// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`; returns the
+/// files written.
+pub fn import(tasks: &[Task], out: &Path) -> Result<Vec<PathBuf>, Error> {
+    let mut written = HashSet::new();
+    let mut files = Vec::new();
+    for t in tasks {
+        let dir = out.join(&t.meta.scene);
+        let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
+        if !written.insert(path.clone()) {
+            return Err(Error::Io {
+                file: path.display().to_string(),
+                message: format!(
+                    "two tasks map to this file (scene {:?}, task_id {}); import them into different folders",
+                    t.meta.scene, t.meta.task_id
+                ),
+            });
+        }
+        let io = |e: std::io::Error| Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        };
+        std::fs::create_dir_all(&dir).map_err(io)?;
+        let text = serde_json::to_string_pretty(&native::to_value(t))
+            .expect("JSON values always serialize");
+        std::fs::write(&path, text + "\n").map_err(io)?;
+        files.push(path);
+    }
+    Ok(files)
+}

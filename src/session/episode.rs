@@ -1,0 +1,216 @@
+//! One episode: prepared (the task, the settings, the budget, the backend, the
+//! environment), then run with its transcript written as it goes; or a recorded episode
+//! replayed from its transcript and checked against it.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_agents::bench::BackendChoice;
+use coherent_agents::episode::{self, Budget, Settings};
+use coherent_agents::llm::{Backend, BackendInfo};
+use coherent_agents::transcript::{self, Round, Transcript};
+use coherent_agents::{Cancel, Episode, ReplayBackend};
+use coherent_core::planner::Limits;
+use coherent_core::{Environment, SymbolicEnv, Task, native};
+
+/// Why an episode could not run.
+#[derive(Debug)]
+pub enum Failure {
+    /// The physical world could not be built for the task.
+    Physics(coherent_sim::PhysicsError),
+    /// Anything else: a budget that cannot be sized, a transcript that cannot be read or
+    /// written, a recording that does not fit the task given.
+    Other(String),
+}
+
+impl std::fmt::Display for Failure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Failure::Physics(e) => write!(f, "physics: {}", e.message),
+            Failure::Other(why) => f.write_str(why),
+        }
+    }
+}
+
+impl From<String> for Failure {
+    fn from(why: String) -> Failure {
+        Failure::Other(why)
+    }
+}
+
+/// The environment an episode runs in: Rapier with `physics`, else the rules alone.
+pub fn environment(
+    task: &Arc<Task>,
+    physics: bool,
+) -> Result<Box<dyn Environment + Send + Sync>, coherent_sim::PhysicsError> {
+    Ok(if physics {
+        Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?)
+    } else {
+        Box::new(SymbolicEnv::new(Arc::clone(task)))
+    })
+}
+
+/// What a new episode is to be.
+#[derive(Debug)]
+pub struct EpisodeSpec {
+    pub task: Arc<Task>,
+    /// The method, its history window, the sampling settings, physics or not.
+    pub settings: Settings,
+    /// Overrides the budget of 2 x GT.
+    pub max_steps: Option<u32>,
+    pub backend: BackendChoice,
+    /// Most states one planner search may visit (the budget without a GT, the built-in
+    /// and simulated backends, the optimal method).
+    pub max_states: usize,
+    /// The folder the transcript goes to.
+    pub out: PathBuf,
+}
+
+/// An episode ready to run.
+pub struct Prepared {
+    pub task: Arc<Task>,
+    pub settings: Settings,
+    pub budget: Budget,
+    backend: Arc<dyn Backend>,
+    env: Box<dyn Environment + Send + Sync>,
+    out: PathBuf,
+    /// The transcript a replay answers from and is checked against.
+    recording: Option<(Transcript, PathBuf)>,
+}
+
+impl std::fmt::Debug for Prepared {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Prepared")
+            .field("task", &self.task.meta.name)
+            .field("settings", &self.settings)
+            .field("budget", &self.budget)
+            .field("backend", &self.backend.info())
+            .finish_non_exhaustive()
+    }
+}
+
+/// An episode as it ran: the transcript as written (in memory), where it is, whether the
+/// goal holds at the end, and for a replay whether it came out as recorded.
+#[derive(Debug)]
+pub struct Ran {
+    pub task: Arc<Task>,
+    pub transcript: Transcript,
+    pub path: PathBuf,
+    pub goal_satisfied: bool,
+    /// `Some(Err(why))` when a replayed round or summary differs from the recording.
+    pub replay: Option<Result<(), String>>,
+}
+
+impl Ran {
+    pub fn summary(&self) -> &transcript::Summary {
+        self.transcript
+            .summary
+            .as_ref()
+            .expect("a finished episode has its summary")
+    }
+}
+
+/// Prepares a new episode: sizes its budget (which may plan, stopped by `cancel`),
+/// builds its backend and its environment.
+pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Failure> {
+    let limits = Limits {
+        cancel: Some(cancel.flag()),
+        ..Limits::max_states(spec.max_states)
+    };
+    let budget = Budget::of(&spec.task, spec.max_steps, &limits)?;
+    let seed = spec.settings.seed.unwrap_or(0);
+    let backend = spec.backend.for_episode(&limits, seed).ok_or_else(|| {
+        Failure::Other("a benchmark's replay backend answers benchmark episodes only".into())
+    })?;
+    let env = environment(&spec.task, spec.settings.physics).map_err(Failure::Physics)?;
+    Ok(Prepared {
+        task: spec.task,
+        settings: spec.settings,
+        budget,
+        backend,
+        env,
+        out: spec.out,
+        recording: None,
+    })
+}
+
+/// Prepares the replay of the episode recorded at `path`: the task, settings and budget
+/// as recorded, answered from the recording (no network). With `given`, the recorded
+/// task must be that task.
+pub fn prepare_replay(
+    path: &Path,
+    given: Option<&Task>,
+    out: PathBuf,
+) -> Result<Prepared, Failure> {
+    let recorded = transcript::read(path)?;
+    let task = episode::recorded_task(&recorded, path)?;
+    if let Some(given) = given
+        && native::to_value(given) != recorded.header.task
+    {
+        return Err(Failure::Other(format!(
+            "the task given differs from the one recorded in {}",
+            path.display()
+        )));
+    }
+    let (settings, budget) = episode::recorded_settings(&recorded)?;
+    let task = Arc::new(task);
+    let env = environment(&task, settings.physics).map_err(Failure::Physics)?;
+    Ok(Prepared {
+        task,
+        settings,
+        budget,
+        backend: Arc::new(ReplayBackend::new(&recorded)),
+        env,
+        out,
+        recording: Some((recorded, path.to_owned())),
+    })
+}
+
+impl Prepared {
+    /// The backend that answers, as the transcript records it.
+    pub fn backend_info(&self) -> BackendInfo {
+        self.backend.info()
+    }
+
+    /// The transcript a replay answers from.
+    pub fn replaying(&self) -> Option<&Path> {
+        self.recording.as_ref().map(|(_, p)| p.as_path())
+    }
+
+    /// Runs the episode, writing its transcript into the output folder; `progress` sees
+    /// each round as it ends; `cancel` ends it between rounds or in a model call.
+    pub async fn run(
+        mut self,
+        cancel: &Cancel,
+        progress: &mut (dyn FnMut(&Round) + Send),
+    ) -> Result<Ran, Failure> {
+        let path = episode::transcript_path(&self.out, &self.task, self.settings.method);
+        let (episode, header) = episode::run(
+            &self.task,
+            self.env.as_mut(),
+            self.backend.as_ref(),
+            &self.settings,
+            self.budget,
+            &path,
+            cancel,
+            progress,
+        )
+        .await?;
+        let replay = self
+            .recording
+            .as_ref()
+            .map(|(t, _)| episode::check_replay(t, &episode));
+        let Episode { rounds, summary } = episode;
+        Ok(Ran {
+            task: self.task,
+            transcript: Transcript {
+                header,
+                rounds,
+                summary: Some(summary),
+            },
+            path,
+            goal_satisfied: self.env.goal_satisfied(),
+            replay,
+        })
+    }
+}

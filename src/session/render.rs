@@ -1,0 +1,73 @@
+//! The scene from above as SVG, and the robots' paths when a plan or a recorded episode
+//! is carried out in physics.
+
+use std::sync::Arc;
+
+use coherent_agents::transcript::{Outcome, Transcript};
+use coherent_core::planner::{self, Limits};
+use coherent_core::{Environment, Task};
+use coherent_sim::{PhysicalEnv, layout, render};
+
+/// A robot's track, `[x, y, z]` points, as `coherent_sim` records it.
+pub type RobotPath = (coherent_core::NodeId, Vec<[f32; 3]>);
+
+/// The robots' paths and the warning, when there is one, that the physical run stopped
+/// early (the paths go up to there).
+#[derive(Debug)]
+pub struct Paths {
+    pub paths: Vec<RobotPath>,
+    pub warning: Option<String>,
+}
+
+/// The task's scene at its start from above, with `paths` drawn when given.
+pub fn svg(task: &Task, paths: Option<&[RobotPath]>) -> Result<String, String> {
+    let layout = layout::for_task(task).map_err(|e| format!("layout: {}", e.0))?;
+    Ok(render::svg(task, &layout, &task.init, paths))
+}
+
+/// The robots' paths when the task's optimal plan is carried out in physics.
+pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, String> {
+    let analysis = planner::analyse(task, limits);
+    let plan = analysis.plan.ok_or_else(|| {
+        format!(
+            "no plan to draw: {}",
+            analysis
+                .reason
+                .unwrap_or_else(|| "the search stopped".into())
+        )
+    })?;
+    let report = coherent_sim::execute_plan(task, &plan);
+    Ok(Paths {
+        warning: report
+            .physics_error
+            .map(|e| format!("the plan failed in physics, paths drawn up to there: {e}")),
+        paths: report.paths,
+    })
+}
+
+/// The robots' paths when the transcript's executed actions are carried out in physics.
+pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, String> {
+    let mut env =
+        PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
+    let mut warning = None;
+    for round in &t.rounds {
+        let (Outcome::Executed, Some(p), Some(d)) =
+            (&round.outcome, &round.proposal, &round.decision)
+        else {
+            continue;
+        };
+        let Some(action) = &d.action else { continue };
+        let outcome = env.step(p.robot, action).map_err(|e| e.to_string())?;
+        if let Some(why) = outcome.infeasible {
+            warning = Some(format!(
+                "round {}: {action} failed in physics, paths drawn up to there: {why}",
+                round.step
+            ));
+            break;
+        }
+    }
+    Ok(Paths {
+        paths: env.world().paths.clone(),
+        warning,
+    })
+}
