@@ -71,3 +71,37 @@ def test_cli_entry_point_exits_with_the_status(env0_path: Path, capfd: pytest.Ca
         signal.signal(signal.SIGINT, previous)
     assert info.value.code == 0
     assert "env0 task 0: 5 steps" in capfd.readouterr().out
+
+
+def _cli_findings(coherent_exe: str, *paths: Path) -> dict[tuple[str, int], list[str]]:
+    """`coherent validate`'s findings by (scene, task_id), parsed from its lines."""
+    out = subprocess.run([coherent_exe, "validate", *map(str, paths)], capture_output=True, text=True, check=False)
+    assert out.returncode in (0, 1), out.stderr
+    found: dict[tuple[str, int], list[str]] = {}
+    for line in out.stdout.splitlines()[:-1]:  # the last line is the count
+        head, finding = line.split(": ", 1)
+        scene, _, rest = head.partition(" task ")
+        found.setdefault((scene, int(rest.split(" ")[0])), []).append(finding)
+    return found
+
+
+def test_validate_in_python_and_on_the_command_line_agree(coherent_exe: str, tmp_path: Path) -> None:
+    # Every task of our benchmark, and one whose stairs break the scene rules: the two
+    # front ends go through one check, so they report the same findings.
+    folder = Path(__file__).parents[2] / "benchmark" / "tasks"
+    task = json.loads((folder / "s5-house" / "task-00.json").read_text())
+    task["geometry"]["stairs"][0]["width"] = 0.6
+    task["task_id"] = 999
+    broken = tmp_path / "narrow-stairs.json"
+    broken.write_text(json.dumps(task))
+    cli = _cli_findings(coherent_exe, folder, broken)
+    tasks = coherent.load_tasks(folder) + coherent.load_tasks(broken)
+    assert len(tasks) == 101
+    py: dict[tuple[str, int], list[str]] = {}
+    for t in tasks:
+        found = coherent.validate(t)
+        if found:
+            py.setdefault((t.scene, t.task_id), []).extend(found)
+    assert py == cli
+    stairs = py[(task["scene"], task["task_id"])]
+    assert "geometry: stairs 17: 0.60 m wide; a flight is at least 1 m wide" in stairs
