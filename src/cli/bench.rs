@@ -10,8 +10,7 @@ use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, 
 use coherent_agents::episode::Method;
 use coherent_core::planner::Limits;
 
-use super::llm::{LlmArgs, sim_errors};
-use super::method_names;
+use super::args::{LlmArgs, method_names, sim_errors};
 use crate::session;
 use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
 use crate::session::bench::{self as session_bench, TableFormat as Tables};

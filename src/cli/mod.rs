@@ -1,8 +1,8 @@
 //! The `coherent` command line: `run`, `plan`, `validate`, `import`. One implementation
 //! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
 
+mod args;
 mod bench;
-mod llm;
 mod render;
 mod run;
 
@@ -10,7 +10,6 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
-use coherent_agents::episode::Method;
 use coherent_core::Error;
 use coherent_core::Task;
 use coherent_core::planner::{Analysis, Limits};
@@ -275,9 +274,4 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
             )
         }
     }
-}
-
-/// The method names `--method` and `--methods` accept.
-pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
 }

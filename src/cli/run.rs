@@ -16,8 +16,7 @@ use coherent_core::planner::Limits;
 
 use serde_json::json;
 
-use super::llm::{AnswerFormat, LlmArgs, sim_errors};
-use super::method_names;
+use super::args::{AnswerFormat, LlmArgs, method_names, sim_errors};
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, tasks};

@@ -7,7 +7,8 @@ use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyTuple, PyType};
 
-use crate::MODULE;
+/// The native module's name, which its exceptions report as their `__module__`.
+const MODULE: &str = "coherent._coherent";
 
 /// Built with `type(...)` rather than `create_exception!` because two of them also
 /// derive from `ValueError` (bad input), which needs two bases.

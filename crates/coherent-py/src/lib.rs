@@ -31,8 +31,6 @@ use convert::{interruptible, json_to_py};
 use errors::core_err;
 use task::PyTask;
 
-const MODULE: &str = "coherent._coherent";
-
 // ---------------------------------------------------------------------------------------
 // Functions
 

@@ -1,8 +1,9 @@
-//! The model endpoint's flags, one struct that `run` and `bench` both flatten so that the
-//! same setting has the same flag; resolving them (with the environment) is the session
-//! layer's ([`crate::session::endpoint`]).
+//! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
+//! that the same setting has the same flag; resolving them with the environment is the
+//! session layer's, [`crate::session::endpoint`]), `--sim-errors`, the method names.
 
 use clap::{Args, ValueEnum};
+use coherent_agents::episode::Method;
 use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode};
 
 use crate::session::endpoint::{Endpoint, Patience};
@@ -94,4 +95,9 @@ pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, Strin
     flag.map(ErrorRates::parse)
         .transpose()
         .map_err(|e| format!("--sim-errors: {e}"))
+}
+
+/// The method names `--method` and `--methods` accept.
+pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
 }
