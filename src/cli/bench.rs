@@ -9,6 +9,7 @@ use coherent_agents::Cancel;
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
 use coherent_agents::episode::Method;
 use coherent_core::planner::Limits;
+use coherent_core::text::{shown, shown_lines};
 
 use super::args::{LlmArgs, method_names, sim_errors};
 use crate::session;
@@ -137,7 +138,7 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
     let subset = session_bench::subset(&args.subset)?;
     let chosen = session_bench::choose(tasks_path, &subset)?;
     for e in &chosen.malformed {
-        eprintln!("skipped a malformed task: {e}");
+        eprintln!("skipped a malformed task: {}", shown_lines(&e.to_string()));
     }
     let malformed = chosen.malformed.len();
     let selection = chosen.selection;
@@ -160,7 +161,7 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         let listed: Vec<String> = selection
             .missing
             .iter()
-            .map(|(s, id)| format!("{s} task {id}"))
+            .map(|(s, id)| format!("{} task {id}", shown(s)))
             .collect();
         println!(
             "missing: {} of {wanted} are not in {}: {}",
@@ -221,7 +222,7 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         );
     }
     for why in &outcome.skipped_tasks {
-        eprintln!("skipped: {why}");
+        eprintln!("skipped: {}", shown(why));
     }
     println!(
         "{} episodes: {} already finished, {} run now, {} unfinished; results in {}, transcripts in {}",

@@ -13,6 +13,7 @@ use clap::{Parser, Subcommand};
 use coherent_core::Error;
 use coherent_core::Task;
 use coherent_core::planner::{Analysis, Limits};
+use coherent_core::text::{shown, shown_lines};
 
 use crate::session::{check, tasks};
 
@@ -97,19 +98,19 @@ where
     let result = match cli.command {
         Command::Render(args) => {
             return render::render(&args).unwrap_or_else(|e| {
-                eprintln!("error: {e}");
+                error(&e);
                 2
             });
         }
         Command::Run(args) => {
             return run::run(*args).unwrap_or_else(|e| {
-                eprintln!("error: {e}");
+                error(&e);
                 2
             });
         }
         Command::Bench(args) => {
             return bench::bench(*args).unwrap_or_else(|e| {
-                eprintln!("error: {e}");
+                error(&e);
                 2
             });
         }
@@ -134,17 +135,23 @@ where
     match result {
         Ok(code) => code,
         Err(e) => {
-            eprintln!("error: {e}");
+            error(&e);
             2
         }
     }
+}
+
+/// Says `error: ...` on stderr, each line of the message escaped ([`shown`]): a message
+/// may quote a task file or a server.
+fn error(message: &dyn std::fmt::Display) {
+    eprintln!("error: {}", shown_lines(&message.to_string()));
 }
 
 /// Tasks of every file; malformed ones are reported on stderr and counted.
 fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
     let (tasks, errors) = tasks::read_all(files);
     for e in &errors {
-        eprintln!("error: {e}");
+        error(&e);
     }
     *malformed += errors.len();
     tasks
@@ -160,7 +167,7 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
             with_problems += 1;
         }
         for f in found {
-            println!("{}: {f}", tasks::task_name(t));
+            println!("{}: {}", shown(&tasks::task_name(t)), shown(&f));
         }
     }
     println!(
@@ -228,7 +235,7 @@ fn plan(
                         "\n  physics: ok, {:.1} s simulated in {:.0} ms",
                         r.sim_seconds, r.wall_ms
                     ),
-                    Some(e) => format!("\n  physics: failed: {e}"),
+                    Some(e) => format!("\n  physics: failed: {}", shown(e)),
                 });
             }
             text
@@ -256,13 +263,16 @@ fn plan_text(t: &Task, a: &Analysis) -> String {
         .gt_steps
         .map(|g| g.to_string())
         .unwrap_or_else(|| "-".to_owned());
-    let head = format!("{} task {}", t.meta.scene, t.meta.task_id);
+    let head = format!("{} task {}", shown(&t.meta.scene), t.meta.task_id);
     match &a.plan {
-        None => format!("{head}: no plan: {}", a.reason.as_deref().unwrap_or("")),
+        None => format!(
+            "{head}: no plan: {}",
+            shown(a.reason.as_deref().unwrap_or(""))
+        ),
         Some(plan) => {
             let steps: Vec<String> = plan
                 .iter()
-                .map(|s| format!("  {:>4}  {}", t.id(s.robot), s.action.render(t)))
+                .map(|s| format!("  {:>4}  {}", t.id(s.robot), shown(&s.action.render(t))))
                 .collect();
             format!(
                 "{head}: {} steps (gt {gt}), {}, {} states, {:.1} ms\n{}",

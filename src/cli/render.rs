@@ -10,6 +10,8 @@ use coherent_agents::episode;
 use coherent_agents::transcript;
 use coherent_core::planner::Limits;
 
+use coherent_core::text::shown;
+
 use crate::session::{render, tasks};
 
 #[derive(Args)]
@@ -51,7 +53,7 @@ pub(crate) fn render(args: &RenderArgs) -> Result<u8, String> {
         None
     };
     if let Some(why) = paths.as_ref().and_then(|p| p.warning.as_ref()) {
-        eprintln!("warning: {why}");
+        eprintln!("warning: {}", shown(why));
     }
     let svg = render::svg(&task, paths.as_ref().map(|p| p.paths.as_slice()))?;
     std::fs::write(&args.out, svg).map_err(|e| format!("{}: {e}", args.out.display()))?;

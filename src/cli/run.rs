@@ -13,6 +13,7 @@ use coherent_agents::llm::BackendInfo;
 use coherent_agents::transcript::{Outcome, Round, Status, Summary};
 use coherent_core::Task;
 use coherent_core::planner::Limits;
+use coherent_core::text::shown;
 
 use serde_json::json;
 
@@ -183,7 +184,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             ran.transcript.rounds.len()
         )),
         Some(Err(why)) => {
-            lines.say(&format!("replay: {why}"));
+            lines.say(&format!("replay: {}", shown(why)));
             return Ok(BACKEND_FAILED);
         }
         None => {}
@@ -228,9 +229,9 @@ fn task_line(p: &Prepared) -> String {
     };
     format!(
         "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
-        task.meta.scene,
+        shown(&task.meta.scene),
         task.meta.task_id,
-        task.meta.instruction,
+        shown(&task.meta.instruction),
         p.settings.method.name()
     )
 }
@@ -239,18 +240,20 @@ fn backend_line(info: &BackendInfo, replay: Option<&Path>) -> String {
     match (info.kind.as_str(), replay) {
         ("replay", Some(path)) => format!(
             "backend: replay of {} (recorded with model {}; no network)",
-            path.display(),
-            info.model
+            shown(&path.display().to_string()),
+            shown(&info.model)
         ),
         ("simulated", _) => format!(
             "backend: simulated (the optimal planner with seeded mistakes: {}; not a language model)",
-            info.model
-                .trim_start_matches("optimal-planner with errors ")
+            shown(
+                info.model
+                    .trim_start_matches("optimal-planner with errors ")
+            )
         ),
         ("openai", _) => format!(
             "backend: OpenAI-compatible endpoint {} with model {}",
-            info.base_url.clone().unwrap_or_default(),
-            info.model
+            shown(&info.base_url.clone().unwrap_or_default()),
+            shown(&info.model)
         ),
         _ => "backend: built-in (the optimal planner plays the assigner and the executors; \
               to use a model, set OPENAI_BASE_URL, COHERENT_MODEL and OPENAI_API_KEY, \
@@ -264,26 +267,28 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
         .proposal
         .as_ref()
         .and_then(|p| task.idx(p.robot))
-        .map_or("-".to_owned(), |i| task.node(i).label());
+        .map_or("-".to_owned(), |i| {
+            shown(&task.node(i).label()).into_owned()
+        });
     let action = r
         .decision
         .as_ref()
-        .and_then(|d| d.action.clone())
-        .unwrap_or_else(|| "-".to_owned());
+        .and_then(|d| d.action.as_deref())
+        .map_or("-".to_owned(), |a| shown(a).into_owned());
     // The subtask in quotes, unless it is the action itself (the built-in backend's).
     let subtask = r
         .proposal
         .as_ref()
-        .filter(|p| p.subtask != action)
+        .filter(|p| shown(&p.subtask) != action)
         .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
     let outcome = match &r.outcome {
         Outcome::Executed if r.done => "ok, goal reached".to_owned(),
         Outcome::Executed => "ok".to_owned(),
-        Outcome::Infeasible { reason, .. } => format!("infeasible ({reason})"),
+        Outcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
         Outcome::Declined => "declined".to_owned(),
-        Outcome::NoProposal { why } => format!("no usable proposal: {why}"),
-        Outcome::NoDecision { why } => format!("no usable decision: {why}"),
-        Outcome::BackendError { message } => format!("backend failed: {message}"),
+        Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
+        Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
+        Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
     };
     let width = max.to_string().len();
     format!(

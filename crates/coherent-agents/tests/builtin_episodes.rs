@@ -39,7 +39,8 @@ async fn run_builtin(
         &mut |_| {},
     )
     .await
-    .expect("the episode runs");
+    .expect("the episode runs")
+    .0;
     (budget, e, path)
 }
 
@@ -129,6 +130,7 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
             )
             .await
             .expect("the replay runs")
+            .0
         }
     };
     let replayed = replay(&recorded).await;

@@ -206,7 +206,8 @@ async fn run(name: &str, server: &Server, steps: u32) -> Run {
         &mut |_| {},
     )
     .await
-    .expect("the episode runs");
+    .expect("the episode runs")
+    .0;
     let transcript = transcript::read(&path).expect("the transcript reads back");
     assert!(
         transcript.rounds == episode.rounds,

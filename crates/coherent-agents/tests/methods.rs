@@ -32,6 +32,7 @@ async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Epis
     )
     .await
     .expect("the episode runs")
+    .0
 }
 
 /// One task per scene, mono to trio.

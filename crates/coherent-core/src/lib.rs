@@ -21,6 +21,7 @@ pub mod planner;
 pub mod relaxed;
 pub mod rules;
 pub mod task;
+pub mod text;
 pub mod validate;
 pub mod vocab;
 
