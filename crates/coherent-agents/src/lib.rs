@@ -6,24 +6,17 @@
 //! optimal planner ([`builtin`]). Prompts are template files ([`prompt`]); answers are
 //! parsed robustly ([`answer`]); every episode writes a [`transcript`].
 
-pub mod answer;
-pub mod bench;
-pub mod builtin;
-pub mod cmrs;
-pub mod dmrs;
+pub mod backends;
 pub mod episode;
-pub mod joint;
-pub mod llm;
-pub mod mcts;
-pub mod openai;
-pub mod optimal;
-pub mod pefa;
-pub mod prompt;
-pub mod replay;
-pub mod report;
-pub mod retry;
+pub mod harness;
+pub mod methods;
+pub mod records;
 pub mod rng;
-pub mod transcript;
+
+pub use backends::{builtin, llm, openai, replay, retry};
+pub use harness::{bench, report};
+pub use methods::{answer, cmrs, dmrs, joint, mcts, optimal, pefa, prompt};
+pub use records::transcript;
 
 pub use builtin::{BuiltinBackend, ErrorRates};
 pub use episode::{Budget, Method, Settings};

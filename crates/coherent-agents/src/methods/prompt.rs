@@ -6,12 +6,12 @@ use serde_json::{Value, json};
 
 use crate::llm::Message;
 
-const ASSIGNER_SYSTEM: &str = include_str!("../prompts/assigner_system.txt");
-const ASSIGNER_USER: &str = include_str!("../prompts/assigner_user.txt");
-const EXECUTOR_USER: &str = include_str!("../prompts/executor_user.txt");
-const EXECUTOR_QUADROTOR: &str = include_str!("../prompts/executor_quadrotor.txt");
-const EXECUTOR_ROBOT_DOG: &str = include_str!("../prompts/executor_robot_dog.txt");
-const EXECUTOR_ROBOT_ARM: &str = include_str!("../prompts/executor_robot_arm.txt");
+const ASSIGNER_SYSTEM: &str = include_str!("../../prompts/assigner_system.txt");
+const ASSIGNER_USER: &str = include_str!("../../prompts/assigner_user.txt");
+const EXECUTOR_USER: &str = include_str!("../../prompts/executor_user.txt");
+const EXECUTOR_QUADROTOR: &str = include_str!("../../prompts/executor_quadrotor.txt");
+const EXECUTOR_ROBOT_DOG: &str = include_str!("../../prompts/executor_robot_dog.txt");
+const EXECUTOR_ROBOT_ARM: &str = include_str!("../../prompts/executor_robot_arm.txt");
 
 /// `template` with every `{{key}}` replaced by its value, in one pass: a value that
 /// itself contains `{{...}}` (an instruction, say) is left as written.

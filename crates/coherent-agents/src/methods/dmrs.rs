@@ -21,7 +21,7 @@ use crate::prompt;
 use crate::rng::{Rng, seed_of};
 use crate::transcript::Round;
 
-const TEMPLATE: &str = include_str!("../prompts/dmrs_speaker.txt");
+const TEMPLATE: &str = include_str!("../../prompts/dmrs_speaker.txt");
 /// The line that separates the template's system part from its user part.
 const USER_MARK: &str = "@@user@@";
 /// Most tokens of one turn (a sentence and a line).

@@ -14,7 +14,7 @@ use crate::pefa;
 use crate::prompt;
 use crate::transcript::{Outcome, Round};
 
-const TEMPLATE: &str = include_str!("../prompts/central.txt");
+const TEMPLATE: &str = include_str!("../../prompts/central.txt");
 /// The line that separates the template's system part from its user part.
 const USER_MARK: &str = "@@user@@";
 
