@@ -154,7 +154,6 @@ async fn run_async(args: RunArgs) -> Result<u8, String> {
                 let settings = Settings {
                     method,
                     history: args.history,
-                    max_steps: args.max_steps,
                     temperature: http.as_ref().map(|_| args.temperature),
                     seed: args.seed,
                     physics: args.physics,

@@ -442,7 +442,6 @@ pub(crate) fn run(
     let settings = Settings {
         method,
         history,
-        max_steps,
         temperature: llm.map(|l| l.get().temperature_of()),
         seed,
         physics,

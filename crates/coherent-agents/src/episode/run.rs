@@ -1,144 +1,22 @@
-//! Running one episode end to end: the step budget, the transcript file, the method, and
-//! checking that a replay reproduced its recording. The CLI, Python and the benchmark
-//! harness all go through here.
+//! Running one episode end to end: the transcript file, the method, the step budget.
+//! The CLI, Python and the benchmark harness all go through here.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use coherent_core::planner::{self, Limits};
+use coherent_core::planner::Limits;
 use coherent_core::{Environment, Task, native};
 
-use crate::dmrs::{self, DmrsConfig};
-use crate::llm::{Backend, BackendInfo};
-use crate::mcts::{self, MctsConfig};
-use crate::pefa::{self, Cancel, Episode, PefaConfig};
-use crate::transcript::{self, Header, Record, Round, Summary, Transcript, Writer};
-use crate::{cmrs, optimal};
-
-/// A planning method.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
-    /// COHERENT's loop with the assigner's history window.
-    Pefa,
-    /// The paper's "w/o history" ablation: the window is 0.
-    PefaNoHistory,
-    /// One central model choosing one robot's action per step.
-    Cmrs,
-    /// Decentralised dialogue, one round per step.
-    Dmrs1d,
-    /// Decentralised dialogue, two rounds per step.
-    Dmrs2d,
-    /// Primitive MCTS with the authors' settings; no model.
-    Mcts,
-    /// MCTS with a language-model prior at the root of each step's tree.
-    LlmMcts,
-    /// The optimal planner's plan: the ground-truth row; no model.
-    Optimal,
-}
-
-impl Method {
-    pub const ALL: [Method; 8] = [
-        Method::Pefa,
-        Method::PefaNoHistory,
-        Method::Cmrs,
-        Method::Dmrs1d,
-        Method::Dmrs2d,
-        Method::Mcts,
-        Method::LlmMcts,
-        Method::Optimal,
-    ];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Method::Pefa => "pefa",
-            Method::PefaNoHistory => "pefa-no-history",
-            Method::Cmrs => "cmrs",
-            Method::Dmrs1d => "dmrs-1d",
-            Method::Dmrs2d => "dmrs-2d",
-            Method::Mcts => "mcts",
-            Method::LlmMcts => "llm-mcts",
-            Method::Optimal => "optimal",
-        }
-    }
-
-    /// Whether the method asks a model (the backend) at all.
-    pub fn uses_model(self) -> bool {
-        !matches!(self, Method::Mcts | Method::Optimal)
-    }
-
-    pub fn from_name(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
-    }
-}
-
-/// How an episode is run, as recorded in its transcript's header.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Settings {
-    pub method: Method,
-    /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
-    /// baselines, the executed actions in their prompts (the paper: 5 for both).
-    pub history: usize,
-    /// Overrides the budget of 2 x GT.
-    pub max_steps: Option<u32>,
-    pub temperature: Option<f32>,
-    /// The model's sampling seed; also the MCTS search's and the DMRS speaking order's
-    /// (0 when unset).
-    pub seed: Option<u64>,
-    /// Whether the environment is physical (recorded; the caller builds the environment).
-    pub physics: bool,
-}
-
-impl Settings {
-    pub fn new(method: Method) -> Settings {
-        Settings {
-            method,
-            history: 5,
-            max_steps: None,
-            temperature: None,
-            seed: None,
-            physics: false,
-        }
-    }
-}
-
-/// Where a step budget came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Budget {
-    /// 2 x the task's ground truth, the paper's rule.
-    TwiceGroundTruth(u32),
-    /// Set by the caller.
-    Given(u32),
-    /// The task has no ground truth: 2 x the optimum the planner finds.
-    TwiceOptimum(u32),
-}
-
-impl Budget {
-    pub fn steps(self) -> u32 {
-        match self {
-            Budget::TwiceGroundTruth(n) | Budget::Given(n) | Budget::TwiceOptimum(n) => n,
-        }
-    }
-
-    /// The budget of `task`: `max_steps` when given, else 2 x GT, else 2 x the optimum.
-    pub fn of(task: &Task, max_steps: Option<u32>, limits: &Limits) -> Result<Budget, String> {
-        if let Some(n) = max_steps {
-            return Ok(Budget::Given(n));
-        }
-        if let Some(gt) = task.meta.gt_steps {
-            return Ok(Budget::TwiceGroundTruth(2 * gt));
-        }
-        let search = planner::search(task, &task.robots, &task.goal, limits);
-        match search.plan {
-            Some(plan) => Ok(Budget::TwiceOptimum(2 * plan.len().max(1) as u32)),
-            None => Err(
-                "the task has no ground truth and the planner finds no plan to size a budget \
-                 from: pass a step budget (--max-steps)"
-                    .into(),
-            ),
-        }
-    }
-}
+use crate::backends::llm::{Backend, BackendInfo};
+use crate::episode::cancel::Cancel;
+use crate::episode::rounds::Episode;
+use crate::episode::settings::{Budget, Method, Settings};
+use crate::methods::dmrs::{self, DmrsConfig};
+use crate::methods::mcts::{self, MctsConfig};
+use crate::methods::pefa::{self, PefaConfig};
+use crate::methods::{cmrs, optimal};
+use crate::records::transcript::{self, Header, Record, Round, Writer};
 
 /// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists.
 pub fn transcript_path(out: &Path, task: &Task, method: Method) -> PathBuf {
@@ -278,57 +156,6 @@ pub async fn run(
         .write(&Record::Summary(episode.summary.clone()))
         .map_err(io)?;
     Ok(episode)
-}
-
-/// The settings and budget a transcript was recorded with, to replay it.
-pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
-    let method = Method::from_name(&t.header.method)
-        .ok_or_else(|| format!("unknown method {:?} in the transcript", t.header.method))?;
-    let settings = Settings {
-        method,
-        history: t.header.history,
-        max_steps: Some(t.header.max_steps),
-        temperature: t.header.temperature,
-        seed: t.header.seed,
-        physics: t.header.physics,
-    };
-    Ok((settings, Budget::Given(t.header.max_steps)))
-}
-
-/// The task a transcript was recorded on.
-pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, String> {
-    native::read(&file.display().to_string(), &t.header.task).map_err(|e| e.to_string())
-}
-
-/// Whether `replayed` did exactly what `recorded` did: the same rounds (calls, answers,
-/// decisions, outcomes, feedback) apart from wall-clock time, and the same summary.
-pub fn check_replay(recorded: &Transcript, replayed: &Episode) -> Result<(), String> {
-    let strip = |r: &Round| Round {
-        wall_ms: 0.0,
-        ..r.clone()
-    };
-    if recorded.rounds.len() != replayed.rounds.len() {
-        return Err(format!(
-            "the recording has {} rounds, the replay {}",
-            recorded.rounds.len(),
-            replayed.rounds.len()
-        ));
-    }
-    for (a, b) in recorded.rounds.iter().zip(&replayed.rounds) {
-        if strip(a) != strip(b) {
-            return Err(format!("round {} differs from the recording", a.step));
-        }
-    }
-    let timeless = |s: &Summary| Summary {
-        wall_ms: 0.0,
-        ..s.clone()
-    };
-    if let Some(s) = &recorded.summary
-        && timeless(s) != timeless(&replayed.summary)
-    {
-        return Err("the summary differs from the recording".into());
-    }
-    Ok(())
 }
 
 #[cfg(test)]
