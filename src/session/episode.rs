@@ -9,7 +9,7 @@ use coherent_agents::bench::BackendChoice;
 use coherent_agents::episode::{self, Budget, Settings};
 use coherent_agents::llm::{Backend, BackendInfo};
 use coherent_agents::transcript::{self, Round, Transcript};
-use coherent_agents::{Cancel, Episode, ReplayBackend};
+use coherent_agents::{Cancel, Episode, Replay};
 use coherent_core::planner::Limits;
 use coherent_core::{Environment, SymbolicEnv, Task, native};
 
@@ -74,8 +74,8 @@ pub struct Prepared {
     backend: Arc<dyn Backend>,
     env: Box<dyn Environment + Send + Sync>,
     out: PathBuf,
-    /// The transcript a replay answers from and is checked against.
-    recording: Option<(Transcript, PathBuf)>,
+    /// The recording a replay answers from and is checked against, and its file.
+    recording: Option<(Replay, PathBuf)>,
 }
 
 impl std::fmt::Debug for Prepared {
@@ -143,7 +143,6 @@ pub fn prepare_replay(
     out: PathBuf,
 ) -> Result<Prepared, Failure> {
     let recorded = transcript::read(path)?;
-    let task = episode::recorded_task(&recorded, path)?;
     if let Some(given) = given
         && native::to_value(given) != recorded.header.task
     {
@@ -152,17 +151,16 @@ pub fn prepare_replay(
             path.display()
         )));
     }
-    let (settings, budget) = episode::recorded_settings(&recorded)?;
-    let task = Arc::new(task);
-    let env = environment(&task, settings.physics).map_err(Failure::Physics)?;
+    let replay = Replay::prepare(&recorded, path)?;
+    let env = environment(&replay.task, replay.settings.physics).map_err(Failure::Physics)?;
     Ok(Prepared {
-        task,
-        settings,
-        budget,
-        backend: Arc::new(ReplayBackend::new(&recorded)),
+        task: Arc::clone(&replay.task),
+        settings: replay.settings.clone(),
+        budget: replay.budget,
+        backend: Arc::clone(&replay.backend) as Arc<dyn Backend>,
         env,
         out,
-        recording: Some((recorded, path.to_owned())),
+        recording: Some((replay, path.to_owned())),
     })
 }
 
@@ -199,7 +197,7 @@ impl Prepared {
         let replay = self
             .recording
             .as_ref()
-            .map(|(t, _)| episode::check_replay(t, &episode));
+            .map(|(replay, _)| replay.check(&episode));
         let Episode { rounds, summary } = episode;
         Ok(Ran {
             task: self.task,

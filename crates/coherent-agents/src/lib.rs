@@ -1,34 +1,56 @@
-//! `coherent-agents`: the COHERENT planning loop over language models.
+//! `coherent-agents`: the COHERENT planning loop over language models, and the methods
+//! the paper compares it with.
 //!
-//! [`pefa`] runs the paper's Proposal-Execution-Feedback-Adjustment loop on any
-//! `coherent_core::Environment`, asking its two roles through a [`Backend`]: an
-//! OpenAI-compatible server ([`openai`]), a recorded transcript ([`replay`]) or the
-//! optimal planner ([`builtin`]). Prompts are template files ([`prompt`]); answers are
-//! parsed robustly ([`answer`]); every episode writes a [`transcript`].
+//! The crate is in five folders, by layer:
+//!
+//! - [`methods`]: the planning methods. The paper's [`pefa`] loop
+//!   (Proposal-Execution-Feedback-Adjustment) with its two roles, [`TaskAssigner`]
+//!   (`methods/assigner.rs`) and [`RobotExecutor`] (`methods/executor.rs`); the baselines
+//!   [`cmrs`], [`dmrs`] and [`mcts`] over the team's [`joint`] action space; and the
+//!   [`optimal`] plan, the tables' ground-truth row.
+//! - [`episode`]: what every method shares. The round loop and its [`Episode`], asking
+//!   a backend, executing on the `coherent_core::Environment`, [`Cancel`], the step
+//!   [`Budget`], the [`Method`] names and their [`Settings`]; and [`episode::run()`],
+//!   the front door that writes the transcript and runs the method the settings name.
+//! - [`backends`]: who answers the methods' questions. The [`Backend`] trait ([`llm`])
+//!   and an OpenAI-compatible server ([`openai`], with [`retry`]), the optimal planner
+//!   ([`builtin`]; with seeded mistakes, the simulated backend) and a recorded transcript
+//!   ([`replay`]).
+//! - [`records`]: what an episode leaves behind. Its [`transcript`], and [`Replay`],
+//!   which sets up the replay of a recorded episode and checks it against the recording.
+//! - [`harness`]: the benchmark. [`bench`](mod@bench) runs methods x tasks x seeds into a
+//!   results file; [`report`] turns it into the paper's tables.
+//!
+//! No file reaches back to one that uses it. From the bottom: [`llm`] is the vocabulary
+//! of a model call; the transcript records calls in it; the backends answer them (the
+//! replay one from a transcript; the built-in one picks from the [`joint`] action
+//! space); the episode loop asks backends and fills the records; the methods are built
+//! on the loop, and [`episode::run()`] on the methods; [`Replay`] prepares a run of it,
+//! and the harness drives it all. [`rng`] is the crate's one random number generator.
+//!
+//! The modules are also reachable at the crate root by their short names
+//! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
 
-pub mod answer;
-pub mod bench;
-pub mod builtin;
-pub mod cmrs;
-pub mod dmrs;
+pub mod backends;
 pub mod episode;
-pub mod joint;
-pub mod llm;
-pub mod mcts;
-pub mod openai;
-pub mod optimal;
-pub mod pefa;
-pub mod prompt;
-pub mod replay;
-pub mod report;
-pub mod retry;
+pub mod harness;
+pub mod methods;
+pub mod records;
 pub mod rng;
-pub mod transcript;
 
-pub use builtin::{BuiltinBackend, ErrorRates};
-pub use episode::{Budget, Method, Settings};
-pub use llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
-pub use openai::{ApiKey, OpenAiClient, OpenAiConfig};
-pub use pefa::{Cancel, Episode, PefaConfig};
-pub use replay::ReplayBackend;
-pub use transcript::{Status, Summary, Transcript};
+pub use backends::{builtin, llm, openai, replay, retry};
+pub use harness::{bench, report};
+pub use methods::{cmrs, dmrs, joint, mcts, optimal, pefa, prompt};
+pub use records::transcript;
+
+pub use backends::builtin::BuiltinBackend;
+pub use backends::llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
+pub use backends::openai::{ApiKey, OpenAiClient, OpenAiConfig};
+pub use backends::replay::ReplayBackend;
+pub use backends::simulated::ErrorRates;
+pub use episode::{Budget, Cancel, Episode, Method, Settings};
+pub use methods::assigner::TaskAssigner;
+pub use methods::executor::RobotExecutor;
+pub use methods::pefa::PefaConfig;
+pub use records::replay::Replay;
+pub use records::transcript::{Status, Summary, Transcript};

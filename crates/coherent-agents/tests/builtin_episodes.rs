@@ -8,7 +8,7 @@ use std::sync::Arc;
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::llm::Role;
 use coherent_agents::transcript::{self, Outcome, Status};
-use coherent_agents::{BuiltinBackend, Cancel, ReplayBackend};
+use coherent_agents::{BuiltinBackend, Cancel, Replay};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
 
@@ -111,42 +111,48 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
     );
 
     let replay = |t: &transcript::Transcript| {
-        let t = t.clone();
+        let replay = Replay::prepare(t, Path::new("recorded")).expect("task and settings");
         let out = out.clone();
         async move {
-            let task = Arc::new(episode::recorded_task(&t, Path::new("recorded")).expect("task"));
-            let (settings, budget) = episode::recorded_settings(&t).expect("settings");
-            let mut env = SymbolicEnv::new(Arc::clone(&task));
-            let path = episode::transcript_path(&out, &task, settings.method);
-            episode::run(
-                &task,
+            let task = &replay.task;
+            let mut env = SymbolicEnv::new(Arc::clone(task));
+            let path = episode::transcript_path(&out, task, replay.settings.method);
+            let episode = episode::run(
+                task,
                 &mut env,
-                &ReplayBackend::new(&t),
-                &settings,
-                budget,
+                replay.backend.as_ref(),
+                &replay.settings,
+                replay.budget,
                 &path,
                 &Cancel::default(),
                 &mut |_| {},
             )
             .await
             .expect("the replay runs")
-            .0
+            .0;
+            (replay, episode)
         }
     };
-    let replayed = replay(&recorded).await;
-    episode::check_replay(&recorded, &replayed).expect("same rounds");
+    let (setup, replayed) = replay(&recorded).await;
+    setup.check(&replayed).expect("same rounds");
 
     // A prompt that differs from the recording stops the replay with the round named.
     let mut changed = recorded.clone();
     changed.rounds[2].calls[0].messages[1]
         .content
         .push_str(" (edited)");
-    let diverged = replay(&changed).await;
+    let (_, diverged) = replay(&changed).await;
     assert_eq!(diverged.summary.status, Status::BackendError);
     let error = diverged.summary.error.clone().unwrap_or_default();
     assert!(
         error.contains("round 3") && error.contains("prompt"),
         "{error}"
     );
-    assert!(episode::check_replay(&recorded, &diverged).is_err());
+    assert!(setup.check(&diverged).is_err());
+
+    // A transcript of a method this version does not know cannot be replayed.
+    let mut unknown = recorded.clone();
+    unknown.header.method = "nope".into();
+    let error = Replay::prepare(&unknown, Path::new("recorded")).expect_err("no such method");
+    assert!(error.contains("unknown method \"nope\""), "{error}");
 }

@@ -5,8 +5,10 @@
 use std::collections::VecDeque;
 use std::sync::{Mutex, PoisonError};
 
-use crate::llm::{Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query};
-use crate::transcript::{Call, Transcript};
+use crate::backends::llm::{
+    Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query,
+};
+use crate::records::transcript::{Call, Transcript};
 
 #[derive(Debug)]
 pub struct ReplayBackend {

@@ -1,6 +1,7 @@
 //! What the planning loop asks of a language model, and what comes back, whatever
-//! answers: an OpenAI-compatible server ([`crate::openai`]), a recorded transcript
-//! ([`crate::replay`]) or the optimal planner ([`crate::builtin`]).
+//! answers: an OpenAI-compatible server ([`crate::backends::openai`]), a recorded
+//! transcript ([`crate::backends::replay`]) or the optimal planner
+//! ([`crate::backends::builtin`]).
 
 use std::fmt;
 use std::future::Future;

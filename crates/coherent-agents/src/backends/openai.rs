@@ -12,11 +12,11 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
-use crate::llm::{
+use crate::backends::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
     Usage,
 };
-use crate::retry::{Backoff, parse_retry_after};
+use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
 
 /// An API key. It is sent in the `Authorization` header and nowhere else: it has no

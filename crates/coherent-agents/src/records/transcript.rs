@@ -1,16 +1,18 @@
 //! Transcripts: one JSON-lines file per episode, a header, one line per round (prompts,
 //! raw answers, parsed decisions, the action list, the outcome, tokens, latencies),
 //! then a summary; each line is flushed as it is written, so a crash loses nothing that
-//! ran. A transcript holds everything needed to replay its episode ([`crate::replay`]).
+//! ran. A transcript holds everything needed to replay its episode
+//! ([`crate::records::replay`]).
 
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-use crate::answer::{Decision, Proposal};
-use crate::llm::{Answer, BackendInfo, LlmError, Message, Role};
+use coherent_core::NodeId;
+
+use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
 
 pub const FORMAT: &str = "coherent-transcript";
 pub const VERSION: u32 = 1;
@@ -46,6 +48,29 @@ pub struct Call {
     pub messages: Vec<Message>,
     pub answer: Option<Answer>,
     pub error: Option<LlmError>,
+}
+
+/// The task assigner's proposal, as read from its answer
+/// ([`crate::methods::assigner::TaskAssigner::parse`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Proposal {
+    pub robot: NodeId,
+    pub subtask: String,
+    pub reasoning: String,
+}
+
+/// An executor's decision, as read from its answer
+/// ([`crate::methods::executor::RobotExecutor::parse`]); the central and dialogue
+/// methods record their chosen line as one too.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Decision {
+    pub can_do: bool,
+    /// The action to run, as answered (matched to the list's spelling when it is one of
+    /// them); `None` when the executor declines.
+    pub action: Option<String>,
+    /// The executor's own judgement that this action finishes the subtask.
+    pub subtask_complete: bool,
+    pub note: String,
 }
 
 /// What came of one round.
@@ -143,7 +168,6 @@ pub enum Record {
 #[derive(Debug)]
 pub struct Writer {
     file: File,
-    path: PathBuf,
 }
 
 impl Writer {
@@ -154,14 +178,9 @@ impl Writer {
         }
         let mut w = Writer {
             file: File::create(path)?,
-            path: path.to_owned(),
         };
         w.write(&Record::Header(Box::new(header)))?;
         Ok(w)
-    }
-
-    pub fn path(&self) -> &Path {
-        &self.path
     }
 
     pub fn write(&mut self, record: &Record) -> io::Result<()> {

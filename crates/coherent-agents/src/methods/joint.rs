@@ -8,13 +8,13 @@ use std::collections::VecDeque;
 use coherent_core::{Action, Environment, NodeId, Robot, State, Task, rules};
 use serde_json::{Value, json};
 
-use crate::answer::{self, Decision, normal};
-use crate::llm::Message;
-use crate::pefa;
-use crate::prompt;
-use crate::transcript::{Outcome, Round};
+use crate::backends::llm::Message;
+use crate::episode::environment::execute;
+use crate::methods::answer::{json_object, normal};
+use crate::methods::prompt::{self, robot_label};
+use crate::records::transcript::{Decision, Outcome, Round};
 
-const TEMPLATE: &str = include_str!("../prompts/central.txt");
+const TEMPLATE: &str = include_str!("../../prompts/central.txt");
 /// The line that separates the template's system part from its user part.
 const USER_MARK: &str = "@@user@@";
 
@@ -126,7 +126,7 @@ pub fn match_line(lines: &[String], answer: &str) -> Option<usize> {
 /// `robot` field in front when the action does not name one; a `subtask` field stands in
 /// for a missing `action`), else the whole text.
 pub fn read_line(text: &str) -> String {
-    let object = answer::json_object(text);
+    let object = json_object(text);
     let Some(map) = object else {
         return text.trim().to_owned();
     };
@@ -209,12 +209,6 @@ pub fn choose(task: &Task, lines: &[String], text: &str) -> Result<(NodeId, Stri
     ))
 }
 
-/// `<label>(id)` of robot `robot`, or `robot <id>` when it is none of the task's.
-pub fn label(task: &Task, robot: NodeId) -> String {
-    task.idx(robot)
-        .map_or_else(|| format!("robot {robot}"), |i| task.node(i).label())
-}
-
 /// Runs `robot`'s `action` as the round's decision: records the line, checks and
 /// executes it, and says what came of it.
 pub(crate) fn act(
@@ -225,8 +219,8 @@ pub(crate) fn act(
     action: &str,
     note: String,
 ) {
-    let line = format!("{}: {action}", label(task, robot));
-    round.outcome = pefa::execute(env, robot, action);
+    let line = format!("{}: {action}", robot_label(task, robot));
+    round.outcome = execute(env, robot, action);
     round.feedback = feedback(&line, &round.outcome);
     round.decision = Some(Decision {
         can_do: true,

@@ -9,10 +9,13 @@ use std::time::Instant;
 
 use coherent_core::{Environment, Task};
 
-use crate::joint::{self, Executed, joint_actions};
-use crate::llm::{Backend, Query, Role, Situation};
-use crate::pefa::{self, Cancel, Episode, Side, team_observation};
-use crate::transcript::Round;
+use crate::backends::llm::{Backend, Query, Role, Situation};
+use crate::episode::ask::{Side, ask};
+use crate::episode::cancel::Cancel;
+use crate::episode::environment::team_observation;
+use crate::episode::rounds::{Episode, rounds};
+use crate::methods::joint::{self, Executed, joint_actions};
+use crate::records::transcript::Round;
 
 /// Most tokens of one answer (a line and a little reasoning).
 const MAX_TOKENS: u32 = 200;
@@ -36,7 +39,7 @@ pub async fn run(
         }
         Ok(r)
     };
-    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+    rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
 async fn round(
@@ -63,7 +66,7 @@ async fn round(
         max_tokens: MAX_TOKENS,
         situation: Situation::now(task, env, None),
     };
-    let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
+    let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let chosen = reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text)));
     match chosen {
         Ok((robot, action)) => joint::act(env, task, &mut round, robot, &action, String::new()),

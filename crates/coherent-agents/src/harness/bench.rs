@@ -1,147 +1,37 @@
 //! The benchmark harness: methods x tasks x seeds, run concurrently, one JSON line per
 //! finished episode appended to a results file (flushed as each ends), resumable after a
-//! crash or Ctrl-C. [`crate::report`] turns the lines into the paper's tables.
+//! crash or Ctrl-C. [`crate::harness::report`] turns the lines into the paper's tables.
+//!
+//! The harness's other parts are reachable here too, as one namespace:
+//! [`crate::harness::subset`] (which tasks), [`crate::harness::results`] (the results
+//! file) and [`crate::harness::progress`] (what a run reports).
 
 use std::collections::{HashMap, HashSet};
-use std::fs::{File, OpenOptions};
-use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::fs::OpenOptions;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
-use std::time::{Duration, Instant};
 
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
-use serde::{Deserialize, Serialize};
 use tokio::sync::{OnceCell, Semaphore};
 use tokio::task::JoinSet;
 
-use crate::builtin::{BuiltinBackend, ErrorRates};
-use crate::episode::{self, Budget, Method, Settings};
-use crate::llm::{Backend, BackendInfo};
-use crate::openai::OpenAiClient;
-use crate::pefa::Cancel;
-use crate::replay::ReplayBackend;
-use crate::transcript::{self, Status};
+use crate::backends::builtin::BuiltinBackend;
+use crate::backends::llm::{Backend, BackendInfo};
+use crate::backends::openai::OpenAiClient;
+use crate::backends::simulated::ErrorRates;
+use crate::episode::cancel::Cancel;
+use crate::episode::run::{run as run_episode, transcript_path};
+use crate::episode::settings::{Budget, Method, Settings};
+use crate::records::replay::Replay;
+use crate::records::transcript;
 
-/// The paper's 40-task subset (SEMANTICS.md section 6): 8 tasks per scene, by the scene's
-/// file name and the task id.
-pub const PAPER40: [(&str, [i64; 8]); 5] = [
-    ("env0", [2, 4, 9, 10, 11, 15, 16, 20]),
-    ("env1", [1, 3, 7, 8, 10, 11, 16, 20]),
-    ("env2", [3, 5, 6, 7, 10, 11, 16, 17]),
-    ("env3", [2, 4, 6, 7, 10, 16, 17, 19]),
-    ("env4", [0, 1, 7, 10, 12, 17, 18, 19]),
-];
-
-/// Which tasks of those read to run.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub enum Subset {
-    /// Every well-formed task.
-    All,
-    /// [`PAPER40`].
-    Paper40,
-    /// `scene task_id` pairs from a file, one per line, `#` starting a comment.
-    Listed(Vec<(String, i64)>),
-}
-
-impl Subset {
-    /// The subset a name stands for: `all`, `paper40` (the paper's subset of its released
-    /// tasks) or `native40` (the 40-task subset of the project's own benchmark, listed by
-    /// `coherent_core::benchmark::subset40`); None for any other name.
-    pub fn named(name: &str) -> Option<Subset> {
-        match name {
-            "all" => Some(Subset::All),
-            "paper40" => Some(Subset::Paper40),
-            "native40" => Some(Subset::Listed(coherent_core::benchmark::subset40())),
-            _ => None,
-        }
-    }
-
-    /// Reads a subset file; errors name the file and the line.
-    pub fn read_file(path: &Path) -> Result<Subset, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let mut pairs = Vec::new();
-        for (i, line) in text.lines().enumerate() {
-            let line = line.split('#').next().unwrap_or("").trim();
-            if line.is_empty() {
-                continue;
-            }
-            let at = || format!("{}: line {}", path.display(), i + 1);
-            let mut words = line.split_whitespace();
-            let (Some(scene), Some(id), None) = (words.next(), words.next(), words.next()) else {
-                return Err(format!(
-                    "{}: expected `scene task_id`, found {line:?}",
-                    at()
-                ));
-            };
-            let id: i64 = id
-                .parse()
-                .map_err(|_| format!("{}: task id {id:?} is not an integer", at()))?;
-            pairs.push((scene.to_owned(), id));
-        }
-        Ok(Subset::Listed(pairs))
-    }
-
-    fn wanted(&self) -> Option<Vec<(String, i64)>> {
-        match self {
-            Subset::All => None,
-            Subset::Paper40 => Some(
-                PAPER40
-                    .iter()
-                    .flat_map(|(scene, ids)| ids.iter().map(|id| ((*scene).to_owned(), *id)))
-                    .collect(),
-            ),
-            Subset::Listed(pairs) => Some(pairs.clone()),
-        }
-    }
-}
-
-/// The tasks a subset picks, and the (scene, task_id) pairs it names that were not read.
-#[derive(Debug)]
-pub struct Selection {
-    pub tasks: Vec<Arc<Task>>,
-    pub missing: Vec<(String, i64)>,
-}
-
-/// Picks `subset` from `tasks`, in the subset's order (the read order for `All`). Two
-/// tasks with the same scene and id are an error: results are keyed by them.
-pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, String> {
-    let mut by_key: HashMap<(String, i64), Arc<Task>> = HashMap::new();
-    let mut order = Vec::new();
-    for t in tasks {
-        let key = (t.meta.scene.clone(), t.meta.task_id);
-        if by_key.contains_key(&key) {
-            return Err(format!(
-                "two tasks with scene {:?} and task_id {}: results could not tell them apart",
-                key.0, key.1
-            ));
-        }
-        order.push(key.clone());
-        by_key.insert(key, Arc::new(t));
-    }
-    let Some(wanted) = subset.wanted() else {
-        let tasks = order.iter().map(|k| Arc::clone(&by_key[k])).collect();
-        return Ok(Selection {
-            tasks,
-            missing: Vec::new(),
-        });
-    };
-    let mut seen = HashSet::new();
-    let mut selection = Selection {
-        tasks: Vec::new(),
-        missing: Vec::new(),
-    };
-    for key in wanted {
-        if !seen.insert(key.clone()) {
-            continue;
-        }
-        match by_key.get(&key) {
-            Some(t) => selection.tasks.push(Arc::clone(t)),
-            None => selection.missing.push(key),
-        }
-    }
-    Ok(selection)
-}
+pub use crate::harness::progress::{Event, Progress};
+pub use crate::harness::results::{
+    EpisodeKey, ResultLine, ResultsFile, read_results, repair, transcripts_dir,
+};
+pub use crate::harness::subset::{PAPER40, Selection, Subset, select};
 
 /// Which backend answers the model-using methods.
 #[derive(Clone, Debug)]
@@ -247,200 +137,6 @@ pub struct BenchConfig {
     pub out: PathBuf,
 }
 
-/// One finished episode: a line of the results file.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct ResultLine {
-    pub method: String,
-    pub scene: String,
-    pub task_id: i64,
-    /// `mono`, `dual` or `trio`; null when the planner finds no plan.
-    pub task_type: Option<String>,
-    /// The seed index (0-based).
-    pub seed: u32,
-    /// The seed the episode actually ran with, derived from the index, method and task.
-    #[serde(default)]
-    pub episode_seed: u64,
-    pub success: bool,
-    pub status: Status,
-    pub steps: u32,
-    pub gt_steps: Option<u32>,
-    #[serde(default)]
-    pub optimal_steps: Option<u32>,
-    pub max_steps: u32,
-    pub llm_calls: u32,
-    pub prompt_tokens: u64,
-    pub completion_tokens: u64,
-    pub wall_ms: f64,
-    /// The run's backend (even for a method that asks no model; see `uses_model`).
-    pub backend: BackendInfo,
-    #[serde(default = "yes")]
-    pub uses_model: bool,
-    #[serde(default)]
-    pub error: Option<String>,
-    pub transcript: String,
-}
-
-fn yes() -> bool {
-    true
-}
-
-impl ResultLine {
-    /// Whether the episode ended in a way that counts: success or budget spent.
-    pub fn is_final(&self) -> bool {
-        matches!(self.status, Status::Success | Status::Failure)
-    }
-
-    pub fn key(&self) -> EpisodeKey {
-        EpisodeKey {
-            method: self.method.clone(),
-            scene: self.scene.clone(),
-            task_id: self.task_id,
-            seed: self.seed,
-        }
-    }
-}
-
-/// What identifies an episode across runs.
-#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct EpisodeKey {
-    pub method: String,
-    pub scene: String,
-    pub task_id: i64,
-    pub seed: u32,
-}
-
-/// A results file as read.
-#[derive(Debug, Default)]
-pub struct ResultsFile {
-    pub lines: Vec<ResultLine>,
-    /// Bytes of a last line cut off mid-write (0 when none); [`repair`] drops them.
-    pub truncated_bytes: u64,
-    /// Length of the well-formed part.
-    pub good_len: u64,
-}
-
-/// Reads a results file. A last line without its newline that does not parse is a write
-/// cut short (reported in `truncated_bytes`); any other bad line is an error naming the
-/// file, the line and the JSON path.
-pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
-    let mut text = Vec::new();
-    File::open(path)
-        .and_then(|mut f| f.read_to_end(&mut text))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut out = ResultsFile::default();
-    let mut start = 0;
-    let mut number = 0;
-    while start < text.len() {
-        number += 1;
-        let (end, complete) = match text[start..].iter().position(|&b| b == b'\n') {
-            Some(i) => (start + i + 1, true),
-            None => (text.len(), false),
-        };
-        let raw = &text[start..end];
-        let parsed = std::str::from_utf8(raw)
-            .map_err(|e| e.to_string())
-            .and_then(|s| {
-                if s.trim().is_empty() {
-                    return Ok(None);
-                }
-                let de = &mut serde_json::Deserializer::from_str(s);
-                parse_line(de).map(Some)
-            });
-        match parsed {
-            Ok(line) => {
-                out.lines.extend(line);
-                // A complete record missing only its newline is kept; repair adds it.
-                out.good_len = end as u64;
-            }
-            Err(_) if !complete => {
-                out.truncated_bytes = (end - start) as u64;
-            }
-            Err(e) => {
-                return Err(format!("{}: line {number}: {e}", path.display()));
-            }
-        }
-        start = end;
-    }
-    Ok(out)
-}
-
-fn parse_line(
-    de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
-) -> Result<ResultLine, String> {
-    let value: serde_json::Value =
-        serde::Deserialize::deserialize(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
-    de.end().map_err(|e| format!("invalid JSON: {e}"))?;
-    serde_json::from_value::<ResultLine>(value.clone()).map_err(|e| {
-        // Name the field: serde_json's messages say what, not where.
-        let field = missing_or_bad_field(&value);
-        format!("{e}{field}")
-    })
-}
-
-/// ` (at $.field)` for the first field of a results line that is absent or has the
-/// wrong JSON type, to point at the culprit.
-fn missing_or_bad_field(value: &serde_json::Value) -> String {
-    use serde_json::Value as V;
-    let Some(map) = value.as_object() else {
-        return " (at $: expected an object)".into();
-    };
-    type Check = fn(&V) -> bool;
-    let expect: [(&str, Check); 14] = [
-        ("method", V::is_string),
-        ("scene", V::is_string),
-        ("task_id", V::is_i64),
-        ("seed", V::is_u64),
-        ("success", V::is_boolean),
-        ("status", V::is_string),
-        ("steps", V::is_u64),
-        ("max_steps", V::is_u64),
-        ("llm_calls", V::is_u64),
-        ("prompt_tokens", V::is_u64),
-        ("completion_tokens", V::is_u64),
-        ("wall_ms", V::is_number),
-        ("backend", V::is_object),
-        ("transcript", V::is_string),
-    ];
-    for (name, ok) in expect {
-        match map.get(name) {
-            None => return format!(" (at $.{name}: missing)"),
-            Some(v) if !ok(v) => return format!(" (at $.{name}: found {v})"),
-            Some(_) => {}
-        }
-    }
-    String::new()
-}
-
-/// Cuts a results file back to its well-formed part and ends it with a newline, so
-/// that appended lines start on their own line.
-pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
-    let io = |e: io::Error| format!("{}: {e}", path.display());
-    let mut f = OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)
-        .map_err(io)?;
-    f.set_len(file.good_len).map_err(io)?;
-    if file.good_len > 0 {
-        f.seek(SeekFrom::Start(file.good_len - 1)).map_err(io)?;
-        let mut last = [0u8];
-        f.read_exact(&mut last).map_err(io)?;
-        if last[0] != b'\n' {
-            f.seek(SeekFrom::End(0)).map_err(io)?;
-            f.write_all(b"\n").map_err(io)?;
-        }
-    }
-    f.flush().map_err(io)
-}
-
-/// `results.jsonl` -> `results.transcripts/`, next to it.
-pub fn transcripts_dir(out: &Path) -> PathBuf {
-    let stem = out
-        .file_stem()
-        .map_or_else(|| "results".into(), |s| s.to_string_lossy().into_owned());
-    out.with_file_name(format!("{stem}.transcripts"))
-}
-
 /// The seed of one episode: a hash of the seed index, the method and the task, so that
 /// results do not depend on the order episodes run in (FNV-1a, then SplitMix64's mixer).
 pub fn episode_seed(seed: u32, method: &str, scene: &str, task_id: i64) -> u64 {
@@ -499,15 +195,6 @@ pub struct BenchOutcome {
     pub skipped_tasks: Vec<String>,
     /// Lines dropped from a cut-off last line.
     pub repaired_bytes: u64,
-}
-
-/// What the harness reports as it goes.
-#[derive(Debug)]
-pub enum Event<'a> {
-    /// Before the first episode: how many to run, how many were already done.
-    Start { to_run: usize, skipped: usize },
-    /// An episode ended and its line is on disk.
-    Finished(&'a ResultLine),
 }
 
 /// Runs every method on every task for every seed, `config.concurrency` at once, skipping
@@ -704,10 +391,10 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
                     recorded.results.display()
                 )));
             };
-            let t = transcript::read(path)?;
-            (settings, budget) = episode::recorded_settings(&t)?;
-            let backend = Arc::new(ReplayBackend::new(&t));
-            recording = Some(t);
+            let replay = Replay::prepare(&transcript::read(path)?, path)?;
+            (settings, budget) = (replay.settings.clone(), replay.budget);
+            let backend = Arc::clone(&replay.backend) as Arc<dyn Backend>;
+            recording = Some(replay);
             backend
         }
         choice => choice
@@ -715,7 +402,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
             .expect("every backend but a replay serves any episode"),
     };
     let dir = shared.transcripts.join(format!("seed{}", job.seed));
-    let path = episode::transcript_path(&dir, task, method);
+    let path = transcript_path(&dir, task, method);
     // An episode's future holds `&dyn Environment` across awaits, so it is not `Send`:
     // each runs to completion on a blocking-pool thread of the same multi-thread runtime
     // (its model calls, timers and planner searches still use the runtime).
@@ -725,7 +412,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         tokio::task::spawn_blocking(move || {
             handle.block_on(async move {
                 let mut env = SymbolicEnv::new(Arc::clone(&task));
-                episode::run(
+                run_episode(
                     &task,
                     &mut env,
                     backend.as_ref(),
@@ -746,7 +433,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
     // A replay that comes out differently says so in its line's error.
     let mismatch = recording
         .as_ref()
-        .and_then(|t| episode::check_replay(t, &episode).err())
+        .and_then(|r| r.check(&episode).err())
         .map(|why| format!("replay mismatch: {why}"));
     let s = episode.summary;
     Ok(JobResult::Line(Box::new(ResultLine {
@@ -791,109 +478,6 @@ fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
     }
 }
 
-/// Progress lines: on a terminal one line redrawn in place, otherwise one line per
-/// finished episode.
-#[derive(Debug)]
-pub struct Progress {
-    terminal: bool,
-    start: Instant,
-    to_run: usize,
-    done: usize,
-    successes: usize,
-    counted: usize,
-}
-
-impl Progress {
-    pub fn new(terminal: bool) -> Progress {
-        Progress {
-            terminal,
-            start: Instant::now(),
-            to_run: 0,
-            done: 0,
-            successes: 0,
-            counted: 0,
-        }
-    }
-
-    /// The text to print for `event` (for a terminal, with a carriage return and no
-    /// newline), or `None`.
-    pub fn line(&mut self, event: &Event<'_>) -> Option<String> {
-        match event {
-            Event::Start { to_run, skipped } => {
-                self.to_run = *to_run;
-                self.start = Instant::now();
-                Some(format!(
-                    "{to_run} episodes to run, {skipped} already finished in the results file\n"
-                ))
-            }
-            Event::Finished(line) => {
-                self.done += 1;
-                if line.is_final() {
-                    self.counted += 1;
-                    self.successes += usize::from(line.success);
-                }
-                let sr = if self.counted == 0 {
-                    "-".to_owned()
-                } else {
-                    format!("{:.3}", self.successes as f64 / self.counted as f64)
-                };
-                let elapsed = self.start.elapsed();
-                let left = self.to_run.saturating_sub(self.done);
-                let eta = elapsed.mul_f64(left as f64 / self.done as f64);
-                let width = self.to_run.to_string().len();
-                let head = format!(
-                    "[{:>width$}/{}] SR {sr} | ETA {}",
-                    self.done,
-                    self.to_run,
-                    clock(eta)
-                );
-                Some(if self.terminal {
-                    format!(
-                        "\r\x1b[2K{head} | last: {} {} task {} seed {} {}",
-                        line.method,
-                        line.scene,
-                        line.task_id,
-                        line.seed,
-                        status_word(line.status)
-                    )
-                } else {
-                    format!(
-                        "{head} | {} {} task {} seed {}: {} in {} steps (GT {}), {} LLM calls, {:.1} s\n",
-                        line.method,
-                        line.scene,
-                        line.task_id,
-                        line.seed,
-                        status_word(line.status),
-                        line.steps,
-                        line.gt_steps.map_or("-".to_owned(), |g| g.to_string()),
-                        line.llm_calls,
-                        line.wall_ms / 1e3
-                    )
-                })
-            }
-        }
-    }
-}
-
-fn status_word(s: Status) -> &'static str {
-    match s {
-        Status::Success => "success",
-        Status::Failure => "failure",
-        Status::BackendError => "backend error",
-        Status::Interrupted => "interrupted",
-    }
-}
-
-/// `1h02m03s`, `2m03s`, `3s`.
-fn clock(d: Duration) -> String {
-    let s = d.as_secs();
-    match (s / 3600, s / 60 % 60, s % 60) {
-        (0, 0, sec) => format!("{sec}s"),
-        (0, m, sec) => format!("{m}m{sec:02}s"),
-        (h, m, sec) => format!("{h}h{m:02}m{sec:02}s"),
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -906,20 +490,5 @@ mod tests {
         assert_ne!(a, episode_seed(0, "mcts", "env0", 2));
         assert_ne!(a, episode_seed(0, "pefa", "env1", 2));
         assert_ne!(a, episode_seed(0, "pefa", "env0", 3));
-    }
-
-    #[test]
-    fn clock_text() {
-        assert_eq!(clock(Duration::from_secs(3)), "3s");
-        assert_eq!(clock(Duration::from_secs(123)), "2m03s");
-        assert_eq!(clock(Duration::from_secs(3723)), "1h02m03s");
-    }
-
-    #[test]
-    fn transcripts_sit_next_to_the_results() {
-        assert_eq!(
-            transcripts_dir(Path::new("out/results.jsonl")),
-            Path::new("out/results.transcripts")
-        );
     }
 }

@@ -13,15 +13,17 @@ use std::time::Instant;
 use coherent_core::{Environment, NodeId, Task, describe};
 use serde_json::{Value, json};
 
-use crate::answer;
-use crate::joint::{self, Executed, joint_actions};
-use crate::llm::{Backend, Message, Query, Role, Situation};
-use crate::pefa::{self, Cancel, Episode, Side, Unusable};
-use crate::prompt;
+use crate::backends::llm::{Backend, Message, Query, Role, Situation};
+use crate::episode::ask::{Side, Unusable, ask};
+use crate::episode::cancel::Cancel;
+use crate::episode::rounds::{Episode, rounds};
+use crate::methods::answer::json_object;
+use crate::methods::joint::{self, Executed, joint_actions};
+use crate::methods::prompt::{self, robot_label};
+use crate::records::transcript::Round;
 use crate::rng::{Rng, seed_of};
-use crate::transcript::Round;
 
-const TEMPLATE: &str = include_str!("../prompts/dmrs_speaker.txt");
+const TEMPLATE: &str = include_str!("../../prompts/dmrs_speaker.txt");
 /// The line that separates the template's system part from its user part.
 const USER_MARK: &str = "@@user@@";
 /// Most tokens of one turn (a sentence and a line).
@@ -57,20 +59,20 @@ pub async fn run(
         }
         Ok(r)
     };
-    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+    rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
 /// One speaker's turn, as the next speakers hear it.
 fn said(task: &Task, speaker: NodeId, text: &str, proposal: Option<&(NodeId, String)>) -> String {
-    let message = answer::json_object(text)
+    let message = json_object(text)
         .and_then(|m| m.get("message").and_then(Value::as_str).map(str::to_owned))
         .unwrap_or_default();
     let proposal = proposal.map_or("nothing usable".to_owned(), |(robot, action)| {
-        format!("{}: {action}", joint::label(task, *robot))
+        format!("{}: {action}", robot_label(task, *robot))
     });
     format!(
         "{} said: {} It proposed {proposal}.",
-        joint::label(task, speaker),
+        robot_label(task, speaker),
         message.trim()
     )
 }
@@ -114,7 +116,7 @@ async fn round(
                 max_tokens: MAX_TOKENS,
                 situation: Situation::now(task, env, None),
             };
-            let reply = pefa::ask(backend, query, cancel, &mut round.calls).await?;
+            let reply = ask(backend, query, cancel, &mut round.calls).await?;
             let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());
             match reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text))) {
                 Ok(p) => proposal = Some(p),
@@ -169,7 +171,7 @@ fn speaker_messages(
         }
     };
     let values = [
-        ("robot", joint::label(task, speaker)),
+        ("robot", robot_label(task, speaker)),
         ("kind", kind),
         ("team", prompt::team(task)),
         ("instruction", task.meta.instruction.clone()),

@@ -9,9 +9,10 @@ use std::time::Instant;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task};
 
-use crate::joint;
-use crate::pefa::{self, Cancel, Episode};
-use crate::transcript::{Outcome, Round};
+use crate::episode::cancel::Cancel;
+use crate::episode::rounds::{Episode, rounds};
+use crate::methods::joint;
+use crate::records::transcript::{Outcome, Round};
 
 /// Runs the shortest plan from the environment's state (found once, by `limits`).
 pub async fn run(
@@ -56,5 +57,5 @@ pub async fn run(
         round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(round))
     };
-    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+    rounds(env, task, max_steps, cancel, on_round, play).await
 }

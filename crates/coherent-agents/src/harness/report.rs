@@ -1,4 +1,4 @@
-//! The paper's tables from a results file ([`crate::bench`]): Table I (success rate and
+//! The paper's tables from a results file ([`crate::harness::bench`]): Table I (success rate and
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
 //! scene), each with the ground-truth row, and each method's LLM calls and tokens.
 //!
@@ -10,8 +10,8 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 
 use serde::Serialize;
 
-use crate::bench::{EpisodeKey, ResultLine};
-use crate::episode::Method;
+use crate::episode::settings::Method;
+use crate::harness::results::{EpisodeKey, ResultLine};
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
 /// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the

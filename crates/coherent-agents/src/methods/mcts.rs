@@ -72,13 +72,13 @@ use std::time::Instant;
 
 use coherent_core::{Environment, State, Task, rules};
 
-use crate::answer::Decision;
-use crate::joint::{self, Executed, JointAction, joint_actions};
-use crate::llm::{Backend, Finish, Query, Role, Situation};
-use crate::pefa::{self, team_observation};
-use crate::pefa::{Cancel, Episode};
+use crate::backends::llm::{Backend, Finish, Query, Role, Situation};
+use crate::episode::cancel::Cancel;
+use crate::episode::environment::{execute, team_observation};
+use crate::episode::rounds::{Episode, rounds};
+use crate::methods::joint::{self, Executed, JointAction, joint_actions};
+use crate::records::transcript::{Call, Decision, Outcome, Round};
 use crate::rng::{Rng, seed_of};
-use crate::transcript::{Call, Outcome, Round};
 
 /// Settings of one MCTS episode; the default is the authors' (METHOD.md).
 #[derive(Clone, Debug, PartialEq)]
@@ -410,7 +410,7 @@ pub async fn run(
         }
         Ok(r)
     };
-    pefa::rounds(env, task, max_steps, cancel, on_round, play).await
+    rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
 /// One real step; `None` when cancelled during it (nothing of it is kept).
@@ -525,7 +525,7 @@ async fn round(
             stats.visits[i], stats.simulations, stats.q[i], stats.prior[i]
         ),
     });
-    round.outcome = pefa::execute(env, task.id(chosen.robot.node), &action);
+    round.outcome = execute(env, task.id(chosen.robot.node), &action);
     round.feedback = match &round.outcome {
         Outcome::Infeasible { message, .. } => {
             format!("{robot} tried {action}, which cannot be done: {message}")

@@ -1,0 +1,121 @@
+//! Asking a backend one question: the call is recorded in the round whatever comes of
+//! it, and the answer's text comes back unless it gives nothing to act on (empty,
+//! refused, filtered, or the backend failed).
+
+use crate::backends::llm::{Backend, Finish, LlmError, Query};
+use crate::episode::cancel::Cancel;
+use crate::records::transcript::{Call, Outcome};
+
+/// Why a role's answer gave nothing to act on.
+pub(crate) enum Unusable {
+    /// The backend failed for good.
+    Failed(LlmError),
+    /// An answer came, but not one that can be used.
+    Bad(String),
+}
+
+/// Which side of a round an unusable answer came from: the one that proposes (PEFA's
+/// task assigner) or the one that decides on an action (an executor, a central model, a
+/// speaker).
+#[derive(Clone, Copy)]
+pub(crate) enum Side {
+    Assigner,
+    Executor,
+}
+
+impl Unusable {
+    pub(crate) fn outcome(self, side: Side) -> Outcome {
+        match (self, side) {
+            (Unusable::Failed(e), _) => Outcome::BackendError {
+                message: e.to_string(),
+            },
+            (Unusable::Bad(why), Side::Assigner) => Outcome::NoProposal { why },
+            (Unusable::Bad(why), Side::Executor) => Outcome::NoDecision { why },
+        }
+    }
+}
+
+/// An answer's text, and whether generation was cut at the token limit.
+pub(crate) struct Reply {
+    pub(crate) text: String,
+    truncated: bool,
+}
+
+impl Reply {
+    /// Parses the text; a truncated answer counts when what matters came before the cut
+    /// (a small model may pad a complete action with whitespace up to the limit).
+    pub(crate) fn read<T>(
+        self,
+        parse: impl FnOnce(&str) -> Result<T, String>,
+    ) -> Result<T, Unusable> {
+        parse(&self.text).map_err(|why| {
+            Unusable::Bad(if self.truncated {
+                format!(
+                    "the answer was cut off at the token limit ({why}): {:?}",
+                    excerpt(&self.text)
+                )
+            } else {
+                why
+            })
+        })
+    }
+}
+
+/// Asks `backend`, records the call, and gives the answer's text unless it is empty,
+/// refused or filtered; `None` when cancelled.
+pub(crate) async fn ask(
+    backend: &dyn Backend,
+    query: Query,
+    cancel: &Cancel,
+    calls: &mut Vec<Call>,
+) -> Option<Result<Reply, Unusable>> {
+    let mut call = Call {
+        role: query.role,
+        robot: query.robot.map(|r| r.0),
+        messages: query.messages.clone(),
+        answer: None,
+        error: None,
+    };
+    let result = tokio::select! {
+        biased;
+        () = cancel.cancelled() => return None,
+        r = backend.ask(query) => r,
+    };
+    let reply = match result {
+        Ok(answer) => {
+            let reply = match &answer.finish {
+                Finish::Refusal(words) => Err(format!("the model refused: {words}")),
+                Finish::ContentFilter => Err("the answer was withheld by a content filter".into()),
+                _ if answer.text.trim().is_empty() => Err(if answer.finish == Finish::Length {
+                    "the answer was cut off at the token limit before any text".into()
+                } else {
+                    "the answer was empty".into()
+                }),
+                finish => Ok(Reply {
+                    text: answer.text.clone(),
+                    truncated: *finish == Finish::Length,
+                }),
+            };
+            call.answer = Some(answer);
+            reply.map_err(Unusable::Bad)
+        }
+        Err(e) => {
+            call.error = Some(e.clone());
+            if e.ends_episode() {
+                Err(Unusable::Failed(e))
+            } else {
+                Err(Unusable::Bad(e.to_string()))
+            }
+        }
+    };
+    calls.push(call);
+    Some(reply)
+}
+
+fn excerpt(text: &str) -> String {
+    let mut s: String = text.chars().take(120).collect();
+    if s.len() < text.len() {
+        s.push('…');
+    }
+    s
+}

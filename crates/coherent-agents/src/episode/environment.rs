@@ -1,0 +1,34 @@
+//! What every method does with the [`Environment`]: observe the whole team, and check
+//! and run one robot's action.
+
+use coherent_core::{Environment, NodeId, Task, describe};
+
+use crate::records::transcript::Outcome;
+
+/// Checks and runs `action` for `robot`: executed, or why not.
+pub(crate) fn execute(env: &mut (dyn Environment + Send), robot: NodeId, action: &str) -> Outcome {
+    match env.step(robot, action) {
+        Ok(o) => match o.infeasible {
+            None => Outcome::Executed,
+            Some(why) => Outcome::Infeasible {
+                reason: why.reason.name().to_owned(),
+                message: why.message,
+            },
+        },
+        Err(e) => Outcome::Infeasible {
+            reason: "error".into(),
+            message: e.to_string(),
+        },
+    }
+}
+
+/// Every robot's observation, merged, as facts.
+pub(crate) fn team_observation(env: &(dyn Environment + Send), task: &Task) -> String {
+    let observations: Vec<_> = task
+        .robots
+        .iter()
+        .filter_map(|r| env.observe(task.id(r.node)).ok())
+        .collect();
+    let refs: Vec<_> = observations.iter().collect();
+    describe::facts(task, env.state(), &refs)
+}

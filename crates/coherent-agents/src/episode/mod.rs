@@ -1,0 +1,29 @@
+//! The episode: what every method shares, and the one way to run any of them.
+//!
+//! - [`settings`]: the method names ([`Method`]), the settings a transcript records
+//!   ([`Settings`]) and the step budget ([`Budget`]).
+//! - [`rounds`]: the round loop and its result ([`Episode`]): one round per step until
+//!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires.
+//! - `ask`: asking a backend one question and recording the call.
+//! - `environment`: observing the whole team and executing one action.
+//! - [`cancel`]: stopping an episode from outside.
+//! - [`run`](mod@run): the front door above the methods: writes the transcript and
+//!   runs the method the settings name.
+//!
+//! Every method of [`crate::methods`] is built on `rounds`, `ask`, `environment` and
+//! `cancel`; only [`run()`] looks at the methods.
+
+pub(crate) mod ask;
+pub mod cancel;
+pub(crate) mod environment;
+pub mod rounds;
+pub mod run;
+pub mod settings;
+
+// For callers that set up a replay piece by piece; `records::replay::Replay` does it in
+// one call.
+pub use crate::records::replay::{check_replay, recorded_settings, recorded_task};
+pub use cancel::Cancel;
+pub use rounds::Episode;
+pub use run::{run, transcript_path};
+pub use settings::{Budget, Method, Settings};

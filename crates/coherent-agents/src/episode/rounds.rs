@@ -1,0 +1,79 @@
+//! The round loop every method shares: one round per step until the goal holds, the
+//! budget is spent, the backend fails for good or the episode is cancelled; then the
+//! summary.
+
+use std::io;
+use std::time::Instant;
+
+use coherent_core::{Environment, Task};
+
+use crate::episode::cancel::Cancel;
+use crate::records::transcript::{Outcome, Round, Status, Summary};
+
+/// An episode as it ran.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Episode {
+    pub rounds: Vec<Round>,
+    pub summary: Summary,
+}
+
+/// The loop every method shares: `play` one round per step until the goal holds, the
+/// budget is spent, a round ends in a backend failure, or `cancel` fires (`play` gives
+/// `None` when cancelled during a round); then the summary. `on_round` sees each round
+/// as it ends (the transcript writer, progress lines); its error stops the episode, so
+/// that no round goes unrecorded.
+pub(crate) async fn rounds(
+    env: &mut (dyn Environment + Send),
+    task: &Task,
+    max_steps: u32,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+    mut play: impl AsyncFnMut(&mut (dyn Environment + Send), u32) -> io::Result<Option<Round>>,
+) -> io::Result<Episode> {
+    let start = Instant::now();
+    let mut rounds: Vec<Round> = Vec::new();
+    let mut status = if env.goal_satisfied() {
+        Status::Success
+    } else {
+        Status::Failure
+    };
+    let mut error = None;
+    while status == Status::Failure && rounds.len() < max_steps as usize {
+        if cancel.is_cancelled() {
+            status = Status::Interrupted;
+            break;
+        }
+        let Some(round) = play(env, rounds.len() as u32 + 1).await? else {
+            status = Status::Interrupted;
+            break;
+        };
+        on_round(&round)?;
+        if let Outcome::BackendError { message } = &round.outcome {
+            status = Status::BackendError;
+            error = Some(message.clone());
+        } else if round.done {
+            status = Status::Success;
+        }
+        rounds.push(round);
+    }
+    let answers = rounds
+        .iter()
+        .flat_map(|r| &r.calls)
+        .filter_map(|c| c.answer.as_ref());
+    let (prompt_tokens, completion_tokens) = answers.fold((0, 0), |(p, c), a| {
+        (p + a.usage.prompt_tokens, c + a.usage.completion_tokens)
+    });
+    let summary = Summary {
+        status,
+        success: status == Status::Success,
+        steps: rounds.len() as u32,
+        gt_steps: task.meta.gt_steps,
+        max_steps,
+        llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum(),
+        prompt_tokens,
+        completion_tokens,
+        wall_ms: start.elapsed().as_secs_f64() * 1e3,
+        error,
+    };
+    Ok(Episode { rounds, summary })
+}

@@ -1,0 +1,173 @@
+//! Running one episode end to end: the transcript file, the method, the step budget.
+//! The CLI, Python and the benchmark harness all go through here.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use coherent_core::planner::Limits;
+use coherent_core::{Environment, Task, native};
+
+use crate::backends::llm::{Backend, BackendInfo};
+use crate::episode::cancel::Cancel;
+use crate::episode::rounds::Episode;
+use crate::episode::settings::{Budget, Method, Settings};
+use crate::methods::dmrs::{self, DmrsConfig};
+use crate::methods::mcts::{self, MctsConfig};
+use crate::methods::pefa::{self, PefaConfig};
+use crate::methods::{cmrs, optimal};
+use crate::records::transcript::{self, Header, Record, Round, Writer};
+
+/// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists.
+pub fn transcript_path(out: &Path, task: &Task, method: Method) -> PathBuf {
+    let secs = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let stem = format!(
+        "{}-task{}-{}-{}",
+        task.meta.scene.replace(['/', '\\'], "_"),
+        task.meta.task_id,
+        method.name(),
+        utc_stamp(secs)
+    );
+    let mut path = out.join(format!("{stem}.jsonl"));
+    let mut n = 2;
+    while path.exists() {
+        path = out.join(format!("{stem}-{n}.jsonl"));
+        n += 1;
+    }
+    path
+}
+
+/// `YYYYmmddTHHMMSSZ` for Unix seconds (the civil calendar from days, after H. Hinnant's
+/// public-domain date algorithms).
+fn utc_stamp(secs: u64) -> String {
+    let days = (secs / 86_400) as i64;
+    let rem = secs % 86_400;
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}{month:02}{day:02}T{:02}{:02}{:02}Z",
+        rem / 3600,
+        rem / 60 % 60,
+        rem % 60
+    )
+}
+
+/// Runs `method` on `env` with `backend`, writing the transcript to `transcript` (header
+/// first, then each round as it ends, then the summary). `progress` sees each round.
+/// Returns the episode and the transcript's header, so that a caller holds the whole
+/// transcript without reading it back.
+#[allow(clippy::too_many_arguments)]
+pub async fn run(
+    task: &Arc<Task>,
+    env: &mut (dyn Environment + Send),
+    backend: &dyn Backend,
+    settings: &Settings,
+    budget: Budget,
+    transcript: &Path,
+    cancel: &Cancel,
+    progress: &mut (dyn FnMut(&Round) + Send),
+) -> Result<(Episode, Header), String> {
+    let history = match settings.method {
+        Method::PefaNoHistory => 0,
+        _ => settings.history,
+    };
+    let backend_info = if settings.method.uses_model() {
+        backend.info()
+    } else {
+        BackendInfo {
+            kind: "none".into(),
+            model: String::new(),
+            base_url: None,
+        }
+    };
+    let header = Header {
+        format: transcript::FORMAT.into(),
+        version: transcript::VERSION,
+        coherent: env!("CARGO_PKG_VERSION").into(),
+        task: native::to_value(task),
+        task_name: task.meta.name.clone(),
+        method: settings.method.name().into(),
+        history,
+        max_steps: budget.steps(),
+        gt_steps: task.meta.gt_steps,
+        physics: settings.physics,
+        backend: backend_info,
+        temperature: settings.temperature,
+        seed: settings.seed,
+        started_ms: SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map_or(0, |d| d.as_millis() as u64),
+    };
+    let io = |e: std::io::Error| format!("{}: {e}", transcript.display());
+    let mut writer = Writer::create(transcript, header.clone()).map_err(io)?;
+    let mut on_round = |r: &Round| {
+        progress(r);
+        writer.write(&Record::Round(Box::new(r.clone())))
+    };
+    let mcts = MctsConfig {
+        seed: settings.seed.unwrap_or(0),
+        history,
+        ..MctsConfig::default()
+    };
+    let steps = budget.steps();
+    let episode = match settings.method {
+        Method::Pefa | Method::PefaNoHistory => {
+            let config = PefaConfig {
+                history,
+                ..PefaConfig::new(steps)
+            };
+            pefa::run(env, task, backend, &config, cancel, &mut on_round).await
+        }
+        Method::Cmrs => cmrs::run(env, task, backend, history, steps, cancel, &mut on_round).await,
+        Method::Dmrs1d | Method::Dmrs2d => {
+            let config = DmrsConfig {
+                dialogue_rounds: if settings.method == Method::Dmrs1d {
+                    1
+                } else {
+                    2
+                },
+                history,
+                seed: settings.seed.unwrap_or(0),
+            };
+            dmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
+        }
+        Method::Mcts => mcts::run(env, task, None, &mcts, steps, cancel, &mut on_round).await,
+        Method::LlmMcts => {
+            let model = Some(backend);
+            mcts::run(env, task, model, &mcts, steps, cancel, &mut on_round).await
+        }
+        Method::Optimal => {
+            let limits = Limits {
+                cancel: Some(cancel.flag()),
+                ..Limits::default()
+            };
+            optimal::run(env, task, &limits, steps, cancel, &mut on_round).await
+        }
+    }
+    .map_err(io)?;
+    writer
+        .write(&Record::Summary(episode.summary.clone()))
+        .map_err(io)?;
+    Ok((episode, header))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_stamps() {
+        assert_eq!(utc_stamp(0), "19700101T000000Z");
+        assert_eq!(utc_stamp(951_782_400), "20000229T000000Z");
+        assert_eq!(utc_stamp(1_795_323_508), "20261122T045828Z");
+    }
+}

@@ -1,0 +1,127 @@
+//! How an episode is run: the method, its settings as a transcript records them, and
+//! the step budget.
+
+use coherent_core::Task;
+use coherent_core::planner::{self, Limits};
+
+/// A planning method.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// COHERENT's loop with the assigner's history window.
+    Pefa,
+    /// The paper's "w/o history" ablation: the window is 0.
+    PefaNoHistory,
+    /// One central model choosing one robot's action per step.
+    Cmrs,
+    /// Decentralised dialogue, one round per step.
+    Dmrs1d,
+    /// Decentralised dialogue, two rounds per step.
+    Dmrs2d,
+    /// Primitive MCTS with the authors' settings; no model.
+    Mcts,
+    /// MCTS with a language-model prior at the root of each step's tree.
+    LlmMcts,
+    /// The optimal planner's plan: the ground-truth row; no model.
+    Optimal,
+}
+
+impl Method {
+    pub const ALL: [Method; 8] = [
+        Method::Pefa,
+        Method::PefaNoHistory,
+        Method::Cmrs,
+        Method::Dmrs1d,
+        Method::Dmrs2d,
+        Method::Mcts,
+        Method::LlmMcts,
+        Method::Optimal,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Pefa => "pefa",
+            Method::PefaNoHistory => "pefa-no-history",
+            Method::Cmrs => "cmrs",
+            Method::Dmrs1d => "dmrs-1d",
+            Method::Dmrs2d => "dmrs-2d",
+            Method::Mcts => "mcts",
+            Method::LlmMcts => "llm-mcts",
+            Method::Optimal => "optimal",
+        }
+    }
+
+    /// Whether the method asks a model (the backend) at all.
+    pub fn uses_model(self) -> bool {
+        !matches!(self, Method::Mcts | Method::Optimal)
+    }
+
+    pub fn from_name(name: &str) -> Option<Method> {
+        Method::ALL.into_iter().find(|m| m.name() == name)
+    }
+}
+
+/// How an episode is run, as recorded in its transcript's header. The step budget is
+/// apart ([`Budget`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub method: Method,
+    /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
+    /// baselines, the executed actions in their prompts (the paper: 5 for both).
+    pub history: usize,
+    pub temperature: Option<f32>,
+    /// The model's sampling seed; also the MCTS search's and the DMRS speaking order's
+    /// (0 when unset).
+    pub seed: Option<u64>,
+    /// Whether the environment is physical (recorded; the caller builds the environment).
+    pub physics: bool,
+}
+
+impl Settings {
+    pub fn new(method: Method) -> Settings {
+        Settings {
+            method,
+            history: 5,
+            temperature: None,
+            seed: None,
+            physics: false,
+        }
+    }
+}
+
+/// Where a step budget came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Budget {
+    /// 2 x the task's ground truth, the paper's rule.
+    TwiceGroundTruth(u32),
+    /// Set by the caller.
+    Given(u32),
+    /// The task has no ground truth: 2 x the optimum the planner finds.
+    TwiceOptimum(u32),
+}
+
+impl Budget {
+    pub fn steps(self) -> u32 {
+        match self {
+            Budget::TwiceGroundTruth(n) | Budget::Given(n) | Budget::TwiceOptimum(n) => n,
+        }
+    }
+
+    /// The budget of `task`: `max_steps` when given, else 2 x GT, else 2 x the optimum.
+    pub fn of(task: &Task, max_steps: Option<u32>, limits: &Limits) -> Result<Budget, String> {
+        if let Some(n) = max_steps {
+            return Ok(Budget::Given(n));
+        }
+        if let Some(gt) = task.meta.gt_steps {
+            return Ok(Budget::TwiceGroundTruth(2 * gt));
+        }
+        let search = planner::search(task, &task.robots, &task.goal, limits);
+        match search.plan {
+            Some(plan) => Ok(Budget::TwiceOptimum(2 * plan.len().max(1) as u32)),
+            None => Err(
+                "the task has no ground truth and the planner finds no plan to size a budget \
+                 from: pass a step budget (--max-steps)"
+                    .into(),
+            ),
+        }
+    }
+}

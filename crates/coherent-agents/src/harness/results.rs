@@ -1,0 +1,219 @@
+//! The results file of a benchmark run: one JSON line per finished episode, read back
+//! with errors that point at the bad line and field, repaired after a crash that cut
+//! the last line short.
+
+use std::fs::{File, OpenOptions};
+use std::io::{self, Read, Seek, SeekFrom, Write};
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::backends::llm::BackendInfo;
+use crate::records::transcript::Status;
+
+/// One finished episode: a line of the results file.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ResultLine {
+    pub method: String,
+    pub scene: String,
+    pub task_id: i64,
+    /// `mono`, `dual` or `trio`; null when the planner finds no plan.
+    pub task_type: Option<String>,
+    /// The seed index (0-based).
+    pub seed: u32,
+    /// The seed the episode actually ran with, derived from the index, method and task.
+    #[serde(default)]
+    pub episode_seed: u64,
+    pub success: bool,
+    pub status: Status,
+    pub steps: u32,
+    pub gt_steps: Option<u32>,
+    #[serde(default)]
+    pub optimal_steps: Option<u32>,
+    pub max_steps: u32,
+    pub llm_calls: u32,
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub wall_ms: f64,
+    /// The run's backend (even for a method that asks no model; see `uses_model`).
+    pub backend: BackendInfo,
+    #[serde(default = "yes")]
+    pub uses_model: bool,
+    #[serde(default)]
+    pub error: Option<String>,
+    pub transcript: String,
+}
+
+fn yes() -> bool {
+    true
+}
+
+impl ResultLine {
+    /// Whether the episode ended in a way that counts: success or budget spent.
+    pub fn is_final(&self) -> bool {
+        matches!(self.status, Status::Success | Status::Failure)
+    }
+
+    pub fn key(&self) -> EpisodeKey {
+        EpisodeKey {
+            method: self.method.clone(),
+            scene: self.scene.clone(),
+            task_id: self.task_id,
+            seed: self.seed,
+        }
+    }
+}
+
+/// What identifies an episode across runs.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct EpisodeKey {
+    pub method: String,
+    pub scene: String,
+    pub task_id: i64,
+    pub seed: u32,
+}
+
+/// A results file as read.
+#[derive(Debug, Default)]
+pub struct ResultsFile {
+    pub lines: Vec<ResultLine>,
+    /// Bytes of a last line cut off mid-write (0 when none); [`repair`] drops them.
+    pub truncated_bytes: u64,
+    /// Length of the well-formed part.
+    pub good_len: u64,
+}
+
+/// Reads a results file. A last line without its newline that does not parse is a write
+/// cut short (reported in `truncated_bytes`); any other bad line is an error naming the
+/// file, the line and the JSON path.
+pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
+    let mut text = Vec::new();
+    File::open(path)
+        .and_then(|mut f| f.read_to_end(&mut text))
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut out = ResultsFile::default();
+    let mut start = 0;
+    let mut number = 0;
+    while start < text.len() {
+        number += 1;
+        let (end, complete) = match text[start..].iter().position(|&b| b == b'\n') {
+            Some(i) => (start + i + 1, true),
+            None => (text.len(), false),
+        };
+        let raw = &text[start..end];
+        let parsed = std::str::from_utf8(raw)
+            .map_err(|e| e.to_string())
+            .and_then(|s| {
+                if s.trim().is_empty() {
+                    return Ok(None);
+                }
+                let de = &mut serde_json::Deserializer::from_str(s);
+                parse_line(de).map(Some)
+            });
+        match parsed {
+            Ok(line) => {
+                out.lines.extend(line);
+                // A complete record missing only its newline is kept; repair adds it.
+                out.good_len = end as u64;
+            }
+            Err(_) if !complete => {
+                out.truncated_bytes = (end - start) as u64;
+            }
+            Err(e) => {
+                return Err(format!("{}: line {number}: {e}", path.display()));
+            }
+        }
+        start = end;
+    }
+    Ok(out)
+}
+
+fn parse_line(
+    de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
+) -> Result<ResultLine, String> {
+    let value: serde_json::Value =
+        serde::Deserialize::deserialize(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
+    de.end().map_err(|e| format!("invalid JSON: {e}"))?;
+    serde_json::from_value::<ResultLine>(value.clone()).map_err(|e| {
+        // Name the field: serde_json's messages say what, not where.
+        let field = missing_or_bad_field(&value);
+        format!("{e}{field}")
+    })
+}
+
+/// ` (at $.field)` for the first field of a results line that is absent or has the
+/// wrong JSON type, to point at the culprit.
+fn missing_or_bad_field(value: &serde_json::Value) -> String {
+    use serde_json::Value as V;
+    let Some(map) = value.as_object() else {
+        return " (at $: expected an object)".into();
+    };
+    type Check = fn(&V) -> bool;
+    let expect: [(&str, Check); 14] = [
+        ("method", V::is_string),
+        ("scene", V::is_string),
+        ("task_id", V::is_i64),
+        ("seed", V::is_u64),
+        ("success", V::is_boolean),
+        ("status", V::is_string),
+        ("steps", V::is_u64),
+        ("max_steps", V::is_u64),
+        ("llm_calls", V::is_u64),
+        ("prompt_tokens", V::is_u64),
+        ("completion_tokens", V::is_u64),
+        ("wall_ms", V::is_number),
+        ("backend", V::is_object),
+        ("transcript", V::is_string),
+    ];
+    for (name, ok) in expect {
+        match map.get(name) {
+            None => return format!(" (at $.{name}: missing)"),
+            Some(v) if !ok(v) => return format!(" (at $.{name}: found {v})"),
+            Some(_) => {}
+        }
+    }
+    String::new()
+}
+
+/// Cuts a results file back to its well-formed part and ends it with a newline, so
+/// that appended lines start on their own line.
+pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
+    let io = |e: io::Error| format!("{}: {e}", path.display());
+    let mut f = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)
+        .map_err(io)?;
+    f.set_len(file.good_len).map_err(io)?;
+    if file.good_len > 0 {
+        f.seek(SeekFrom::Start(file.good_len - 1)).map_err(io)?;
+        let mut last = [0u8];
+        f.read_exact(&mut last).map_err(io)?;
+        if last[0] != b'\n' {
+            f.seek(SeekFrom::End(0)).map_err(io)?;
+            f.write_all(b"\n").map_err(io)?;
+        }
+    }
+    f.flush().map_err(io)
+}
+
+/// `results.jsonl` -> `results.transcripts/`, next to it.
+pub fn transcripts_dir(out: &Path) -> PathBuf {
+    let stem = out
+        .file_stem()
+        .map_or_else(|| "results".into(), |s| s.to_string_lossy().into_owned());
+    out.with_file_name(format!("{stem}.transcripts"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn transcripts_sit_next_to_the_results() {
+        assert_eq!(
+            transcripts_dir(Path::new("out/results.jsonl")),
+            Path::new("out/results.transcripts")
+        );
+    }
+}

@@ -1,0 +1,244 @@
+//! The Task Assigner, the first of PEFA's two roles. Each round it sees the team (each
+//! robot's label and type, what each type can do, the world's rules), the instruction,
+//! where each robot is, the team's observations as relation facts and the last rounds,
+//! and proposes one subtask for one robot: the Proposal of Proposal-Execution-Feedback-
+//! Adjustment ([`crate::methods::pefa`]).
+//!
+//! Its prompt is `prompts/assigner_system.txt` and `prompts/assigner_user.txt`; its
+//! answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
+//! to the team's labels, read into a [`Proposal`] wherever it sits in the text (or,
+//! without one, from the first line that names a robot).
+
+use std::sync::Arc;
+
+use coherent_core::{Environment, NodeId, Relation, Task, rules};
+use serde_json::{Value, json};
+
+use crate::backends::llm::{Message, Query, Role, Situation};
+use crate::episode::environment::team_observation;
+use crate::methods::answer::{json_object, string_field};
+use crate::methods::prompt::{fill, team};
+use crate::records::transcript::Proposal;
+
+const SYSTEM: &str = include_str!("../../prompts/assigner_system.txt");
+const USER: &str = include_str!("../../prompts/assigner_user.txt");
+
+/// What the assigner is told each round.
+#[derive(Clone, Debug)]
+pub struct AssignerView<'a> {
+    /// One line per robot: label, type and where it is.
+    pub robots: &'a str,
+    /// The team's observations as facts.
+    pub observation: &'a str,
+    /// The last rounds, oldest first, one entry each.
+    pub history: &'a [String],
+}
+
+/// The Task Assigner of one episode's task.
+#[derive(Clone, Debug)]
+pub struct TaskAssigner {
+    task: Arc<Task>,
+    /// Most tokens of one answer.
+    max_tokens: u32,
+}
+
+impl TaskAssigner {
+    pub fn new(task: &Arc<Task>, max_tokens: u32) -> TaskAssigner {
+        TaskAssigner {
+            task: Arc::clone(task),
+            max_tokens,
+        }
+    }
+
+    /// The round's question where `env` stands, with `history`: the last rounds, oldest
+    /// first.
+    pub fn query(&self, env: &(dyn Environment + Send), history: &[String]) -> Query {
+        let task = &self.task;
+        Query {
+            role: Role::Assigner,
+            robot: None,
+            messages: self.messages(&AssignerView {
+                robots: &robot_lines(env, task),
+                observation: &team_observation(env, task),
+                history,
+            }),
+            schema_name: "proposal",
+            schema: self.schema(),
+            max_tokens: self.max_tokens,
+            situation: Situation::now(task, env, None),
+        }
+    }
+
+    /// The system prompt (the team) and the user prompt (the round).
+    pub fn messages(&self, view: &AssignerView<'_>) -> Vec<Message> {
+        let task = &self.task;
+        let history = if view.history.is_empty() {
+            "(none yet)".to_owned()
+        } else {
+            view.history.join("\n")
+        };
+        vec![
+            Message::system(fill(SYSTEM, &[("team", &team(task))]).trim_end().to_owned()),
+            Message::user(
+                fill(
+                    USER,
+                    &[
+                        ("instruction", &task.meta.instruction),
+                        ("robots", view.robots),
+                        ("observation", view.observation),
+                        ("history", &history),
+                    ],
+                )
+                .trim_end()
+                .to_owned(),
+            ),
+        ]
+    }
+
+    /// The answer: a robot of the team and a subtask, reasoning first so that a model
+    /// thinks before it commits.
+    pub fn schema(&self) -> Value {
+        let task = &self.task;
+        let robots: Vec<String> = task
+            .robots
+            .iter()
+            .map(|r| task.node(r.node).label())
+            .collect();
+        json!({
+            "type": "object",
+            "properties": {
+                "reasoning": {"type": "string"},
+                "robot": {"type": "string", "enum": robots},
+                "subtask": {"type": "string"},
+            },
+            "required": ["reasoning", "robot", "subtask"],
+            "additionalProperties": false,
+        })
+    }
+
+    /// The proposal in an answer: its JSON object's robot (by label, id, or a type the
+    /// team has one robot of) and subtask; without an object, the first line that names
+    /// a robot by its label, the subtask being what follows the label.
+    pub fn parse(&self, text: &str) -> Result<Proposal, String> {
+        let task = &self.task;
+        if let Some(map) = json_object(text) {
+            let robot_text = string_field(&map, "robot").ok_or("the answer has no \"robot\"")?;
+            let robot = resolve_robot(task, &robot_text).ok_or_else(|| {
+                format!(
+                    "{robot_text:?} is not a robot of the team ({})",
+                    team_list(task)
+                )
+            })?;
+            let subtask = string_field(&map, "subtask").unwrap_or_default();
+            if subtask.is_empty() {
+                return Err("the answer has no subtask".into());
+            }
+            return Ok(Proposal {
+                robot,
+                subtask,
+                reasoning: string_field(&map, "reasoning").unwrap_or_default(),
+            });
+        }
+        // Free text: the first line that names a robot by its label; the subtask is what
+        // follows the label (or the whole line).
+        for line in text.lines().map(str::trim) {
+            let mention = task
+                .robots
+                .iter()
+                .filter_map(|r| {
+                    let label = task.node(r.node).label();
+                    line.find(&label)
+                        .map(|at| (at, at + label.len(), task.id(r.node)))
+                })
+                .min();
+            if let Some((_, end, robot)) = mention {
+                let rest = line[end..].trim_start_matches([':', '-', ',', ' ']).trim();
+                return Ok(Proposal {
+                    robot,
+                    subtask: if rest.is_empty() { line } else { rest }.to_owned(),
+                    reasoning: text.trim().to_owned(),
+                });
+            }
+        }
+        Err(format!(
+            "no JSON object and no line naming a robot of the team ({})",
+            team_list(task)
+        ))
+    }
+}
+
+/// One line per robot: type, room, and what it stands on, hovers above or holds.
+fn robot_lines(env: &(dyn Environment + Send), task: &Task) -> String {
+    let s = env.state();
+    task.robots
+        .iter()
+        .map(|r| {
+            let mut line = format!("- {}: {}", task.node(r.node).label(), r.kind);
+            if let Some(room) = rules::room_of(task, s, r.node) {
+                line.push_str(&format!(", in {}", task.node(room).label()));
+            }
+            for e in s.out(r.node) {
+                let word = match e.rel() {
+                    Relation::On => "on",
+                    Relation::Above => "above",
+                    Relation::Hold => "holding",
+                    _ => continue,
+                };
+                line.push_str(&format!(", {word} {}", task.node(e.to()).label()));
+            }
+            let states = task.vocab.state_names(s.states(r.node));
+            if !states.is_empty() {
+                line.push_str(&format!(" ({})", states.join(", ")));
+            }
+            line
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The robot `text` names: its label `<quadrotor>(22)`, its id, or its type when the
+/// team has only one robot of that type.
+fn resolve_robot(task: &Task, text: &str) -> Option<NodeId> {
+    let text = text.trim();
+    let labelled = task.robots.iter().find(|r| {
+        let label = task.node(r.node).label();
+        text == label || text.contains(&label)
+    });
+    if let Some(r) = labelled {
+        return Some(task.id(r.node));
+    }
+    let digits: String = text.chars().filter(char::is_ascii_digit).collect();
+    if let Ok(id) = digits.parse::<i64>()
+        && let Some(r) = task.robots.iter().find(|r| task.id(r.node).0 == id)
+    {
+        return Some(task.id(r.node));
+    }
+    let lower = text.to_ascii_lowercase();
+    let mut of_type = task.robots.iter().filter(|r| {
+        lower.contains(r.kind.class_name()) || lower.contains(&task.node(r.node).class_name)
+    });
+    match (of_type.next(), of_type.next()) {
+        (Some(r), None) => Some(task.id(r.node)),
+        _ => None,
+    }
+}
+
+fn team_list(task: &Task) -> String {
+    task.robots
+        .iter()
+        .map(|r| task.node(r.node).label())
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::prompt::check_placeholders;
+
+    #[test]
+    fn every_template_placeholder_is_filled() {
+        check_placeholders(SYSTEM, &["team"]);
+        check_placeholders(USER, &["instruction", "robots", "observation", "history"]);
+    }
+}

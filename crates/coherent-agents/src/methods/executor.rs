@@ -1,0 +1,336 @@
+//! A Robot Executor, the second of PEFA's two roles: one per robot. Given the subtask
+//! the task assigner proposed, it sees its type's description, its own observation and
+//! its action list from the rules, and picks one action, or none when no action is a
+//! step of the subtask now: the Execution of Proposal-Execution-Feedback-Adjustment
+//! ([`crate::methods::pefa`]). What came of it, in words, is the round's Feedback
+//! ([`feedback`]).
+//!
+//! Its prompt is one system prompt per robot type (`prompts/executor_quadrotor.txt`,
+//! `executor_robot_dog.txt`, `executor_robot_arm.txt`) and `prompts/executor_user.txt`;
+//! its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
+//! constrained to its list or `none`, read into a [`Decision`] (or, without an object,
+//! from the first action of the list the text names).
+
+use std::sync::Arc;
+
+use coherent_core::{Environment, NodeId, RobotKind, Task, describe};
+use serde_json::{Value, json};
+
+use crate::backends::llm::{Message, Query, Role, Situation};
+use crate::methods::answer::{bool_field, json_object, normal, string_field};
+use crate::methods::prompt::{fill, robot_label};
+use crate::records::transcript::{Decision, Outcome, Round};
+
+const USER: &str = include_str!("../../prompts/executor_user.txt");
+const QUADROTOR: &str = include_str!("../../prompts/executor_quadrotor.txt");
+const ROBOT_DOG: &str = include_str!("../../prompts/executor_robot_dog.txt");
+const ROBOT_ARM: &str = include_str!("../../prompts/executor_robot_arm.txt");
+
+/// What one executor is told.
+#[derive(Clone, Debug)]
+pub struct ExecutorView<'a> {
+    pub subtask: &'a str,
+    pub observation: &'a str,
+    pub actions: &'a [String],
+}
+
+/// The Robot Executor of one robot of the team.
+#[derive(Clone, Debug)]
+pub struct RobotExecutor {
+    task: Arc<Task>,
+    robot: NodeId,
+    /// `<label>(id)`.
+    label: String,
+    kind: RobotKind,
+    /// Most tokens of one answer.
+    max_tokens: u32,
+}
+
+impl RobotExecutor {
+    /// The executor of `robot`, or why there is none.
+    pub fn of(task: &Arc<Task>, robot: NodeId, max_tokens: u32) -> Result<RobotExecutor, String> {
+        let Ok(r) = task.robot_by_id(robot) else {
+            return Err(format!("robot {robot} is not in the team"));
+        };
+        Ok(RobotExecutor {
+            task: Arc::clone(task),
+            robot,
+            label: task.node(r.node).label(),
+            kind: r.kind,
+            max_tokens,
+        })
+    }
+
+    /// Its action list where `env` stands (empty when it has none).
+    pub fn actions(&self, env: &(dyn Environment + Send)) -> Vec<String> {
+        env.actions(self.robot).unwrap_or_default()
+    }
+
+    /// The question where `env` stands: `subtask`, with its own observation and its
+    /// `actions`.
+    pub fn query(
+        &self,
+        env: &(dyn Environment + Send),
+        subtask: &str,
+        actions: &[String],
+    ) -> Query {
+        let task = &self.task;
+        let observation = env
+            .observe(self.robot)
+            .map(|o| describe::facts(task, env.state(), &[&o]))
+            .unwrap_or_default();
+        Query {
+            role: Role::Executor,
+            robot: Some(self.robot),
+            messages: self.messages(&ExecutorView {
+                subtask,
+                observation: &observation,
+                actions,
+            }),
+            schema_name: "decision",
+            schema: self.schema(actions),
+            max_tokens: self.max_tokens,
+            situation: Situation::now(task, env, Some(subtask.to_owned())),
+        }
+    }
+
+    /// The system prompt (its type's) and the user prompt (the subtask and its list).
+    pub fn messages(&self, view: &ExecutorView<'_>) -> Vec<Message> {
+        let system = match self.kind {
+            RobotKind::Quadrotor => QUADROTOR,
+            RobotKind::RobotDog => ROBOT_DOG,
+            RobotKind::RobotArm => ROBOT_ARM,
+        };
+        let actions = if view.actions.is_empty() {
+            "(none)".to_owned()
+        } else {
+            view.actions
+                .iter()
+                .map(|a| format!("- {a}"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        };
+        vec![
+            Message::system(
+                fill(system, &[("robot", &self.label)])
+                    .trim_end()
+                    .to_owned(),
+            ),
+            Message::user(
+                fill(
+                    USER,
+                    &[
+                        ("subtask", view.subtask),
+                        ("observation", view.observation),
+                        ("actions", &actions),
+                    ],
+                )
+                .trim_end()
+                .to_owned(),
+            ),
+        ]
+    }
+
+    /// The answer: one action of its list, or `none` when no action is a step of the
+    /// subtask (that is its "cannot do it now"; a separate yes/no field would let a
+    /// model say yes and name nothing).
+    pub fn schema(&self, actions: &[String]) -> Value {
+        let mut choices: Vec<&str> = actions.iter().map(String::as_str).collect();
+        choices.push("none");
+        json!({
+            "type": "object",
+            "properties": {
+                "action": {"type": "string", "enum": choices},
+                "subtask_complete": {"type": "boolean"},
+                "note": {"type": "string"},
+            },
+            "required": ["action", "subtask_complete", "note"],
+            "additionalProperties": false,
+        })
+    }
+
+    /// The decision in an answer, given the list it chose from.
+    pub fn parse(&self, actions: &[String], text: &str) -> Result<Decision, String> {
+        parse_decision(actions, text)
+    }
+}
+
+fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String> {
+    if let Some(map) = json_object(text) {
+        let action = string_field(&map, "action").filter(|a| {
+            let a = normal(a);
+            !a.is_empty() && a != "none" && a != "null"
+        });
+        // `can_do` is optional (the schema leaves it out: `none` says it); a model that
+        // says it can but names nothing has not chosen.
+        let can_do = bool_field(&map, "can_do").unwrap_or(true) && action.is_some();
+        let note = string_field(&map, "note").unwrap_or_default();
+        return Ok(Decision {
+            can_do,
+            action: if can_do {
+                action.map(|a| match_action(actions, &a))
+            } else {
+                None
+            },
+            subtask_complete: bool_field(&map, "subtask_complete").unwrap_or(false),
+            note,
+        });
+    }
+    // Free text: the action of the list that appears first.
+    let lower = normal(text);
+    let found = actions
+        .iter()
+        .filter_map(|a| {
+            lower
+                .find(&normal(a))
+                .map(|at| (at, std::cmp::Reverse(a.len()), a))
+        })
+        .min();
+    match found {
+        Some((_, _, action)) => Ok(Decision {
+            can_do: true,
+            action: Some(action.clone()),
+            subtask_complete: false,
+            note: String::new(),
+        }),
+        None if ["cannot", "can't", "can not", "unable"]
+            .iter()
+            .any(|w| lower.contains(w)) =>
+        {
+            Ok(Decision {
+                can_do: false,
+                action: None,
+                subtask_complete: false,
+                note: text.trim().to_owned(),
+            })
+        }
+        None => Err("no JSON object and no action of the list in the answer".into()),
+    }
+}
+
+/// `answer` spelled as in `actions` when it is one of them, else as answered.
+fn match_action(actions: &[String], answer: &str) -> String {
+    let n = normal(answer);
+    actions
+        .iter()
+        .find(|a| normal(a) == n)
+        .cloned()
+        .unwrap_or_else(|| answer.trim().to_owned())
+}
+
+/// What the assigner hears about a round, PEFA's Feedback: self-reflection built from
+/// the executor's answer and the checked outcome (or why the round never got that far).
+pub fn feedback(task: &Task, round: &Round, outcome: &Outcome) -> String {
+    let robot = round
+        .proposal
+        .as_ref()
+        .map(|p| robot_label(task, p.robot))
+        .unwrap_or_default();
+    let action = round
+        .decision
+        .as_ref()
+        .and_then(|d| d.action.clone())
+        .unwrap_or_default();
+    let can_do_now = || {
+        if round.actions.is_empty() {
+            format!("{robot} can do nothing now.")
+        } else {
+            format!("{robot} can do now: {}.", round.actions.join("; "))
+        }
+    };
+    match outcome {
+        Outcome::Executed => {
+            let done = round.decision.as_ref().is_some_and(|d| d.subtask_complete);
+            let note = round
+                .decision
+                .as_ref()
+                .map(|d| d.note.trim().to_owned())
+                .unwrap_or_default();
+            if done {
+                format!("{robot} did {action}. The subtask is complete.")
+            } else if note.is_empty() {
+                format!("{robot} did {action}. The subtask is not complete yet.")
+            } else {
+                format!("{robot} did {action}. The subtask is not complete yet: {note}")
+            }
+        }
+        Outcome::Infeasible { message, .. } => {
+            format!(
+                "{robot} tried {action}, which cannot be done: {message}. {}",
+                can_do_now()
+            )
+        }
+        Outcome::Declined => {
+            let note = round
+                .decision
+                .as_ref()
+                .map(|d| d.note.trim().to_owned())
+                .filter(|n| !n.is_empty())
+                .unwrap_or_else(|| "no reason given".into());
+            format!(
+                "{robot} cannot do this subtask now ({note}). {}",
+                can_do_now()
+            )
+        }
+        Outcome::NoProposal { why } => format!(
+            "Your answer could not be used ({why}). Name one robot of the team and one subtask."
+        ),
+        Outcome::NoDecision { why } => {
+            format!("{robot} gave no usable answer ({why}). {}", can_do_now())
+        }
+        Outcome::BackendError { message } => format!("The model could not be reached: {message}"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::methods::prompt::check_placeholders;
+
+    #[test]
+    fn every_template_placeholder_is_filled() {
+        check_placeholders(USER, &["subtask", "observation", "actions"]);
+        for system in [QUADROTOR, ROBOT_DOG, ROBOT_ARM] {
+            check_placeholders(system, &["robot"]);
+        }
+    }
+
+    fn actions() -> Vec<String> {
+        vec![
+            "[grab] <mug>(7)".to_owned(),
+            "[movetowards] <kitchen>(2)".to_owned(),
+        ]
+    }
+
+    #[test]
+    fn decisions_are_found_in_fences_and_chatter() {
+        let text = "Sure!\n```json\n{\"can_do\": true, \"action\": \"[grab]  <MUG>(7)\", \"subtask_complete\": true, \"note\": \"\"}\n```";
+        let d = parse_decision(&actions(), text).expect("a decision");
+        assert_eq!(d.action.as_deref(), Some("[grab] <mug>(7)"));
+        assert!(d.can_do && d.subtask_complete);
+    }
+
+    #[test]
+    fn an_action_outside_the_list_is_kept_for_the_feasibility_check() {
+        let d = parse_decision(
+            &actions(),
+            r#"{"can_do": "yes", "action": "[grab] <cup>(9)"}"#,
+        )
+        .expect("a decision");
+        assert_eq!(d.action.as_deref(), Some("[grab] <cup>(9)"));
+    }
+
+    #[test]
+    fn free_text_decisions() {
+        let d = parse_decision(&actions(), "I will do [movetowards] <kitchen>(2) now.")
+            .expect("found in text");
+        assert_eq!(d.action.as_deref(), Some("[movetowards] <kitchen>(2)"));
+        let d = parse_decision(&actions(), "I cannot reach it.").expect("a refusal");
+        assert!(!d.can_do);
+        assert!(parse_decision(&actions(), "").is_err());
+        let d = parse_decision(&actions(), r#"{"action": "none", "note": "too far"}"#)
+            .expect("a refusal");
+        assert!(!d.can_do && d.action.is_none() && d.note == "too far");
+        assert!(parse_decision(&actions(), "{\"can_do\": tr").is_err());
+    }
+}

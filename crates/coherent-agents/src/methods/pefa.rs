@@ -1,0 +1,149 @@
+//! PEFA, the paper's loop: Proposal (the [`TaskAssigner`] gives one robot one subtask),
+//! Execution (that robot's [`RobotExecutor`] picks one action from its list; the action
+//! is checked and run through the [`Environment`]), Feedback (what ran and whether the
+//! subtask is done, or why not, with the robot's actions: [`executor::feedback`]),
+//! Adjustment (the feedback joins the history the assigner sees next round). One round
+//! is one step; two model calls per round.
+
+use std::collections::VecDeque;
+use std::io;
+use std::sync::Arc;
+use std::time::Instant;
+
+use coherent_core::{Environment, Task};
+
+use crate::backends::llm::Backend;
+use crate::episode::ask::{Side, ask};
+use crate::episode::environment::execute;
+use crate::episode::rounds::rounds;
+use crate::methods::assigner::TaskAssigner;
+use crate::methods::executor::{self, RobotExecutor};
+use crate::methods::prompt::robot_label;
+use crate::records::transcript::{Outcome, Round};
+
+/// The shared loop's types, where PEFA's callers have always found them.
+pub use crate::episode::cancel::Cancel;
+pub use crate::episode::rounds::Episode;
+
+/// Settings of one PEFA episode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PefaConfig {
+    /// Rounds of history the assigner sees (the paper: 5; 0 is "w/o history").
+    pub history: usize,
+    /// Steps before the episode stops as a failure (2 x GT by the paper's rule).
+    pub max_steps: u32,
+    pub assigner_max_tokens: u32,
+    pub executor_max_tokens: u32,
+}
+
+impl PefaConfig {
+    pub fn new(max_steps: u32) -> PefaConfig {
+        PefaConfig {
+            history: 5,
+            max_steps,
+            assigner_max_tokens: 400,
+            executor_max_tokens: 200,
+        }
+    }
+}
+
+/// Runs PEFA on `env` until the goal holds, the budget is spent, the backend fails for
+/// good, or `cancel` fires. `on_round` sees each round as it ends (the transcript writer,
+/// progress lines); its error stops the episode, so that no round goes unrecorded.
+pub async fn run(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    config: &PefaConfig,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+) -> io::Result<Episode> {
+    let mut history: VecDeque<String> = VecDeque::new();
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let r = round(env, task, backend, config, cancel, &history, step).await;
+        // Adjustment: the round joins the history the assigner sees next.
+        if let Some(r) = &r
+            && config.history > 0
+        {
+            history.push_back(history_entry(task, r));
+            while history.len() > config.history {
+                history.pop_front();
+            }
+        }
+        Ok(r)
+    };
+    rounds(env, task, config.max_steps, cancel, on_round, play).await
+}
+
+/// One round; `None` when cancelled during it (nothing of it is kept).
+async fn round(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    config: &PefaConfig,
+    cancel: &Cancel,
+    history: &VecDeque<String>,
+    step: u32,
+) -> Option<Round> {
+    let start = Instant::now();
+    let mut round = Round::new(step);
+
+    // Proposal.
+    let assigner = TaskAssigner::new(task, config.assigner_max_tokens);
+    let history: Vec<String> = history.iter().cloned().collect();
+    let query = assigner.query(env, &history);
+    let reply = ask(backend, query, cancel, &mut round.calls).await?;
+    let proposal = match reply.and_then(|r| r.read(|text| assigner.parse(text))) {
+        Ok(p) => p,
+        Err(e) => return Some(finish(env, round, e.outcome(Side::Assigner), start)),
+    };
+    round.proposal = Some(proposal.clone());
+
+    // Execution.
+    let robot = proposal.robot;
+    let executor = match RobotExecutor::of(task, robot, config.executor_max_tokens) {
+        Ok(executor) => executor,
+        Err(why) => return Some(finish(env, round, Outcome::NoProposal { why }, start)),
+    };
+    round.actions = executor.actions(env);
+    let query = executor.query(env, &proposal.subtask, &round.actions);
+    let reply = ask(backend, query, cancel, &mut round.calls).await?;
+    let decision = match reply.and_then(|r| r.read(|text| executor.parse(&round.actions, text))) {
+        Ok(d) => d,
+        Err(e) => return Some(finish(env, round, e.outcome(Side::Executor), start)),
+    };
+    round.decision = Some(decision.clone());
+    let outcome = match &decision.action {
+        Some(action) if decision.can_do => execute(env, robot, action),
+        _ => Outcome::Declined,
+    };
+    Some(finish(env, round, outcome, start))
+}
+
+/// Closes a round: the outcome, the Feedback for the assigner, whether the goal holds.
+fn finish(
+    env: &(dyn Environment + Send),
+    mut round: Round,
+    outcome: Outcome,
+    start: Instant,
+) -> Round {
+    round.feedback = executor::feedback(env.task(), &round, &outcome);
+    round.outcome = outcome;
+    round.done = env.goal_satisfied();
+    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    round
+}
+
+/// The history line of a round, oldest first in the prompt.
+fn history_entry(task: &Task, round: &Round) -> String {
+    match &round.proposal {
+        Some(p) => format!(
+            "Round {}: you asked {} to \"{}\". {}",
+            round.step,
+            robot_label(task, p.robot),
+            p.subtask,
+            round.feedback
+        ),
+        None => format!("Round {}: {}", round.step, round.feedback),
+    }
+}

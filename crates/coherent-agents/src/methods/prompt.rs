@@ -1,0 +1,80 @@
+//! What the methods' prompts share: template files under `prompts/` filled with the
+//! situation, the team list, and robot labels. Each role's own templates sit with it
+//! ([`crate::methods::assigner`], [`crate::methods::executor`], [`crate::methods::joint`],
+//! [`crate::methods::dmrs`]). Observations are written as relation facts
+//! (`coherent_core::describe`).
+
+use coherent_core::{NodeId, Task};
+
+/// `template` with every `{{key}}` replaced by its value, in one pass: a value that
+/// itself contains `{{...}}` (an instruction, say) is left as written.
+pub fn fill(template: &str, values: &[(&str, &str)]) -> String {
+    let mut out = String::with_capacity(template.len());
+    let mut rest = template;
+    while let Some(open) = rest.find("{{") {
+        out.push_str(&rest[..open]);
+        let after = &rest[open + 2..];
+        let value = after.find("}}").and_then(|close| {
+            let key = &after[..close];
+            values
+                .iter()
+                .find(|(k, _)| *k == key)
+                .map(|(_, v)| (*v, close))
+        });
+        match value {
+            Some((v, close)) => {
+                out.push_str(v);
+                rest = &after[close + 2..];
+            }
+            None => {
+                out.push_str("{{");
+                rest = after;
+            }
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The team list of a system prompt: each robot's label and type, one per line.
+pub(crate) fn team(task: &Task) -> String {
+    task.robots
+        .iter()
+        .map(|r| format!("- {}: {}", task.node(r.node).label(), r.kind))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `<label>(id)` of robot `robot`, or `robot <id>` when it is none of the task's.
+pub fn robot_label(task: &Task, robot: NodeId) -> String {
+    task.idx(robot)
+        .map_or_else(|| format!("robot {robot}"), |i| task.node(i).label())
+}
+
+/// Asserts that `template` has a placeholder for each of `keys` and that filling them
+/// leaves none unfilled.
+#[cfg(test)]
+pub(crate) fn check_placeholders(template: &str, keys: &[&str]) {
+    let values: Vec<(&str, &str)> = keys.iter().map(|&k| (k, "value")).collect();
+    let filled = fill(template, &values);
+    assert!(!filled.contains("{{"), "unfilled placeholder in:\n{filled}");
+    for k in keys {
+        assert!(template.contains(&format!("{{{{{k}}}}}")), "{k} unused");
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fill_replaces_every_known_key_once() {
+        assert_eq!(
+            fill(
+                "{{a}} and {{a}}, {{b}} {{c}}",
+                &[("a", "x"), ("b", "{{a}}")]
+            ),
+            "x and x, {{a}} {{c}}"
+        );
+    }
+}

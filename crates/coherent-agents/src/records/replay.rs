@@ -1,0 +1,99 @@
+//! Setting up the replay of a recorded episode: the task, the settings and the budget
+//! it ran with, a backend that answers from the recording, and afterwards the check
+//! that the replay did exactly what the recording did. `coherent run --replay`, the
+//! Python `replay` and `coherent bench --backend replay` all start here.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use coherent_core::{Task, native};
+
+use crate::backends::replay::ReplayBackend;
+use crate::episode::rounds::Episode;
+use crate::episode::settings::{Budget, Method, Settings};
+use crate::records::transcript::{Round, Summary, Transcript};
+
+/// What replaying a recorded episode needs: run `settings.method` on `task` with
+/// `backend` and `budget`, then [`Replay::check`] the episode.
+#[derive(Debug)]
+pub struct Replay {
+    /// The task recorded in the transcript's header.
+    pub task: Arc<Task>,
+    /// The recorded method, history window, temperature, seed and physics.
+    pub settings: Settings,
+    /// The recorded budget, as given.
+    pub budget: Budget,
+    /// Answers every call from the recording, after checking that it is the recorded one.
+    pub backend: Arc<ReplayBackend>,
+    recording: Transcript,
+}
+
+impl Replay {
+    /// The replay of `transcript`, read from `file` (which errors name).
+    pub fn prepare(transcript: &Transcript, file: &Path) -> Result<Replay, String> {
+        let task = recorded_task(transcript, file)?;
+        let (settings, budget) = recorded_settings(transcript)?;
+        Ok(Replay {
+            task: Arc::new(task),
+            settings,
+            budget,
+            backend: Arc::new(ReplayBackend::new(transcript)),
+            recording: transcript.clone(),
+        })
+    }
+
+    /// Whether `replayed` did exactly what the recording did (see [`check_replay`]).
+    pub fn check(&self, replayed: &Episode) -> Result<(), String> {
+        check_replay(&self.recording, replayed)
+    }
+}
+
+/// The settings and budget a transcript was recorded with, to replay it.
+pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
+    let method = Method::from_name(&t.header.method)
+        .ok_or_else(|| format!("unknown method {:?} in the transcript", t.header.method))?;
+    let settings = Settings {
+        method,
+        history: t.header.history,
+        temperature: t.header.temperature,
+        seed: t.header.seed,
+        physics: t.header.physics,
+    };
+    Ok((settings, Budget::Given(t.header.max_steps)))
+}
+
+/// The task a transcript was recorded on.
+pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, String> {
+    native::read(&file.display().to_string(), &t.header.task).map_err(|e| e.to_string())
+}
+
+/// Whether `replayed` did exactly what `recorded` did: the same rounds (calls, answers,
+/// decisions, outcomes, feedback) apart from wall-clock time, and the same summary.
+pub fn check_replay(recorded: &Transcript, replayed: &Episode) -> Result<(), String> {
+    let strip = |r: &Round| Round {
+        wall_ms: 0.0,
+        ..r.clone()
+    };
+    if recorded.rounds.len() != replayed.rounds.len() {
+        return Err(format!(
+            "the recording has {} rounds, the replay {}",
+            recorded.rounds.len(),
+            replayed.rounds.len()
+        ));
+    }
+    for (a, b) in recorded.rounds.iter().zip(&replayed.rounds) {
+        if strip(a) != strip(b) {
+            return Err(format!("round {} differs from the recording", a.step));
+        }
+    }
+    let timeless = |s: &Summary| Summary {
+        wall_ms: 0.0,
+        ..s.clone()
+    };
+    if let Some(s) = &recorded.summary
+        && timeless(s) != timeless(&replayed.summary)
+    {
+        return Err("the summary differs from the recording".into());
+    }
+    Ok(())
+}
