@@ -218,7 +218,8 @@ class LLM:
 
     Arguments left out come from ``OPENAI_BASE_URL``, ``OPENAI_API_KEY`` and
     ``COHERENT_MODEL``; raises :class:`BackendError` when no endpoint or no model results.
-    The key never appears in ``repr``, transcripts or logs, and cannot be read back.
+    The key never appears in ``repr``, transcripts or logs, and cannot be read back. A
+    response body longer than ``max_response_bytes`` is a failed call, read no further.
     """
 
     def __init__(
@@ -235,6 +236,7 @@ class LLM:
         timeout: float = 300.0,
         max_retries: int = 4,
         concurrency: int = 4,
+        max_response_bytes: int = 4194304,
     ) -> None: ...
     @property
     def base_url(self) -> str: ...

@@ -65,6 +65,9 @@ pub(crate) struct LlmArgs {
     /// Requests in flight at once (across all episodes of a benchmark).
     #[arg(long, default_value_t = 4)]
     pub requests: usize,
+    /// The most bytes a response body may have; a longer one is a failed call.
+    #[arg(long, default_value_t = OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES)]
+    max_response_bytes: usize,
 }
 
 impl LlmArgs {
@@ -84,6 +87,7 @@ impl LlmArgs {
                 max_retries: self.max_retries,
             },
             requests: self.requests,
+            max_response_bytes: self.max_response_bytes,
         }
         .config()
     }

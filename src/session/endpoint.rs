@@ -46,6 +46,8 @@ pub struct Endpoint {
     pub patience: Patience,
     /// Requests in flight at once.
     pub requests: usize,
+    /// The most bytes a response body may have.
+    pub max_response_bytes: usize,
 }
 
 impl Endpoint {
@@ -78,6 +80,7 @@ impl Endpoint {
             },
             concurrency: self.requests.max(1),
             output: self.format,
+            max_response_bytes: self.max_response_bytes,
             ..OpenAiConfig::new(base_url, model)
         }))
     }

@@ -43,9 +43,34 @@ pub fn shown_lines(text: &str) -> String {
     text.split('\n').map(shown).collect::<Vec<_>>().join("\n")
 }
 
+/// `text` cut to at most `max` bytes (at a character boundary), with a note of the
+/// whole length when it was longer: for what a long answer or value may keep.
+pub fn cut(text: &str, max: usize) -> Cow<'_, str> {
+    if text.len() <= max {
+        return Cow::Borrowed(text);
+    }
+    let mut end = max;
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    Cow::Owned(format!(
+        "{}… [cut: {} bytes in all]",
+        &text[..end],
+        text.len()
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_text_is_cut_at_a_character_boundary() {
+        assert_eq!(cut("short", 10), "short");
+        assert_eq!(cut("abcdef", 3), "abc… [cut: 6 bytes in all]");
+        // "é" is two bytes: a cut inside it moves back before it.
+        assert_eq!(cut("aé", 2), "a… [cut: 3 bytes in all]");
+    }
 
     #[test]
     fn plain_text_is_borrowed() {

@@ -34,7 +34,8 @@ impl PyLlm {
     #[pyo3(signature = (
         base_url = None, model = None, api_key = None, *, temperature = 0.0, seed = None,
         format = "json_schema", connect_timeout = 10.0, read_timeout = 120.0, timeout = 300.0,
-        max_retries = 4, concurrency = 4
+        max_retries = 4, concurrency = 4,
+        max_response_bytes = OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -50,6 +51,7 @@ impl PyLlm {
         timeout: f64,
         max_retries: u32,
         concurrency: usize,
+        max_response_bytes: usize,
     ) -> PyResult<PyLlm> {
         let format: OutputMode = serde_json::from_value(format.into()).map_err(|_| {
             PyValueError::new_err(format!(
@@ -70,6 +72,7 @@ impl PyLlm {
                 max_retries,
             },
             requests: concurrency,
+            max_response_bytes,
         };
         let config = endpoint.config().map_err(|e| errors::backend(py, e))?.ok_or_else(|| {
             errors::backend(

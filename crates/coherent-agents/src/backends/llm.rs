@@ -110,6 +110,11 @@ pub struct Usage {
     pub completion_tokens: u64,
 }
 
+/// The most bytes of an answer's text that the loop reads and a round keeps: far more
+/// than any `max_tokens` the methods ask for produces, so only a runaway server's answer
+/// is cut (with a note of its whole length).
+pub const MAX_ANSWER_BYTES: usize = 64 << 10;
+
 /// What a role answered.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Answer {

@@ -12,9 +12,11 @@ use serde::Deserialize;
 use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
+use coherent_core::text::cut;
+
 use crate::backends::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
-    Usage,
+    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, MAX_ANSWER_BYTES,
+    OutputMode, Query, Usage,
 };
 use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
@@ -29,14 +31,69 @@ impl ApiKey {
         ApiKey(key.into())
     }
 
-    /// `text` with every occurrence of the key replaced.
+    /// `text` with every occurrence of the key replaced: as it is, in any letter case,
+    /// and base64-encoded (as in basic auth, at any of the three alignments a longer
+    /// encoded text puts it at, in the standard and the URL-safe alphabets).
     pub fn scrub(&self, text: &str) -> String {
         if self.0.is_empty() {
-            text.to_owned()
-        } else {
-            text.replace(&self.0, "[api key]")
+            return text.to_owned();
         }
+        let mut out = replace_ignoring_case(text, &self.0);
+        for spelling in base64_spellings(self.0.as_bytes()) {
+            out = out.replace(&spelling, "[api key]");
+        }
+        out
     }
+}
+
+/// `text` with every ASCII-case-insensitive occurrence of `needle` replaced.
+fn replace_ignoring_case(text: &str, needle: &str) -> String {
+    let (lower, wanted) = (text.to_ascii_lowercase(), needle.to_ascii_lowercase());
+    // ASCII lower-casing keeps every byte offset, so the matches of the lowered text are
+    // the matches of the text.
+    let mut out = String::with_capacity(text.len());
+    let mut from = 0;
+    for (at, _) in lower.match_indices(&wanted) {
+        if at < from {
+            continue;
+        }
+        out.push_str(&text[from..at]);
+        out.push_str("[api key]");
+        from = at + wanted.len();
+    }
+    out.push_str(&text[from..]);
+    out
+}
+
+/// The base64 text that encodes `key` wherever it sits in a longer encoded text: for each
+/// alignment (0, 1 or 2 bytes before it in its group of three), the characters that
+/// depend on the key's bytes alone; in both alphabets. Too short a key has none.
+fn base64_spellings(key: &[u8]) -> Vec<String> {
+    const STANDARD: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut spellings = Vec::new();
+    for offset in 0..3usize {
+        // With `offset` bytes before the key, its first whole group starts at the next
+        // multiple of three; the groups that hold key bytes only encode to fixed text.
+        let skip = (3 - offset) % 3;
+        let whole = (key.len().saturating_sub(skip)) / 3;
+        if whole < 2 {
+            continue;
+        }
+        let bytes = &key[skip..skip + 3 * whole];
+        let mut text = String::with_capacity(4 * whole);
+        for group in bytes.chunks(3) {
+            let n = u32::from(group[0]) << 16 | u32::from(group[1]) << 8 | u32::from(group[2]);
+            for shift in [18, 12, 6, 0] {
+                text.push(char::from(STANDARD[(n >> shift & 63) as usize]));
+            }
+        }
+        let url_safe = text.replace('+', "-").replace('/', "_");
+        if url_safe != text {
+            spellings.push(url_safe);
+        }
+        spellings.push(text);
+    }
+    spellings
 }
 
 impl fmt::Debug for ApiKey {
@@ -64,6 +121,15 @@ pub struct OpenAiConfig {
     pub concurrency: usize,
     /// The answer format to ask for first; a server that refuses it gets the next one.
     pub output: OutputMode,
+    /// The most bytes a response body may have; a longer one is a failed call (read no
+    /// further than the limit, whatever the server sends).
+    pub max_response_bytes: usize,
+}
+
+impl OpenAiConfig {
+    /// The default [`OpenAiConfig::max_response_bytes`]: 4 MiB, hundreds of times what a
+    /// chat answer of a few thousand tokens takes.
+    pub const DEFAULT_MAX_RESPONSE_BYTES: usize = 4 << 20;
 }
 
 impl OpenAiConfig {
@@ -80,6 +146,7 @@ impl OpenAiConfig {
             backoff: Backoff::default(),
             concurrency: 4,
             output: OutputMode::JsonSchema,
+            max_response_bytes: OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES,
         }
     }
 }
@@ -184,8 +251,28 @@ impl OpenAiClient {
             .get(reqwest::header::RETRY_AFTER)
             .and_then(|v| v.to_str().ok())
             .and_then(|v| parse_retry_after(v, SystemTime::now()));
-        let bytes = response.bytes().await.map_err(|e| self.transport(&e))?;
-        Ok((status, retry_after, bytes.to_vec()))
+        let cap = self.config.max_response_bytes;
+        let too_large = |what: String| {
+            LlmError::new(
+                LlmErrorKind::Malformed,
+                format!(
+                    "the response is {what}, more than the limit of {cap} bytes (--max-response-bytes)"
+                ),
+            )
+        };
+        if let Some(length) = response.content_length().filter(|&n| n > cap as u64) {
+            return Err(too_large(format!("{length} bytes long")));
+        }
+        // Read it chunk by chunk, so that a body that never ends stops at the limit.
+        let mut body = Vec::new();
+        let mut response = response;
+        while let Some(chunk) = response.chunk().await.map_err(|e| self.transport(&e))? {
+            if body.len() + chunk.len() > cap {
+                return Err(too_large("longer".into()));
+            }
+            body.extend_from_slice(&chunk);
+        }
+        Ok((status, retry_after, body))
     }
 
     fn transport(&self, e: &reqwest::Error) -> LlmError {
@@ -224,7 +311,9 @@ impl OpenAiClient {
                         message: self.scrub(&message),
                         attempts,
                     })?;
-                    answer.text = self.scrub(&answer.text);
+                    // What the loop parses is what the transcript keeps, so that a replay
+                    // reads the same text: both are cut at the limit of an answer.
+                    answer.text = self.scrub(&cut(&answer.text, MAX_ANSWER_BYTES));
                     answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
                     answer.attempts = attempts;
                     answer.mode = mode;
@@ -378,6 +467,46 @@ mod tests {
         assert!(parse_completion(br#"{"choices":[]}"#).is_err());
         assert!(parse_completion(b"{\"choices\": [").is_err());
         assert!(parse_completion(b"").is_err());
+    }
+
+    #[test]
+    fn the_key_is_scrubbed_in_other_spellings() {
+        let key = ApiKey::new("sk-test-0123456789-SECRET");
+        let upper = "echo: SK-TEST-0123456789-SECRET.";
+        assert_eq!(key.scrub(upper), "echo: [api key].");
+        // Basic auth: base64 of "user:<key>", and of the key at the other alignments.
+        for prefix in ["user:", "", "x", "xy"] {
+            let encoded = encode(format!("{prefix}sk-test-0123456789-SECRET").as_bytes());
+            let scrubbed = key.scrub(&format!("Authorization: Basic {encoded}"));
+            assert!(scrubbed.contains("[api key]"), "{prefix:?}: {scrubbed}");
+            assert!(
+                !scrubbed.contains(&encoded[8..encoded.len() - 8]),
+                "{scrubbed}"
+            );
+        }
+    }
+
+    /// Standard base64 with padding, written out for the test.
+    fn encode(bytes: &[u8]) -> String {
+        const ALPHABET: &[u8; 64] =
+            b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut out = String::new();
+        for group in bytes.chunks(3) {
+            let b = [
+                group[0],
+                *group.get(1).unwrap_or(&0),
+                *group.get(2).unwrap_or(&0),
+            ];
+            let n = u32::from(b[0]) << 16 | u32::from(b[1]) << 8 | u32::from(b[2]);
+            for (i, shift) in [18, 12, 6, 0].into_iter().enumerate() {
+                out.push(if i <= group.len() {
+                    char::from(ALPHABET[(n >> shift & 63) as usize])
+                } else {
+                    '='
+                });
+            }
+        }
+        out
     }
 
     #[test]

@@ -4,7 +4,18 @@
 //! [`crate::methods::executor`], [`crate::methods::joint`]); anything unreadable is an
 //! error with the reason, never a panic.
 
+use coherent_core::text::cut;
 use serde_json::{Map, Value};
+
+/// The most bytes a field read from an answer keeps (a subtask, an action, a note, a
+/// reasoning). What a round stores and what the history feeds back into the next prompt
+/// are built from these fields, so a runaway answer cannot grow them.
+pub(crate) const MAX_FIELD_BYTES: usize = 2_000;
+
+/// `text` trimmed and cut to [`MAX_FIELD_BYTES`].
+pub(crate) fn field_text(text: &str) -> String {
+    cut(text.trim(), MAX_FIELD_BYTES).into_owned()
+}
 
 /// The first JSON object in `text`.
 pub(crate) fn json_object(text: &str) -> Option<Map<String, Value>> {
@@ -17,11 +28,11 @@ pub(crate) fn json_object(text: &str) -> Option<Map<String, Value>> {
     })
 }
 
-/// A string field, trimmed; a number is taken as written.
+/// A string field, trimmed and cut to [`MAX_FIELD_BYTES`]; a number is taken as written.
 pub(crate) fn string_field(map: &Map<String, Value>, key: &str) -> Option<String> {
     match map.get(key)? {
-        Value::String(s) => Some(s.trim().to_owned()),
-        Value::Number(n) => Some(n.to_string()),
+        Value::String(s) => Some(field_text(s)),
+        Value::Number(n) => Some(field_text(&n.to_string())),
         _ => None,
     }
 }

@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::episode::environment::team_observation;
-use crate::methods::answer::{json_object, string_field};
+use crate::methods::answer::{field_text, json_object, string_field};
 use crate::methods::prompt::{fill, team};
 use crate::records::transcript::Proposal;
 
@@ -155,8 +155,8 @@ impl TaskAssigner {
                 let rest = line[end..].trim_start_matches([':', '-', ',', ' ']).trim();
                 return Ok(Proposal {
                     robot,
-                    subtask: if rest.is_empty() { line } else { rest }.to_owned(),
-                    reasoning: text.trim().to_owned(),
+                    subtask: field_text(if rest.is_empty() { line } else { rest }),
+                    reasoning: field_text(text),
                 });
             }
         }

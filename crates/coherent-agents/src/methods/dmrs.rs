@@ -17,7 +17,7 @@ use crate::backends::llm::{Backend, Message, Query, Role, Situation};
 use crate::episode::ask::{Side, Unusable, ask};
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, rounds};
-use crate::methods::answer::json_object;
+use crate::methods::answer::{field_text, json_object};
 use crate::methods::joint::{self, Executed, joint_actions};
 use crate::methods::prompt::{self, robot_label};
 use crate::records::transcript::Round;
@@ -65,7 +65,7 @@ pub async fn run(
 /// One speaker's turn, as the next speakers hear it.
 fn said(task: &Task, speaker: NodeId, text: &str, proposal: Option<&(NodeId, String)>) -> String {
     let message = json_object(text)
-        .and_then(|m| m.get("message").and_then(Value::as_str).map(str::to_owned))
+        .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
         .unwrap_or_default();
     let proposal = proposal.map_or("nothing usable".to_owned(), |(robot, action)| {
         format!("{}: {action}", robot_label(task, *robot))

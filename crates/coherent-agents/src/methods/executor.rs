@@ -17,7 +17,7 @@ use coherent_core::{Environment, NodeId, RobotKind, Task, describe};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
-use crate::methods::answer::{bool_field, json_object, normal, string_field};
+use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
 use crate::methods::prompt::{fill, robot_label};
 use crate::records::transcript::{Decision, Outcome, Round};
 
@@ -201,7 +201,7 @@ fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String> {
                 can_do: false,
                 action: None,
                 subtask_complete: false,
-                note: text.trim().to_owned(),
+                note: field_text(text),
             })
         }
         None => Err("no JSON object and no action of the list in the answer".into()),
@@ -215,7 +215,7 @@ fn match_action(actions: &[String], answer: &str) -> String {
         .iter()
         .find(|a| normal(a) == n)
         .cloned()
-        .unwrap_or_else(|| answer.trim().to_owned())
+        .unwrap_or_else(|| field_text(answer))
 }
 
 /// What the assigner hears about a round, PEFA's Feedback: self-reflection built from

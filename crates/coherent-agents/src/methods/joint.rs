@@ -10,7 +10,7 @@ use serde_json::{Value, json};
 
 use crate::backends::llm::Message;
 use crate::episode::environment::execute;
-use crate::methods::answer::{json_object, normal};
+use crate::methods::answer::{field_text, json_object, normal};
 use crate::methods::prompt::{self, robot_label};
 use crate::records::transcript::{Decision, Outcome, Round};
 
@@ -128,15 +128,17 @@ pub fn match_line(lines: &[String], answer: &str) -> Option<usize> {
 pub fn read_line(text: &str) -> String {
     let object = json_object(text);
     let Some(map) = object else {
-        return text.trim().to_owned();
+        return field_text(text);
     };
-    let field = |k: &str| map.get(k).and_then(Value::as_str).map(str::trim);
-    let action = field("action").or_else(|| field("subtask")).unwrap_or("");
+    let field = |k: &str| map.get(k).and_then(Value::as_str).map(field_text);
+    let action = field("action")
+        .or_else(|| field("subtask"))
+        .unwrap_or_default();
     match field("robot") {
-        Some(robot) if !robot.is_empty() && !action.contains(robot) => {
+        Some(robot) if !robot.is_empty() && !action.contains(&robot) => {
             format!("{robot}: {action}")
         }
-        _ => action.to_owned(),
+        _ => action,
     }
 }
 
