@@ -214,6 +214,14 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         eprintln!();
     }
     let outcome = result?;
+    if let Some(first) = outcome.orphaned.first() {
+        eprintln!(
+            "note: {} transcripts of episodes killed mid-run had no results line; renamed to \
+             *.jsonl.unfinished (e.g. {}), and their episodes ran again",
+            outcome.orphaned.len(),
+            first.display()
+        );
+    }
     if outcome.repaired_bytes > 0 {
         eprintln!(
             "note: {}: dropped a last line cut off mid-write ({} bytes)",

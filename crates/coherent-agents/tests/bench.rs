@@ -415,3 +415,35 @@ fn a_bad_line_in_the_middle_is_an_error_naming_the_file_line_and_field() {
     assert!(e.contains("r.jsonl: line 2"), "{e}");
     assert!(e.contains("$.steps"), "{e}");
 }
+
+/// A kill mid-episode leaves a transcript with no summary that no results line points to;
+/// the next run renames it `*.jsonl.unfinished`, says so, runs that episode again, and
+/// leaves the transcripts of finished episodes alone.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
+    let dir = scratch("orphans");
+    let out = dir.join("results.jsonl");
+    let tasks = paper40_env0();
+    let config = config(out.clone(), vec![Method::Optimal], BackendChoice::Builtin);
+    let first = bench::run(&tasks[..2], &config, &Cancel::default(), &mut |_| {})
+        .await
+        .expect("runs");
+    assert!(first.orphaned.is_empty());
+    // What a kill leaves: a transcript with a header and no summary, and no line for it.
+    let killed = bench::transcripts_dir(&out).join("seed0/env0-task99-optimal-killed.jsonl");
+    std::fs::write(&killed, "{\"type\": \"header\"}\n").expect("write");
+    let second = bench::run(&tasks[..3], &config, &Cancel::default(), &mut |_| {})
+        .await
+        .expect("runs");
+    assert_eq!((second.skipped, second.written), (2, 1));
+    let renamed = killed.with_extension("jsonl.unfinished");
+    assert_eq!(second.orphaned, [renamed.clone()]);
+    assert!(renamed.exists() && !killed.exists());
+    for line in bench::read_results(&out).expect("reads").lines {
+        assert!(
+            PathBuf::from(&line.transcript).exists(),
+            "{}",
+            line.transcript
+        );
+    }
+}

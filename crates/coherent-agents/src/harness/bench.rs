@@ -29,7 +29,7 @@ use crate::records::transcript;
 
 pub use crate::harness::progress::{Event, Progress};
 pub use crate::harness::results::{
-    EpisodeKey, ResultLine, ResultsFile, read_results, repair, transcripts_dir,
+    EpisodeKey, ResultLine, ResultsFile, mark_orphans, read_results, repair, transcripts_dir,
 };
 pub use crate::harness::subset::{PAPER40, Selection, Subset, select};
 
@@ -195,6 +195,9 @@ pub struct BenchOutcome {
     pub skipped_tasks: Vec<String>,
     /// Lines dropped from a cut-off last line.
     pub repaired_bytes: u64,
+    /// Transcripts that no results line points to (episodes killed mid-run), renamed to
+    /// `*.jsonl.unfinished` before this run; their episodes run again.
+    pub orphaned: Vec<PathBuf>,
 }
 
 /// Runs every method on every task for every seed, `config.concurrency` at once, skipping
@@ -222,6 +225,7 @@ pub async fn run(
                 .filter(|l| l.is_final())
                 .map(ResultLine::key),
         );
+        outcome.orphaned = mark_orphans(out, &file.lines)?;
     } else if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }

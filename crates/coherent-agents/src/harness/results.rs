@@ -2,6 +2,7 @@
 //! with errors that point at the bad line and field, repaired after a crash that cut
 //! the last line short.
 
+use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
@@ -195,6 +196,42 @@ pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
         }
     }
     f.flush().map_err(io)
+}
+
+/// Renames to `*.jsonl.unfinished` every transcript under [`transcripts_dir`] of `out`
+/// that none of `lines` points to: an episode killed mid-run (or between its last round
+/// and its results line) left it, and the episode runs again. Returns the new names.
+pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, String> {
+    let dir = transcripts_dir(out);
+    if !dir.is_dir() {
+        return Ok(Vec::new());
+    }
+    // By the file itself, whatever spelling of the folder the lines were written with.
+    let pointed: HashSet<PathBuf> = lines
+        .iter()
+        .filter_map(|l| Path::new(&l.transcript).canonicalize().ok())
+        .collect();
+    let io = |p: &Path, e: io::Error| format!("{}: {e}", p.display());
+    let mut marked = Vec::new();
+    let mut folders = vec![dir];
+    while let Some(folder) = folders.pop() {
+        for entry in std::fs::read_dir(&folder).map_err(|e| io(&folder, e))? {
+            let path = entry.map_err(|e| io(&folder, e))?.path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.extension().is_some_and(|x| x == "jsonl")
+                && !pointed.contains(&path.canonicalize().map_err(|e| io(&path, e))?)
+            {
+                let mut renamed = path.clone().into_os_string();
+                renamed.push(".unfinished");
+                let renamed = PathBuf::from(renamed);
+                std::fs::rename(&path, &renamed).map_err(|e| io(&path, e))?;
+                marked.push(renamed);
+            }
+        }
+    }
+    marked.sort();
+    Ok(marked)
 }
 
 /// `results.jsonl` -> `results.transcripts/`, next to it.
