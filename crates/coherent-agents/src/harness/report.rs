@@ -2,7 +2,7 @@
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
 //! scene), each with the ground-truth row, and each method's LLM calls and tokens.
 //!
-//! AS counts a failed episode as 2 x GT + 1 steps (SEMANTICS.md section 5; for a task
+//! AS counts a failed episode as 2 x GT + 1 steps (docs/semantics.md, "Steps, the budget and the scores"; for a task
 //! without GT, its budget plus one). With several seeds each cell is the mean over seeds of the
 //! per-seed value, with the half-width of a 95% confidence interval from Student's t.
 

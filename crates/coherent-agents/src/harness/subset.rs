@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use coherent_core::Task;
 
-/// The paper's 40-task subset (SEMANTICS.md section 6): 8 tasks per scene, by the scene's
+/// The paper's 40-task subset (docs/semantics.md, "Steps, the budget and the scores"): 8 tasks per scene, by the scene's
 /// file name and the task id.
 pub const PAPER40: [(&str, [i64; 8]); 5] = [
     ("env0", [2, 4, 9, 10, 11, 15, 16, 20]),

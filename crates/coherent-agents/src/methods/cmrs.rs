@@ -1,4 +1,4 @@
-//! CMRS, the paper's centralised baseline (METHOD.md, "Baselines"): each step one model
+//! CMRS, the paper's centralised baseline (docs/methods.md, `cmrs`): each step one model
 //! sees every robot's observation, the union of all robots' action lists and the last
 //! executed actions, and answers one `<robot>: <action>` line, which is checked and run.
 //! One model call per step.

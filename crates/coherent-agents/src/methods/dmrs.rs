@@ -1,5 +1,5 @@
-//! DMRS, the paper's decentralised dialogue baselines after CoELA (METHOD.md,
-//! "Baselines"): each step the robots speak in a random order (seeded); each speaker sees
+//! DMRS, the paper's decentralised dialogue baselines after CoELA (docs/methods.md,
+//! `dmrs-1d` and `dmrs-2d`): each step the robots speak in a random order (seeded); each speaker sees
 //! the task, the last executed actions, its own observation, the action lists of itself
 //! and of the robots who spoke before it, and the step's dialogue so far, and proposes
 //! one `<robot>: <action>` line. The last speaker's proposal is checked and run.

@@ -250,7 +250,7 @@ fn excerpt(text: &str) -> String {
 }
 
 /// The last executed joint actions, oldest first: the action history the baselines
-/// see (METHOD.md: the last 5).
+/// see (the paper's baselines: the last 5; docs/methods.md).
 #[derive(Clone, Debug, Default)]
 pub(crate) struct Executed {
     lines: VecDeque<String>,

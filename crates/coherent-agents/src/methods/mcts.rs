@@ -1,5 +1,5 @@
 //! The paper's two tree-search baselines: primitive MCTS and LLM-MCTS
-//! (`../shared/design/METHOD.md`, "Baselines").
+//! (`docs/methods.md`, `mcts` and `llm-mcts`).
 //!
 //! Each real step builds a fresh tree from the environment's current state and searches
 //! the joint action space: every `(robot, action)` pair that [`rules::actions`] offers
@@ -80,7 +80,7 @@ use crate::methods::joint::{self, Executed, JointAction, joint_actions};
 use crate::records::transcript::{Call, Decision, Outcome, Round};
 use crate::rng::{Rng, seed_of};
 
-/// Settings of one MCTS episode; the default is the authors' (METHOD.md).
+/// Settings of one MCTS episode; the default is the authors' (docs/methods.md).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MctsConfig {
     /// `c` of PUCT.
