@@ -7,7 +7,7 @@ use std::process::{Command, Output};
 use serde_json::{Value, json};
 
 fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/coherent-original/env")
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
 }
 
 fn env_file(n: usize) -> PathBuf {

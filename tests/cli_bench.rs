@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn env0() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/coherent-original/env/env0.json")
+    Path::new(env!("COHERENT_ORIGINAL_ENV")).join("env0.json")
 }
 
 fn scratch(name: &str) -> PathBuf {

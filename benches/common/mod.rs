@@ -1,12 +1,12 @@
 //! Fixtures shared by the benches: the paper's released tasks, read from
-//! `../shared/coherent-original/env` beside the checkout.
+//! `COHERENT_ORIGINAL_ENV` (`.cargo/config.toml`: beside the checkout).
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use coherent_core::{Task, load};
 
 pub fn env_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/coherent-original/env")
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
 }
 
 /// The well-formed tasks of scene `envN` (a malformed one, env3's index 18, is skipped).

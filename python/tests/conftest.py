@@ -1,6 +1,7 @@
 """Shared fixtures. The paper's released tasks live beside the repository, in
 `<repo>/../shared/coherent-original/env` (CI clones the repository with shared/ beside
-the checkout); COHERENT_ORIGINAL_ENV points elsewhere."""
+the checkout); COHERENT_ORIGINAL_ENV points elsewhere, as for the Rust tests
+(`.cargo/config.toml`)."""
 
 from __future__ import annotations
 

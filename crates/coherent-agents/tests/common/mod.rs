@@ -1,14 +1,15 @@
-//! The released benchmark for the integration tests: `shared/` lies beside the repository.
+//! The released benchmark for the integration tests, from `COHERENT_ORIGINAL_ENV`
+//! (`.cargo/config.toml`: `../shared/coherent-original/env` beside the checkout).
 
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_core::{Task, read_tasks};
 
 pub fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
 }
 
 /// Every well-formed task of the released files `env<n>.json` for `scenes`.
