@@ -437,7 +437,7 @@ async fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
         .expect("runs");
     assert_eq!((second.skipped, second.written), (2, 1));
     let renamed = killed.with_extension("jsonl.unfinished");
-    assert_eq!(second.orphaned, [renamed.clone()]);
+    assert_eq!(second.orphaned, std::slice::from_ref(&renamed));
     assert!(renamed.exists() && !killed.exists());
     for line in bench::read_results(&out).expect("reads").lines {
         assert!(
