@@ -1,5 +1,5 @@
 """A Gymnasium environment over :class:`coherent.Env`, for planners that plug into RL
-tooling (``pip install coherent[gym]``)::
+tooling (``pip install 'coherent[gym]'``)::
 
     from coherent.gym import CoherentEnv
 
@@ -22,11 +22,13 @@ import json
 import string
 from typing import Any
 
-import gymnasium
-import numpy as np
-from gymnasium import spaces
-
 from ._coherent import Env, Task
+from ._extras import needs
+
+with needs("coherent.gym", "gym"):
+    import gymnasium
+    import numpy as np
+    from gymnasium import spaces
 
 #: Characters of the observation and of action texts (JSON is written ASCII-only).
 CHARSET = string.printable

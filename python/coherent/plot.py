@@ -1,5 +1,5 @@
-"""The figures people put in papers, one call each (matplotlib, installed with the
-package):
+"""The figures people put in papers, one call each (matplotlib; ``pip install
+'coherent[analysis]'`` brings it):
 
 - :func:`table`: the paper's Table I (by task type) or Table II (by scene) as a
   figure: success rate and average steps per method, with 95% intervals over seeds and
@@ -21,17 +21,19 @@ from collections.abc import Sequence
 from itertools import groupby
 from typing import TYPE_CHECKING, Any, Literal, Union
 
-import matplotlib.pyplot as plt
-import numpy as np
-import pandas as pd
-from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
-from matplotlib.ticker import MaxNLocator
-from matplotlib.patches import Rectangle
-
 from . import _coherent
 from ._coherent import METHODS, Episode, Task
+from ._extras import needs
 from .analysis import Report, Results, report
+
+with needs("coherent.plot", "analysis"):
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import pandas as pd
+    from matplotlib.axes import Axes
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import MaxNLocator
+    from matplotlib.patches import Rectangle
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
