@@ -22,7 +22,7 @@ from itertools import groupby
 from typing import TYPE_CHECKING, Any, Literal, Union
 
 from . import _coherent
-from ._coherent import METHODS, Episode, Task
+from ._coherent import METHODS, ArgumentError, Episode, Task
 from ._extras import needs
 from .analysis import Report, Results, report
 
@@ -62,7 +62,7 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
     interval over seeds as error bars (none with one seed); dashes mark the ground
     truth's average steps."""
     if by not in ("type", "scene"):
-        raise ValueError(f'by={by!r}: expected "type" or "scene"')
+        raise ArgumentError(f'by={by!r}: expected "type" or "scene"')
     rep = results if isinstance(results, Report) else report(results)
     t = rep.table1 if by == "type" else rep.table2
     methods = [m for m in t.index if m != "ground truth"]
@@ -246,7 +246,7 @@ def scene(source: Task | Episode, ax: Axes | Sequence[Axes] | None = None, *, pa
     else:
         axes = [ax] if isinstance(ax, Axes) else list(ax)
         if len(axes) != len(levels):
-            raise ValueError(f"{task.scene}: ax must be one Axes per storey ({len(levels)}), not {len(axes)}")
+            raise ArgumentError(f"{task.scene}: ax must be one Axes per storey ({len(levels)}), not {len(axes)}")
 
     def panel(level: float | None) -> int:
         # Outside every room (or on no storey) is the lowest storey's, as in `coherent render`.
