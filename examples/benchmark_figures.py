@@ -1,5 +1,5 @@
 """Runs a 40-task subset with the built-in and the simulated backends and writes the
-paper's figures as PNG files (``pip install .`` brings matplotlib).
+paper's figures as PNG files (``pip install '.[analysis]'`` brings matplotlib).
 
     python examples/benchmark_figures.py                    # the project's benchmark, 40 tasks
     python examples/benchmark_figures.py --tasks ../shared/coherent-original/env --subset paper40

@@ -16,6 +16,11 @@ Everything the ``coherent`` command line does, from Python::
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step and the
 scene map (matplotlib); ``coherent.gym`` is a Gymnasium environment. The engine is Rust
 (``coherent._coherent``); errors derive from :class:`CoherentError`.
+
+Planning, stepping and running need no other package. The DataFrames (``bench``,
+``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
+matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasium,
+``pip install 'coherent[gym]'``.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ from ._coherent import (
     LLM,
     METHODS,
     ActionParseError,
+    ArgumentError,
     BackendError,
     CoherentError,
     Env,
@@ -57,6 +63,7 @@ __all__ = [
     "LLM",
     "METHODS",
     "ActionParseError",
+    "ArgumentError",
     "BackendError",
     "CoherentError",
     "Env",
@@ -86,8 +93,8 @@ __all__ = [
     "validate",
 ]
 
-# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import),
-# `coherent.gym` gymnasium (an optional dependency: `pip install coherent[gym]`).
+# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the
+# extra `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
 _SUBMODULES = ("analysis", "benchmark", "gym", "plot")
 
 

@@ -66,6 +66,11 @@ class _ParsedAction(TypedDict):
 class CoherentError(Exception):
     """Base class of every error raised by coherent."""
 
+class ArgumentError(CoherentError, ValueError):
+    """An argument of the right type whose value cannot be used: an int out of range, a
+    float that is not finite, text with a lone surrogate, an empty name, an unknown choice.
+    The message names the argument and shows the value."""
+
 class TaskFormatError(CoherentError, ValueError):
     """A task file or folder that cannot be read or does not follow its format."""
 
@@ -75,10 +80,11 @@ class TaskFormatError(CoherentError, ValueError):
     """Where in the file, as ``$[0].init_graph.edges[3].to_id``; None when it could not be read."""
 
 class UnknownRobotError(CoherentError):
-    """A robot id that is not a robot of the task."""
+    """A robot id that is not a robot of the task (an int beyond 64 bits included)."""
 
 class ActionParseError(CoherentError, ValueError):
-    """An action string that does not follow the grammar ``[verb] <name>(id)``."""
+    """An action string that does not follow the grammar ``[verb] <name>(id)``, or a str
+    that is not text (a lone surrogate)."""
 
     action: str
     reason: str
@@ -141,7 +147,8 @@ class Env:
     :class:`PhysicsError`).
 
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
-    for an id that is not one of the task's robots.
+    for an id that is not one of the task's robots; an action str with a lone surrogate
+    raises :class:`ActionParseError`.
     """
 
     def __init__(self, task: Task, physics: bool = False) -> None: ...

@@ -1,4 +1,5 @@
-"""Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps.
+"""Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps
+(``pip install 'coherent[analysis]'`` brings pandas).
 
 The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
 as ``coherent bench``); this module only shapes them into DataFrames.
@@ -10,10 +11,12 @@ import math
 import os
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
+from types import ModuleType
 from typing import TYPE_CHECKING, Any, Literal, Union
 
 from . import _coherent
 from ._coherent import LLM, Episode, Task
+from ._extras import needs
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -25,23 +28,30 @@ Results = Union["pd.DataFrame", PathLike, Sequence[Mapping[str, Any]]]
 _BACKEND_FIELDS = ("kind", "model", "base_url")
 
 
+def _pandas(what: str) -> ModuleType:
+    """pandas, imported when first needed; without it, an ImportError naming ``what`` and
+    the extra to install."""
+    with needs(what, "analysis"):
+        import pandas
+    return pandas
+
+
 def results(path: PathLike) -> pd.DataFrame:
     """The results file of :func:`bench` (or ``coherent bench --out``) as a DataFrame,
     one row per line; the ``backend`` object is spread over ``backend_kind``,
     ``backend_model`` and ``backend_base_url``."""
-    return _frame(_coherent.read_results(path))
+    pandas = _pandas("coherent.results's DataFrame")
+    return _frame(pandas, _coherent.read_results(path))
 
 
-def _frame(lines: list[dict[str, Any]]) -> pd.DataFrame:
-    import pandas as pd
-
+def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
     rows = []
     for line in lines:
         row = {k: v for k, v in line.items() if k != "backend"}
         for name in _BACKEND_FIELDS:
             row[f"backend_{name}"] = line["backend"][name]
         rows.append(row)
-    return pd.DataFrame(rows)
+    return pandas.DataFrame(rows)
 
 
 def _lines(data: Results) -> list[dict[str, Any]]:
@@ -96,6 +106,8 @@ def bench(
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
     """
+    # Before the run, not after it.
+    pandas = _pandas("coherent.bench's DataFrame")
     malformed: list[_coherent.TaskFormatError] = []
     if isinstance(tasks, (str, os.PathLike)):
         chosen, malformed = _coherent.read_tasks(tasks)
@@ -114,7 +126,7 @@ def bench(
         out=out,
         progress=progress,
     )
-    frame = results(out)
+    frame = _frame(pandas, _coherent.read_results(out))
     frame.attrs["outcome"] = outcome
     frame.attrs["malformed"] = [str(e) for e in malformed]
     return frame
@@ -158,14 +170,13 @@ class Report:
 def report(data: Results) -> Report:
     """Table I and Table II of the paper, and the costs, from benchmark results: a
     DataFrame of :func:`bench` or :func:`results`, a results file, or its lines."""
-    import pandas as pd
-
+    pandas = _pandas("coherent.report's Report")
     lines = _lines(data)
     r = _coherent.report_tables(lines)
-    costs = pd.DataFrame(r["costs"]).set_index("method") if r["costs"] else pd.DataFrame()
+    costs = pandas.DataFrame(r["costs"]).set_index("method") if r["costs"] else pandas.DataFrame()
     return Report(
-        table1=_table(r["table1"]),
-        table2=_table(r["table2"]),
+        table1=_table(pandas, r["table1"]),
+        table2=_table(pandas, r["table2"]),
         costs=costs,
         backends=r["backends"],
         seeds=r["seeds"],
@@ -175,9 +186,7 @@ def report(data: Results) -> Report:
     )
 
 
-def _table(t: dict[str, Any]) -> pd.DataFrame:
-    import pandas as pd
-
+def _table(pandas: ModuleType, t: dict[str, Any]) -> pd.DataFrame:
     nan = float("nan")
 
     def stat(cell: dict[str, Any] | None, name: str, part: str) -> float:
@@ -194,9 +203,9 @@ def _table(t: dict[str, Any]) -> pd.DataFrame:
         data[(column, "SR ci95")] = [stat(c, "sr", "ci95") for c in cells] + [nan]
         data[(column, "AS")] = [stat(c, "as", "mean") for c in cells] + [nan if gt is None else float(gt)]
         data[(column, "AS ci95")] = [stat(c, "as", "ci95") for c in cells] + [nan]
-    index = pd.Index([row["method"] for row in t["rows"]] + ["ground truth"], name="method")
-    frame = pd.DataFrame(data, index=index)
-    frame.columns = pd.MultiIndex.from_tuples(list(data), names=["column", "stat"])
+    index = pandas.Index([row["method"] for row in t["rows"]] + ["ground truth"], name="method")
+    frame = pandas.DataFrame(data, index=index)
+    frame.columns = pandas.MultiIndex.from_tuples(list(data), names=["column", "stat"])
     frame.attrs["title"] = t["title"]
     frame.attrs["tasks"] = dict(zip(t["columns"], t["tasks"]))
     return frame
@@ -208,8 +217,7 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
     ``no_proposal``, ``no_decision``, ``backend_error``) and why, whether the executor
     judged the subtask complete, whether the goal holds after it, the model calls and
     tokens, and the time."""
-    import pandas as pd
-
+    pandas = _pandas("Episode.to_dataframe (coherent.analysis.episode_frame)")
     types = episode.task.robot_types
     rows = []
     for r in episode.transcript:
@@ -234,7 +242,7 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
                 "wall_ms": r["wall_ms"],
             }
         )
-    frame = pd.DataFrame(rows, columns=_EPISODE_COLUMNS)
+    frame = pandas.DataFrame(rows, columns=_EPISODE_COLUMNS)
     return frame.astype({"robot": "Int64"})
 
 

@@ -1,5 +1,5 @@
 """A Gymnasium environment over :class:`coherent.Env`, for planners that plug into RL
-tooling (``pip install coherent[gym]``)::
+tooling (``pip install 'coherent[gym]'``)::
 
     from coherent.gym import CoherentEnv
 
@@ -19,14 +19,17 @@ and ``info["reason"]`` says why. The episode is truncated after ``max_steps`` st
 from __future__ import annotations
 
 import json
+import operator
 import string
 from typing import Any
 
-import gymnasium
-import numpy as np
-from gymnasium import spaces
+from ._coherent import ArgumentError, Env, Task
+from ._extras import needs
 
-from ._coherent import Env, Task
+with needs("coherent.gym", "gym"):
+    import gymnasium
+    import numpy as np
+    from gymnasium import spaces
 
 #: Characters of the observation and of action texts (JSON is written ASCII-only).
 CHARSET = string.printable
@@ -89,6 +92,8 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[str, dict[str, Any]]:
         """Back to the task's initial state; the world is deterministic, ``seed`` only
         seeds the spaces' sampling."""
+        if seed is not None and operator.index(seed) < 0:
+            raise ArgumentError(f"seed={seed!r}: expected an int from 0")
         super().reset(seed=seed)
         if seed is not None:
             self.action_space.seed(seed)
@@ -100,7 +105,8 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
         """Tries ``(robot, action text)``; raises :class:`coherent.UnknownRobotError` for
         a robot that is not one of the task's."""
         robot, text = action
-        ok, reason, done = self.env.step(int(robot), text)
+        # An int or a numpy integer; a float is refused (TypeError), not rounded.
+        ok, reason, done = self.env.step(operator.index(robot), text)
         self.steps += 1
         truncated = not done and self.max_steps is not None and self.steps >= self.max_steps
         return self._observation(), float(done and ok), done, truncated, self._info(ok, reason)

@@ -1,5 +1,5 @@
-"""The figures people put in papers, one call each (matplotlib, installed with the
-package):
+"""The figures people put in papers, one call each (matplotlib; ``pip install
+'coherent[analysis]'`` brings it):
 
 - :func:`table`: the paper's Table I (by task type) or Table II (by scene) as a
   figure: success rate and average steps per method, with 95% intervals over seeds and
@@ -21,17 +21,19 @@ from collections.abc import Sequence
 from itertools import groupby
 from typing import TYPE_CHECKING, Any, Literal, Union
 
-import matplotlib.pyplot as plt
-import numpy as np
-import pandas as pd
-from matplotlib.axes import Axes
-from matplotlib.lines import Line2D
-from matplotlib.ticker import MaxNLocator
-from matplotlib.patches import Rectangle
-
 from . import _coherent
-from ._coherent import METHODS, Episode, Task
+from ._coherent import METHODS, ArgumentError, Episode, Task
+from ._extras import needs
 from .analysis import Report, Results, report
+
+with needs("coherent.plot", "analysis"):
+    import matplotlib.pyplot as plt
+    import numpy as np
+    import pandas as pd
+    from matplotlib.axes import Axes
+    from matplotlib.lines import Line2D
+    from matplotlib.ticker import MaxNLocator
+    from matplotlib.patches import Rectangle
 
 if TYPE_CHECKING:
     from matplotlib.artist import Artist
@@ -60,7 +62,7 @@ def table(results: ReportLike, by: Literal["type", "scene"] = "type", *, title: 
     interval over seeds as error bars (none with one seed); dashes mark the ground
     truth's average steps."""
     if by not in ("type", "scene"):
-        raise ValueError(f'by={by!r}: expected "type" or "scene"')
+        raise ArgumentError(f'by={by!r}: expected "type" or "scene"')
     rep = results if isinstance(results, Report) else report(results)
     t = rep.table1 if by == "type" else rep.table2
     methods = [m for m in t.index if m != "ground truth"]
@@ -244,7 +246,7 @@ def scene(source: Task | Episode, ax: Axes | Sequence[Axes] | None = None, *, pa
     else:
         axes = [ax] if isinstance(ax, Axes) else list(ax)
         if len(axes) != len(levels):
-            raise ValueError(f"{task.scene}: ax must be one Axes per storey ({len(levels)}), not {len(axes)}")
+            raise ArgumentError(f"{task.scene}: ax must be one Axes per storey ({len(levels)}), not {len(axes)}")
 
     def panel(level: float | None) -> int:
         # Outside every room (or on no storey) is the lowest storey's, as in `coherent render`.

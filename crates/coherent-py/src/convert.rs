@@ -1,14 +1,19 @@
-//! Conversions between JSON values and Python objects, and running long work off the
-//! GIL where Ctrl-C can stop it.
+//! Conversions between JSON values and Python objects, of arguments whose values Rust
+//! cannot take as they are (into `ArgumentError`s that name them), and running long work
+//! off the GIL where Ctrl-C can stop it.
 
+use std::borrow::Cow;
+use std::path::PathBuf;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
 use pyo3::IntoPyObjectExt;
-use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyOverflowError, PyRuntimeError, PyTypeError, PyUnicodeEncodeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use serde_json::Value;
+
+use crate::errors::{self, short_repr};
 
 /// A JSON value as the Python object `json.loads` would give (key order kept).
 pub(crate) fn json_to_py<'py>(py: Python<'py>, value: &Value) -> PyResult<Bound<'py, PyAny>> {
@@ -53,8 +58,16 @@ pub(crate) fn to_py<'py, T: serde::Serialize>(
 
 /// A Python object made of dicts, lists, tuples, strings, numbers, booleans and None as
 /// JSON. A float NaN is null and a whole float an integer, as a pandas column with
-/// missing values holds them.
+/// missing values holds them. A value JSON cannot hold (an infinite float, an int beyond
+/// 64 bits, a str with a lone surrogate) is an `ArgumentError` naming where it is, as a
+/// JSON path from `$`, the object itself.
 pub(crate) fn py_to_json(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
+    json_at(obj, "$")
+}
+
+/// [`py_to_json`], with errors naming the place from `at` (an argument's name, an item
+/// of it: `lines[3]`).
+pub(crate) fn json_at(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
     if obj.is_none() {
         Ok(Value::Null)
     } else if let Ok(b) = obj.cast::<PyBool>() {
@@ -62,7 +75,9 @@ pub(crate) fn py_to_json(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
     } else if obj.is_instance_of::<PyInt>() {
         match obj.extract::<i64>() {
             Ok(i) => Ok(i.into()),
-            Err(_) => Ok(obj.extract::<u64>()?.into()),
+            Err(_) => obj.extract::<u64>().map(Value::from).map_err(|_| {
+                errors::argument(at, obj, "an int beyond the 64 bits of JSON numbers")
+            }),
         }
     } else if let Ok(f) = obj.cast::<PyFloat>() {
         let x = f.value();
@@ -71,29 +86,33 @@ pub(crate) fn py_to_json(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
         } else if x.fract() == 0.0 && x.abs() < 9.0e15 {
             Ok((x as i64).into())
         } else {
-            serde_json::Number::from_f64(x)
+            serde_json::Number::from_f64(finite(obj, at)?)
                 .map(Value::Number)
-                .ok_or_else(|| PyValueError::new_err(format!("{x} is not a JSON number")))
+                .ok_or_else(|| errors::argument(at, obj, "not a JSON number"))
         }
-    } else if let Ok(s) = obj.cast::<PyString>() {
-        Ok(Value::String(s.to_cow()?.into_owned()))
+    } else if obj.is_instance_of::<PyString>() {
+        Ok(Value::String(text(obj, at)?))
     } else if let Ok(d) = obj.cast::<PyDict>() {
         let mut map = serde_json::Map::new();
         for (k, v) in d.iter() {
-            let key = k
-                .cast::<PyString>()
-                .map_err(|_| PyTypeError::new_err(format!("a key that is not a string: {k}")))?;
-            map.insert(key.to_cow()?.into_owned(), py_to_json(&v)?);
+            let place = format!("{at}[{}]", short_repr(&k));
+            if !k.is_instance_of::<PyString>() {
+                return Err(PyTypeError::new_err(format!(
+                    "{place}: a key that is not a string"
+                )));
+            }
+            map.insert(text(&k, &place)?, json_at(&v, &place)?);
         }
         Ok(Value::Object(map))
     } else if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
         obj.try_iter()?
-            .map(|item| py_to_json(&item?))
+            .enumerate()
+            .map(|(i, item)| json_at(&item?, &format!("{at}[{i}]")))
             .collect::<PyResult<Vec<Value>>>()
             .map(Value::Array)
     } else {
         Err(PyTypeError::new_err(format!(
-            "{} is not JSON data (dict, list, str, int, float, bool or None)",
+            "{at}: {} is not JSON data (dict, list, str, int, float, bool or None)",
             obj.get_type().name()?
         )))
     }
@@ -104,6 +123,113 @@ pub(crate) fn py_repr(py: Python<'_>, s: &str) -> String {
         .repr()
         .map(|r| r.to_string())
         .unwrap_or_else(|_| format!("{s:?}"))
+}
+
+/// The UTF-8 text of a str, or why it has none: a Python str may hold a lone surrogate,
+/// which is no character and which UTF-8 (so Rust) cannot encode.
+pub(crate) fn utf8<'a>(s: &'a Bound<'_, PyString>) -> Result<Cow<'a, str>, String> {
+    s.to_cow().map_err(|e| unencodable(s, &e))
+}
+
+/// What the `UnicodeEncodeError` `e` of encoding `s` is about: the lone surrogate and where.
+fn unencodable(s: &Bound<'_, PyAny>, e: &PyErr) -> String {
+    let at = e
+        .value(s.py())
+        .getattr("start")
+        .and_then(|i| i.extract::<usize>());
+    match at.and_then(|i| Ok((i, s.get_item(i)?.repr()?))) {
+        Ok((i, c)) => format!("{c} at index {i} is a lone surrogate, not a character"),
+        Err(_) => e.to_string(),
+    }
+}
+
+/// A str argument's text: another type is a `TypeError`, a str with a lone surrogate an
+/// `ArgumentError` naming `name`.
+pub(crate) fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+    let Ok(s) = obj.cast::<PyString>() else {
+        return Err(PyTypeError::new_err(format!(
+            "{name}: expected a str, not {}",
+            obj.get_type().name()?
+        )));
+    };
+    utf8(s)
+        .map(Cow::into_owned)
+        .map_err(|why| errors::argument(name, obj, why))
+}
+
+/// An action argument's text (`[verb] <name>(id)`); a str with a lone surrogate is an
+/// `ActionParseError`, like any action that does not parse.
+pub(crate) fn action_text(obj: &Bound<'_, PyAny>) -> PyResult<String> {
+    let s = obj.cast::<PyString>()?;
+    utf8(s)
+        .map(Cow::into_owned)
+        .map_err(|why| errors::not_text_action(s, why))
+}
+
+/// A float argument that is finite: NaN, the infinities and an int too large for a
+/// float are `ArgumentError`s naming `name`; another type is a `TypeError`.
+pub(crate) fn finite(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
+    match obj.extract::<f64>() {
+        Ok(x) if x.is_finite() => Ok(x),
+        Ok(_) => Err(errors::argument(name, obj, "not a finite number")),
+        Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => {
+            Err(errors::argument(name, obj, "too large for a float"))
+        }
+        Err(e) => Err(e),
+    }
+}
+
+/// The unsigned ints that int arguments (counts, limits, seeds) convert to.
+pub(crate) trait Unsigned: TryFrom<u64> {
+    const MAX: u64;
+}
+
+impl Unsigned for u32 {
+    const MAX: u64 = u32::MAX as u64;
+}
+
+impl Unsigned for u64 {
+    const MAX: u64 = u64::MAX;
+}
+
+impl Unsigned for usize {
+    const MAX: u64 = usize::MAX as u64;
+}
+
+/// An int argument as `T`: a negative int, or one above `T::MAX`, is an `ArgumentError`
+/// naming `name` and the range; another type is a `TypeError`.
+#[expect(
+    dead_code,
+    reason = "for the arguments of lib.rs, run.rs and bench.rs, on another branch"
+)]
+pub(crate) fn unsigned<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
+    let out_of_range = || errors::argument(name, obj, format!("out of range: 0 to {}", T::MAX));
+    match obj.extract::<u64>() {
+        Ok(n) => T::try_from(n).map_err(|_| out_of_range()),
+        Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => Err(out_of_range()),
+        Err(e) => Err(e),
+    }
+}
+
+/// A path argument (a str or an `os.PathLike`, as `PathBuf` takes them; an item of
+/// `argv` too, with `into_os_string`): a str the file system encoding cannot encode (a
+/// lone surrogate that is no escaped byte) is an `ArgumentError` naming `name`, where
+/// PyO3's own conversion panics; another type is a `TypeError`.
+#[expect(
+    dead_code,
+    reason = "for the arguments of lib.rs, run.rs and bench.rs, on another branch"
+)]
+pub(crate) fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<PathBuf> {
+    let py = obj.py();
+    let fspath = py.import("os")?.call_method1("fspath", (obj,))?;
+    if let Err(e) = py.import("os")?.call_method1("fsencode", (&fspath,)) {
+        return Err(if e.is_instance_of::<PyUnicodeEncodeError>(py) {
+            errors::argument(name, obj, unencodable(&fspath, &e))
+        } else {
+            e
+        });
+    }
+    fspath.extract()
 }
 
 /// Runs `f` on its own thread with the GIL released, checking for Ctrl-C (and other

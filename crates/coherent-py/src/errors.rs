@@ -1,19 +1,22 @@
 //! The exception tree: `CoherentError` and a few subclasses, each raised for one kind of
 //! failure, with the attributes a caller needs to act on it.
 
+use std::fmt::Display;
+
 use coherent_core::Error;
 use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
-use pyo3::types::{PyDict, PyTuple, PyType};
+use pyo3::types::{PyDict, PyString, PyTuple, PyType};
 
 /// The native module's name, which its exceptions report as their `__module__`.
 const MODULE: &str = "coherent._coherent";
 
-/// Built with `type(...)` rather than `create_exception!` because two of them also
+/// Built with `type(...)` rather than `create_exception!` because three of them also
 /// derive from `ValueError` (bad input), which needs two bases.
 pub(crate) struct Exceptions {
     pub base: Py<PyType>,
+    pub argument: Py<PyType>,
     pub task_format: Py<PyType>,
     pub unknown_robot: Py<PyType>,
     pub action_parse: Py<PyType>,
@@ -48,6 +51,13 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
             make(name, bases, doc)
         };
         Ok(Exceptions {
+            argument: sub(
+                "ArgumentError",
+                true,
+                "An argument of the right type whose value cannot be used: an int out of\n\
+                 range, a float that is not finite, text with a lone surrogate, an empty\n\
+                 name, an unknown choice. The message names the argument and shows the value.",
+            )?,
             task_format: sub(
                 "TaskFormatError",
                 true,
@@ -118,7 +128,12 @@ pub(crate) fn core_err(py: Python<'_>, e: Error) -> PyErr {
         };
         Ok(PyErr::from_value(value))
     });
-    // Only when Python itself fails (e.g. out of memory): say that, keeping the message.
+    raised(message, built)
+}
+
+/// The exception `built`, or when Python itself failed to build it (e.g. out of memory), a
+/// `RuntimeError` that says so, keeping the message.
+fn raised(message: String, built: PyResult<PyErr>) -> PyErr {
     built.unwrap_or_else(|inner| {
         PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
     })
@@ -128,6 +143,7 @@ pub(crate) fn core_err(py: Python<'_>, e: Error) -> PyErr {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Kind {
     Coherent,
+    Argument,
     Physics,
     Backend,
     ReplayMismatch,
@@ -145,6 +161,7 @@ pub(crate) fn error(
     let built = exceptions(py).and_then(|exc| {
         let class = match kind {
             Kind::Coherent => &exc.base,
+            Kind::Argument => &exc.argument,
             Kind::Physics => &exc.physics,
             Kind::Backend => &exc.backend,
             Kind::ReplayMismatch => &exc.replay_mismatch,
@@ -155,9 +172,7 @@ pub(crate) fn error(
         }
         Ok(PyErr::from_value(value))
     });
-    built.unwrap_or_else(|inner| {
-        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
-    })
+    raised(message, built)
 }
 
 /// A `CoherentError` with `message`, for the engine's errors that are plain text.
@@ -171,4 +186,42 @@ pub(crate) fn physics(py: Python<'_>, e: coherent_sim::PhysicsError) -> PyErr {
 
 pub(crate) fn backend(py: Python<'_>, message: impl Into<String>) -> PyErr {
     error(py, Kind::Backend, message, None)
+}
+
+/// An `ArgumentError`: argument `name` cannot be `value` (shown cut down), because `why`.
+pub(crate) fn argument(name: &str, value: &Bound<'_, PyAny>, why: impl Display) -> PyErr {
+    let message = format!("{name}={}: {why}", short_repr(value));
+    error(value.py(), Kind::Argument, message, None)
+}
+
+/// An `ActionParseError` for a str that Rust cannot hold as text (one with a lone
+/// surrogate): its `action` attribute is the str as given.
+pub(crate) fn not_text_action(action: &Bound<'_, PyString>, reason: String) -> PyErr {
+    let py = action.py();
+    let message = format!("cannot parse action {}: {reason}", short_repr(action));
+    let built = exceptions(py).and_then(|exc| {
+        let value = exc.action_parse.bind(py).call1((message.clone(),))?;
+        value.setattr("action", action)?;
+        value.setattr("reason", reason)?;
+        Ok(PyErr::from_value(value))
+    });
+    raised(message, built)
+}
+
+/// `repr(value)`, cut in the middle to about 60 characters: enough to recognise a value
+/// in a message, whatever its length.
+pub(crate) fn short_repr(value: &Bound<'_, PyAny>) -> String {
+    const HEAD: usize = 40;
+    const TAIL: usize = 16;
+    let full = value
+        .repr()
+        .map(|r| r.to_string())
+        .unwrap_or_else(|_| format!("<{}>", value.get_type()));
+    let chars = full.chars().count();
+    if chars <= HEAD + TAIL + 3 {
+        return full;
+    }
+    let head: String = full.chars().take(HEAD).collect();
+    let tail: String = full.chars().skip(chars - TAIL).collect();
+    format!("{head}...{tail}")
 }

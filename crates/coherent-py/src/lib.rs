@@ -167,6 +167,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("METHODS", Method::ALL.map(Method::name).to_vec())?;
     let exc = errors::exceptions(py)?;
     m.add("CoherentError", exc.base.clone_ref(py))?;
+    m.add("ArgumentError", exc.argument.clone_ref(py))?;
     m.add("TaskFormatError", exc.task_format.clone_ref(py))?;
     m.add("UnknownRobotError", exc.unknown_robot.clone_ref(py))?;
     m.add("ActionParseError", exc.action_parse.clone_ref(py))?;

@@ -7,10 +7,12 @@ use coherent_core::planner::{self, Limits};
 use coherent_core::{
     Environment, NodeId, RawGraph, SymbolicEnv, Task, feasibility, native, original,
 };
+use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::{interruptible, json_to_py, py_repr, to_py};
+use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
+use crate::errors::short_repr;
 use crate::errors::{self, core_err};
 
 /// A task: the scene graph at the start, the robots, the goal and the ground truth.
@@ -149,6 +151,40 @@ pub(crate) fn robot_ids(task: &Task) -> Vec<i64> {
     task.robots.iter().map(|r| task.id(r.node).0).collect()
 }
 
+/// A robot argument: a node id, or the repr of an int beyond the 64 bits of node ids, which
+/// is no robot either.
+type RobotArg = Result<NodeId, String>;
+
+fn robot_arg(obj: &Bound<'_, PyAny>) -> PyResult<RobotArg> {
+    match obj.extract::<i64>() {
+        Ok(id) => Ok(Ok(NodeId(id))),
+        Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => Ok(Err(short_repr(obj))),
+        Err(e) => Err(e),
+    }
+}
+
+/// The node id of a robot argument; an int too large for a node id is an
+/// `UnknownRobotError` as any other id that is not a robot is (the others are left to
+/// the environment, which names its robots).
+fn node_id(py: Python<'_>, task: &Task, robot: RobotArg) -> PyResult<NodeId> {
+    robot.map_err(|repr| {
+        let robots: Vec<String> = task
+            .robots
+            .iter()
+            .map(|r| format!("{} ({})", task.id(r.node), r.kind))
+            .collect();
+        core_err(
+            py,
+            coherent_core::Error::UnknownRobot(format!(
+                "robot={repr}: no node id is that large; the robots of task {}/{} are {}",
+                task.meta.scene,
+                task.meta.task_id,
+                robots.join(", ")
+            )),
+        )
+    })
+}
+
 /// Puts `graph`'s `nodes` and `edges` (the original format's field names) into `dict`.
 fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
     dict.set_item("nodes", to_py(dict.py(), &graph.nodes)?)?;
@@ -203,11 +239,13 @@ impl PyEnv {
 
     /// What `robot` sees: `{"room": id | None, "nodes": [...], "edges": [...]}`, nodes and
     /// edges with the original format's field names.
-    fn observe<'py>(&self, py: Python<'py>, robot: i64) -> PyResult<Bound<'py, PyDict>> {
-        let obs = self
-            .env
-            .observe(NodeId(robot))
-            .map_err(|e| core_err(py, e))?;
+    fn observe<'py>(
+        &self,
+        py: Python<'py>,
+        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let robot = node_id(py, self.env.task(), robot)?;
+        let obs = self.env.observe(robot).map_err(|e| core_err(py, e))?;
         let task = self.env.task();
         let graph = task.raw_subgraph(self.env.state(), &obs.nodes, &obs.edges);
         let dict = PyDict::new(py);
@@ -217,35 +255,47 @@ impl PyEnv {
     }
 
     /// The action strings `robot` may use now.
-    fn actions(&self, py: Python<'_>, robot: i64) -> PyResult<Vec<String>> {
-        self.env.actions(NodeId(robot)).map_err(|e| core_err(py, e))
+    fn actions(
+        &self,
+        py: Python<'_>,
+        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
+    ) -> PyResult<Vec<String>> {
+        let robot = node_id(py, self.env.task(), robot)?;
+        self.env.actions(robot).map_err(|e| core_err(py, e))
     }
 
     /// Why `robot` cannot do `action` now, by the rules, without doing it; None when it
-    /// can. An unparsable action gets the parser's reason.
-    fn why_not(&self, py: Python<'_>, robot: i64, action: &str) -> PyResult<Option<String>> {
+    /// can. An unparsable action gets the parser's reason; a str that is not text (a lone
+    /// surrogate) raises `ActionParseError`.
+    fn why_not(
+        &self,
+        py: Python<'_>,
+        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
+        #[pyo3(from_py_with = action_text)] action: String,
+    ) -> PyResult<Option<String>> {
         let task = self.env.task();
-        let r = task
-            .robot_by_id(NodeId(robot))
-            .map_err(|e| core_err(py, e))?;
-        Ok(feasibility::check(task, self.env.state(), r, action)
+        let robot = node_id(py, task, robot)?;
+        let r = task.robot_by_id(robot).map_err(|e| core_err(py, e))?;
+        Ok(feasibility::check(task, self.env.state(), r, &action)
             .err()
             .map(|why| why.message))
     }
 
     /// Tries `action` for `robot`: `(ok, reason, done)`. An infeasible or unparsable
-    /// action is not an error: `ok` is False and `reason` says why.
+    /// action is not an error: `ok` is False and `reason` says why. A str that is not text
+    /// (a lone surrogate) cannot be tried and raises `ActionParseError`.
     fn step(
         &mut self,
         py: Python<'_>,
-        robot: i64,
-        action: &str,
+        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
+        #[pyo3(from_py_with = action_text)] action: String,
     ) -> PyResult<(bool, Option<String>, bool)> {
+        let robot = node_id(py, self.env.task(), robot)?;
         let outcome = if self.physics {
             let env = &mut self.env;
-            py.detach(|| env.step(NodeId(robot), action))
+            py.detach(|| env.step(robot, &action))
         } else {
-            self.env.step(NodeId(robot), action)
+            self.env.step(robot, &action)
         }
         .map_err(|e| core_err(py, e))?;
         Ok((
