@@ -12,8 +12,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
-use crate::errors::short_repr;
-use crate::errors::{self, core_err};
+
+use crate::errors::{self, core_err, short_repr};
 
 /// A task: the scene graph at the start, the robots, the goal and the ground truth.
 #[pyclass(name = "Task", module = "coherent._coherent", frozen)]
