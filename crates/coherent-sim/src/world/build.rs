@@ -16,7 +16,10 @@ use super::{
     Arm, DT, Dog, FailureKind, G_DOG, G_OBJECT, G_QUAD, G_STATIC, Hinge, PhysicsError, Quad,
     Volume, World, fail, groups, hinge_pose, v3,
 };
-use crate::layout::{self, ASIDE, Flight, ItemGeom, Layout, Lid, WALL, wall_of};
+use crate::layout::{
+    self, ASIDE, DoorGeom, Flight, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, WALL,
+    wall_of,
+};
 
 /// A wall of the lower room closer than this to a side of a flight rises with the
 /// stairwell (the robots need no gap that narrow).
@@ -95,9 +98,10 @@ impl World {
         }
     }
 
+    /// The ground, each room's floor and walls, the flights of stairs and the door
+    /// panels (each door open or closed as the task starts is set by [`World::new`]).
     fn build_rooms(&mut self) -> Result<(), PhysicsError> {
         let ground = self.pw.insert_body(RigidBodyBuilder::fixed());
-        let wh = self.layout.wall_height;
         self.add_collider(
             ColliderBuilder::cuboid(8.0, 0.05, 8.0)
                 .translation(Vector::new(ASIDE[0] - 4.0, -0.05, ASIDE[1] - 4.0))
@@ -120,147 +124,168 @@ impl World {
             if let Some(f) = floor {
                 self.top[f.get()] = Some((ground, Vector::new(cx, r.level, cz), [hx, hz]));
             }
-            // Four walls, cut where a door opens in them.
-            let sides = [
-                (true, r.min[1], r.min[0], r.max[0]),
-                (true, r.max[1], r.min[0], r.max[0]),
-                (false, r.min[0], r.min[1], r.max[1]),
-                (false, r.max[0], r.min[1], r.max[1]),
-            ];
-            let mut raised = Vec::new();
-            for (along_x, at, a0, a1) in sides {
-                let mut cuts: Vec<(f32, f32, f32)> = self
-                    .layout
-                    .doors
-                    .iter()
-                    .filter(|d| {
-                        d.along_x == along_x
-                            && layout::door_level(&self.layout, d) == r.level
-                            && (if along_x { d.center[1] } else { d.center[0] } - at).abs() < 1e-3
-                    })
-                    .map(|d| {
-                        let c = if along_x { d.center[0] } else { d.center[1] };
-                        (c - d.width / 2.0, c + d.width / 2.0, d.height)
-                    })
-                    .collect();
-                // Where a flight arrives: an opening the flight's width, the wall's full
-                // height.
-                cuts.extend(
-                    self.flights
-                        .iter()
-                        .filter(|f| {
-                            f.rooms[1] == r.id
-                                && f.along_x() != along_x
-                                && (if along_x { f.head[1] } else { f.head[0] } - at).abs() < 1e-3
-                        })
-                        .map(|f| {
-                            let c = if along_x { f.head[0] } else { f.head[1] };
-                            (c - f.width / 2.0, c + f.width / 2.0, wh)
-                        }),
-                );
-                cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                // Beside a flight of this room, the wall rises to the top of the upper
-                // storey's walls: the stairwell is walled up to there.
-                for f in self
-                    .flights
-                    .iter()
-                    .filter(|f| f.rooms[0] == r.id && f.along_x() == along_x)
-                {
-                    let rect = f.rect();
-                    let (e0, e1, s0, s1) = if along_x {
-                        (rect[1], rect[3], rect[0], rect[2])
-                    } else {
-                        (rect[0], rect[2], rect[1], rect[3])
-                    };
-                    if (e0 - at).abs() < STAIRWELL_GAP || (e1 - at).abs() < STAIRWELL_GAP {
-                        raised.push((along_x, at, s0.max(a0), s1.min(a1), f.upper - r.level + wh));
-                    }
-                }
-                let mut start = a0;
-                let mut pieces = Vec::new();
-                for (c0, c1, h) in cuts {
-                    pieces.push((start, c0, 0.0, wh));
-                    pieces.push((c0, c1, h, wh)); // lintel
-                    start = c1;
-                }
-                pieces.push((start, a1, 0.0, wh));
-                for (p0, p1, y0, y1) in pieces {
-                    if p1 - p0 < 1e-3 || y1 - y0 < 1e-3 {
-                        continue;
-                    }
-                    let (m, half) = ((p0 + p1) / 2.0, (p1 - p0) / 2.0);
-                    let (t, hx, hz) = if along_x {
-                        (Vector::new(m, r.level + (y0 + y1) / 2.0, at), half, WALL)
-                    } else {
-                        (Vector::new(at, r.level + (y0 + y1) / 2.0, m), WALL, half)
-                    };
-                    self.add_collider(
-                        ColliderBuilder::cuboid(hx, (y1 - y0) / 2.0, hz)
-                            .translation(t)
-                            .collision_groups(groups(G_STATIC)),
-                        ground,
-                        None,
-                    );
-                }
-            }
-            for (along_x, at, p0, p1, top) in raised {
-                let (m, half, y) = ((p0 + p1) / 2.0, (p1 - p0) / 2.0, (wh + top) / 2.0);
-                let (t, hx, hz) = if along_x {
-                    (Vector::new(m, r.level + y, at), half, WALL)
-                } else {
-                    (Vector::new(at, r.level + y, m), WALL, half)
-                };
-                self.add_collider(
-                    ColliderBuilder::cuboid(hx, (top - wh) / 2.0, hz)
-                        .translation(t)
-                        .collision_groups(groups(G_STATIC)),
-                    ground,
-                    None,
-                );
-            }
+            self.build_walls(ground, &r);
         }
         for f in self.flights.clone() {
             self.build_flight(ground, &f)?;
         }
         for d in self.layout.doors.clone() {
-            let door = self.node_of(d.id)?;
-            let level = layout::door_level(&self.layout, &d);
-            let (w2, h2) = (d.width / 2.0 - 0.02, d.height / 2.0 - 0.01);
-            // Hinge on the low end of the opening.
-            let (pivot, centre, shape) = if d.along_x {
-                (
-                    Vector::new(d.center[0] - d.width / 2.0 + 0.02, level, d.center[1]),
-                    Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
-                    ColliderBuilder::cuboid(w2, h2, 0.025),
-                )
-            } else {
-                (
-                    Vector::new(d.center[0], level, d.center[1] - d.width / 2.0 + 0.02),
-                    Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
-                    ColliderBuilder::cuboid(0.025, h2, w2),
-                )
-            };
-            let closed = Pose::from_translation(centre);
-            let body = self
-                .pw
-                .insert_body(RigidBodyBuilder::kinematic_position_based().pose(closed));
-            self.add_collider(shape.collision_groups(groups(G_STATIC)), body, Some(door));
-            self.body[door.get()] = Some(body);
-            let handle_world = if d.along_x {
-                Vector::new(d.center[0] + d.width / 2.0 - 0.12, level + 0.9, d.center[1])
-            } else {
-                Vector::new(d.center[0], level + 0.9, d.center[1] + d.width / 2.0 - 0.12)
-            };
-            self.hinges.push(Hinge {
-                node: door,
-                body,
-                closed,
-                pivot,
-                axis: Vector::Y,
-                open_angle: FRAC_PI_2,
-                handle: closed.inverse_transform_point(handle_world),
-            });
+            self.build_door(&d)?;
         }
+        Ok(())
+    }
+
+    /// A room's four walls, cut where a door opens in them or a flight arrives, and
+    /// raised beside a flight that leaves the room.
+    fn build_walls(&mut self, ground: RigidBodyHandle, r: &RoomGeom) {
+        let wh = self.layout.wall_height;
+        let sides = [
+            (true, r.min[1], r.min[0], r.max[0]),
+            (true, r.max[1], r.min[0], r.max[0]),
+            (false, r.min[0], r.min[1], r.max[1]),
+            (false, r.max[0], r.min[1], r.max[1]),
+        ];
+        let mut raised = Vec::new();
+        for (along_x, at, a0, a1) in sides {
+            // Beside a flight of this room, the wall rises to the top of the upper
+            // storey's walls: the stairwell is walled up to there.
+            for f in self
+                .flights
+                .iter()
+                .filter(|f| f.rooms[0] == r.id && f.along_x() == along_x)
+            {
+                let rect = f.rect();
+                let (e0, e1, s0, s1) = if along_x {
+                    (rect[1], rect[3], rect[0], rect[2])
+                } else {
+                    (rect[0], rect[2], rect[1], rect[3])
+                };
+                if (e0 - at).abs() < STAIRWELL_GAP || (e1 - at).abs() < STAIRWELL_GAP {
+                    raised.push((along_x, at, s0.max(a0), s1.min(a1), f.upper - r.level + wh));
+                }
+            }
+            let mut start = a0;
+            let mut pieces = Vec::new();
+            for (c0, c1, h) in self.wall_cuts(r, along_x, at) {
+                pieces.push((start, c0, 0.0, wh));
+                pieces.push((c0, c1, h, wh)); // lintel
+                start = c1;
+            }
+            pieces.push((start, a1, 0.0, wh));
+            for (p0, p1, y0, y1) in pieces {
+                if p1 - p0 < 1e-3 || y1 - y0 < 1e-3 {
+                    continue;
+                }
+                self.wall_box(ground, r.level, (along_x, at), (p0, p1), (y0, y1));
+            }
+        }
+        for (along_x, at, p0, p1, top) in raised {
+            self.wall_box(ground, r.level, (along_x, at), (p0, p1), (wh, top));
+        }
+    }
+
+    /// The openings in the wall of room `r` that runs along x (`along_x`) or z at `at`:
+    /// `(from, to, height)` along the wall, in order; a door is as high as it is, a
+    /// flight arriving through the wall leaves it open to the wall's full height.
+    fn wall_cuts(&self, r: &RoomGeom, along_x: bool, at: f32) -> Vec<(f32, f32, f32)> {
+        let mut cuts: Vec<(f32, f32, f32)> = self
+            .layout
+            .doors
+            .iter()
+            .filter(|d| {
+                d.along_x == along_x
+                    && layout::door_level(&self.layout, d) == r.level
+                    && (if along_x { d.center[1] } else { d.center[0] } - at).abs() < 1e-3
+            })
+            .map(|d| {
+                let c = if along_x { d.center[0] } else { d.center[1] };
+                (c - d.width / 2.0, c + d.width / 2.0, d.height)
+            })
+            .collect();
+        cuts.extend(
+            self.flights
+                .iter()
+                .filter(|f| {
+                    f.rooms[1] == r.id
+                        && f.along_x() != along_x
+                        && (if along_x { f.head[1] } else { f.head[0] } - at).abs() < 1e-3
+                })
+                .map(|f| {
+                    let c = if along_x { f.head[0] } else { f.head[1] };
+                    (
+                        c - f.width / 2.0,
+                        c + f.width / 2.0,
+                        self.layout.wall_height,
+                    )
+                }),
+        );
+        cuts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        cuts
+    }
+
+    /// A piece of wall on the storey at `level`, on the line `(along_x, at)`, from `p0`
+    /// to `p1` along it and from `y0` to `y1` above the floor.
+    fn wall_box(
+        &mut self,
+        ground: RigidBodyHandle,
+        level: f32,
+        (along_x, at): (bool, f32),
+        (p0, p1): (f32, f32),
+        (y0, y1): (f32, f32),
+    ) {
+        let (m, half) = ((p0 + p1) / 2.0, (p1 - p0) / 2.0);
+        let (t, hx, hz) = if along_x {
+            (Vector::new(m, level + (y0 + y1) / 2.0, at), half, WALL)
+        } else {
+            (Vector::new(at, level + (y0 + y1) / 2.0, m), WALL, half)
+        };
+        self.add_collider(
+            ColliderBuilder::cuboid(hx, (y1 - y0) / 2.0, hz)
+                .translation(t)
+                .collision_groups(groups(G_STATIC)),
+            ground,
+            None,
+        );
+    }
+
+    /// A door's panel, hinged on the low end of its opening.
+    fn build_door(&mut self, d: &DoorGeom) -> Result<(), PhysicsError> {
+        let door = self.node_of(d.id)?;
+        let level = layout::door_level(&self.layout, d);
+        let (w2, h2) = (d.width / 2.0 - 0.02, d.height / 2.0 - 0.01);
+        let (pivot, centre, shape) = if d.along_x {
+            (
+                Vector::new(d.center[0] - d.width / 2.0 + 0.02, level, d.center[1]),
+                Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
+                ColliderBuilder::cuboid(w2, h2, 0.025),
+            )
+        } else {
+            (
+                Vector::new(d.center[0], level, d.center[1] - d.width / 2.0 + 0.02),
+                Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
+                ColliderBuilder::cuboid(0.025, h2, w2),
+            )
+        };
+        let closed = Pose::from_translation(centre);
+        let body = self
+            .pw
+            .insert_body(RigidBodyBuilder::kinematic_position_based().pose(closed));
+        self.add_collider(shape.collision_groups(groups(G_STATIC)), body, Some(door));
+        self.body[door.get()] = Some(body);
+        let handle_world = if d.along_x {
+            Vector::new(d.center[0] + d.width / 2.0 - 0.12, level + 0.9, d.center[1])
+        } else {
+            Vector::new(d.center[0], level + 0.9, d.center[1] + d.width / 2.0 - 0.12)
+        };
+        self.hinges.push(Hinge {
+            node: door,
+            body,
+            closed,
+            pivot,
+            axis: Vector::Y,
+            open_angle: FRAC_PI_2,
+            handle: closed.inverse_transform_point(handle_world),
+        });
         Ok(())
     }
 
@@ -431,6 +456,7 @@ impl World {
         Ok(())
     }
 
+    /// Each robot of the layout, as its kind is built.
     fn build_robots(&mut self) -> Result<(), PhysicsError> {
         let specs = self.layout.specs.clone();
         for rg in self.layout.robots.clone() {
@@ -443,137 +469,161 @@ impl World {
             };
             let rot = Rotation::from_rotation_y(rg.yaw);
             match robot.kind {
-                RobotKind::Quadrotor => {
-                    let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.003, 0.0), rot);
-                    let body = self.pw.insert_body(
-                        RigidBodyBuilder::dynamic()
-                            .pose(pose)
-                            .linear_damping(0.3)
-                            .angular_damping(1.0)
-                            .can_sleep(false),
-                    );
-                    let basket = self.task.basket_of(r);
-                    let b = specs.basket_half;
-                    let q = specs.quad_half;
-                    let t = 0.02;
-                    let wall_h = 0.14;
-                    let gr = groups(G_QUAD);
-                    let owner = basket.or(Some(r));
-                    // Basket: floor and walls. Its mass is most of the craft's.
-                    let total = specs.quad_mass;
-                    let parts = [
-                        (Vector::new(0.0, t / 2.0, 0.0), [b, t / 2.0, b]),
-                        (
-                            Vector::new(-b + t / 2.0, wall_h / 2.0, 0.0),
-                            [t / 2.0, wall_h / 2.0, b],
-                        ),
-                        (
-                            Vector::new(b - t / 2.0, wall_h / 2.0, 0.0),
-                            [t / 2.0, wall_h / 2.0, b],
-                        ),
-                        (
-                            Vector::new(0.0, wall_h / 2.0, b - t / 2.0),
-                            [b, wall_h / 2.0, t / 2.0],
-                        ),
-                        (
-                            Vector::new(0.0, wall_h / 2.0, -b + t / 2.0),
-                            [b, wall_h / 2.0, t / 2.0],
-                        ),
-                    ];
-                    for (c, e) in parts {
-                        self.add_collider(
-                            ColliderBuilder::cuboid(e[0], e[1], e[2])
-                                .translation(c)
-                                .mass(total * 0.1)
-                                .friction(0.9)
-                                .collision_groups(gr),
-                            body,
-                            owner,
-                        );
-                    }
-                    let rotors = [
-                        Vector::new(q - 0.08, 0.24, q - 0.08),
-                        Vector::new(-q + 0.08, 0.24, q - 0.08),
-                        Vector::new(-q + 0.08, 0.24, -q + 0.08),
-                        Vector::new(q - 0.08, 0.24, -q + 0.08),
-                    ];
-                    for p in rotors {
-                        self.add_collider(
-                            ColliderBuilder::cylinder(0.01, 0.08)
-                                .translation(p)
-                                .mass(total * 0.1)
-                                .collision_groups(gr),
-                            body,
-                            Some(r),
-                        );
-                    }
-                    self.add_collider(
-                        ColliderBuilder::cuboid(0.06, 0.03, 0.06)
-                            .translation(Vector::new(0.0, 0.25, 0.0))
-                            .mass(total * 0.1)
-                            .collision_groups(gr),
-                        body,
-                        Some(r),
-                    );
-                    self.body[r.get()] = Some(body);
-                    if let Some(bk) = basket {
-                        self.body[bk.get()] = Some(body);
-                        self.volume[bk.get()] = Some(Volume {
-                            body,
-                            local: Pose::from_translation(Vector::new(0.0, t + 0.06, 0.0)),
-                            half: Vector::new(b - t, 0.06, b - t),
-                        });
-                    }
-                    self.quad = Some(Quad {
-                        robot: r,
-                        body,
-                        motors_on: false,
-                        integral: Vector::ZERO,
-                        rotors,
-                    });
-                    self.paths.push((self.task.id(r), vec![rg.pos]));
-                }
-                RobotKind::RobotDog => {
-                    let h = specs.dog_half;
-                    let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.02, 0.0), rot);
-                    let body = self
-                        .pw
-                        .insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose));
-                    let collider = self.pw.colliders.insert_with_parent(
-                        ColliderBuilder::cylinder(h[1], h[0].max(h[2]))
-                            .translation(Vector::new(0.0, h[1], 0.0))
-                            .collision_groups(groups(G_DOG)),
-                        body,
-                        &mut self.pw.bodies,
-                    );
-                    self.owner.insert(collider, r);
-                    self.body[r.get()] = Some(body);
-                    self.dog = Some(Dog {
-                        robot: r,
-                        body,
-                        yaw: rg.yaw,
-                    });
-                    let shoulder = v3(specs.dog_shoulder);
-                    self.build_arm(r, body, shoulder, specs.dog_links)?;
-                    self.paths.push((self.task.id(r), vec![rg.pos]));
-                }
-                RobotKind::RobotArm => {
-                    let pose = Pose::from_parts(v3(rg.pos), rot);
-                    let body = self.pw.insert_body(RigidBodyBuilder::fixed().pose(pose));
-                    self.add_collider(
-                        ColliderBuilder::cylinder(specs.arm_shoulder / 2.0, 0.08)
-                            .translation(Vector::new(0.0, specs.arm_shoulder / 2.0, 0.0))
-                            .collision_groups(InteractionGroups::none()),
-                        body,
-                        Some(r),
-                    );
-                    self.body[r.get()] = Some(body);
-                    let shoulder = Vector::new(0.0, specs.arm_shoulder, 0.0);
-                    self.build_arm(r, body, shoulder, specs.arm_links)?;
-                }
+                RobotKind::Quadrotor => self.build_quadrotor(r, &rg, rot, &specs),
+                RobotKind::RobotDog => self.build_dog(r, &rg, rot, &specs)?,
+                RobotKind::RobotArm => self.build_fixed_arm(r, &rg, rot, &specs)?,
             }
         }
         Ok(())
+    }
+
+    /// The quadrotor: a dynamic body whose basket (floor and walls) carries most of its
+    /// mass, four rotors and a hub; the basket's inside is a volume of the basket node.
+    fn build_quadrotor(&mut self, r: Idx, rg: &RobotGeom, rot: Rotation, specs: &RobotSpecs) {
+        let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.003, 0.0), rot);
+        let body = self.pw.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(pose)
+                .linear_damping(0.3)
+                .angular_damping(1.0)
+                .can_sleep(false),
+        );
+        let basket = self.task.basket_of(r);
+        let b = specs.basket_half;
+        let q = specs.quad_half;
+        let t = 0.02;
+        let wall_h = 0.14;
+        let gr = groups(G_QUAD);
+        let owner = basket.or(Some(r));
+        // Basket: floor and walls. Its mass is most of the craft's.
+        let total = specs.quad_mass;
+        let parts = [
+            (Vector::new(0.0, t / 2.0, 0.0), [b, t / 2.0, b]),
+            (
+                Vector::new(-b + t / 2.0, wall_h / 2.0, 0.0),
+                [t / 2.0, wall_h / 2.0, b],
+            ),
+            (
+                Vector::new(b - t / 2.0, wall_h / 2.0, 0.0),
+                [t / 2.0, wall_h / 2.0, b],
+            ),
+            (
+                Vector::new(0.0, wall_h / 2.0, b - t / 2.0),
+                [b, wall_h / 2.0, t / 2.0],
+            ),
+            (
+                Vector::new(0.0, wall_h / 2.0, -b + t / 2.0),
+                [b, wall_h / 2.0, t / 2.0],
+            ),
+        ];
+        for (c, e) in parts {
+            self.add_collider(
+                ColliderBuilder::cuboid(e[0], e[1], e[2])
+                    .translation(c)
+                    .mass(total * 0.1)
+                    .friction(0.9)
+                    .collision_groups(gr),
+                body,
+                owner,
+            );
+        }
+        let rotors = [
+            Vector::new(q - 0.08, 0.24, q - 0.08),
+            Vector::new(-q + 0.08, 0.24, q - 0.08),
+            Vector::new(-q + 0.08, 0.24, -q + 0.08),
+            Vector::new(q - 0.08, 0.24, -q + 0.08),
+        ];
+        for p in rotors {
+            self.add_collider(
+                ColliderBuilder::cylinder(0.01, 0.08)
+                    .translation(p)
+                    .mass(total * 0.1)
+                    .collision_groups(gr),
+                body,
+                Some(r),
+            );
+        }
+        self.add_collider(
+            ColliderBuilder::cuboid(0.06, 0.03, 0.06)
+                .translation(Vector::new(0.0, 0.25, 0.0))
+                .mass(total * 0.1)
+                .collision_groups(gr),
+            body,
+            Some(r),
+        );
+        self.body[r.get()] = Some(body);
+        if let Some(bk) = basket {
+            self.body[bk.get()] = Some(body);
+            self.volume[bk.get()] = Some(Volume {
+                body,
+                local: Pose::from_translation(Vector::new(0.0, t + 0.06, 0.0)),
+                half: Vector::new(b - t, 0.06, b - t),
+            });
+        }
+        self.quad = Some(Quad {
+            robot: r,
+            body,
+            motors_on: false,
+            integral: Vector::ZERO,
+            rotors,
+        });
+        self.paths.push((self.task.id(r), vec![rg.pos]));
+    }
+
+    /// The legged robot: a kinematic cylinder walked by the character controller, and
+    /// its arm.
+    fn build_dog(
+        &mut self,
+        r: Idx,
+        rg: &RobotGeom,
+        rot: Rotation,
+        specs: &RobotSpecs,
+    ) -> Result<(), PhysicsError> {
+        let h = specs.dog_half;
+        let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.02, 0.0), rot);
+        let body = self
+            .pw
+            .insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose));
+        let collider = self.pw.colliders.insert_with_parent(
+            ColliderBuilder::cylinder(h[1], h[0].max(h[2]))
+                .translation(Vector::new(0.0, h[1], 0.0))
+                .collision_groups(groups(G_DOG)),
+            body,
+            &mut self.pw.bodies,
+        );
+        self.owner.insert(collider, r);
+        self.body[r.get()] = Some(body);
+        self.dog = Some(Dog {
+            robot: r,
+            body,
+            yaw: rg.yaw,
+        });
+        let shoulder = v3(specs.dog_shoulder);
+        self.build_arm(r, body, shoulder, specs.dog_links)?;
+        self.paths.push((self.task.id(r), vec![rg.pos]));
+        Ok(())
+    }
+
+    /// A fixed arm: a fixed base on its surface (it touches nothing) and the arm on it.
+    fn build_fixed_arm(
+        &mut self,
+        r: Idx,
+        rg: &RobotGeom,
+        rot: Rotation,
+        specs: &RobotSpecs,
+    ) -> Result<(), PhysicsError> {
+        let pose = Pose::from_parts(v3(rg.pos), rot);
+        let body = self.pw.insert_body(RigidBodyBuilder::fixed().pose(pose));
+        self.add_collider(
+            ColliderBuilder::cylinder(specs.arm_shoulder / 2.0, 0.08)
+                .translation(Vector::new(0.0, specs.arm_shoulder / 2.0, 0.0))
+                .collision_groups(InteractionGroups::none()),
+            body,
+            Some(r),
+        );
+        self.body[r.get()] = Some(body);
+        let shoulder = Vector::new(0.0, specs.arm_shoulder, 0.0);
+        self.build_arm(r, body, shoulder, specs.arm_links)
     }
 
     fn build_arm(
