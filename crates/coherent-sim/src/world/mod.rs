@@ -3,17 +3,16 @@
 //! bodies. This file holds the [`World`] itself, what its robot models and panels keep
 //! beside the bodies, the errors, and the lookups every job shares; the jobs are one
 //! file each, each using only this one and those above it in this list:
-//! - [`step`](self::step): one simulation step and the controllers it runs (the
-//!   quadrotor's thrust controller, the arm chains following their roots);
-//! - [`arm`](self::arm): inverse kinematics and arm motion;
-//! - [`relations`](self::relations): where things are, read back from the bodies;
-//! - [`build`](self::build): the bodies from the layout (rooms, walls, doors, stairs,
-//!   furniture, objects, the robots and their arms);
-//! - [`quadrotor`](self::quadrotor): take-off, flights between rooms and storeys,
-//!   landing;
-//! - [`legged`](self::legged): the legged robot's routes and walking;
-//! - [`manipulation`](self::manipulation): grasping, putting down, opening and closing;
-//! - [`execute`](self::execute): one action, dispatched to the three above.
+//! - `step.rs`: one simulation step and the controllers it runs (the quadrotor's
+//!   thrust controller, the arm chains following their roots);
+//! - `arm.rs`: inverse kinematics and arm motion;
+//! - `relations.rs`: where things are, read back from the bodies;
+//! - `build.rs`: the bodies from the layout (rooms, walls, doors, stairs, furniture,
+//!   objects, the robots and their arms);
+//! - `quadrotor.rs`: take-off, flights between rooms and storeys, landing;
+//! - `legged.rs`: the legged robot's routes and walking;
+//! - `manipulation.rs`: grasping, putting down, opening and closing;
+//! - `execute.rs`: one action, dispatched to the three above.
 
 mod arm;
 mod build;

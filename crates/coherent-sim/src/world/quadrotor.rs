@@ -1,7 +1,7 @@
 //! The quadrotor's flights: take-off, routes at cruise altitude through the door between
 //! two rooms or up and down the stairwell between storeys, hovering, landing spots and
 //! landing, and the crash check against walls and door panels. The thrust controller
-//! that follows the set points runs in every step ([`super::step`]).
+//! that follows the set points runs in every step (`step.rs`).
 
 use coherent_core::{Idx, NodeKind, Relation};
 use rapier3d::prelude::*;
