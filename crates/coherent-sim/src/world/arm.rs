@@ -10,8 +10,10 @@ use rapier3d::prelude::*;
 
 use super::{Arm, DT, FailureKind, PhysicsError, World, fail};
 
+/// The joint angles (yaw, shoulder, elbow) an arm rests at, folded up.
 pub(super) const ARM_HOME: [f32; 3] = [0.0, -1.3, 2.4];
 
+/// `a` brought into `[-pi, pi]`.
 fn wrap(a: f32) -> f32 {
     let mut a = a;
     while a > PI {
