@@ -23,7 +23,6 @@ pub struct PhysicalEnv {
     state: State,
     world: World,
     last_error: Option<PhysicsError>,
-    wall: std::time::Duration,
 }
 
 /// What one physically executed step did.
@@ -45,7 +44,6 @@ impl PhysicalEnv {
     }
 
     pub fn with_layout(task: Arc<Task>, layout: Layout) -> Result<PhysicalEnv, PhysicsError> {
-        let start = Instant::now();
         let world = World::new(task.clone(), layout.clone())?;
         let env = PhysicalEnv {
             state: task.init.clone(),
@@ -53,7 +51,6 @@ impl PhysicalEnv {
             layout,
             world,
             last_error: None,
-            wall: start.elapsed(),
         };
         env.compare().map_err(|e| PhysicsError {
             kind: e.kind,
@@ -77,11 +74,6 @@ impl PhysicalEnv {
 
     pub fn sim_seconds(&self) -> f64 {
         self.world.sim_time
-    }
-
-    /// Wall time spent building and stepping the world.
-    pub fn wall_time(&self) -> std::time::Duration {
-        self.wall
     }
 
     /// Checks `text` with the rules, executes it physically, applies it symbolically and
@@ -109,10 +101,7 @@ impl PhysicalEnv {
             Err(why) => return Ok(Err(why)),
         };
         let t0 = self.world.sim_time;
-        let start = Instant::now();
-        let result = self.execute_and_compare(r.node, a);
-        self.wall += start.elapsed();
-        match result {
+        match self.execute_and_compare(r.node, a) {
             Ok(()) => Ok(Ok(StepReport {
                 action: a.render(&self.task),
                 sim_seconds: self.world.sim_time - t0,

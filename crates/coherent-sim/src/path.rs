@@ -9,8 +9,7 @@ use std::collections::BinaryHeap;
 
 use rapier3d::prelude::*;
 
-use crate::layout;
-use crate::world::World;
+use crate::layout::{self, Flight, Layout};
 
 const CELL: f32 = 0.1;
 
@@ -23,10 +22,18 @@ pub(crate) struct Grid {
 }
 
 impl Grid {
-    /// The grid of the storey whose floor is at `level`.
-    pub fn new(w: &World, dog: RigidBodyHandle, level: f32) -> Grid {
+    /// The grid of the storey whose floor is at `level`, from the layout's rooms and
+    /// doors, its `flights`, and the `colliders` (those of the legged robot's body `dog`
+    /// left out).
+    pub fn new(
+        layout: &Layout,
+        flights: &[Flight],
+        colliders: &ColliderSet,
+        dog: RigidBodyHandle,
+        level: f32,
+    ) -> Grid {
         let (mut x0, mut z0, mut x1, mut z1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
-        for r in &w.layout.rooms {
+        for r in &layout.rooms {
             x0 = x0.min(r.min[0]);
             z0 = z0.min(r.min[1]);
             x1 = x1.max(r.max[0]);
@@ -41,10 +48,10 @@ impl Grid {
             nz,
             blocked: vec![true; nx * nz],
         };
-        let h = w.layout.specs.dog_half;
+        let h = layout.specs.dog_half;
         let inflate = h[0].max(h[2]) + 0.03;
         // Free inside the storey's rooms, minus a margin along the outer footprint.
-        for r in w.layout.rooms.iter().filter(|r| r.level == level) {
+        for r in layout.rooms.iter().filter(|r| r.level == level) {
             g.mark(
                 r.min[0] + inflate,
                 r.min[1] + inflate,
@@ -56,14 +63,12 @@ impl Grid {
         // Door openings are passable (their panels, when closed, block below), and so is
         // the opening where a flight arrives on this storey: a box across the opening
         // (its middle, its width, whether it runs along x), 15 cm deep into each side.
-        let doors = w
-            .layout
+        let doors = layout
             .doors
             .iter()
-            .filter(|d| layout::door_level(&w.layout, d) == level)
+            .filter(|d| layout::door_level(layout, d) == level)
             .map(|d| (d.center, d.width, d.along_x));
-        let heads = w
-            .flights
+        let heads = flights
             .iter()
             .filter(|f| f.upper == level)
             .map(|f| (f.head, f.width, !f.along_x()));
@@ -72,7 +77,7 @@ impl Grid {
             let (ax, az) = if along_x { (half, deep) } else { (deep, half) };
             g.mark(c[0] - ax, c[1] - az, c[0] + ax, c[1] + az, false);
         }
-        for (_, c) in w.pw.colliders.iter() {
+        for (_, c) in colliders.iter() {
             if c.collision_groups().memberships == Group::NONE || c.parent() == Some(dog) {
                 continue;
             }

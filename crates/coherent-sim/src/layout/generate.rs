@@ -1,30 +1,15 @@
-//! Where everything is. A task's `geometry` (native files, [`coherent_core::geometry`])
-//! is used as it is; without one (every imported original task) [`generate`] derives a
-//! deterministic layout from the graph.
-//!
-//! Frame: metres, `y` up, the floor at `y = 0`; positions are the bottom centre of a box.
+//! A layout generated from a task's graph, for a task without geometry (every imported
+//! original task): the rooms on a grid joined where the doors say, one floor item per
+//! cell, fixed arms on their furniture, and everything else packed on its surface or in
+//! its container, things grown to fit what the graph puts on or in them. The result is
+//! a deterministic function of the task.
 
-pub use coherent_core::geometry::{
-    DoorGeom, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, StairsGeom, WALL,
-    landing_pad, wall_of,
+use coherent_core::geometry::{
+    DoorGeom, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, landing_pad, wall_of,
 };
 use coherent_core::{Idx, NodeKind, PropSet, Relation, RobotKind, StateSet, Task};
 
-/// Why a layout could not be made.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct LayoutError(pub String);
-
-impl std::fmt::Display for LayoutError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for LayoutError {}
-
-fn err<T>(msg: String) -> Result<T, LayoutError> {
-    Err(LayoutError(msg))
-}
+use super::error::{LayoutError, err};
 
 /// Side of a floor cell; the generated layout puts one floor item in each.
 const CELL: f32 = 3.0;
@@ -35,25 +20,57 @@ const WALL_HEIGHT: f32 = 2.6;
 /// Where things that are in no room are set aside, `[x, z]`.
 pub const ASIDE: [f32; 2] = [-30.0, -30.0];
 
-/// The task's own geometry when it has one (checked when the task was read), otherwise
-/// a generated layout.
-pub fn for_task(task: &Task) -> Result<Layout, LayoutError> {
-    match &task.meta.geometry {
-        Some(layout) => Ok(layout.clone()),
-        None => generate(task),
-    }
-}
-
 /// A deterministic layout from the graph: rooms on a grid joined where doors say,
 /// one floor item per cell, things packed on their surface or in their container.
 pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
     let specs = RobotSpecs::default();
-    let init = &task.init;
     let rooms = task.rooms().to_vec();
     if rooms.is_empty() {
         return err("layout: the task has no room".into());
     }
-    // Door -> its two rooms.
+    let doors = door_rooms(task);
+    let cell = grid_places(task, &rooms, &doors)?;
+    let mut k = 2usize;
+    for &r in &rooms {
+        let n = floor_items(task, r).len() + 1;
+        let mut kr = (n as f32).sqrt().ceil() as usize;
+        kr += kr % 2; // even, so that no item stands in front of a door
+        k = k.max(kr);
+    }
+    let side = k as f32 * CELL;
+    let room_geom: Vec<RoomGeom> = cell
+        .iter()
+        .map(|&(r, (i, j))| RoomGeom {
+            id: task.id(r).0,
+            min: [i as f32 * side, j as f32 * side],
+            max: [(i + 1) as f32 * side, (j + 1) as f32 * side],
+            level: 0.0,
+        })
+        .collect();
+    let door_geom = door_geoms(task, &doors, &cell, side)?;
+    let loc = locations(task);
+    let fitted = fitted_sizes(task, &specs, &loc);
+    let (mut items, mut robots) = floor_things(task, &specs, &cell, k, &fitted);
+    quadrotor_on_furniture(task, &specs, &items, &mut robots);
+    fixed_arms(task, &items, &mut robots)?;
+    held_things(task, &specs, &loc, &fitted, &mut items, &robots)?;
+    let layout = Layout {
+        specs,
+        rooms: room_geom,
+        doors: door_geom,
+        stairs: Vec::new(),
+        items,
+        robots,
+        wall_height: WALL_HEIGHT,
+    };
+    match layout.missing_entry(task) {
+        Some(missing) => err(format!("layout: {missing}")),
+        None => Ok(layout),
+    }
+}
+
+/// Each door with its rooms, in file order.
+fn door_rooms(task: &Task) -> Vec<(Idx, Vec<Idx>)> {
     let mut doors: Vec<(Idx, Vec<Idx>)> = Vec::new();
     for &(d, r) in task.doors() {
         match doors.iter_mut().find(|(x, _)| *x == d) {
@@ -61,18 +78,35 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             None => doors.push((d, vec![r])),
         }
     }
-    // Grid places, breadth first from the room with the most doors.
+    doors
+}
+
+/// Each room with its place on the grid of rooms, `(i, j)`: its footprint is the
+/// square `i` sides along x and `j` along z.
+type RoomPlaces = Vec<(Idx, (i32, i32))>;
+
+/// Where `r` is on the grid of rooms.
+fn place_of(cell: &[(Idx, (i32, i32))], r: Idx) -> Option<(i32, i32)> {
+    cell.iter().find(|(x, _)| *x == r).map(|(_, p)| *p)
+}
+
+/// Each room's place on the grid: breadth first from the room with the most doors, a
+/// room through a door on a free side of the one it joins; a room no door reaches at
+/// the next free place along x.
+fn grid_places(
+    task: &Task,
+    rooms: &[Idx],
+    doors: &[(Idx, Vec<Idx>)],
+) -> Result<RoomPlaces, LayoutError> {
     let degree = |r: Idx| doors.iter().filter(|(_, rs)| rs.contains(&r)).count();
     let hub = rooms
         .iter()
         .copied()
         .max_by_key(|&r| (degree(r), std::cmp::Reverse(r)))
         .unwrap_or(rooms[0]);
-    let mut cell: Vec<(Idx, (i32, i32))> = vec![(hub, (0, 0))];
+    let mut cell: RoomPlaces = vec![(hub, (0, 0))];
     let mut queue = vec![hub];
     let mut qi = 0;
-    let place_of =
-        |cell: &[(Idx, (i32, i32))], r: Idx| cell.iter().find(|(x, _)| *x == r).map(|(_, p)| *p);
     while qi < queue.len() || cell.len() < rooms.len() {
         if qi == queue.len() {
             // A room no door reaches: next free cell along x.
@@ -88,7 +122,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
         let r = queue[qi];
         qi += 1;
         let p = place_of(&cell, r).unwrap_or((0, 0));
-        for (_, rs) in &doors {
+        for (_, rs) in doors {
             if !rs.contains(&r) {
                 continue;
             }
@@ -112,47 +146,44 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             }
         }
     }
+    Ok(cell)
+}
 
-    // Floor items of each room (robots included), in file order.
-    let floor_items = |room: Idx| -> Vec<Idx> {
-        let floor = task.floor_of(room);
-        task.indices()
-            .filter(|&n| {
-                let k = task.node(n).kind;
-                (k == NodeKind::Object
-                    || k == NodeKind::Robot(RobotKind::RobotDog)
-                    || k == NodeKind::Robot(RobotKind::Quadrotor))
-                    && if k == NodeKind::Object {
-                        floor.is_some_and(|f| {
-                            init.has(coherent_core::Edge::new(n, Relation::On, f))
-                                || init.has(coherent_core::Edge::new(n, Relation::Inside, f))
-                        })
-                    } else {
-                        // A robot is in the room its INSIDE edge names.
-                        init.has(coherent_core::Edge::new(n, Relation::Inside, room))
-                    }
-            })
-            .collect()
-    };
-    let mut k = 2usize;
-    for &r in &rooms {
-        let n = floor_items(r).len() + 1;
-        let mut kr = (n as f32).sqrt().ceil() as usize;
-        kr += kr % 2; // even, so that no item stands in front of a door
-        k = k.max(kr);
-    }
-    let side = k as f32 * CELL;
-    let room_geom: Vec<RoomGeom> = cell
-        .iter()
-        .map(|&(r, (i, j))| RoomGeom {
-            id: task.id(r).0,
-            min: [i as f32 * side, j as f32 * side],
-            max: [(i + 1) as f32 * side, (j + 1) as f32 * side],
-            level: 0.0,
+/// The floor items of `room` (robots included), in file order.
+fn floor_items(task: &Task, room: Idx) -> Vec<Idx> {
+    let floor = task.floor_of(room);
+    task.indices()
+        .filter(|&n| {
+            let k = task.node(n).kind;
+            (k == NodeKind::Object
+                || k == NodeKind::Robot(RobotKind::RobotDog)
+                || k == NodeKind::Robot(RobotKind::Quadrotor))
+                && if k == NodeKind::Object {
+                    floor.is_some_and(|f| {
+                        task.init.has(coherent_core::Edge::new(n, Relation::On, f))
+                            || task
+                                .init
+                                .has(coherent_core::Edge::new(n, Relation::Inside, f))
+                    })
+                } else {
+                    // A robot is in the room its INSIDE edge names.
+                    task.init
+                        .has(coherent_core::Edge::new(n, Relation::Inside, room))
+                }
         })
-        .collect();
+        .collect()
+}
+
+/// The doors between the rooms at their places on the grid, `side` metres apart: each
+/// in the middle of the wall the two rooms share.
+fn door_geoms(
+    task: &Task,
+    doors: &[(Idx, Vec<Idx>)],
+    cell: &[(Idx, (i32, i32))],
+    side: f32,
+) -> Result<Vec<DoorGeom>, LayoutError> {
     let mut door_geom = Vec::new();
-    for (d, rs) in &doors {
+    for (d, rs) in doors {
         let label = task.node(*d).label();
         let [a, b] = rs[..] else {
             return err(format!(
@@ -160,7 +191,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
                 rs.len()
             ));
         };
-        let (Some(pa), Some(pb)) = (place_of(&cell, a), place_of(&cell, b)) else {
+        let (Some(pa), Some(pb)) = (place_of(cell, a), place_of(cell, b)) else {
             return err(format!("layout: {label} leads to an unplaced room"));
         };
         let (dx, dz) = (pb.0 - pa.0, pb.1 - pa.1);
@@ -184,13 +215,23 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             height: 2.3,
         });
     }
+    Ok(door_geom)
+}
 
-    let loc = locations(task);
-    let fitted = fitted_sizes(task, &specs, &loc);
+/// The floor items of each room in its `k` by `k` cells, one each: the robots that
+/// stand on a floor, and the furniture and floor objects at their `fitted` sizes.
+fn floor_things(
+    task: &Task,
+    specs: &RobotSpecs,
+    cell: &[(Idx, (i32, i32))],
+    k: usize,
+    fitted: &[[f32; 3]],
+) -> (Vec<ItemGeom>, Vec<RobotGeom>) {
+    let side = k as f32 * CELL;
     let mut items: Vec<ItemGeom> = Vec::new();
     let mut robots: Vec<RobotGeom> = Vec::new();
-    for &(r, (i, j)) in &cell {
-        for (slot, n) in floor_items(r).into_iter().enumerate() {
+    for &(r, (i, j)) in cell {
+        for (slot, n) in floor_items(task, r).into_iter().enumerate() {
             let (a, b) = (slot % k, slot / k);
             let x = i as f32 * side + (a as f32 + 0.5) * CELL;
             let z = j as f32 * side + (b as f32 + 0.5) * CELL;
@@ -201,7 +242,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
                     yaw: 0.0,
                 }),
                 _ => {
-                    let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+                    let (_, container, lid, dynamic) = shape_of(task, n, specs);
                     let size = fitted[n.get()];
                     items.push(ItemGeom {
                         id: task.id(n).0,
@@ -215,12 +256,21 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             }
         }
     }
-    // A quadrotor that starts on a piece of furniture: on the right end of its top.
+    (items, robots)
+}
+
+/// A quadrotor that starts on a piece of furniture: on the right end of its top.
+fn quadrotor_on_furniture(
+    task: &Task,
+    specs: &RobotSpecs,
+    items: &[ItemGeom],
+    robots: &mut [RobotGeom],
+) {
     for r in &task.robots {
         if r.kind != RobotKind::Quadrotor {
             continue;
         }
-        let Some(s) = init.target(r.node, Relation::On) else {
+        let Some(s) = task.init.target(r.node, Relation::On) else {
             continue;
         };
         if task.node(s).kind == NodeKind::Floor {
@@ -238,12 +288,19 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             sg.pos[2] - 0.1,
         ];
     }
-    // Fixed arms on their surfaces.
+}
+
+/// Each fixed arm on the surface it stands on ([`arm_spot`]).
+fn fixed_arms(
+    task: &Task,
+    items: &[ItemGeom],
+    robots: &mut Vec<RobotGeom>,
+) -> Result<(), LayoutError> {
     for r in &task.robots {
         if r.kind != RobotKind::RobotArm {
             continue;
         }
-        let Some(s) = init.target(r.node, Relation::On) else {
+        let Some(s) = task.init.target(r.node, Relation::On) else {
             return err(format!(
                 "layout: {} stands on nothing",
                 task.node(r.node).label()
@@ -263,7 +320,20 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             yaw: 0.0,
         });
     }
-    // Everything else, level by level: on a surface or in a container already placed.
+    Ok(())
+}
+
+/// Everything not yet placed, level by level: on a surface or in a container already
+/// placed (a quadrotor's basket included), packed in file order; a thing in no room is
+/// set aside outside the house.
+fn held_things(
+    task: &Task,
+    specs: &RobotSpecs,
+    loc: &[Option<(Idx, bool)>],
+    fitted: &[[f32; 3]],
+    items: &mut Vec<ItemGeom>,
+    robots: &[RobotGeom],
+) -> Result<(), LayoutError> {
     let mut pending: Vec<Idx> = task
         .indices()
         .filter(|&n| task.node(n).kind == NodeKind::Object)
@@ -278,7 +348,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             let Some((holder, inside)) = loc[n.get()] else {
                 // In no room at all (some released tasks have such things): set
                 // aside on an unnamed pad outside the house, where nothing sees it.
-                let (size, container, lid, dynamic) = shape_of(task, n, &specs);
+                let (size, container, lid, dynamic) = shape_of(task, n, specs);
                 let k = items.len() as f32;
                 items.push(ItemGeom {
                     id: task.id(n).0,
@@ -297,7 +367,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
             let hg = match items.iter().find(|it| it.id == task.id(holder).0) {
                 Some(h) => h.clone(),
                 // A quadrotor's basket: the open box on the craft.
-                None => match basket_geom(task, holder, &robots, &specs) {
+                None => match basket_geom(task, holder, robots, specs) {
                     Some(h) => h,
                     None => {
                         rest.push(n);
@@ -305,15 +375,15 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
                     }
                 },
             };
-            let (_, container, lid, dynamic) = shape_of(task, n, &specs);
+            let (_, container, lid, dynamic) = shape_of(task, n, specs);
             let size = fitted[n.get()];
-            let group: Vec<Idx> = contents(&loc, holder, inside);
+            let group: Vec<Idx> = contents(loc, holder, inside);
             let slot = group.iter().position(|&x| x == n).unwrap_or(0);
             let packed = match spots.iter().find(|c| c.0 == hg.id && c.1 == inside) {
                 Some(c) => Some(c.2.clone()),
                 None => {
                     let sizes: Vec<[f32; 3]> = group.iter().map(|x| fitted[x.get()]).collect();
-                    let flags = holder_flags(task, &specs, &loc, holder);
+                    let flags = holder_flags(task, specs, loc, holder);
                     let got = pack(pack_region(&hg, inside, flags.0, flags.1), &sizes);
                     if let Some(g) = &got {
                         spots.push((hg.id, inside, g.clone()));
@@ -349,19 +419,7 @@ pub fn generate(task: &Task) -> Result<Layout, LayoutError> {
         }
         pending = rest;
     }
-    let layout = Layout {
-        specs,
-        rooms: room_geom,
-        doors: door_geom,
-        stairs: Vec::new(),
-        items,
-        robots,
-        wall_height: WALL_HEIGHT,
-    };
-    match layout.missing_entry(task) {
-        Some(missing) => err(format!("layout: {missing}")),
-        None => Ok(layout),
-    }
+    Ok(())
 }
 
 /// Where a fixed arm stands on its surface: towards the back, left of centre, leaving
@@ -649,212 +707,4 @@ fn shape_of(task: &Task, n: Idx, specs: &RobotSpecs) -> ([f32; 3], bool, Lid, bo
         [0.3, 0.2, 0.3]
     };
     (size, container, lid, grabable)
-}
-
-/// Steepest flight a scene may have, rise over run (about 37 degrees; the legged robot
-/// climbs up to 45).
-pub const MAX_FLIGHT_SLOPE: f32 = 0.75;
-/// Narrowest flight: the quadrotor (0.6 m) and the legged robot (0.6 m) pass with room.
-pub const MIN_FLIGHT_WIDTH: f32 = 1.0;
-
-/// The room whose footprint holds `p` on the storey `p` is on: among the rooms whose
-/// footprint holds `(x, z)`, the one with the highest level at most 5 cm above `p`'s
-/// height (the first in file order on a tie).
-pub fn room_at(layout: &Layout, p: [f32; 3]) -> Option<&RoomGeom> {
-    let mut best: Option<&RoomGeom> = None;
-    for r in &layout.rooms {
-        let inside = p[0] >= r.min[0] && p[0] <= r.max[0] && p[2] >= r.min[1] && p[2] <= r.max[1];
-        if inside && r.level <= p[1] + 0.05 && best.is_none_or(|b| r.level > b.level) {
-            best = Some(r);
-        }
-    }
-    best
-}
-
-/// The storeys of a layout: the distinct room levels, lowest first.
-pub fn levels(layout: &Layout) -> Vec<f32> {
-    let mut out: Vec<f32> = Vec::new();
-    for r in &layout.rooms {
-        if !out.contains(&r.level) {
-            out.push(r.level);
-        }
-    }
-    out.sort_by(f32::total_cmp);
-    out
-}
-
-/// Level of a door: the level of its rooms.
-pub fn door_level(layout: &Layout, d: &DoorGeom) -> f32 {
-    layout
-        .rooms
-        .iter()
-        .find(|r| r.id == d.rooms[0])
-        .map_or(0.0, |r| r.level)
-}
-
-/// A flight of stairs worked out from its [`StairsGeom`]: a straight run up from the
-/// lower room's level at `foot` to the upper room's level at `head`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Flight {
-    pub id: i64,
-    pub rooms: [i64; 2],
-    /// Floor heights at the foot and at the head.
-    pub lower: f32,
-    pub upper: f32,
-    pub foot: [f32; 2],
-    pub head: [f32; 2],
-    /// Unit direction of the run on the floor plan, from foot to head.
-    pub dir: [f32; 2],
-    /// Horizontal length of the run.
-    pub run: f32,
-    pub width: f32,
-}
-
-impl Flight {
-    /// Whether the run goes along x (the flight is `width` wide along z).
-    pub fn along_x(&self) -> bool {
-        self.dir[0] != 0.0
-    }
-
-    /// Footprint `[x0, z0, x1, z1]`.
-    pub fn rect(&self) -> [f32; 4] {
-        let (w, l) = (self.width / 2.0, [self.dir[1].abs(), self.dir[0].abs()]);
-        [
-            self.foot[0].min(self.head[0]) - l[0] * w,
-            self.foot[1].min(self.head[1]) - l[1] * w,
-            self.foot[0].max(self.head[0]) + l[0] * w,
-            self.foot[1].max(self.head[1]) + l[1] * w,
-        ]
-    }
-
-    /// The point `along` metres from the foot towards the head (negative: before the
-    /// foot) on the flight's middle line, at height `y`.
-    pub fn at(&self, along: f32, y: f32) -> [f32; 3] {
-        [
-            self.foot[0] + self.dir[0] * along,
-            y,
-            self.foot[1] + self.dir[1] * along,
-        ]
-    }
-
-    /// Height of the walking surface `along` metres from the foot.
-    pub fn surface(&self, along: f32) -> f32 {
-        self.lower + (self.upper - self.lower) * (along / self.run).clamp(0.0, 1.0)
-    }
-}
-
-/// Every flight of the layout, checked against the rules a scene must follow (see
-/// `docs/physics.md`, "Storeys and stairs"); the first broken rule, with numbers.
-pub fn flights(layout: &Layout) -> Result<Vec<Flight>, LayoutError> {
-    let room = |id: i64, what: &str, s: i64| {
-        layout.rooms.iter().find(|r| r.id == id).ok_or_else(|| {
-            LayoutError(format!(
-                "stairs {s}: its {what} room {id} has no entry in rooms"
-            ))
-        })
-    };
-    for d in &layout.doors {
-        let levels: Vec<f32> = d
-            .rooms
-            .iter()
-            .filter_map(|&id| layout.rooms.iter().find(|r| r.id == id))
-            .map(|r| r.level)
-            .collect();
-        if levels.len() == 2 && levels[0] != levels[1] {
-            return err(format!(
-                "door {}: its rooms are on levels {:.2} m and {:.2} m; a door joins rooms of one level (stairs join levels)",
-                d.id, levels[0], levels[1]
-            ));
-        }
-    }
-    let mut out = Vec::new();
-    for s in &layout.stairs {
-        let lo = room(s.rooms[0], "lower", s.id)?;
-        let hi = room(s.rooms[1], "upper", s.id)?;
-        let rise = hi.level - lo.level;
-        if rise < layout.wall_height {
-            return err(format!(
-                "stairs {}: the upper room is {rise:.2} m above the lower one; storeys must be at least the wall height ({:.2} m) apart",
-                s.id, layout.wall_height
-            ));
-        }
-        let (dx, dz) = (s.head[0] - s.foot[0], s.head[1] - s.foot[1]);
-        if dx.abs() > 1e-3 && dz.abs() > 1e-3 {
-            return err(format!(
-                "stairs {}: foot ({:.2}, {:.2}) and head ({:.2}, {:.2}) are not on a line along x or z",
-                s.id, s.foot[0], s.foot[1], s.head[0], s.head[1]
-            ));
-        }
-        let run = dx.abs().max(dz.abs());
-        if run < 1e-3 || rise / run > MAX_FLIGHT_SLOPE {
-            return err(format!(
-                "stairs {}: it rises {rise:.2} m over a run of {run:.2} m; the steepest flight rises {MAX_FLIGHT_SLOPE} m per metre (a run of at least {:.2} m)",
-                s.id,
-                rise / MAX_FLIGHT_SLOPE
-            ));
-        }
-        if s.width < MIN_FLIGHT_WIDTH {
-            return err(format!(
-                "stairs {}: {:.2} m wide; a flight is at least {MIN_FLIGHT_WIDTH} m wide",
-                s.id, s.width
-            ));
-        }
-        let dir = if dx.abs() > dz.abs() {
-            [dx.signum(), 0.0]
-        } else {
-            [0.0, dz.signum()]
-        };
-        let f = Flight {
-            id: s.id,
-            rooms: s.rooms,
-            lower: lo.level,
-            upper: hi.level,
-            foot: s.foot,
-            head: s.head,
-            dir,
-            run,
-            width: s.width,
-        };
-        let r = f.rect();
-        let eps = 1e-3;
-        if r[0] < lo.min[0] - eps
-            || r[1] < lo.min[1] - eps
-            || r[2] > lo.max[0] + eps
-            || r[3] > lo.max[1] + eps
-        {
-            return err(format!(
-                "stairs {}: the flight [{:.2}, {:.2}] x [{:.2}, {:.2}] is not inside its lower room's footprint",
-                s.id, r[0], r[2], r[1], r[3]
-            ));
-        }
-        // The head lies on the upper room's wall, the run pointing into the room.
-        let on_wall = if f.along_x() {
-            let x = if dir[0] > 0.0 { hi.min[0] } else { hi.max[0] };
-            (s.head[0] - x).abs() < eps && r[1] >= hi.min[1] - eps && r[3] <= hi.max[1] + eps
-        } else {
-            let z = if dir[1] > 0.0 { hi.min[1] } else { hi.max[1] };
-            (s.head[1] - z).abs() < eps && r[0] >= hi.min[0] - eps && r[2] <= hi.max[0] + eps
-        };
-        if !on_wall {
-            return err(format!(
-                "stairs {}: the head ({:.2}, {:.2}) is not on the wall of the upper room through which the run enters it (the whole width on that wall)",
-                s.id, s.head[0], s.head[1]
-            ));
-        }
-        // Nothing above the flight: no room of a higher storey over it.
-        if let Some(over) = layout.rooms.iter().find(|o| {
-            o.level > lo.level
-                && o.min[0] < r[2] - eps
-                && o.max[0] > r[0] + eps
-                && o.min[1] < r[3] - eps
-                && o.max[1] > r[1] + eps
-        }) {
-            return err(format!(
-                "stairs {}: room {} (level {:.2} m) is over the flight; the stairwell must stay open",
-                s.id, over.id, over.level
-            ));
-        }
-        out.push(f);
-    }
-    Ok(out)
 }

@@ -1,0 +1,431 @@
+//! The legged robot: its way between two points (a route on each storey's occupancy
+//! grid, [`crate::path`], joined by flights of stairs), walking it with the character
+//! controller, and where it stands to work on a thing or to enter a room.
+
+use std::f32::consts::PI;
+
+use coherent_core::{Idx, NodeKind};
+use rapier3d::prelude::*;
+
+use super::{DT, Dog, FailureKind, PhysicsError, Placement, World, fail, solid, v3};
+use crate::layout::{self, Flight};
+use crate::path;
+
+/// A stretch of the legged robot's way: waypoints on one storey (the first is where
+/// it starts), or a flight walked from the approach at one end to the approach at the
+/// other (given).
+#[derive(Clone, Debug)]
+enum Leg {
+    Floor(Vec<Vector>),
+    Flight(Flight, Vector),
+}
+
+/// How far before the foot and past the head the legged robot lines up with a flight.
+const FLIGHT_APPROACH: f32 = 0.55;
+
+impl World {
+    /// One occupancy grid per storey, for the legged robot.
+    fn grids(&self, dog: RigidBodyHandle) -> Vec<(f32, path::Grid)> {
+        layout::levels(&self.layout)
+            .into_iter()
+            .map(|level| {
+                let grid =
+                    path::Grid::new(&self.layout, &self.flights, &self.pw.colliders, dog, level);
+                (level, grid)
+            })
+            .collect()
+    }
+
+    /// The legged robot's way from `start` to `goal` (body origins; each on the storey
+    /// its height says): a route on each storey, joined by the flights between them
+    /// (fewest flights first). `None` when there is no way.
+    fn dog_route(
+        &self,
+        grids: &[(f32, path::Grid)],
+        start: Vector,
+        goal: Vector,
+    ) -> Option<Vec<Leg>> {
+        let grid = |level: f32| grids.iter().find(|(l, _)| *l == level).map(|(_, g)| g);
+        let (from, to) = (self.level_at(start), self.level_at(goal));
+        // Breadth first over storeys, a flight being an edge either way.
+        let mut reached: Vec<(f32, Option<(usize, bool)>)> = vec![(from, None)];
+        let mut i = 0;
+        while i < reached.len() && !reached.iter().any(|(l, _)| *l == to) {
+            let level = reached[i].0;
+            for (k, f) in self.flights.iter().enumerate() {
+                for (up, a, b) in [(true, f.lower, f.upper), (false, f.upper, f.lower)] {
+                    if a == level && !reached.iter().any(|(l, _)| *l == b) {
+                        reached.push((b, Some((k, up))));
+                    }
+                }
+            }
+            i += 1;
+        }
+        let mut flights = Vec::new();
+        let mut level = to;
+        while let Some(&(_, Some((k, up)))) = reached.iter().find(|(l, _)| *l == level) {
+            flights.push((self.flights[k], up));
+            level = if up {
+                self.flights[k].lower
+            } else {
+                self.flights[k].upper
+            };
+        }
+        if level != from {
+            return None;
+        }
+        flights.reverse();
+        let mut legs = Vec::new();
+        let mut at = start;
+        for (f, up) in flights {
+            let (here, there) = if up {
+                (
+                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
+                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
+                )
+            } else {
+                (
+                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
+                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
+                )
+            };
+            let (here, there) = (v3(here), v3(there));
+            legs.push(Leg::Floor(grid(self.level_at(at))?.route(at, here)?));
+            legs.push(Leg::Flight(f, there));
+            at = there;
+        }
+        legs.push(Leg::Floor(grid(to)?.route(at, goal)?));
+        Some(legs)
+    }
+
+    /// Walks the dog to `goal` (body origin, on the storey its height says) along a
+    /// planned way, then turns it to face `face`.
+    pub(super) fn walk(&mut self, goal: Vector, face: Vector) -> Result<(), PhysicsError> {
+        let Some(dog) = self.dog.clone() else {
+            return fail(FailureKind::Layout, "no legged robot".into());
+        };
+        let start = self.pw.bodies[dog.body].translation();
+        let grids = self.grids(dog.body);
+        let Some(legs) = self.dog_route(&grids, start, goal) else {
+            return fail(
+                FailureKind::Blocked,
+                format!(
+                    "no path for the legged robot from ({:.2}, {:.2}, {:.2}) to ({:.2}, {:.2}, {:.2}): closed doors, furniture or missing stairs block every way",
+                    start.x, start.y, start.z, goal.x, goal.y, goal.z
+                ),
+            );
+        };
+        for leg in legs {
+            match leg {
+                Leg::Floor(route) => self.walk_along(&dog, &route[1..], false)?,
+                Leg::Flight(f, there) => {
+                    self.walk_along(&dog, &[there], true)?;
+                    let y = self.pw.bodies[dog.body].translation().y;
+                    if (y - there.y).abs() > 0.03 {
+                        return fail(
+                            FailureKind::Blocked,
+                            format!(
+                                "the legged robot on stairs {} stopped at height {y:.2} m, not on the floor at {:.2} m",
+                                f.id,
+                                there.y - 0.02
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+        let pos = self.pw.bodies[dog.body].translation();
+        let yaw = (face.x - pos.x).atan2(face.z - pos.z);
+        self.pw.bodies[dog.body]
+            .set_next_kinematic_position(Pose::from_parts(pos, Rotation::from_rotation_y(yaw)));
+        self.step();
+        self.step();
+        if let Some(d) = self.dog.as_mut() {
+            d.yaw = yaw;
+        }
+        Ok(())
+    }
+
+    /// Moves the dog through `waypoints` on the floor plan with the character
+    /// controller: at its height on a floor, or (`on_flight`) climbing and descending
+    /// the flight's slope with the controller's vertical motion.
+    fn walk_along(
+        &mut self,
+        dog: &Dog,
+        waypoints: &[Vector],
+        on_flight: bool,
+    ) -> Result<(), PhysicsError> {
+        let speed = self.layout.specs.dog_speed;
+        let h = self.layout.specs.dog_half;
+        // A cylinder: turning the robot never makes it collide.
+        let shape = Cylinder::new(h[1], h[0].max(h[2]));
+        let shape_off = Vector::new(0.0, h[1], 0.0);
+        let kcc = if on_flight { self.stairs_kcc } else { self.kcc };
+        let mut last_hit: Option<(ColliderHandle, Vector)> = None;
+        for &wp in waypoints {
+            let mut stuck = 0;
+            let from = self.pw.bodies[dog.body].translation();
+            let budget = ((wp - from).length() / (speed * DT) * 3.0) as usize + 120;
+            for _ in 0..budget {
+                let pos = self.pw.bodies[dog.body].translation();
+                let d = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z);
+                if d.length() < 0.01 {
+                    break;
+                }
+                let want = d.normalize_or_zero() * (speed * DT).min(d.length());
+                let yaw = d.x.atan2(d.z);
+                let moved = {
+                    let filter = solid().exclude_rigid_body(dog.body);
+                    let qp = self.pw.query_pipeline_with_filter(filter);
+                    let cpose = Pose::from_translation(pos + shape_off);
+                    kcc.move_shape(DT, &qp, &shape, &cpose, want, |c| {
+                        last_hit = Some((c.handle, c.hit.witness1));
+                    })
+                    .translation
+                };
+                let rise = if on_flight { moved.y } else { 0.0 };
+                let rb = &mut self.pw.bodies[dog.body];
+                rb.set_next_kinematic_position(Pose::from_parts(
+                    pos + Vector::new(moved.x, rise, moved.z),
+                    Rotation::from_rotation_y(yaw),
+                ));
+                self.step();
+                self.record_path(dog.robot);
+                let horizontal = Vector::new(moved.x, 0.0, moved.z).length();
+                if horizontal < 0.2 * want.length() {
+                    stuck += 1;
+                    if stuck > 30 {
+                        return fail(
+                            FailureKind::Blocked,
+                            format!(
+                                "the legged robot is blocked at ({:.2}, {:.2}, {:.2}) on its way to ({:.2}, {:.2}){}",
+                                pos.x,
+                                pos.y,
+                                pos.z,
+                                wp.x,
+                                wp.z,
+                                self.hit_name(last_hit)
+                            ),
+                        );
+                    }
+                } else {
+                    stuck = 0;
+                }
+            }
+            let pos = self.pw.bodies[dog.body].translation();
+            let off = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z).length();
+            if off > 0.05 {
+                return fail(
+                    FailureKind::Blocked,
+                    format!(
+                        "the legged robot slid along an obstacle and stopped {off:.2} m short of ({:.2}, {:.2}) at ({:.2}, {:.2}){}",
+                        wp.x,
+                        wp.z,
+                        pos.x,
+                        pos.z,
+                        self.hit_name(last_hit)
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Names what a character-controller contact touched, for failure messages.
+    fn hit_name(&self, hit: Option<(ColliderHandle, Vector)>) -> String {
+        let Some((h, p)) = hit else {
+            return String::new();
+        };
+        let what = match self.owner.get(&h) {
+            Some(n) => self.label(*n),
+            None => "a wall".to_string(),
+        };
+        format!(
+            " (last contact: {what} at ({:.2}, {:.2}, {:.2}))",
+            p.x, p.y, p.z
+        )
+    }
+
+    /// The fixed thing a node ultimately stands on or in (furniture), or itself.
+    fn anchor(&self, x: Idx) -> Idx {
+        let mut cur = x;
+        for _ in 0..6 {
+            match self.placement(cur) {
+                Placement::On(s) | Placement::Inside(s) => {
+                    let k = self.task.node(s).kind;
+                    if k == NodeKind::Floor {
+                        return cur;
+                    }
+                    if k == NodeKind::Tool {
+                        return s;
+                    }
+                    cur = s;
+                }
+                _ => return cur,
+            }
+        }
+        cur
+    }
+
+    /// Where the dog stands to work on `x`: beside what `x` stands on, nearest to `x`.
+    pub(super) fn service_point(&self, x: Idx) -> Result<(Vector, Vector), PhysicsError> {
+        let Some(dog) = &self.dog else {
+            return fail(FailureKind::Layout, "no legged robot".into());
+        };
+        let a = self.anchor(x);
+        let aabb = self
+            .node_aabb(a)
+            .or_else(|| self.node_aabb(x))
+            .ok_or_else(|| PhysicsError {
+                kind: FailureKind::Layout,
+                message: format!("{} has no body", self.label(x)),
+            })?;
+        // Aim at what the move brings within reach: the things on a surface (the dog is
+        // to handle them next), else the thing itself.
+        let on_top: Vec<Vector> = if self.top[x.get()].is_some() {
+            self.task
+                .indices()
+                .filter(|&n| self.body[n.get()].is_some())
+                .filter(|&n| matches!(self.placement(n), Placement::On(s) if s == x))
+                .filter_map(|n| self.node_aabb(n).map(|b| b.center()))
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let target = if on_top.is_empty() {
+            self.node_aabb(x)
+                .map(|b| b.center())
+                .unwrap_or(aabb.center())
+        } else {
+            on_top.iter().copied().sum::<Vector>() / on_top.len() as f32
+        };
+        let h = self.layout.specs.dog_half;
+        let gap = h[0].max(h[2]) + 0.12;
+        let c = aabb.center();
+        let he = aabb.half_extents();
+        // The storey of what the thing stands on.
+        let level = self.level_at(Vector::new(c.x, aabb.mins.y, c.z));
+        let grids = self.grids(dog.body);
+        let Some((_, grid)) = grids.iter().find(|(l, _)| *l == level) else {
+            return fail(
+                FailureKind::Layout,
+                format!("no storey at {level:.2} m for {}", self.label(a)),
+            );
+        };
+        // A spot in the thing's own room: the far side of a wall is not beside it.
+        let home = if self.task.node(a).kind == NodeKind::Door {
+            None
+        } else {
+            self.room_at(Vector::new(c.x, aabb.mins.y + 0.05, c.z))
+        };
+        let mut cands = Vec::new();
+        for (nx, nz) in [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)] {
+            let lateral = if nx == 0.0 {
+                Vector::X * he.x
+            } else {
+                Vector::Z * he.z
+            };
+            for f in [0.0f32, -0.6, 0.6, -0.3, 0.3] {
+                // Nearest free cell straight out from that side (a wall beside a door
+                // or the grid's 10 cm cells can block the first one).
+                let free = [0.0f32, 0.1, 0.2, 0.3].into_iter().find_map(|extra| {
+                    let p = Vector::new(
+                        c.x + nx * (he.x + gap + extra),
+                        level + 0.02,
+                        c.z + nz * (he.z + gap + extra),
+                    ) + lateral * f;
+                    (grid.free(p) && (home.is_none() || self.room_at(p) == home)).then_some(p)
+                });
+                cands.extend(free);
+            }
+        }
+        let start = self.pw.bodies[dog.body].translation();
+        let fwd = self.layout.specs.dog_shoulder[2];
+        cands.sort_by(|p, q| {
+            let sp =
+                *p + (Vector::new(target.x - p.x, 0.0, target.z - p.z)).normalize_or_zero() * fwd;
+            let sq =
+                *q + (Vector::new(target.x - q.x, 0.0, target.z - q.z)).normalize_or_zero() * fwd;
+            let dp = Vector::new(sp.x - target.x, 0.0, sp.z - target.z).length();
+            let dq = Vector::new(sq.x - target.x, 0.0, sq.z - target.z).length();
+            dp.total_cmp(&dq)
+        });
+        for p in cands {
+            if self.dog_route(&grids, start, p).is_some() {
+                return Ok((p, target));
+            }
+        }
+        fail(
+            FailureKind::Blocked,
+            format!(
+                "the legged robot can reach no free spot beside {} (closed doors or furniture in the way)",
+                self.label(a)
+            ),
+        )
+    }
+
+    pub(super) fn dog_to_room(&mut self, room: Idx) -> Result<(), PhysicsError> {
+        let Some(dog) = self.dog.clone() else {
+            return fail(FailureKind::Layout, "no legged robot".into());
+        };
+        let p = self.pw.bodies[dog.body].translation();
+        let here = self.room_at(p).map(|h| self.task.id(h).0);
+        let rid = self.task.id(room).0;
+        let joins =
+            |rooms: &[i64; 2]| rooms.contains(&rid) && here.is_some_and(|h| rooms.contains(&h));
+        let door = self.layout.doors.iter().find(|d| joins(&d.rooms)).cloned();
+        let flight = self.flights.iter().find(|f| joins(&f.rooms)).copied();
+        let Some((lo, hi)) = self.room_rect(room) else {
+            return fail(
+                FailureKind::Layout,
+                format!("{} has no footprint", self.label(room)),
+            );
+        };
+        let level = self.room_level(room);
+        // The robot's height on the room's floor.
+        let y = if level == self.level_at(p) {
+            p.y
+        } else {
+            level + 0.02
+        };
+        // A free spot inside the room, just past the door or the flight when there is one.
+        let mid = Vector::new((lo[0] + hi[0]) / 2.0, y, (lo[1] + hi[1]) / 2.0);
+        let seed = match (&door, flight) {
+            (Some(d), _) => {
+                let c = Vector::new(d.center[0], y, d.center[1]);
+                c + (mid - c).normalize_or_zero() * 1.0
+            }
+            (None, Some(f)) if f.rooms[1] == rid => v3(f.at(f.run + 1.0, y)),
+            (None, Some(f)) => v3(f.at(-1.0, y)),
+            (None, None) => mid,
+        };
+        let grids = self.grids(dog.body);
+        let Some((_, grid)) = grids.iter().find(|(l, _)| *l == level) else {
+            return fail(
+                FailureKind::Layout,
+                format!("no storey at {level:.2} m for {}", self.label(room)),
+            );
+        };
+        let mut goal = None;
+        'search: for r in 0..20 {
+            for k in 0..16 {
+                let a = k as f32 * PI / 8.0;
+                let q = seed + Vector::new(a.cos(), 0.0, a.sin()) * (r as f32 * 0.15);
+                if self.room_at(q) == Some(room) && grid.free(q) {
+                    goal = Some(q);
+                    break 'search;
+                }
+                if r == 0 {
+                    break;
+                }
+            }
+        }
+        let Some(goal) = goal else {
+            return fail(
+                FailureKind::Blocked,
+                format!("no free floor in {}", self.label(room)),
+            );
+        };
+        self.walk(goal, goal + (goal - p))
+    }
+}

@@ -1,0 +1,354 @@
+//! What the arms do to things: grasping (what rides on the thing comes along), putting
+//! down on a free spot within reach, and opening and closing doors and lids by their
+//! handles.
+
+use std::f32::consts::FRAC_PI_2;
+
+use coherent_core::{Idx, NodeKind};
+use rapier3d::prelude::*;
+
+use super::{
+    FailureKind, G_OBJECT, Grasp, PhysicsError, Placement, World, fail, groups, hinge_pose, solid,
+};
+
+impl World {
+    /// A free spot for `h` on surface `s` or in container `c`, nearest to the robot's
+    /// shoulder and within its reach; returns the bottom centre for `h`.
+    fn put_spot(
+        &self,
+        robot: Idx,
+        h: Idx,
+        holder: Idx,
+        inside: bool,
+    ) -> Result<Vector, PhysicsError> {
+        let size = self
+            .layout
+            .item(self.task.id(h))
+            .map(|it| it.size)
+            .unwrap_or([0.12; 3]);
+        let (body, centre, half) = if inside {
+            let Some(v) = self.volume[holder.get()] else {
+                return fail(
+                    FailureKind::Blocked,
+                    format!("{} has no inside", self.label(holder)),
+                );
+            };
+            let bottom = v.local.translation - Vector::new(0.0, v.half.y, 0.0);
+            (v.body, bottom, [v.half.x, v.half.z])
+        } else {
+            let Some(t) = self.top[holder.get()] else {
+                return fail(
+                    FailureKind::Blocked,
+                    format!("{} has no top", self.label(holder)),
+                );
+            };
+            t
+        };
+        let Some(ai) = self.arm_index(robot) else {
+            return fail(
+                FailureKind::Reach,
+                format!("{} has no arm", self.label(robot)),
+            );
+        };
+        let shoulder = self.shoulder(&self.arms[ai]);
+        let reach = self.arms[ai].reach;
+        let min_reach = self.arms[ai].min_reach + 0.05;
+        let pose = *self.pw.bodies[body].position();
+        let shape = Cuboid::new(Vector::new(
+            size[0] / 2.0 - 0.005,
+            size[1] / 2.0 - 0.005,
+            size[2] / 2.0 - 0.005,
+        ));
+        let hb = self.body[h.get()];
+        let hx = half[0] - size[0] / 2.0 - 0.01;
+        let hz = half[1] - size[2] / 2.0 - 0.01;
+        if hx < -0.005 || hz < -0.005 {
+            return fail(
+                FailureKind::Blocked,
+                format!(
+                    "{} ({:.2} m wide) does not fit {} {}",
+                    self.label(h),
+                    size[0],
+                    if inside { "in" } else { "on" },
+                    self.label(holder)
+                ),
+            );
+        }
+        let step = 0.04;
+        let (nx, nz) = (
+            (hx.max(0.0) / step).floor() as i32,
+            (hz.max(0.0) / step).floor() as i32,
+        );
+        let mut best: Option<(f32, Vector)> = None;
+        let mut nearest_any = f32::INFINITY;
+        // What filled the last spot tried within reach (None: an unnamed body).
+        let mut in_the_way: Option<Option<Idx>> = None;
+        for i in -nx..=nx {
+            for k in -nz..=nz {
+                let local = centre + Vector::new(i as f32 * step, 0.003, k as f32 * step);
+                let p = pose.transform_point(local);
+                let grip = p + Vector::new(0.0, size[1], 0.0);
+                let d = (grip - shoulder).length();
+                nearest_any = nearest_any.min(d);
+                if d > reach - 0.03 || d < min_reach {
+                    continue;
+                }
+                let probe =
+                    Pose::from_translation(p + Vector::new(0.0, size[1] / 2.0 + 0.004, 0.0));
+                let mut filter = solid();
+                if let Some(b) = hb {
+                    filter = filter.exclude_rigid_body(b);
+                }
+                let qp = self.pw.query_pipeline_with_filter(filter);
+                let blocker = qp.intersect_shape(probe, &shape).find_map(|(ch, col)| {
+                    let owner = self.owner.get(&ch).copied();
+                    (col.collision_groups().memberships != Group::NONE
+                        && (inside || owner != Some(holder))
+                        && self.task.node(owner.unwrap_or(holder)).kind != NodeKind::Door)
+                        .then_some(owner)
+                });
+                if let Some(owner) = blocker {
+                    in_the_way = Some(owner);
+                    continue;
+                }
+                if best.is_none_or(|(d0, _)| d < d0) {
+                    best = Some((d, p));
+                }
+            }
+        }
+        match best {
+            Some((_, p)) => Ok(p),
+            None if nearest_any > reach - 0.03 => fail(
+                FailureKind::Reach,
+                format!(
+                    "every spot {} {} is beyond the reach of {}: the nearest is {:.2} m from its shoulder, its reach is {:.2} m",
+                    if inside { "in" } else { "on" },
+                    self.label(holder),
+                    self.label(robot),
+                    nearest_any,
+                    reach
+                ),
+            ),
+            None => fail(
+                FailureKind::Blocked,
+                format!(
+                    "no free spot for {} {} {} within reach of {}{}",
+                    self.label(h),
+                    if inside { "in" } else { "on" },
+                    self.label(holder),
+                    self.label(robot),
+                    match in_the_way {
+                        Some(Some(n)) => format!(" ({} is in the way)", self.label(n)),
+                        Some(None) => " (a robot is in the way)".to_owned(),
+                        None => String::new(),
+                    }
+                ),
+            ),
+        }
+    }
+
+    pub(super) fn grasp(&mut self, robot: Idx, x: Idx) -> Result<(), PhysicsError> {
+        let Some(xb) = self.body[x.get()] else {
+            return fail(
+                FailureKind::Layout,
+                format!("{} has no body", self.label(x)),
+            );
+        };
+        let size = self
+            .layout
+            .item(self.task.id(x))
+            .map(|it| it.size)
+            .unwrap_or([0.12; 3]);
+        // The middle of its top as it lies now (it may have tipped over).
+        let top = match self.node_aabb(x) {
+            Some(a) => Vector::new(a.center().x, a.maxs.y, a.center().z),
+            None => self.pw.bodies[xb]
+                .position()
+                .transform_point(Vector::new(0.0, size[1], 0.0)),
+        };
+        self.reach(robot, top + Vector::new(0.0, 0.01, 0.0), &self.label(x))?;
+        let Some(ai) = self.arm_index(robot) else {
+            return Ok(());
+        };
+        let hand = self.arms[ai].hand;
+        // What rides on or in it comes along, fastened (no sloshing in transport).
+        let mut carried = vec![xb];
+        let mut riders = vec![x];
+        let mut i = 0;
+        while i < riders.len() {
+            let host = riders[i];
+            for n in self.task.indices() {
+                if riders.contains(&n) || self.body[n.get()].is_none() {
+                    continue;
+                }
+                let dynamic = self
+                    .layout
+                    .item(self.task.id(n))
+                    .is_some_and(|it| it.dynamic);
+                if dynamic
+                    && matches!(self.placement(n), Placement::On(s) | Placement::Inside(s) if s == host)
+                {
+                    riders.push(n);
+                    if let Some(b) = self.body[n.get()] {
+                        carried.push(b);
+                    }
+                }
+            }
+            i += 1;
+        }
+        let hand_pose = *self.pw.bodies[hand].position();
+        let mut joints = Vec::new();
+        for &b in &carried {
+            let obj_pose = *self.pw.bodies[b].position();
+            let frame2 = obj_pose.inverse() * hand_pose;
+            let j = FixedJointBuilder::new()
+                .local_frame1(Pose::IDENTITY)
+                .local_frame2(frame2)
+                .contacts_enabled(false);
+            joints.push(self.pw.impulse_joints.insert(hand, b, j, true));
+            self.set_body_groups(b, InteractionGroups::none());
+        }
+        self.grasps.push(Grasp {
+            robot,
+            object: x,
+            joints,
+            carried,
+        });
+        self.arm_home(robot);
+        Ok(())
+    }
+
+    fn set_body_groups(&mut self, b: RigidBodyHandle, g: InteractionGroups) {
+        let cs: Vec<ColliderHandle> = self.pw.bodies[b].colliders().to_vec();
+        for c in cs {
+            if let Some(col) = self.pw.colliders.get_mut(c) {
+                col.set_collision_groups(g);
+            }
+        }
+    }
+
+    pub(super) fn release(
+        &mut self,
+        robot: Idx,
+        h: Idx,
+        holder: Idx,
+        inside: bool,
+    ) -> Result<(), PhysicsError> {
+        let Some(gi) = self
+            .grasps
+            .iter()
+            .position(|g| g.robot == robot && g.object == h)
+        else {
+            return fail(
+                FailureKind::Disagreement,
+                format!("{} does not hold {}", self.label(robot), self.label(h)),
+            );
+        };
+        if inside {
+            self.check_open(holder)?;
+        }
+        let spot = self.put_spot(robot, h, holder, inside)?;
+        let size = self
+            .layout
+            .item(self.task.id(h))
+            .map(|it| it.size)
+            .unwrap_or([0.12; 3]);
+        let Some(ai) = self.arm_index(robot) else {
+            return Ok(());
+        };
+        // Hand target: where the middle of the object's underside is 1 cm above the
+        // spot (its lowest point, whichever way up it is held).
+        let offset = match self.node_aabb(h) {
+            Some(a) => {
+                self.hand_pos(&self.arms[ai]) - Vector::new(a.center().x, a.mins.y, a.center().z)
+            }
+            None => Vector::new(0.0, size[1], 0.0),
+        };
+        let target = spot + Vector::new(0.0, 0.01, 0.0) + offset;
+        let what = format!(
+            "the spot {} {}",
+            if inside { "in" } else { "on" },
+            self.label(holder)
+        );
+        self.reach(robot, target, &what)?;
+        let g = self.grasps.remove(gi);
+        for j in g.joints {
+            self.pw.impulse_joints.remove(j, true);
+        }
+        for b in g.carried {
+            self.set_body_groups(b, groups(G_OBJECT));
+            let rb = &mut self.pw.bodies[b];
+            rb.set_linvel(Vector::ZERO, true);
+            rb.set_angvel(Vector::ZERO, true);
+        }
+        self.settle(0.5);
+        self.arm_home(robot);
+        self.settle(1.0);
+        Ok(())
+    }
+
+    fn check_open(&self, c: Idx) -> Result<(), PhysicsError> {
+        if let Some(angle) = self.hinge_angle(c)
+            && angle.abs() < 1.0
+        {
+            return fail(
+                FailureKind::Blocked,
+                format!(
+                    "the lid of {} is open only {:.0} degrees: the opening is blocked",
+                    self.label(c),
+                    angle.to_degrees()
+                ),
+            );
+        }
+        Ok(())
+    }
+
+    pub(super) fn drive_hinge(
+        &mut self,
+        robot: Idx,
+        n: Idx,
+        open: bool,
+    ) -> Result<(), PhysicsError> {
+        let Some(hi) = self.hinges.iter().position(|h| h.node == n) else {
+            return fail(
+                FailureKind::Blocked,
+                format!("{} has no door or lid", self.label(n)),
+            );
+        };
+        // Doors swing away from the robot that opens them.
+        if open
+            && self.task.node(n).kind == NodeKind::Door
+            && let Some(rb) = self.body[robot.get()]
+        {
+            let rp = self.pw.bodies[rb].translation();
+            let h = &self.hinges[hi];
+            let side_of = |angle: f32| {
+                let tip = hinge_pose(h, angle).transform_point(Vector::new(0.0, 0.0, 0.0));
+                (tip - rp).length()
+            };
+            let a = if side_of(FRAC_PI_2) >= side_of(-FRAC_PI_2) {
+                FRAC_PI_2
+            } else {
+                -FRAC_PI_2
+            };
+            self.hinges[hi].open_angle = a;
+        }
+        let h = self.hinges[hi].clone();
+        let handle_world = self.pw.bodies[h.body].position().transform_point(h.handle);
+        self.reach(
+            robot,
+            handle_world,
+            &format!("the handle of {}", self.label(n)),
+        )?;
+        let from = self.hinge_angle(n).unwrap_or(0.0);
+        let to = if open { h.open_angle } else { 0.0 };
+        let steps = 60;
+        for s in 1..=steps {
+            let a = from + (to - from) * s as f32 / steps as f32;
+            self.pw.bodies[h.body].set_next_kinematic_position(hinge_pose(&h, a));
+            self.step();
+        }
+        self.arm_home(robot);
+        Ok(())
+    }
+}

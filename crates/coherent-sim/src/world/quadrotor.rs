@@ -1,0 +1,331 @@
+//! The quadrotor's flights: take-off, routes at cruise altitude through the door between
+//! two rooms or up and down the stairwell between storeys, hovering, landing spots and
+//! landing, and the crash check against walls and door panels. The thrust controller
+//! that follows the set points runs in every step (`step.rs`).
+
+use coherent_core::{Idx, NodeKind, Relation};
+use rapier3d::prelude::*;
+
+use super::{DT, FailureKind, PhysicsError, World, fail, solid, v3};
+
+impl World {
+    /// Flies the quadrotor along `waypoints` (body origin) and hovers at the last one.
+    fn fly(&mut self, waypoints: &[Vector]) -> Result<(), PhysicsError> {
+        let Some(q) = self.quad.clone() else {
+            return fail(FailureKind::Layout, "no quadrotor".into());
+        };
+        let speed = self.layout.specs.flight_speed;
+        let com_off = {
+            let rb = &self.pw.bodies[q.body];
+            rb.center_of_mass() - rb.translation()
+        };
+        let mut setpoint = self.pw.bodies[q.body].translation();
+        for &wp in waypoints {
+            while (wp - setpoint).length() > 1e-4 {
+                let d = wp - setpoint;
+                let stepv = d.normalize_or_zero() * (speed * DT).min(d.length());
+                setpoint += stepv;
+                self.quad_target = (setpoint + com_off, stepv / DT);
+                self.step();
+                self.check_quad_hits()?;
+                self.record_path(q.robot);
+            }
+        }
+        let end = setpoint;
+        self.quad_target = (end + com_off, Vector::ZERO);
+        for i in 0..600 {
+            self.step();
+            self.check_quad_hits()?;
+            let rb = &self.pw.bodies[q.body];
+            if i > 20 && (rb.translation() - end).length() < 0.05 && rb.linvel().length() < 0.08 {
+                return Ok(());
+            }
+        }
+        let at = self.pw.bodies[q.body].translation();
+        fail(
+            FailureKind::Timeout,
+            format!(
+                "the quadrotor did not settle at ({:.2}, {:.2}, {:.2}); it is {:.2} m away",
+                end.x,
+                end.y,
+                end.z,
+                (at - end).length()
+            ),
+        )
+    }
+
+    /// A flying quadrotor touching a door panel or a wall has crashed.
+    fn check_quad_hits(&self) -> Result<(), PhysicsError> {
+        let Some(q) = &self.quad else { return Ok(()) };
+        for c in self.pw.bodies[q.body].colliders() {
+            for pair in self.pw.narrow_phase.contact_pairs_with(*c) {
+                if !pair.has_any_active_contact() {
+                    continue;
+                }
+                let other = if pair.collider1 == *c {
+                    pair.collider2
+                } else {
+                    pair.collider1
+                };
+                let owner = self.owner.get(&other).copied();
+                let is_door = owner.is_some_and(|o| self.task.node(o).kind == NodeKind::Door);
+                let is_wall =
+                    owner.is_none()
+                        && self.pw.colliders.get(other).is_some_and(|c| {
+                            c.parent().is_some_and(|p| self.pw.bodies[p].is_fixed())
+                        })
+                        && self.pw.colliders[other].compute_aabb().maxs.y > 0.5;
+                if is_door || is_wall {
+                    let p = self.pw.bodies[q.body].translation();
+                    let v = self.pw.bodies[q.body].linvel().length();
+                    let what = match owner {
+                        Some(o) => {
+                            let angle = self.hinge_angle(o).unwrap_or(0.0).to_degrees();
+                            format!("the panel of {} (open {angle:.0} degrees)", self.label(o))
+                        }
+                        None if self.flight_colliders.contains(&other) => {
+                            "a flight of stairs".to_owned()
+                        }
+                        None => "a wall".to_owned(),
+                    };
+                    return fail(
+                        FailureKind::Blocked,
+                        format!(
+                            "the quadrotor hit {what} at ({:.2}, {:.2}, {:.2}) m, flying at {v:.2} m/s",
+                            p.x, p.y, p.z
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// A free spot for the quadrotor on `s` (body origin), preferring one next to a
+    /// fixed arm on `s`, else the one nearest `near`.
+    pub(super) fn landing_spot(&self, s: Idx, near: Vector) -> Result<Vector, PhysicsError> {
+        let Some((b, c, half)) = self.top[s.get()] else {
+            return fail(
+                FailureKind::Blocked,
+                format!("{} has no top to land on", self.label(s)),
+            );
+        };
+        let pose = *self.pw.bodies[b].position();
+        let qh = self.layout.specs.quad_half;
+        let arm_at = self
+            .arms
+            .iter()
+            .find(|a| {
+                self.task
+                    .init
+                    .has(coherent_core::Edge::new(a.robot, Relation::On, s))
+            })
+            .map(|a| self.pw.bodies[a.root].translation());
+        // A margin around the craft: it must not brush a wall or the arm on arrival.
+        let shape = Cuboid::new(Vector::new(qh + 0.25, 0.13, qh + 0.25));
+        let qbody = self.quad.as_ref().map(|q| q.body);
+        let mut best: Option<(f32, Vector)> = None;
+        let step = 0.1;
+        // A floor is walled: keep the craft's overshoot on arrival off the walls.
+        let wall_gap = if self.task.node(s).kind == NodeKind::Floor {
+            0.45
+        } else {
+            0.0
+        };
+        let nx = ((half[0] - qh - wall_gap) / step).floor() as i32;
+        let nz = ((half[1] - qh - wall_gap) / step).floor() as i32;
+        for i in -nx..=nx {
+            for k in -nz..=nz {
+                let local = c + Vector::new(i as f32 * step, 0.005, k as f32 * step);
+                let p = pose.transform_point(local);
+                let probe = Pose::from_translation(p + Vector::new(0.0, 0.14, 0.0));
+                let mut filter = solid();
+                if let Some(qb) = qbody {
+                    filter = filter.exclude_rigid_body(qb);
+                }
+                let qp = self.pw.query_pipeline_with_filter(filter);
+                let blocked = qp.intersect_shape(probe, &shape).any(|(h, col)| {
+                    col.collision_groups().memberships != Group::NONE
+                        && self.owner.get(&h) != Some(&s)
+                });
+                if blocked {
+                    continue;
+                }
+                let key = match arm_at {
+                    // Close to the arm, but with room for its base.
+                    Some(a) => ((p - a).length() - 0.55).abs(),
+                    None => (p - near).length(),
+                };
+                if best.is_none_or(|(k0, _)| key < k0) {
+                    best = Some((key, p));
+                }
+            }
+        }
+        best.map(|(_, p)| p).ok_or_else(|| PhysicsError {
+            kind: FailureKind::Blocked,
+            message: format!(
+                "no free {:.1} m x {:.1} m spot for the quadrotor on {}",
+                2.0 * qh,
+                2.0 * qh,
+                self.label(s)
+            ),
+        })
+    }
+
+    pub(super) fn top_height(&self, s: Idx) -> f32 {
+        self.top[s.get()]
+            .map(|(b, c, _)| self.pw.bodies[b].position().transform_point(c).y)
+            .unwrap_or(0.0)
+    }
+
+    /// Flies to hover at `hover_y` over `dest` (a point on the destination's surface) at
+    /// the cruise altitude above each storey's floor: through the door between two rooms
+    /// of a storey, or up or down the stairwell between storeys (over the flight's first
+    /// 0.6 m, where nothing is above it, then along the run through the opening in the
+    /// upper room's wall).
+    pub(super) fn quad_fly_to(&mut self, dest: Vector, hover_y: f32) -> Result<(), PhysicsError> {
+        let Some(p) = self.quad_pos() else {
+            return fail(FailureKind::Layout, "no quadrotor".into());
+        };
+        let cruise = self.layout.specs.cruise_altitude;
+        let here = self.level_at(p) + cruise;
+        let mut wps = vec![Vector::new(p.x, here, p.z)];
+        let from_room = self.room_at(p);
+        let to_room = self.room_at(dest);
+        if from_room != to_room
+            && let (Some(a), Some(b)) = (from_room, to_room)
+        {
+            let (ia, ib) = (self.task.id(a).0, self.task.id(b).0);
+            let door = self
+                .layout
+                .doors
+                .iter()
+                .find(|d| d.rooms.contains(&ia) && d.rooms.contains(&ib))
+                .cloned();
+            let flight = self
+                .flights
+                .iter()
+                .find(|f| f.rooms.contains(&ia) && f.rooms.contains(&ib))
+                .copied();
+            if let Some(d) = door {
+                let c = Vector::new(d.center[0], here, d.center[1]);
+                let normal = if d.along_x { Vector::Z } else { Vector::X };
+                let side = (Vector::new(p.x, here, p.z) - c).dot(normal).signum();
+                // An open door's panel stands out from the wall as far as the door is
+                // wide: leave the wall straight out to beyond it before turning to the
+                // doorway, and come back to it the same way on the far side.
+                let clear = (d.width + self.layout.specs.quad_half + 0.2).max(1.6);
+                // Points kept 0.8 m inside `room` (its middle line when it is narrower):
+                // a narrow room, a hallway, is crossed, not flown out of.
+                let fit = |v: f32, lo: f32, hi: f32| {
+                    if hi - lo > 1.6 {
+                        v.clamp(lo + 0.8, hi - 0.8)
+                    } else {
+                        (lo + hi) / 2.0
+                    }
+                };
+                let within = |mut o: Vector, room: Idx| {
+                    if let Some((lo, hi)) = self.room_rect(room) {
+                        o.x = fit(o.x, lo[0], hi[0]);
+                        o.z = fit(o.z, lo[1], hi[1]);
+                    }
+                    o
+                };
+                let out = |q: Vector, s: f32, room: Idx| {
+                    let short = clear - (q - c).dot(normal) * s;
+                    if short <= 0.0 {
+                        q
+                    } else {
+                        within(q + normal * s * short, room)
+                    }
+                };
+                wps.push(out(Vector::new(p.x, here, p.z), side, a));
+                wps.push(within(c + normal * side * clear, a));
+                wps.push(c);
+                wps.push(within(c - normal * side * clear, b));
+                let there = self.room_level(b) + cruise;
+                wps.push(out(Vector::new(dest.x, there, dest.z), -side, b));
+            } else if let Some(f) = flight {
+                let (low, high) = (f.lower + cruise, f.upper + cruise);
+                let mut legs = [f.at(0.6, low), f.at(0.6, high), f.at(f.run + 1.6, high)];
+                if f.rooms[0] != ia {
+                    legs.reverse();
+                }
+                wps.extend(legs.map(v3));
+            } else {
+                return fail(
+                    FailureKind::Blocked,
+                    format!(
+                        "no door or stairs between {} and {}",
+                        self.label(a),
+                        self.label(b)
+                    ),
+                );
+            }
+        }
+        let there = to_room.map_or(here, |r| self.room_level(r) + cruise);
+        wps.push(Vector::new(dest.x, there, dest.z));
+        wps.push(Vector::new(dest.x, hover_y, dest.z));
+        self.fly(&wps)
+    }
+
+    pub(super) fn quad_takeoff(&mut self) -> Result<(), PhysicsError> {
+        let Some(p) = self.quad_pos() else {
+            return fail(FailureKind::Layout, "no quadrotor".into());
+        };
+        if let Some(q) = self.quad.as_mut() {
+            q.motors_on = true;
+            q.integral = Vector::ZERO;
+        }
+        self.fly(&[p + Vector::new(0.0, 0.7, 0.0)])
+    }
+
+    pub(super) fn quad_land(&mut self, s: Idx) -> Result<(), PhysicsError> {
+        let Some(p) = self.quad_pos() else {
+            return fail(FailureKind::Layout, "no quadrotor".into());
+        };
+        let spot = self.landing_spot(s, p)?;
+        self.fly(&[
+            Vector::new(spot.x, p.y.max(spot.y + 0.5), spot.z),
+            spot + Vector::new(0.0, 0.25, 0.0),
+        ])?;
+        // Descend slowly until the basket touches the surface, then cut the motors.
+        let Some(q) = self.quad.clone() else {
+            return Ok(());
+        };
+        let com_off = {
+            let rb = &self.pw.bodies[q.body];
+            rb.center_of_mass() - rb.translation()
+        };
+        let mut y = spot.y + 0.25;
+        for _ in 0..600 {
+            y -= 0.3 * DT;
+            self.quad_target = (
+                Vector::new(spot.x, y, spot.z) + com_off,
+                Vector::new(0.0, -0.3, 0.0),
+            );
+            self.step();
+            if self.quad_touches(s) {
+                break;
+            }
+        }
+        if let Some(q) = self.quad.as_mut() {
+            q.motors_on = false;
+        }
+        self.settle(1.5);
+        if !self.quad_touches(s) {
+            return fail(
+                FailureKind::Blocked,
+                format!("the quadrotor did not come to rest on {}", self.label(s)),
+            );
+        }
+        Ok(())
+    }
+
+    /// Whether a collider of the quadrotor is in contact with one of `s`.
+    fn quad_touches(&self, s: Idx) -> bool {
+        self.quad
+            .as_ref()
+            .is_some_and(|q| self.body_touches(q.body, s))
+    }
+}

@@ -1,0 +1,205 @@
+//! One simulation step and what runs in it: the quadrotor's flight controller (a
+//! position PID and an attitude loop mixed into four rotor thrusts, with the basket's
+//! load fed forward) and the arms' kinematic chains following their roots; settling
+//! until loose things rest.
+
+use coherent_core::NodeId;
+use rapier3d::prelude::*;
+
+use super::{DT, World};
+
+impl World {
+    pub(super) fn step(&mut self) {
+        self.control_quad();
+        // A multibody writes its root link's pose into the root body during the step, so
+        // the root link is put where a kinematic root (the walking dog) is going first;
+        // otherwise the root's kinematic target is overwritten and it never moves.
+        for i in 0..self.arms.len() {
+            let (j, r) = (self.arms[i].joints[0], self.arms[i].root);
+            let rb = &self.pw.bodies[r];
+            let next = if rb.is_kinematic() {
+                *rb.next_position()
+            } else {
+                *rb.position()
+            };
+            self.sync_arm_to(j, next);
+        }
+        self.pw.step();
+        // Kinematic arm joints follow their root (the moving dog) after each step.
+        for i in 0..self.arms.len() {
+            let (j, r) = (self.arms[i].joints[0], self.arms[i].root);
+            self.sync_arm(j, r);
+        }
+        self.sim_time += f64::from(DT);
+    }
+
+    /// Steps until loose things rest (or `max_s` simulated seconds).
+    pub(super) fn settle(&mut self, max_s: f32) {
+        let steps = (max_s / DT) as usize;
+        for i in 0..steps {
+            self.step();
+            if i >= 10 && self.resting() {
+                break;
+            }
+        }
+    }
+
+    fn resting(&self) -> bool {
+        self.layout.items.iter().filter(|it| it.dynamic).all(|it| {
+            self.task
+                .idx(NodeId(it.id))
+                .and_then(|n| self.body[n.get()])
+                .is_none_or(|b| {
+                    let rb = &self.pw.bodies[b];
+                    rb.linvel().length() < 0.01 && rb.angvel().length() < 0.05
+                })
+        })
+    }
+
+    fn control_quad(&mut self) {
+        let Some(q) = self.quad.clone() else { return };
+        let target = self.quad_target;
+        let (payload, load_at) = if q.motors_on {
+            self.basket_load()
+        } else {
+            (0.0, Vector::ZERO)
+        };
+        let rb = &mut self.pw.bodies[q.body];
+        rb.reset_forces(false);
+        rb.reset_torques(false);
+        if !q.motors_on {
+            return;
+        }
+        let craft = rb.mass();
+        // Feed-forward: what rides in the basket weighs on it too.
+        let m = craft + payload;
+        let p = rb.center_of_mass();
+        let v = rb.linvel();
+        let w = rb.angvel();
+        let rot = *rb.rotation();
+        // Position loop (PID): desired acceleration, tilt limited.
+        let (tp, tv) = target;
+        // Horizontally only while hovering: it would wind up on the tracking lag of a
+        // long flight and overshoot at the end of it.
+        let err = tp - p;
+        let err = if tv.length() < 1e-3 {
+            err
+        } else {
+            Vector::new(0.0, err.y, 0.0)
+        };
+        let mut integral = q.integral + err * DT;
+        if integral.length() > 0.5 {
+            integral = integral.normalize() * 0.5;
+        }
+        if let Some(qm) = self.quad.as_mut() {
+            qm.integral = integral;
+        }
+        let rb = &mut self.pw.bodies[q.body];
+        let mut acc = (tp - p) * 3.0 + (tv - v) * 3.5 + integral * 1.5;
+        let horiz = Vector::new(acc.x, 0.0, acc.z);
+        let limit = 2.5;
+        if horiz.length() > limit {
+            let s = limit / horiz.length();
+            acc.x *= s;
+            acc.z *= s;
+        }
+        acc.y = acc.y.clamp(-4.0, 4.0);
+        let f = (acc + Vector::new(0.0, 9.81, 0.0)) * m;
+        let up = rot * Vector::Y;
+        let thrust = f.dot(up).max(0.0);
+        // Attitude loop: align body up with the force direction, hold yaw at zero.
+        let want_up = f.normalize_or(Vector::Y);
+        let err_tilt = up.cross(want_up);
+        let fwd = rot * Vector::Z;
+        let err_yaw = Vector::new(0.0, -fwd.x.atan2(fwd.z), 0.0);
+        let inertia = 0.08;
+        // Feed-forward: cancel the load's weight torque about the centre of mass.
+        let load_torque = if payload > 0.0 {
+            (load_at - p).cross(Vector::new(0.0, -9.81 * payload, 0.0))
+        } else {
+            Vector::ZERO
+        };
+        let torque_world = (err_tilt * 60.0 + err_yaw * 4.0 - w * 12.0) * inertia - load_torque;
+        let torque = rot.inverse() * torque_world;
+        // Mixer: four rotor thrusts along body up give the thrust and the roll/pitch
+        // torques; yaw comes from rotor drag, applied as a torque.
+        let l = q.rotors[0].x.abs();
+        let mut fr = [0.0f32; 4];
+        for (i, r) in q.rotors.iter().enumerate() {
+            // A force f along +y at (x, y, z) gives the torque (-z f, 0, x f).
+            fr[i] = thrust / 4.0 - torque.x * r.z.signum() / (4.0 * l)
+                + torque.z * r.x.signum() / (4.0 * l);
+            fr[i] = fr[i].clamp(0.0, craft * 9.81);
+        }
+        let pose = *rb.position();
+        for (i, r) in q.rotors.iter().enumerate() {
+            let at = pose.transform_point(*r);
+            rb.add_force_at_point(up * fr[i], at, true);
+        }
+        rb.add_torque(rot * Vector::new(0.0, torque.y, 0.0), true);
+    }
+
+    /// Mass of the loose things resting in the quadrotor's basket (their centres within
+    /// the basket's footprint, up to 0.4 m above its floor).
+    /// Returns the mass and its centre.
+    fn basket_load(&self) -> (f32, Vector) {
+        let none = (0.0, Vector::ZERO);
+        let Some(q) = &self.quad else { return none };
+        let Some(v) = self
+            .task
+            .basket_of(q.robot)
+            .and_then(|b| self.volume[b.get()])
+        else {
+            return none;
+        };
+        let mut moment = Vector::ZERO;
+        let frame = *self.pw.bodies[v.body].position() * v.local;
+        let mut load = 0.0;
+        for it in self.layout.items.iter().filter(|it| it.dynamic) {
+            let Some(b) = self
+                .task
+                .idx(NodeId(it.id))
+                .and_then(|n| self.body[n.get()])
+            else {
+                continue;
+            };
+            if b == q.body {
+                continue;
+            }
+            let rb = &self.pw.bodies[b];
+            let l = frame.inverse_transform_point(rb.translation());
+            if l.x.abs() <= v.half.x
+                && l.z.abs() <= v.half.z
+                && l.y >= -v.half.y - 0.02
+                && l.y <= 0.4
+            {
+                load += rb.mass();
+                moment += rb.center_of_mass() * rb.mass();
+            }
+        }
+        if load > 0.0 {
+            (load, moment / load)
+        } else {
+            none
+        }
+    }
+
+    /// Puts an arm's chain where its root body is now: Rapier reads a non-dynamic root's
+    /// pose only when the root's type changes, so the pose is copied in here.
+    pub(super) fn sync_arm(&mut self, joint: MultibodyJointHandle, root: RigidBodyHandle) {
+        let root_pose = *self.pw.bodies[root].position();
+        self.sync_arm_to(joint, root_pose);
+    }
+
+    /// Puts an arm's chain on a root at `root_pose`.
+    fn sync_arm_to(&mut self, joint: MultibodyJointHandle, root_pose: Pose) {
+        if let Some((mb, _)) = self.pw.multibody_joints.get_mut(joint) {
+            // `true`: on the first call the root turns from dynamic to fixed and takes
+            // the body's pose rather than the identity.
+            mb.forward_kinematics(&self.pw.bodies, true);
+            mb.root_mut().joint.data.local_frame1 = root_pose;
+            mb.forward_kinematics(&self.pw.bodies, false);
+            mb.update_rigid_bodies(&mut self.pw.bodies, false);
+        }
+    }
+}
