@@ -17,7 +17,7 @@ fn main() {
         .nth(1)
         .map_or_else(|| root.join("../../docs/render"), PathBuf::from);
     std::fs::create_dir_all(&out_dir).expect("output directory can be made");
-    let data = root.join("../../../shared/coherent-original/env");
+    let data = PathBuf::from(env!("COHERENT_ORIGINAL_ENV"));
     let chosen: Option<Vec<i64>> = std::env::var("RENDER_TASKS")
         .ok()
         .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect());

@@ -1,15 +1,16 @@
 //! The released benchmark tasks and their optimal plans, shared by the physics tests.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits, Step};
 use coherent_core::{Task, read_tasks};
 
-/// The original benchmark files: `shared/` lies beside the repository.
+/// The original benchmark files, from `COHERENT_ORIGINAL_ENV` (`.cargo/config.toml`:
+/// beside the checkout).
 pub fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
 }
 
 /// Every well-formed task of the four files (env3 index 18 is malformed by design).
