@@ -14,6 +14,8 @@ pub mod error;
 pub mod feasibility;
 pub mod geometry;
 pub mod graph;
+pub mod heights;
+pub mod json;
 pub mod load;
 pub mod native;
 pub mod original;

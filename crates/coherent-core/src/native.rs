@@ -9,6 +9,7 @@ use serde_json::Value;
 use crate::error::{Result, Site, ensure};
 use crate::geometry::{self, Layout};
 use crate::graph::NodeKind;
+use crate::heights;
 use crate::task::{RawGraph, RawPredicate, RuleSet, Source, Task, TaskMeta};
 use crate::vocab::Relation;
 
@@ -78,7 +79,7 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
             "unsupported version {v} (this build reads version {VERSION})"
         );
     }
-    let raw: NativeTask = crate::load::from_value(value, &root)?;
+    let raw: NativeTask = crate::json::from_value(value, &root)?;
     ensure!(
         raw.format == FORMAT,
         root.key("format"),
@@ -122,7 +123,7 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
             return Err(root.key("geometry").error(missing));
         }
         if task.meta.rules == RuleSet::Geometric {
-            geometry::derive_heights(&mut task, &layout, &root)?;
+            heights::derive_heights(&mut task, &layout, &root)?;
         }
     } else {
         ensure!(

@@ -35,7 +35,7 @@ pub fn read(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>>
     let Value::Array(items) = value else {
         return Err(root.error(format!(
             "expected a list of tasks (the original format), found {}",
-            crate::load::describe(value)
+            crate::json::describe(value)
         )));
     };
     Ok(items
@@ -46,7 +46,7 @@ pub fn read(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>>
 }
 
 fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>) -> Result<Task> {
-    let raw: OriginalTask = crate::load::from_value(item, at)?;
+    let raw: OriginalTask = crate::json::from_value(item, at)?;
     let mut goal = Vec::with_capacity(raw.task_goal.len());
     let goal_site = at.key("task_goal");
     for (key, value) in &raw.task_goal {

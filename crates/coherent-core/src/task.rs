@@ -59,7 +59,7 @@ pub enum RuleSet {
     #[default]
     Compatible,
     /// The project's own benchmark: the compatible rules, with the height labels derived
-    /// from the task's geometry ([`crate::geometry::derive_heights`]) and one quirk
+    /// from the task's geometry (`heights::derive_heights`) and one quirk
     /// dropped: what a fixed arm puts down is `ON_HIGH_SURFACE` only when the place it
     /// puts it is high, not always (`docs/semantics-notes.md`).
     Geometric,
