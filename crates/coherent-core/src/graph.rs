@@ -3,6 +3,7 @@
 
 use std::fmt;
 
+use crate::error::clip;
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// A node's id as written in a task file (`"id": 22`).
@@ -95,6 +96,12 @@ impl Node {
     /// `<class_name>(id)`, as in action strings and goals.
     pub fn label(&self) -> String {
         format!("<{}>({})", self.class_name, self.id)
+    }
+
+    /// [`Node::label`] with a name longer than [`crate::error::ECHO_CHARS`] cut, for messages about
+    /// input.
+    pub fn short_label(&self) -> String {
+        format!("<{}>({})", clip(&self.class_name), self.id)
     }
 }
 

@@ -26,7 +26,7 @@ impl Layout {
                 NodeKind::Floor | NodeKind::Tool => (true, ""),
                 NodeKind::Object => (self.item(id).is_some(), "items"),
             };
-            (!ok).then(|| format!("no entry in {list} for {}", node.label()))
+            (!ok).then(|| format!("no entry in {list} for {}", node.short_label()))
         })
     }
 }
@@ -54,7 +54,7 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
         if hand_set.0 != 0 {
             return Err(nodes_site.index(n.get()).key("properties").error(format!(
                 "{}: {} comes from the geometry under the geometric rule set and may not be set by hand",
-                node.label(),
+                node.short_label(),
                 task.vocab.property_names(hand_set).join(", ")
             )));
         }
@@ -154,9 +154,9 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
             if d > specs.arm_reach() {
                 return Err(geometry.key("items").index(i).key("pos").error(format!(
                     "{} on {} is {d:.2} m from the shoulder of {}; its reach is {:.2} m",
-                    task.node(x).label(),
-                    task.node(surface).label(),
-                    task.node(robot.node).label(),
+                    task.node(x).short_label(),
+                    task.node(surface).short_label(),
+                    task.node(robot.node).short_label(),
                     specs.arm_reach()
                 )));
             }
@@ -170,7 +170,7 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
         if task.node(n).properties.contains(PropSet::LANDABLE) && g.size[0].min(g.size[2]) < pad {
             return Err(geometry.key("items").index(i).key("size").error(format!(
                 "{} is LANDABLE but its top, {:.2} x {:.2} m, is smaller than the quadrotor's landing pad of {pad:.2} m",
-                task.node(n).label(),
+                task.node(n).short_label(),
                 g.size[0],
                 g.size[2]
             )));

@@ -20,9 +20,18 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Result<Task>>> {
     Ok(out)
 }
 
-/// Every task at `path`, or the first error.
+/// Every task at `path`, or the first error; a file or folder with no task at all (an
+/// empty list) is an error too.
 pub fn load_tasks(path: &Path) -> Result<Vec<Task>> {
-    read_tasks(path)?.into_iter().collect()
+    let tasks: Vec<Task> = read_tasks(path)?.into_iter().collect::<Result<_>>()?;
+    if tasks.is_empty() {
+        return Err(Error::Malformed {
+            file: path.display().to_string(),
+            path: crate::JsonPath::root(),
+            message: "no tasks: the list of tasks is empty".to_owned(),
+        });
+    }
+    Ok(tasks)
 }
 
 /// The JSON files at `path`: the file itself, or a folder's `*.json` files, recursively.
@@ -57,16 +66,8 @@ pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
 /// The tasks of one file: a list (original format) or an object (native format).
 pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| io_error(path, &e))?;
-    let value: Value = serde_json::from_str(&text).map_err(|e| Error::Malformed {
-        file: file.clone(),
-        path: crate::JsonPath::root(),
-        message: format!(
-            "invalid JSON at line {} column {}: {e}",
-            e.line(),
-            e.column()
-        ),
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, &e))?;
+    let value = crate::json::parse(&file, &bytes)?;
     let scene = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::error::{Result, Site, ensure};
+use crate::error::{Result, Site, clip, ensure, quoted};
 use crate::task::{RawGraph, RawPredicate, RuleSet, Source, Task, TaskMeta};
 use crate::vocab::Relation;
 
@@ -64,8 +64,8 @@ fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>)
     ensure!(
         raw.ground_truth_step_num.len() <= 1,
         gt_site,
-        "expected one step count, found {:?}",
-        raw.ground_truth_step_num
+        "expected one step count, found {}",
+        clip(&format!("{:?}", raw.ground_truth_step_num))
     );
     ensure!(
         raw.goal_instruction.len() <= 1,
@@ -103,7 +103,8 @@ fn goal_count(value: &Value, site: &Site<'_>) -> Result<u32> {
     };
     count.and_then(|n| u32::try_from(n).ok()).ok_or_else(|| {
         site.error(format!(
-            "expected [count, []] with a count >= 0, found {value}"
+            "expected [count, []] with a count >= 0, found {}",
+            crate::json::describe(value)
         ))
     })
 }
@@ -112,7 +113,8 @@ fn goal_count(value: &Value, site: &Site<'_>) -> Result<u32> {
 pub fn parse_goal_key(key: &str) -> std::result::Result<(Relation, i64, i64), String> {
     let bad = || {
         format!(
-            "goal {key:?} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)"
+            "goal {} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)",
+            quoted(key)
         )
     };
     let (relation, rest) = if let Some(rest) = key.strip_prefix("on_") {

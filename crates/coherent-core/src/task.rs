@@ -5,7 +5,7 @@
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, Site, ensure};
+use crate::error::{Result, Site, ensure, quoted};
 use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, RobotKind, State};
 use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
@@ -157,11 +157,11 @@ impl Task {
             let at = nodes_site.index(i);
             if let Some(first) = index.insert(NodeId(raw.id), Idx(i as u16)) {
                 return Err(at.key("id").error(format!(
-                    "duplicate node id {} (also the id of nodes[{}], {:?}; this one is {:?})",
+                    "duplicate node id {} (also the id of nodes[{}], {}; this one is {})",
                     raw.id,
                     first.0,
-                    graph.nodes[first.get()].class_name,
-                    raw.class_name
+                    quoted(&graph.nodes[first.get()].class_name),
+                    quoted(&raw.class_name)
                 )));
             }
             let kind = node_kind(raw, &at)?;
@@ -207,8 +207,8 @@ impl Task {
             let to = resolve(raw.to_id, at.key("to_id"))?;
             let rel = Relation::from_name(&raw.relation_type).ok_or_else(|| {
                 at.key("relation_type").error(format!(
-                    "unknown relation {:?} (known: {})",
-                    raw.relation_type,
+                    "unknown relation {} (known: {})",
+                    quoted(&raw.relation_type),
                     Relation::ALL.map(Relation::name).join(", ")
                 ))
             })?;
@@ -435,7 +435,8 @@ fn intern_names(
     for (j, name) in names.iter().enumerate() {
         bits |= intern(name).ok_or_else(|| {
             site.index(j).error(format!(
-                "{what} {name:?}: too many distinct unknown {what} names (at most {limit})"
+                "{what} {}: too many distinct unknown {what} names (at most {limit})",
+                quoted(name)
             ))
         })?;
     }
@@ -456,8 +457,8 @@ fn node_kind(raw: &RawNode, at: &Site<'_>) -> Result<NodeKind> {
         "Agents" => {
             NodeKind::Robot(RobotKind::from_class_name(&raw.class_name).ok_or_else(|| {
                 at.key("class_name").error(format!(
-                    "unknown robot class {:?} (known: {})",
-                    raw.class_name,
+                    "unknown robot class {} (known: {})",
+                    quoted(&raw.class_name),
                     RobotKind::ALL.map(RobotKind::class_name).join(", ")
                 ))
             })?)

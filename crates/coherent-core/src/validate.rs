@@ -1,6 +1,7 @@
 //! Semantic checks of a well-formed task: problems that make it unsolvable, trivial or
 //! inconsistent. (Malformed input is rejected earlier, by the loaders.)
 
+use crate::error::clip;
 use crate::graph::{Idx, NodeKind, RobotKind};
 use crate::planner::Analysis;
 use crate::rules::room_of;
@@ -13,7 +14,11 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
     if task.goal.is_empty() {
         out.push("the goal is empty".to_owned());
     } else if task.goal.iter().all(|p| predicate_holds(&task.init, p)) {
-        let labels: Vec<String> = task.goal.iter().map(|p| task.predicate_label(p)).collect();
+        let labels: Vec<String> = task
+            .goal
+            .iter()
+            .map(|p| clip(&task.predicate_label(p)))
+            .collect();
         out.push(format!(
             "the goal already holds at the start: {}",
             labels.join(", ")
@@ -34,7 +39,7 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
         out.extend(
             role_contradictions(task, n)
                 .into_iter()
-                .map(|m| format!("{}: {m}", task.node(n).label())),
+                .map(|m| format!("{}: {m}", task.node(n).short_label())),
         );
     }
     let listed = task.init_edges.len();
