@@ -35,5 +35,5 @@ pub use graph::{Edge, Idx, Node, NodeId, NodeKind, RobotKind, State};
 pub use load::{load_tasks, read_tasks};
 pub use planner::{Analysis, Limits, Step, TaskType};
 pub use rules::Observation;
-pub use task::{GoalPredicate, RawGraph, Robot, RuleSet, Task, TaskMeta};
+pub use task::{GoalPredicate, MAX_GROUND_TRUTH, RawGraph, Robot, RuleSet, Task, TaskMeta};
 pub use vocab::{PropSet, Relation, StateSet};

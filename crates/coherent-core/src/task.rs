@@ -102,6 +102,32 @@ pub struct TaskMeta {
     pub source: Option<Source>,
 }
 
+/// The most steps a task's ground truth may claim. A ground truth is the length of a
+/// plan someone wrote down (4 to 16 steps on the released benchmark and on the
+/// project's own), and the step budget of an episode is twice it, each step a round of
+/// model calls: 10,000 steps is far beyond any task a team of three robots is given, and
+/// keeps twice it (and the steps counted for a failed episode, twice it plus one) far
+/// inside 32 bits. `coherent validate` flags a larger one, and no budget is sized from
+/// it ([`TaskMeta::twice_ground_truth`]).
+pub const MAX_GROUND_TRUTH: u32 = 10_000;
+
+impl TaskMeta {
+    /// The paper's step budget, twice the ground truth, when the task has one; an error
+    /// when the ground truth is above [`MAX_GROUND_TRUTH`].
+    pub fn twice_ground_truth(&self) -> Option<Result<u32, String>> {
+        self.gt_steps.map(|gt| {
+            if gt > MAX_GROUND_TRUTH {
+                Err(format!(
+                    "the ground truth of {gt} steps is more than any task needs (at most \
+                     {MAX_GROUND_TRUTH}), so no budget of 2 x GT is sized from it: pass a step budget"
+                ))
+            } else {
+                Ok(2 * gt)
+            }
+        })
+    }
+}
+
 /// A goal predicate before ids are resolved, with where each id was read.
 #[derive(Clone, Debug)]
 pub(crate) struct RawPredicate<'a> {

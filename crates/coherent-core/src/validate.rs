@@ -5,7 +5,7 @@ use crate::error::clip;
 use crate::graph::{Idx, NodeKind, RobotKind};
 use crate::planner::Analysis;
 use crate::rules::room_of;
-use crate::task::{Task, predicate_holds};
+use crate::task::{MAX_GROUND_TRUTH, Task, predicate_holds};
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// Everything semantically wrong with `task`, in words; empty when it is clean.
@@ -26,6 +26,12 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
     }
     if let Some(reason) = &analysis.reason {
         out.push(format!("the goal cannot be reached: {reason}"));
+    }
+    if let Some(gt) = task.meta.gt_steps.filter(|&gt| gt > MAX_GROUND_TRUTH) {
+        out.push(format!(
+            "ground truth says {gt} steps, more than any task needs (at most {MAX_GROUND_TRUTH}; \
+             an episode's budget is 2 x GT steps)"
+        ));
     }
     if let (Some(gt), Some(plan)) = (task.meta.gt_steps, &analysis.plan)
         && (gt as usize) < plan.len()
