@@ -353,8 +353,8 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
 fn parse_line(
     de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
 ) -> Result<ResultLine, String> {
-    let value: serde_json::Value =
-        serde::Deserialize::deserialize(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
+    // A key twice in one object is refused: serde_json alone would keep the last one.
+    let value = coherent_core::json::value(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
     de.end().map_err(|e| format!("invalid JSON: {e}"))?;
     serde_json::from_value::<ResultLine>(value.clone()).map_err(|e| {
         // Name the field: serde_json's messages say what, not where.
@@ -763,9 +763,9 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
 fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
     let analysis = planner::analyse(task, limits);
     let optimal = analysis.plan.as_ref().map(|p| p.len() as u32);
-    let budget = match (task.meta.gt_steps, optimal) {
-        (Some(gt), _) => Ok(Budget::TwiceGroundTruth(2 * gt)),
-        (None, Some(n)) => Ok(Budget::TwiceOptimum(2 * n.max(1))),
+    let budget = match (task.meta.twice_ground_truth(), optimal) {
+        (Some(budget), _) => budget.map(Budget::TwiceGroundTruth),
+        (None, Some(n)) => Ok(Budget::TwiceOptimum(n.max(1).saturating_mul(2))),
         (None, None) => Err(format!(
             "no ground truth, and the planner finds no plan to size a budget from ({})",
             analysis.reason.as_deref().unwrap_or("search stopped")
