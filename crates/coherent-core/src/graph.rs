@@ -173,6 +173,12 @@ impl State {
         state
     }
 
+    /// Bytes of the state's own block (its words, with the room a clone leaves for a few
+    /// more edges).
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.data.capacity() * size_of::<u32>()
+    }
+
     fn nodes(&self) -> usize {
         self.data[0] as usize
     }

@@ -33,7 +33,7 @@ pub use feasibility::{Infeasible, Reason};
 pub use geometry::Layout;
 pub use graph::{Edge, Idx, Node, NodeId, NodeKind, RobotKind, State};
 pub use load::{load_tasks, read_tasks};
-pub use planner::{Analysis, Limits, Step, TaskType};
+pub use planner::{Analysis, Limits, Step, Stop, TaskType};
 pub use rules::Observation;
 pub use task::{GoalPredicate, MAX_GROUND_TRUTH, RawGraph, Robot, RuleSet, Task, TaskMeta};
 pub use vocab::{PropSet, Relation, StateSet};

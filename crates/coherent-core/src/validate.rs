@@ -24,8 +24,12 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
             labels.join(", ")
         ));
     }
-    if let Some(reason) = &analysis.reason {
-        out.push(format!("the goal cannot be reached: {reason}"));
+    match (&analysis.reason, analysis.stop) {
+        (Some(reason), Some(_)) => out.push(format!(
+            "the goal could not be decided within the search limits: {reason}"
+        )),
+        (Some(reason), None) => out.push(format!("the goal cannot be reached: {reason}")),
+        (None, _) => {}
     }
     if let Some(gt) = task.meta.gt_steps.filter(|&gt| gt > MAX_GROUND_TRUTH) {
         out.push(format!(
