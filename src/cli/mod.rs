@@ -39,7 +39,8 @@ enum Command {
     /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
     /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
-    /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
+    /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
+    /// no tasks, 0 when clean.
     Validate {
         /// Original env files, native task files or folders of them; `native`: the
         /// project's own benchmark, compiled in.
@@ -48,6 +49,9 @@ enum Command {
         /// Most states one search may visit.
         #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
+        /// Most memory one search's tables may take, in MiB (an estimate).
+        #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
+        max_memory: usize,
     },
     /// Convert original env files into native task files, one per task.
     Import {
@@ -58,7 +62,8 @@ enum Command {
         out: PathBuf,
     },
     /// Plan optimally: shortest plan, task type, or why a task cannot be solved. Exit 1
-    /// when a plan fails in physics (--physics), 2 on malformed input.
+    /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
+    /// input.
     Plan {
         /// An original env file, a native task file or a folder of them; `native`: the
         /// project's own benchmark, compiled in.
@@ -72,6 +77,9 @@ enum Command {
         /// Most states one search may visit.
         #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
+        /// Most memory one search's tables may take, in MiB (an estimate).
+        #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
+        max_memory: usize,
         /// Also execute each plan in Rapier and check it against the rules after every
         /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
         #[arg(long)]
@@ -112,22 +120,25 @@ where
                 2
             });
         }
-        Command::Validate { files, max_states } => {
-            validate_files(&files, &Limits::max_states(max_states))
-        }
+        Command::Validate {
+            files,
+            max_states,
+            max_memory,
+        } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
             file,
             tasks,
             json,
             max_states,
+            max_memory,
             physics,
         } => plan(
             &file,
             &tasks,
             json,
             physics,
-            &Limits::max_states(max_states),
+            &limits(max_states, max_memory),
         ),
     };
     match result {
@@ -136,6 +147,14 @@ where
             eprintln!("error: {e}");
             2
         }
+    }
+}
+
+/// The search bounds of `--max-states` and `--max-memory` (MiB).
+fn limits(max_states: usize, max_memory_mib: usize) -> Limits {
+    Limits {
+        max_memory: max_memory_mib.saturating_mul(1 << 20),
+        ..Limits::max_states(max_states)
     }
 }
 
@@ -148,12 +167,17 @@ pub(crate) fn read_tasks(path: &Path) -> coherent_core::Result<Vec<coherent_core
     load::read_tasks(path)
 }
 
-/// Tasks of every file; malformed ones are reported on stderr and counted.
-fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
+/// Tasks of every file; malformed ones are reported on stderr and counted, and so is a
+/// file or folder that holds no task at all (an empty list) as `empty`, with a warning.
+fn read_all(files: &[PathBuf], malformed: &mut usize, empty: &mut usize) -> Vec<Task> {
     let mut tasks = Vec::new();
     for path in files {
         match read_tasks(path) {
             Ok(results) => {
+                if results.is_empty() {
+                    *empty += 1;
+                    eprintln!("warning: {}: no tasks (an empty list)", path.display());
+                }
                 for r in results {
                     match r {
                         Ok(t) => tasks.push(t),
@@ -184,8 +208,8 @@ fn task_name(t: &Task) -> String {
 }
 
 fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let tasks = read_all(files, &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = read_all(files, &mut malformed, &mut empty);
     let mut with_problems = 0;
     for t in &tasks {
         let analysis = planner::analyse(t, limits);
@@ -209,7 +233,7 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
     );
     Ok(if malformed > 0 {
         2
-    } else if with_problems > 0 {
+    } else if with_problems > 0 || empty > 0 {
         1
     } else {
         0
@@ -217,8 +241,8 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
 }
 
 fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let tasks = read_all(files, &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = read_all(files, &mut malformed, &mut empty);
     let mut written = std::collections::HashSet::new();
     for t in &tasks {
         let dir = out.join(&t.meta.scene);
@@ -256,8 +280,8 @@ fn plan(
     physics: bool,
     limits: &Limits,
 ) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let mut tasks = read_all(&[file.to_owned()], &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let mut tasks = read_all(&[file.to_owned()], &mut malformed, &mut empty);
     if !only.is_empty() {
         tasks.retain(|t| only.contains(&t.meta.task_id));
         if let Some(missing) = only
@@ -314,7 +338,7 @@ fn plan(
     }
     Ok(if malformed > 0 {
         2
-    } else if physics_failed {
+    } else if physics_failed || empty > 0 {
         1
     } else {
         0
