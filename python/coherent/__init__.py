@@ -24,6 +24,7 @@ import importlib
 from typing import Any
 
 from ._coherent import (
+    DEFAULT_MAX_STATES,
     LLM,
     METHODS,
     ActionParseError,
@@ -54,6 +55,7 @@ from ._coherent import (
 from .analysis import Report, bench, report, results
 
 __all__ = [
+    "DEFAULT_MAX_STATES",
     "LLM",
     "METHODS",
     "ActionParseError",

@@ -420,7 +420,8 @@ fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>
 #[pyfunction]
 #[pyo3(signature = (
     task, method = "pefa", *, llm = None, sim_errors = None, history = 5, max_steps = None,
-    physics = false, seed = None, out = PathBuf::from("runs"), max_states = 5_000_000
+    physics = false, seed = None, out = PathBuf::from("runs"),
+    max_states = Limits::DEFAULT_MAX_STATES
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
