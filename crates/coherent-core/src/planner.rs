@@ -186,8 +186,9 @@ impl Tables {
         self.bucket_bytes += (bucket.capacity() - before) * size_of::<u32>();
     }
 
-    /// The estimated bytes of everything, after one more state of `state_bytes` bytes
-    /// when `more` (the vectors and the table grow by doubling when full).
+    /// The estimated bytes of the tables; with `more`, after adding a state whose own
+    /// block takes `more` bytes, counting the doubling of a full vector or table that
+    /// the addition would cause.
     fn bytes(&self, more: Option<usize>) -> usize {
         let grown = |len: usize, cap: usize| match more {
             Some(_) if len == cap => cap.max(4) * 2,
