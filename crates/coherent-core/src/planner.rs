@@ -44,7 +44,7 @@ pub struct Limits {
 
 impl Limits {
     pub const DEFAULT_MAX_STATES: usize = 5_000_000;
-    /// 1 GiB: room for a few million states of the released tasks (some 300 bytes
+    /// 1 GiB: room for a few million states of the released tasks (some 400 bytes
     /// each), and a bound a laptop can afford whatever the task.
     pub const DEFAULT_MAX_MEMORY: usize = 1 << 30;
 
