@@ -496,3 +496,96 @@ fn render_writes_a_picture_with_paths() {
     assert_eq!(code(&out), 2, "{}", show(&out));
     assert!(stderr(&out).contains("choose one with --task ID"));
 }
+
+/// A ground truth no task can need (2 x 2147483648 is 0 in 32 bits, 2 x 4294967295 is
+/// 4294967294): `validate` flags it with the limit, and `run` sizes no budget from it.
+#[test]
+fn a_ground_truth_beyond_any_task_is_flagged_and_sizes_no_budget() {
+    let dir = TempDir::new("huge-gt");
+    for gt in [2_147_483_648_u64, 4_294_967_295] {
+        let mut task = original_list(0).swap_remove(0);
+        task["ground_truth_step_num"] = json!([gt]);
+        let file = dir.write_json("env0.json", &json!([task]));
+        let out = coherent(&["validate", arg(&file)]);
+        assert_eq!(code(&out), 1, "{}", show(&out));
+        assert!(
+            stdout(&out).contains(&format!(
+                "ground truth says {gt} steps, more than any task needs (at most 10000"
+            )),
+            "{}",
+            show(&out)
+        );
+        let out = coherent(&["run", arg(&file), "--task", "0", "--out", arg(dir.path())]);
+        assert_eq!(code(&out), 2, "{}", show(&out));
+        assert!(!stdout(&out).contains("budget"), "{}", show(&out));
+        assert!(
+            stderr(&out).contains(&format!("the ground truth of {gt} steps")),
+            "{}",
+            show(&out)
+        );
+    }
+}
+
+/// An empty list is no tasks: a warning, and exit 1 (not "0 tasks read" and 0).
+#[test]
+fn an_empty_task_list_is_a_warning_and_exits_1() {
+    let dir = TempDir::new("empty-list");
+    let file = dir.write_json("env0.json", &json!([]));
+    for cmd in ["validate", "plan"] {
+        let out = coherent(&[cmd, arg(&file)]);
+        assert_eq!(code(&out), 1, "{cmd}: {}", show(&out));
+        assert!(
+            stderr(&out).contains(&format!(
+                "warning: {}: no tasks (an empty list)",
+                arg(&file)
+            )),
+            "{cmd}: {}",
+            show(&out)
+        );
+    }
+}
+
+/// A key twice in one object is malformed input, named with its path.
+#[test]
+fn a_key_twice_exits_2_naming_its_path() {
+    let dir = TempDir::new("key-twice");
+    let text = serde_json::to_string(&json!([original_list(0).swap_remove(0)])).expect("JSON");
+    let file = dir.path().join("env0.json");
+    std::fs::write(&file, text.replacen("[{", "[{\"task_id\": 7, ", 1)).expect("writable");
+    let out = coherent(&["validate", arg(&file)]);
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(
+        stderr(&out).contains(&format!(
+            "error: {}: $[0].task_id: duplicate key \"task_id\"",
+            arg(&file)
+        )),
+        "{}",
+        show(&out)
+    );
+}
+
+/// env1 task 2 with the sink moved off the kitchen table (its edge now the robot arm's,
+/// twice): the plate can no longer go into it, and proving so takes more states than
+/// any bound here. `validate` stops at the memory bound and says the goal was not
+/// decided (by default it stops at 1 GiB instead of 5,000,000 states and 1.8 GB).
+#[test]
+fn validate_stops_at_the_memory_bound_and_says_the_goal_was_not_decided() {
+    let dir = TempDir::new("memory-bound");
+    let mut task = original_list(1).swap_remove(2);
+    assert_eq!(
+        task["init_graph"]["edges"][7],
+        json!({"from_id": 8, "to_id": 11, "relation_type": "ON"})
+    );
+    task["init_graph"]["edges"][7]["from_id"] = json!(20);
+    let file = dir.write_json("env1.json", &json!([task]));
+    let out = coherent(&["validate", "--max-memory", "16", arg(&file)]);
+    assert_eq!(code(&out), 1, "{}", show(&out));
+    assert!(
+        stdout(&out).contains(
+            "env1 task 2 (env1.json): the goal could not be decided within the search limits: \
+             search stopped at the memory limit of 16 MiB ("
+        ),
+        "{}",
+        show(&out)
+    );
+}

@@ -29,6 +29,7 @@ import importlib
 from typing import Any
 
 from ._coherent import (
+    DEFAULT_MAX_STATES,
     LLM,
     METHODS,
     ActionParseError,
@@ -60,6 +61,7 @@ from ._coherent import (
 from .analysis import Report, bench, report, results
 
 __all__ = [
+    "DEFAULT_MAX_STATES",
     "LLM",
     "METHODS",
     "ActionParseError",

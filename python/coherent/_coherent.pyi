@@ -14,6 +14,10 @@ METHODS: list[str]
 """The planning methods, in the paper's order: ``pefa``, ``pefa-no-history``, ``cmrs``,
 ``dmrs-1d``, ``dmrs-2d``, ``mcts``, ``llm-mcts``, ``optimal``."""
 
+DEFAULT_MAX_STATES: int
+"""The planner's bound on the states one search may visit when ``max_states`` is not
+given (the command line's ``--max-states`` default)."""
+
 _RobotType: TypeAlias = Literal["quadrotor", "robot dog", "robot arm"]
 _TaskType: TypeAlias = Literal["mono", "dual", "trio"]
 _Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted"]
@@ -180,11 +184,11 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
 def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
     """The project's own benchmark, compiled in: every task, or its 40-task subset."""
 
-def plan(task: Task, max_states: int = 5_000_000) -> _PlanResult:
+def plan(task: Task, max_states: int = ...) -> _PlanResult:
     """Plans ``task`` optimally (one line of ``coherent plan --json``). Ctrl-C interrupts
     it and stops the search."""
 
-def validate(task: Task, max_states: int = 5_000_000) -> list[str]:
+def validate(task: Task, max_states: int = ...) -> list[str]:
     """Semantic problems of ``task``, in words; empty when it is clean."""
 
 def parse_action(text: str) -> _ParsedAction:
@@ -314,7 +318,7 @@ def run(
     physics: bool = False,
     seed: int | None = None,
     out: _PathLike = "runs",
-    max_states: int = 5_000_000,
+    max_states: int = ...,
 ) -> Episode:
     """Runs ``method`` (one of :data:`METHODS`) on ``task`` as ``coherent run`` does; the
     transcript goes to ``out``. Without ``llm`` the built-in planner plays the model's
@@ -345,7 +349,7 @@ def run_bench(
     seeds: int = 1,
     concurrency: int = 4,
     history: int = 5,
-    max_states: int = 5_000_000,
+    max_states: int = ...,
     out: _PathLike = "results.jsonl",
     progress: bool = False,
 ) -> _BenchOutcome:

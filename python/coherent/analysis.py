@@ -87,7 +87,7 @@ def bench(
     seeds: int = 1,
     concurrency: int = 4,
     history: int = 5,
-    max_states: int = 5_000_000,
+    max_states: int = _coherent.DEFAULT_MAX_STATES,
     out: PathLike = "results.jsonl",
     progress: bool = False,
 ) -> pd.DataFrame:

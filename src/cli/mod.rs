@@ -41,7 +41,8 @@ enum Command {
     /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
     /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
-    /// Check task files: exit 2 on malformed input, 1 on semantic problems, 0 when clean.
+    /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
+    /// no tasks, 0 when clean.
     Validate {
         /// Original env files, native task files or folders of them; `native`: the
         /// project's own benchmark, compiled in.
@@ -50,6 +51,9 @@ enum Command {
         /// Most states one search may visit.
         #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
+        /// Most memory one search's tables may take, in MiB (an estimate).
+        #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
+        max_memory: usize,
     },
     /// Convert original env files into native task files, one per task.
     Import {
@@ -60,7 +64,8 @@ enum Command {
         out: PathBuf,
     },
     /// Plan optimally: shortest plan, task type, or why a task cannot be solved. Exit 1
-    /// when a plan fails in physics (--physics), 2 on malformed input.
+    /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
+    /// input.
     Plan {
         /// An original env file, a native task file or a folder of them; `native`: the
         /// project's own benchmark, compiled in.
@@ -74,6 +79,9 @@ enum Command {
         /// Most states one search may visit.
         #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
         max_states: usize,
+        /// Most memory one search's tables may take, in MiB (an estimate).
+        #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
+        max_memory: usize,
         /// Also execute each plan in Rapier and check it against the rules after every
         /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
         #[arg(long)]
@@ -114,22 +122,25 @@ where
                 2
             });
         }
-        Command::Validate { files, max_states } => {
-            validate_files(&files, &Limits::max_states(max_states))
-        }
+        Command::Validate {
+            files,
+            max_states,
+            max_memory,
+        } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
             file,
             tasks,
             json,
             max_states,
+            max_memory,
             physics,
         } => plan(
             &file,
             &tasks,
             json,
             physics,
-            &Limits::max_states(max_states),
+            &limits(max_states, max_memory),
         ),
     };
     match result {
@@ -147,19 +158,35 @@ fn error(message: &dyn std::fmt::Display) {
     eprintln!("error: {}", shown_lines(&message.to_string()));
 }
 
-/// Tasks of every file; malformed ones are reported on stderr and counted.
-fn read_all(files: &[PathBuf], malformed: &mut usize) -> Vec<Task> {
-    let (tasks, errors) = tasks::read_all(files);
-    for e in &errors {
+/// The search bounds of `--max-states` and `--max-memory` (MiB).
+fn limits(max_states: usize, max_memory_mib: usize) -> Limits {
+    Limits {
+        max_memory: max_memory_mib.saturating_mul(1 << 20),
+        ..Limits::max_states(max_states)
+    }
+}
+
+/// Tasks of every file; malformed ones are reported on stderr and counted, and so is a
+/// file or folder that holds no task at all (an empty list) as `empty`, with a warning.
+fn read_all(files: &[PathBuf], malformed: &mut usize, empty: &mut usize) -> Vec<Task> {
+    let read = tasks::read_all(files);
+    for path in &read.empty {
+        eprintln!(
+            "warning: {}: no tasks (an empty list)",
+            shown(&path.display().to_string())
+        );
+    }
+    for e in &read.malformed {
         error(&e);
     }
-    *malformed += errors.len();
-    tasks
+    *malformed += read.malformed.len();
+    *empty += read.empty.len();
+    read.tasks
 }
 
 fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let tasks = read_all(files, &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = read_all(files, &mut malformed, &mut empty);
     let mut with_problems = 0;
     for t in &tasks {
         let found = check::findings(t, limits);
@@ -177,7 +204,7 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
     );
     Ok(if malformed > 0 {
         2
-    } else if with_problems > 0 {
+    } else if with_problems > 0 || empty > 0 {
         1
     } else {
         0
@@ -185,8 +212,8 @@ fn validate_files(files: &[PathBuf], limits: &Limits) -> Result<u8, Error> {
 }
 
 fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let tasks = read_all(files, &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = read_all(files, &mut malformed, &mut empty);
     let written = check::import(&tasks, out)?;
     println!(
         "wrote {} native task files to {}",
@@ -203,8 +230,8 @@ fn plan(
     physics: bool,
     limits: &Limits,
 ) -> Result<u8, Error> {
-    let mut malformed = 0;
-    let mut tasks = read_all(&[file.to_owned()], &mut malformed);
+    let (mut malformed, mut empty) = (0, 0);
+    let mut tasks = read_all(&[file.to_owned()], &mut malformed, &mut empty);
     if !only.is_empty() {
         tasks.retain(|t| only.contains(&t.meta.task_id));
         if let Some(missing) = only
@@ -250,7 +277,7 @@ fn plan(
     }
     Ok(if malformed > 0 {
         2
-    } else if physics_failed {
+    } else if physics_failed || empty > 0 {
         1
     } else {
         0

@@ -15,25 +15,37 @@ pub fn read_tasks(path: &Path) -> coherent_core::Result<Vec<coherent_core::Resul
     load::read_tasks(path)
 }
 
-/// The well-formed tasks of every path, and an error for each malformed task or
-/// unreadable path.
-pub fn read_all(paths: &[PathBuf]) -> (Vec<Task>, Vec<Error>) {
-    let mut tasks = Vec::new();
-    let mut malformed = Vec::new();
+/// What [`read_all`] found.
+#[derive(Debug, Default)]
+pub struct Read {
+    /// The well-formed tasks, in the order of the paths.
+    pub tasks: Vec<Task>,
+    /// An error for each malformed task or unreadable path.
+    pub malformed: Vec<Error>,
+    /// The paths that hold no task at all (an empty list, an empty folder).
+    pub empty: Vec<PathBuf>,
+}
+
+/// The tasks of every path, the malformed ones, and the paths with none.
+pub fn read_all(paths: &[PathBuf]) -> Read {
+    let mut read = Read::default();
     for path in paths {
         match read_tasks(path) {
             Ok(results) => {
+                if results.is_empty() {
+                    read.empty.push(path.clone());
+                }
                 for r in results {
                     match r {
-                        Ok(t) => tasks.push(t),
-                        Err(e) => malformed.push(e),
+                        Ok(t) => read.tasks.push(t),
+                        Err(e) => read.malformed.push(e),
                     }
                 }
             }
-            Err(e) => malformed.push(e),
+            Err(e) => read.malformed.push(e),
         }
     }
-    (tasks, malformed)
+    read
 }
 
 /// The task `id` of `file`, or its only task when `id` is `None`.

@@ -280,7 +280,7 @@ fn line(
         steps,
         gt_steps: Some(gt),
         optimal_steps: Some(gt),
-        max_steps: 2 * gt,
+        max_steps: gt.saturating_mul(2),
         llm_calls: calls,
         prompt_tokens: u64::from(calls) * 100,
         completion_tokens: u64::from(calls) * 10,
@@ -446,4 +446,56 @@ async fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
             line.transcript
         );
     }
+}
+
+/// A results line with a key twice is refused, naming the line and the key (serde_json
+/// alone keeps the last one, so `"success": true, "success": false` would count as a
+/// failure unseen).
+#[test]
+fn a_results_line_with_a_key_twice_is_refused() {
+    let dir = scratch("duplicate-key");
+    let path = dir.join("r.jsonl");
+    let good = line(
+        "pefa",
+        "env0",
+        1,
+        Some("mono"),
+        5,
+        0,
+        Status::Success,
+        5,
+        10,
+    );
+    let twice = good.replacen('{', "{\"success\":false,", 1);
+    std::fs::write(&path, format!("{good}{twice}")).expect("write");
+    let e = bench::read_results(&path).expect_err("a key twice");
+    assert!(
+        e.contains("r.jsonl: line 2") && e.contains("duplicate key \"success\" at $.success"),
+        "{e}"
+    );
+}
+
+/// A failed episode counts 2 x GT + 1 steps, worked out without wrapping for the
+/// largest ground truth a results line can hold.
+#[test]
+fn a_huge_ground_truth_counts_without_wrapping() {
+    let dir = scratch("huge-gt");
+    let path = dir.join("r.jsonl");
+    let text = line(
+        "pefa",
+        "env0",
+        1,
+        Some("mono"),
+        u32::MAX,
+        0,
+        Status::Failure,
+        5,
+        10,
+    );
+    std::fs::write(&path, text).expect("write");
+    let lines = bench::read_results(&path).expect("reads").lines;
+    assert_eq!(
+        report::counted_steps(&lines[0]),
+        2.0 * f64::from(u32::MAX) + 1.0
+    );
 }

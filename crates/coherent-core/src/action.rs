@@ -59,7 +59,7 @@ impl Verb {
         }
     }
 
-    /// Verbs a robot type has (SEMANTICS.md section 3).
+    /// Verbs a robot type has (docs/semantics.md, "The robots").
     pub fn of(kind: RobotKind) -> &'static [Verb] {
         match kind {
             RobotKind::Quadrotor => &[Verb::LandOn, Verb::MoveTowards, Verb::TakeoffFrom],

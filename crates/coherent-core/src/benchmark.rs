@@ -2,7 +2,7 @@
 //! tasks under the `geometric` rule set (`benchmark/README.md`), loadable by name with
 //! no files at hand (`coherent bench --tasks native`, `coherent.benchmark.tasks()`).
 
-use crate::{Error, Result, Task};
+use crate::{Result, Task};
 
 mod files {
     include!(concat!(env!("OUT_DIR"), "/benchmark_files.rs"));
@@ -17,12 +17,7 @@ pub fn tasks() -> Result<Vec<Task>> {
         .iter()
         .map(|(path, text)| {
             let file = format!("benchmark/{path}");
-            let value: serde_json::Value =
-                serde_json::from_str(text).map_err(|e| Error::Malformed {
-                    file: file.clone(),
-                    path: crate::JsonPath::root(),
-                    message: format!("invalid JSON: {e}"),
-                })?;
+            let value = crate::json::parse(&file, text.as_bytes())?;
             crate::native::read(&file, &value)
         })
         .collect()

@@ -56,7 +56,7 @@ pub trait Environment {
     }
 }
 
-/// The rules of SEMANTICS.md, nothing else.
+/// The rules of docs/semantics.md, nothing else.
 #[derive(Clone, Debug)]
 pub struct SymbolicEnv {
     task: Arc<Task>,

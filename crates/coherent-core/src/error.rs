@@ -1,5 +1,6 @@
 //! The one error type of `coherent-core`. Every message about input names the file,
-//! the JSON path and the offending value.
+//! the JSON path and the offending value, cut to [`ECHO_CHARS`] characters when it is
+//! longer ([`clip`], [`quoted`]).
 
 use std::fmt;
 
@@ -19,7 +20,7 @@ pub enum Error {
     #[error("{0}")]
     UnknownRobot(String),
     /// An action string that does not follow the grammar `[verb] <name>(id)`.
-    #[error("cannot parse action {action:?}: {reason}")]
+    #[error("cannot parse action {}: {reason}", quoted(action))]
     BadAction { action: String, reason: String },
 }
 
@@ -33,18 +34,39 @@ impl JsonPath {
     pub fn root() -> JsonPath {
         JsonPath::default()
     }
+    /// The member `key` of this object; a key longer than [`ECHO_CHARS`] is cut.
     pub fn key(&self, key: &str) -> JsonPath {
-        JsonPath(format!("{}.{key}", self.0))
+        JsonPath(format!("{}.{}", self.0, clip(key)))
     }
     pub fn index(&self, i: usize) -> JsonPath {
         JsonPath(format!("{}[{i}]", self.0))
     }
-    /// Joins a path reported by `serde_path_to_error` (`a[3].b`, or `.` for the root).
-    pub fn join(&self, rest: &str) -> JsonPath {
-        match rest {
-            "" | "." => self.clone(),
-            r if r.starts_with('[') => JsonPath(format!("{}{r}", self.0)),
-            r => JsonPath(format!("{}.{r}", self.0)),
+}
+
+/// The most characters of a value from the input that a message repeats.
+pub const ECHO_CHARS: usize = 80;
+
+/// `text` itself when it has at most [`ECHO_CHARS`] characters, otherwise its first
+/// ones, an ellipsis and its full length: `abc… (100000 chars)`.
+pub fn clip(text: &str) -> String {
+    match text.char_indices().nth(ECHO_CHARS) {
+        None => text.to_owned(),
+        Some((end, _)) => format!("{}… ({} chars)", &text[..end], text.chars().count()),
+    }
+}
+
+/// `text` in double quotes with Rust's escapes (as `{:?}` writes it), cut like [`clip`]:
+/// `"abc…" (100000 chars)`.
+pub fn quoted(text: &str) -> String {
+    match text.char_indices().nth(ECHO_CHARS) {
+        None => format!("{text:?}"),
+        Some((end, _)) => {
+            let head = format!("{:?}", &text[..end]);
+            format!(
+                "{}…\" ({} chars)",
+                &head[..head.len() - 1],
+                text.chars().count()
+            )
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use std::fmt;
 
+use crate::error::clip;
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// A node's id as written in a task file (`"id": 22`).
@@ -96,6 +97,12 @@ impl Node {
     pub fn label(&self) -> String {
         format!("<{}>({})", self.class_name, self.id)
     }
+
+    /// [`Node::label`] with a name longer than [`crate::error::ECHO_CHARS`] cut, for messages about
+    /// input.
+    pub fn short_label(&self) -> String {
+        format!("<{}>({})", clip(&self.class_name), self.id)
+    }
 }
 
 /// One directed edge, packed as `from << 17 | relation << 14 | to` so that a sorted
@@ -164,6 +171,12 @@ impl State {
             state.set_on_high_surface(Idx(i as u16), *h);
         }
         state
+    }
+
+    /// Bytes of the state's own block (its words, with the room a clone leaves for a few
+    /// more edges).
+    pub(crate) fn heap_bytes(&self) -> usize {
+        self.data.capacity() * size_of::<u32>()
     }
 
     fn nodes(&self) -> usize {

@@ -3,10 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::de::DeserializeOwned;
 use serde_json::Value;
 
-use crate::error::{Error, Result, Site};
+use crate::error::{Error, Result};
 use crate::task::Task;
 
 /// Every task found at `path` (a file of either format, or a folder searched for
@@ -21,9 +20,18 @@ pub fn read_tasks(path: &Path) -> Result<Vec<Result<Task>>> {
     Ok(out)
 }
 
-/// Every task at `path`, or the first error.
+/// Every task at `path`, or the first error; a file or folder with no task at all (an
+/// empty list) is an error too.
 pub fn load_tasks(path: &Path) -> Result<Vec<Task>> {
-    read_tasks(path)?.into_iter().collect()
+    let tasks: Vec<Task> = read_tasks(path)?.into_iter().collect::<Result<_>>()?;
+    if tasks.is_empty() {
+        return Err(Error::Malformed {
+            file: path.display().to_string(),
+            path: crate::JsonPath::root(),
+            message: "no tasks: the list of tasks is empty".to_owned(),
+        });
+    }
+    Ok(tasks)
 }
 
 /// The JSON files at `path`: the file itself, or a folder's `*.json` files, recursively.
@@ -58,16 +66,8 @@ pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
 /// The tasks of one file: a list (original format) or an object (native format).
 pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
     let file = path.display().to_string();
-    let text = std::fs::read_to_string(path).map_err(|e| io_error(path, &e))?;
-    let value: Value = serde_json::from_str(&text).map_err(|e| Error::Malformed {
-        file: file.clone(),
-        path: crate::JsonPath::root(),
-        message: format!(
-            "invalid JSON at line {} column {}: {e}",
-            e.line(),
-            e.column()
-        ),
-    })?;
+    let bytes = std::fs::read(path).map_err(|e| io_error(path, &e))?;
+    let value = crate::json::parse(&file, &bytes)?;
     let scene = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
@@ -89,44 +89,9 @@ pub fn read_value(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<T
             message: format!(
                 "expected a list of tasks (original format) or an object with \"format\": \"{}\", found {}",
                 crate::native::FORMAT,
-                describe(other)
+                crate::json::describe(other)
             ),
         }),
-    }
-}
-
-/// Deserializes `value`, reporting the exact path of a field that does not fit.
-pub(crate) fn from_value<T: DeserializeOwned>(value: &Value, site: &Site<'_>) -> Result<T> {
-    serde_path_to_error::deserialize(value).map_err(|e| {
-        let path = site.path.join(&e.path().to_string());
-        let found = lookup(value, e.path()).map(|v| format!(" (found {})", describe(v)));
-        Error::Malformed {
-            file: site.file.to_owned(),
-            path,
-            message: format!("{}{}", e.inner(), found.unwrap_or_default()),
-        }
-    })
-}
-
-fn lookup<'v>(value: &'v Value, path: &serde_path_to_error::Path) -> Option<&'v Value> {
-    use serde_path_to_error::Segment;
-    path.iter().try_fold(value, |v, seg| match seg {
-        Segment::Seq { index } => v.get(index),
-        Segment::Map { key } => v.get(key),
-        Segment::Enum { .. } | Segment::Unknown => Some(v),
-    })
-}
-
-/// A short description of a JSON value for error messages: its text when short.
-pub(crate) fn describe(value: &Value) -> String {
-    let text = value.to_string();
-    if text.len() <= 60 {
-        return text;
-    }
-    match value {
-        Value::Array(a) => format!("a list of {} items", a.len()),
-        Value::Object(o) => format!("an object with {} keys", o.len()),
-        _ => format!("{}...", text.chars().take(57).collect::<String>()),
     }
 }
 

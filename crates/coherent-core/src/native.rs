@@ -6,9 +6,10 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::error::{Result, Site, ensure};
+use crate::error::{Result, Site, ensure, quoted};
 use crate::geometry::{self, Layout};
 use crate::graph::NodeKind;
+use crate::heights;
 use crate::task::{RawGraph, RawPredicate, RuleSet, Source, Task, TaskMeta};
 use crate::vocab::Relation;
 
@@ -75,15 +76,16 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
         ensure!(
             v.as_u64() == Some(u64::from(VERSION)),
             root.key("version"),
-            "unsupported version {v} (this build reads version {VERSION})"
+            "unsupported version {} (this build reads version {VERSION})",
+            crate::json::describe(v)
         );
     }
-    let raw: NativeTask = crate::load::from_value(value, &root)?;
+    let raw: NativeTask = crate::json::from_value(value, &root)?;
     ensure!(
         raw.format == FORMAT,
         root.key("format"),
-        "expected {FORMAT:?}, found {:?}",
-        raw.format
+        "expected {FORMAT:?}, found {}",
+        quoted(&raw.format)
     );
     let goal_site = root.key("goal");
     let mut goal = Vec::with_capacity(raw.goal.len());
@@ -94,7 +96,8 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
             "INSIDE" => Relation::Inside,
             other => {
                 return Err(site.key("relation").error(format!(
-                    "goal relation {other:?}: expected \"ON\" or \"INSIDE\""
+                    "goal relation {}: expected \"ON\" or \"INSIDE\"",
+                    quoted(other)
                 )));
             }
         };
@@ -122,7 +125,7 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
             return Err(root.key("geometry").error(missing));
         }
         if task.meta.rules == RuleSet::Geometric {
-            geometry::derive_heights(&mut task, &layout, &root)?;
+            heights::derive_heights(&mut task, &layout, &root)?;
         }
     } else {
         ensure!(
@@ -150,17 +153,19 @@ fn check_robots(task: &Task, robots: &[NativeRobot], site: &Site<'_>) -> Result<
         };
         let NodeKind::Robot(kind) = node.kind else {
             return Err(at.key("id").error(format!(
-                "node {} ({:?}) is not a robot (category {:?})",
-                r.id, node.class_name, node.category
+                "node {} ({}) is not a robot (category {})",
+                r.id,
+                quoted(&node.class_name),
+                quoted(&node.category)
             )));
         };
         ensure!(
             kind.class_name() == r.kind,
             at.key("type"),
-            "robot {} is a {:?} in the graph, not {:?}",
+            "robot {} is a {:?} in the graph, not {}",
             r.id,
             kind.class_name(),
-            r.kind
+            quoted(&r.kind)
         );
     }
     for robot in &task.robots {

@@ -6,7 +6,7 @@
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use crate::error::{Result, Site, ensure};
+use crate::error::{Result, Site, clip, ensure, quoted};
 use crate::task::{RawGraph, RawPredicate, RuleSet, Source, Task, TaskMeta};
 use crate::vocab::Relation;
 
@@ -35,7 +35,7 @@ pub fn read(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>>
     let Value::Array(items) = value else {
         return Err(root.error(format!(
             "expected a list of tasks (the original format), found {}",
-            crate::load::describe(value)
+            crate::json::describe(value)
         )));
     };
     Ok(items
@@ -46,7 +46,7 @@ pub fn read(file: &str, scene: &str, value: &Value) -> Result<Vec<Result<Task>>>
 }
 
 fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>) -> Result<Task> {
-    let raw: OriginalTask = crate::load::from_value(item, at)?;
+    let raw: OriginalTask = crate::json::from_value(item, at)?;
     let mut goal = Vec::with_capacity(raw.task_goal.len());
     let goal_site = at.key("task_goal");
     for (key, value) in &raw.task_goal {
@@ -64,8 +64,8 @@ fn read_task(file: &str, scene: &str, index: usize, item: &Value, at: &Site<'_>)
     ensure!(
         raw.ground_truth_step_num.len() <= 1,
         gt_site,
-        "expected one step count, found {:?}",
-        raw.ground_truth_step_num
+        "expected one step count, found {}",
+        clip(&format!("{:?}", raw.ground_truth_step_num))
     );
     ensure!(
         raw.goal_instruction.len() <= 1,
@@ -103,7 +103,8 @@ fn goal_count(value: &Value, site: &Site<'_>) -> Result<u32> {
     };
     count.and_then(|n| u32::try_from(n).ok()).ok_or_else(|| {
         site.error(format!(
-            "expected [count, []] with a count >= 0, found {value}"
+            "expected [count, []] with a count >= 0, found {}",
+            crate::json::describe(value)
         ))
     })
 }
@@ -112,7 +113,8 @@ fn goal_count(value: &Value, site: &Site<'_>) -> Result<u32> {
 pub fn parse_goal_key(key: &str) -> std::result::Result<(Relation, i64, i64), String> {
     let bad = || {
         format!(
-            "goal {key:?} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)"
+            "goal {} is not of the form on_<name>(id)_<name>(id) or inside_<name>(id)_<name>(id)",
+            quoted(key)
         )
     };
     let (relation, rest) = if let Some(rest) = key.strip_prefix("on_") {

@@ -30,6 +30,13 @@ pub struct Step {
 pub struct Limits {
     /// Stop after this many distinct states; the answer is then "unknown", not "unsolvable".
     pub max_states: usize,
+    /// Stop before the search's tables (the states seen, what is known of each, the
+    /// duplicate table and the queue) would take more than this many bytes, as
+    /// [`Search::memory`] estimates them; the answer is then "unknown" too. The states
+    /// of a task take from a few hundred bytes to some kilobytes each (they grow with its
+    /// nodes and edges), so this, not [`Limits::max_states`], is what bounds a search of
+    /// a large task.
+    pub max_memory: usize,
     /// Set from another thread to stop early (Ctrl-C in Python, say); the answer is then
     /// "unknown" too.
     pub cancel: Option<Arc<AtomicBool>>,
@@ -37,10 +44,15 @@ pub struct Limits {
 
 impl Limits {
     pub const DEFAULT_MAX_STATES: usize = 5_000_000;
+    /// 1 GiB: room for a few million states of the released tasks (some 400 bytes
+    /// each), and a bound a laptop can afford whatever the task.
+    pub const DEFAULT_MAX_MEMORY: usize = 1 << 30;
 
+    /// At most `max_states` states and the default memory bound.
     pub fn max_states(max_states: usize) -> Limits {
         Limits {
             max_states,
+            max_memory: Limits::DEFAULT_MAX_MEMORY,
             cancel: None,
         }
     }
@@ -58,6 +70,20 @@ impl Default for Limits {
     }
 }
 
+/// Why a search stopped before it could decide.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Stop {
+    /// It met [`Limits::max_states`] states.
+    States,
+    /// Its tables would have outgrown [`Limits::max_memory`].
+    Memory,
+    /// [`Limits::cancel`] was set.
+    Cancelled,
+    /// Every state it could hold was expanded, but some lie deeper than the 65,535
+    /// steps its costs count.
+    Depth,
+}
+
 /// The result of one search.
 #[derive(Clone, Debug)]
 pub struct Search {
@@ -65,9 +91,14 @@ pub struct Search {
     pub plan: Option<Vec<Step>>,
     /// States taken off the queue and expanded.
     pub states_expanded: usize,
-    /// Whether the search stopped (at [`Limits::max_states`], or cancelled) before it
-    /// could finish.
+    /// Whether the search stopped before it could finish (`stop` says why).
     pub truncated: bool,
+    pub stop: Option<Stop>,
+    /// Distinct states met (expanded or queued).
+    pub states_seen: usize,
+    /// The search's tables at the end, in bytes: an estimate from their sizes, the
+    /// allocator's own bookkeeping included (about 16 bytes a state).
+    pub memory: usize,
 }
 
 /// A* search for a shortest plan reaching `goal` from the task's initial state with only
@@ -76,10 +107,132 @@ pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Li
     search_from(task, &task.init, robots, goal, limits)
 }
 
+/// What the search knows of one state besides the state itself.
+#[derive(Clone, Copy)]
+struct Info {
+    hash: u64,
+    /// The state it was best reached from, and how.
+    parent: u32,
+    step: Option<Step>,
+    /// Best known cost, and the heuristic.
+    g: u16,
+    h: u16,
+    closed: bool,
+}
+
+/// Every state met, by index (a hash table of indices finds duplicates), and the open
+/// list, a bucket queue on `f`; with the bytes they take.
+struct Tables {
+    states: Vec<State>,
+    info: Vec<Info>,
+    table: HashTable<u32>,
+    buckets: Vec<Vec<u32>>,
+    /// Bytes of the states' own blocks and of the buckets' blocks.
+    state_bytes: usize,
+    bucket_bytes: usize,
+}
+
+/// What the allocator adds to each block, roughly.
+const BLOCK_OVERHEAD: usize = 16;
+
+impl Tables {
+    fn new(start: &State, h: u16) -> Tables {
+        let mut t = Tables {
+            states: Vec::new(),
+            info: Vec::new(),
+            table: HashTable::new(),
+            buckets: Vec::new(),
+            state_bytes: 0,
+            bucket_bytes: 0,
+        };
+        t.insert(start.clone(), FxBuildHasher.hash_one(start), 0, None, 0, h);
+        t
+    }
+
+    fn find(&self, hash: u64, s: &State) -> Option<usize> {
+        self.table
+            .find(hash, |&j| self.states[j as usize] == *s)
+            .map(|&j| j as usize)
+    }
+
+    fn insert(&mut self, s: State, hash: u64, parent: u32, step: Option<Step>, g: u16, h: u16) {
+        let j = self.states.len() as u32;
+        let info = &self.info;
+        self.table
+            .insert_unique(hash, j, |&k| info[k as usize].hash);
+        self.state_bytes += s.heap_bytes() + BLOCK_OVERHEAD;
+        self.states.push(s);
+        self.info.push(Info {
+            hash,
+            parent,
+            step,
+            g,
+            h,
+            closed: false,
+        });
+        self.queue(j);
+    }
+
+    /// Puts state `i` in the bucket of its `f`.
+    fn queue(&mut self, i: u32) {
+        let info = self.info[i as usize];
+        let f = usize::from(info.g) + usize::from(info.h);
+        if self.buckets.len() <= f {
+            self.buckets.resize_with(f + 1, Vec::new);
+        }
+        let bucket = &mut self.buckets[f];
+        let before = bucket.capacity();
+        bucket.push(i);
+        self.bucket_bytes += (bucket.capacity() - before) * size_of::<u32>();
+    }
+
+    /// The estimated bytes of the tables; with `more`, after adding a state whose own
+    /// block takes `more` bytes, counting the doubling of a full vector or table that
+    /// the addition would cause.
+    fn bytes(&self, more: Option<usize>) -> usize {
+        let grown = |len: usize, cap: usize| match more {
+            Some(_) if len == cap => cap.max(4) * 2,
+            _ => cap,
+        };
+        let table = grown(self.table.len(), self.table.capacity()) * (size_of::<u32>() + 1) * 8 / 7;
+        self.state_bytes
+            + more.map_or(0, |b| b + BLOCK_OVERHEAD)
+            + grown(self.states.len(), self.states.capacity()) * size_of::<State>()
+            + grown(self.info.len(), self.info.capacity()) * size_of::<Info>()
+            + table
+            + self.buckets.capacity() * size_of::<Vec<u32>>()
+            + self.bucket_bytes
+    }
+
+    fn unwind(&self, mut at: usize) -> Vec<Step> {
+        let mut plan = Vec::new();
+        while let Some(step) = self.info[at].step {
+            plan.push(step);
+            at = self.info[at].parent as usize;
+        }
+        plan.reverse();
+        plan
+    }
+
+    fn result(&self, plan: Option<Vec<Step>>, expanded: usize, stop: Option<Stop>) -> Search {
+        Search {
+            plan,
+            states_expanded: expanded,
+            truncated: stop.is_some(),
+            stop,
+            states_seen: self.states.len(),
+            memory: self.bytes(None),
+        }
+    }
+}
+
 /// A* search for a shortest plan reaching `goal` from `start` with only `robots` acting,
 /// with the admissible and consistent heuristic [`lower_bound`] and duplicate detection
 /// on the compact state. States are expanded in order of `f = g + h` (a bucket queue,
-/// deepest first among equals).
+/// deepest first among equals). Each child is built in one reused buffer, hashed once,
+/// and copied out only when it is new. The search stops, undecided, at
+/// [`Limits::max_states`] states, before its tables outgrow [`Limits::max_memory`], or
+/// when cancelled.
 pub fn search_from(
     task: &Task,
     start: &State,
@@ -88,116 +241,80 @@ pub fn search_from(
     limits: &Limits,
 ) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
+    let mut t = Tables::new(start, lower_bound(task, start, goal));
     if holds(start) {
-        return Search {
-            plan: Some(Vec::new()),
-            states_expanded: 0,
-            truncated: false,
-        };
+        return t.result(Some(Vec::new()), 0, None);
     }
-    // Every state seen, by index: the state, its hash, its best known cost g and its
-    // heuristic h, whether it was expanded, and how it was first reached. A hash table
-    // of indices finds duplicates; each child is built in one reused buffer, hashed
-    // once, and copied out only when it is new.
-    let hasher = FxBuildHasher;
-    let mut states: Vec<State> = vec![start.clone()];
-    let mut hashes: Vec<u64> = vec![hasher.hash_one(start)];
-    let mut g: Vec<u16> = vec![0];
-    let mut h: Vec<u16> = vec![lower_bound(task, start, goal)];
-    let mut closed: Vec<bool> = vec![false];
-    let mut parent: Vec<(u32, Option<Step>)> = vec![(0, None)];
-    let mut table: HashTable<u32> = HashTable::new();
-    table.insert_unique(hashes[0], 0, |&i| hashes[i as usize]);
-    let mut buckets: Vec<Vec<u32>> = Vec::new();
-    push(&mut buckets, usize::from(h[0]), 0);
     let useful = Useful::new(task, start, goal);
     let mut child = start.clone();
     let mut expanded = 0usize;
+    let mut too_deep = false;
     let mut f = 0usize;
-    while f < buckets.len() {
-        let Some(i) = buckets[f].pop() else {
+    while f < t.buckets.len() {
+        let Some(i) = t.buckets[f].pop() else {
             f += 1;
             continue;
         };
         let i = i as usize;
-        if closed[i] || usize::from(g[i] + h[i]) != f {
+        let Info { g, h, closed, .. } = t.info[i];
+        if closed || usize::from(g) + usize::from(h) != f {
             continue; // expanded already, or re-queued with a better cost
         }
-        closed[i] = true;
+        t.info[i].closed = true;
         expanded += 1;
         if expanded.is_multiple_of(1024) && limits.cancelled() {
-            return Search {
-                plan: None,
-                states_expanded: expanded,
-                truncated: true,
-            };
+            return t.result(None, expanded, Some(Stop::Cancelled));
         }
-        if holds(&states[i]) {
-            return Search {
-                plan: Some(unwind(&parent, i)),
-                states_expanded: expanded,
-                truncated: false,
-            };
+        if holds(&t.states[i]) {
+            return t.result(Some(t.unwind(i)), expanded, None);
         }
-        let gc = g[i] + 1;
+        let Some(gc) = g.checked_add(1) else {
+            too_deep = true;
+            continue;
+        };
         for (&robot, actions) in robots
             .iter()
-            .zip(rules::team_actions(task, &states[i], robots))
+            .zip(rules::team_actions(task, &t.states[i], robots))
         {
             for action in actions.into_iter().filter(|a| useful.allows(task, a)) {
-                child.clone_from(&states[i]);
+                child.clone_from(&t.states[i]);
                 rules::apply(task, &mut child, robot, action);
                 let step = Some(Step {
                     robot: robot.node,
                     action,
                 });
-                let hash = hasher.hash_one(&child);
-                let c = match table.find(hash, |&j| states[j as usize] == child) {
-                    Some(&j) => {
-                        let j = j as usize;
-                        if closed[j] || g[j] <= gc {
+                let hash = FxBuildHasher.hash_one(&child);
+                let c = match t.find(hash, &child) {
+                    Some(j) => {
+                        let seen = &mut t.info[j];
+                        if seen.closed || seen.g <= gc {
                             continue;
                         }
-                        g[j] = gc;
-                        parent[j] = (i as u32, step);
+                        (seen.g, seen.parent, seen.step) = (gc, i as u32, step);
+                        t.queue(j as u32);
                         j
                     }
                     None => {
-                        let j = states.len();
-                        table.insert_unique(hash, j as u32, |&k| hashes[k as usize]);
-                        h.push(lower_bound(task, &child, goal));
-                        states.push(child.clone());
-                        hashes.push(hash);
-                        g.push(gc);
-                        closed.push(false);
-                        parent.push((i as u32, step));
-                        j
+                        let kept = child.clone();
+                        if t.bytes(Some(kept.heap_bytes())) > limits.max_memory {
+                            return t.result(None, expanded, Some(Stop::Memory));
+                        }
+                        let h = lower_bound(task, &kept, goal);
+                        t.insert(kept, hash, i as u32, step, gc, h);
+                        t.states.len() - 1
                     }
                 };
                 // A goal at cost f cannot be beaten: every open state has f' >= f.
-                if usize::from(gc) <= f && h[c] == 0 && holds(&states[c]) {
-                    return Search {
-                        plan: Some(unwind(&parent, c)),
-                        states_expanded: expanded,
-                        truncated: false,
-                    };
+                if usize::from(gc) <= f && t.info[c].h == 0 && holds(&t.states[c]) {
+                    return t.result(Some(t.unwind(c)), expanded, None);
                 }
-                push(&mut buckets, usize::from(gc + h[c]), c as u32);
-                if states.len() >= limits.max_states {
-                    return Search {
-                        plan: None,
-                        states_expanded: expanded,
-                        truncated: true,
-                    };
+                if t.states.len() >= limits.max_states {
+                    return t.result(None, expanded, Some(Stop::States));
                 }
             }
         }
     }
-    Search {
-        plan: None,
-        states_expanded: expanded,
-        truncated: false,
-    }
+    t.result(None, expanded, too_deep.then_some(Stop::Depth))
 }
 
 /// The actions worth searching: every goal is a set of `ON`/`INSIDE` edges, so some
@@ -230,13 +347,6 @@ impl Useful {
             _ => true,
         }
     }
-}
-
-fn push(buckets: &mut Vec<Vec<u32>>, f: usize, i: u32) {
-    if buckets.len() <= f {
-        buckets.resize_with(f + 1, Vec::new);
-    }
-    buckets[f].push(i);
 }
 
 /// A lower bound on the steps still needed to reach `goal` from `s`, admissible and
@@ -300,16 +410,6 @@ fn flight_need(s: &State, q: Idx, p: &GoalPredicate) -> u16 {
     }
 }
 
-fn unwind(parent: &[(u32, Option<Step>)], mut at: usize) -> Vec<Step> {
-    let mut plan = Vec::new();
-    while let (from, Some(step)) = parent[at] {
-        plan.push(step);
-        at = from as usize;
-    }
-    plan.reverse();
-    plan
-}
-
 /// Mono, dual or trio: how many robot types the goal needs at the fewest.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TaskType {
@@ -336,6 +436,9 @@ pub struct Analysis {
     pub task_type: Option<TaskType>,
     /// Why there is no plan (None when there is one).
     pub reason: Option<String>,
+    /// Why the search with the whole team stopped before it could decide whether the
+    /// goal is reachable (None when it decided).
+    pub stop: Option<Stop>,
     /// States expanded by the search with the whole team.
     pub states_expanded: usize,
     pub elapsed: Duration,
@@ -383,6 +486,7 @@ pub fn analyse(task: &Task, limits: &Limits) -> Analysis {
             plan: None,
             task_type: None,
             reason: Some(obstacles.join("; ")),
+            stop: None,
             states_expanded: 0,
             elapsed: start.elapsed(),
         };
@@ -396,6 +500,7 @@ pub fn analyse(task: &Task, limits: &Limits) -> Analysis {
         plan: full.plan,
         task_type,
         reason,
+        stop: full.stop,
         states_expanded: full.states_expanded,
         elapsed: start.elapsed(),
     }
@@ -461,14 +566,30 @@ fn subsets(kinds: &[RobotKind], size: usize) -> Vec<Vec<RobotKind>> {
 /// Why an exhaustive search found no plan: which predicates cannot be reached even
 /// alone, or that they cannot be reached together.
 fn why_unsolvable(task: &Task, full: &Search, limits: &Limits) -> String {
-    if full.truncated && limits.cancelled() {
-        return "planning was cancelled before the search finished".to_owned();
-    }
-    if full.truncated {
-        return format!(
-            "search stopped at the limit of {} states without reaching the goal; raise the limit to decide",
-            limits.max_states
-        );
+    match full.stop {
+        Some(Stop::Cancelled) => {
+            return "planning was cancelled before the search finished".to_owned();
+        }
+        Some(Stop::States) => {
+            return format!(
+                "search stopped at the limit of {} states without reaching the goal; raise the limit to decide",
+                limits.max_states
+            );
+        }
+        Some(Stop::Memory) => {
+            return format!(
+                "search stopped at the memory limit of {} ({} states) without reaching the goal; raise the limit to decide",
+                mebibytes(limits.max_memory),
+                full.states_seen
+            );
+        }
+        Some(Stop::Depth) => {
+            return format!(
+                "no plan of at most {} steps reaches the goal, and the search counts no further",
+                u16::MAX
+            );
+        }
+        None => {}
     }
     let alone: Vec<String> = task
         .goal
@@ -490,6 +611,16 @@ fn why_unsolvable(task: &Task, full: &Search, limits: &Limits) -> String {
             "no sequence of actions makes {} hold (searched all reachable states)",
             alone.join(" and ")
         )
+    }
+}
+
+/// `bytes` in MiB, as the command line's `--max-memory` takes them.
+fn mebibytes(bytes: usize) -> String {
+    const MIB: usize = 1 << 20;
+    if bytes.is_multiple_of(MIB) {
+        format!("{} MiB", bytes / MIB)
+    } else {
+        format!("{:.1} MiB", bytes as f64 / MIB as f64)
     }
 }
 

@@ -1,4 +1,4 @@
-//! The compatible rule set of SEMANTICS.md sections 2-4: what a robot observes, the
+//! The compatible rule set of docs/semantics.md ("Observations", "Actions"): what a robot observes, the
 //! actions it may take, and how one action changes the state. Imported original tasks
 //! run under these rules exactly, quirks included (see `docs/semantics-notes.md`).
 
@@ -102,7 +102,7 @@ impl Contents {
     }
 }
 
-/// The visible set of SEMANTICS.md section 2.
+/// The visible set of docs/semantics.md, "Observations".
 pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
     visible_with(task, s, robot, &Contents::new(task, s))
 }
@@ -288,7 +288,7 @@ impl<'a> View<'a> {
             .map(|(room, _)| room)
     }
 
-    /// What the robot dog may move towards (`unreached` of SEMANTICS.md section 3).
+    /// What the robot dog may move towards (`unreached` of docs/semantics.md, "Actions").
     pub fn unreached(&self, n: Idx) -> bool {
         self.sees(n)
             && Some(n) != self.holding
@@ -459,7 +459,7 @@ fn arm_actions(v: &View<'_>, out: &mut Vec<Action>) {
     }
 }
 
-/// Applies an action that [`actions`] offered to `robot` (SEMANTICS.md section 4).
+/// Applies an action that [`actions`] offered to `robot` (docs/semantics.md, "Actions").
 pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
     let me = robot.node;
     let x = a.object;

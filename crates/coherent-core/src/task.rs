@@ -5,7 +5,7 @@
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, Site, ensure};
+use crate::error::{Result, Site, ensure, quoted};
 use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, RobotKind, State};
 use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
@@ -52,14 +52,14 @@ pub struct GoalPredicate {
 }
 
 /// Which rules a task runs under. Imported original tasks run under the compatible
-/// rules of SEMANTICS.md.
+/// rules of docs/semantics.md.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum RuleSet {
     #[default]
     Compatible,
     /// The project's own benchmark: the compatible rules, with the height labels derived
-    /// from the task's geometry ([`crate::geometry::derive_heights`]) and one quirk
+    /// from the task's geometry (`heights::derive_heights`) and one quirk
     /// dropped: what a fixed arm puts down is `ON_HIGH_SURFACE` only when the place it
     /// puts it is high, not always (`docs/semantics-notes.md`).
     Geometric,
@@ -100,6 +100,32 @@ pub struct TaskMeta {
     /// rules, for the height labels.
     pub geometry: Option<crate::geometry::Layout>,
     pub source: Option<Source>,
+}
+
+/// The most steps a task's ground truth may claim. A ground truth is the length of a
+/// plan someone wrote down (4 to 16 steps on the released benchmark and on the
+/// project's own), and the step budget of an episode is twice it, each step a round of
+/// model calls: 10,000 steps is far beyond any task a team of three robots is given, and
+/// keeps twice it (and the steps counted for a failed episode, twice it plus one) far
+/// inside 32 bits. `coherent validate` flags a larger one, and no budget is sized from
+/// it ([`TaskMeta::twice_ground_truth`]).
+pub const MAX_GROUND_TRUTH: u32 = 10_000;
+
+impl TaskMeta {
+    /// The paper's step budget, twice the ground truth, when the task has one; an error
+    /// when the ground truth is above [`MAX_GROUND_TRUTH`].
+    pub fn twice_ground_truth(&self) -> Option<Result<u32, String>> {
+        self.gt_steps.map(|gt| {
+            if gt > MAX_GROUND_TRUTH {
+                Err(format!(
+                    "the ground truth of {gt} steps is more than any task needs (at most \
+                     {MAX_GROUND_TRUTH}), so no budget of 2 x GT is sized from it: pass a step budget"
+                ))
+            } else {
+                Ok(2 * gt)
+            }
+        })
+    }
 }
 
 /// A goal predicate before ids are resolved, with where each id was read.
@@ -157,11 +183,11 @@ impl Task {
             let at = nodes_site.index(i);
             if let Some(first) = index.insert(NodeId(raw.id), Idx(i as u16)) {
                 return Err(at.key("id").error(format!(
-                    "duplicate node id {} (also the id of nodes[{}], {:?}; this one is {:?})",
+                    "duplicate node id {} (also the id of nodes[{}], {}; this one is {})",
                     raw.id,
                     first.0,
-                    graph.nodes[first.get()].class_name,
-                    raw.class_name
+                    quoted(&graph.nodes[first.get()].class_name),
+                    quoted(&raw.class_name)
                 )));
             }
             let kind = node_kind(raw, &at)?;
@@ -207,8 +233,8 @@ impl Task {
             let to = resolve(raw.to_id, at.key("to_id"))?;
             let rel = Relation::from_name(&raw.relation_type).ok_or_else(|| {
                 at.key("relation_type").error(format!(
-                    "unknown relation {:?} (known: {})",
-                    raw.relation_type,
+                    "unknown relation {} (known: {})",
+                    quoted(&raw.relation_type),
                     Relation::ALL.map(Relation::name).join(", ")
                 ))
             })?;
@@ -362,7 +388,7 @@ impl Task {
         }
     }
 
-    /// The goal test of SEMANTICS.md section 5: for every predicate, the number of
+    /// The goal test of docs/semantics.md, "Goals": for every predicate, the number of
     /// matching edges equals its count (edges form a set, so that number is 0 or 1).
     pub fn goal_satisfied(&self, s: &State) -> bool {
         self.goal.iter().all(|p| predicate_holds(s, p))
@@ -435,7 +461,8 @@ fn intern_names(
     for (j, name) in names.iter().enumerate() {
         bits |= intern(name).ok_or_else(|| {
             site.index(j).error(format!(
-                "{what} {name:?}: too many distinct unknown {what} names (at most {limit})"
+                "{what} {}: too many distinct unknown {what} names (at most {limit})",
+                quoted(name)
             ))
         })?;
     }
@@ -456,8 +483,8 @@ fn node_kind(raw: &RawNode, at: &Site<'_>) -> Result<NodeKind> {
         "Agents" => {
             NodeKind::Robot(RobotKind::from_class_name(&raw.class_name).ok_or_else(|| {
                 at.key("class_name").error(format!(
-                    "unknown robot class {:?} (known: {})",
-                    raw.class_name,
+                    "unknown robot class {} (known: {})",
+                    quoted(&raw.class_name),
                     RobotKind::ALL.map(RobotKind::class_name).join(", ")
                 ))
             })?)

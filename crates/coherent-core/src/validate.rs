@@ -1,10 +1,11 @@
 //! Semantic checks of a well-formed task: problems that make it unsolvable, trivial or
 //! inconsistent. (Malformed input is rejected earlier, by the loaders.)
 
+use crate::error::clip;
 use crate::graph::{Idx, NodeKind, RobotKind};
 use crate::planner::Analysis;
 use crate::rules::room_of;
-use crate::task::{Task, predicate_holds};
+use crate::task::{MAX_GROUND_TRUTH, Task, predicate_holds};
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// Everything semantically wrong with `task`, in words; empty when it is clean.
@@ -13,14 +14,28 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
     if task.goal.is_empty() {
         out.push("the goal is empty".to_owned());
     } else if task.goal.iter().all(|p| predicate_holds(&task.init, p)) {
-        let labels: Vec<String> = task.goal.iter().map(|p| task.predicate_label(p)).collect();
+        let labels: Vec<String> = task
+            .goal
+            .iter()
+            .map(|p| clip(&task.predicate_label(p)))
+            .collect();
         out.push(format!(
             "the goal already holds at the start: {}",
             labels.join(", ")
         ));
     }
-    if let Some(reason) = &analysis.reason {
-        out.push(format!("the goal cannot be reached: {reason}"));
+    match (&analysis.reason, analysis.stop) {
+        (Some(reason), Some(_)) => out.push(format!(
+            "the goal could not be decided within the search limits: {reason}"
+        )),
+        (Some(reason), None) => out.push(format!("the goal cannot be reached: {reason}")),
+        (None, _) => {}
+    }
+    if let Some(gt) = task.meta.gt_steps.filter(|&gt| gt > MAX_GROUND_TRUTH) {
+        out.push(format!(
+            "ground truth says {gt} steps, more than any task needs (at most {MAX_GROUND_TRUTH}; \
+             an episode's budget is 2 x GT steps)"
+        ));
     }
     if let (Some(gt), Some(plan)) = (task.meta.gt_steps, &analysis.plan)
         && (gt as usize) < plan.len()
@@ -34,7 +49,7 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
         out.extend(
             role_contradictions(task, n)
                 .into_iter()
-                .map(|m| format!("{}: {m}", task.node(n).label())),
+                .map(|m| format!("{}: {m}", task.node(n).short_label())),
         );
     }
     let listed = task.init_edges.len();

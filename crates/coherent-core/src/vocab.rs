@@ -1,4 +1,4 @@
-//! The world's vocabulary, named as in SEMANTICS.md: relations, node properties and
+//! The world's vocabulary, named as in docs/semantics.md ("The scene graph"): relations, node properties and
 //! node states. Properties and states are bit sets; names the rules do not know are
 //! kept per task (see [`Vocabulary`]) so that any file of the original format imports
 //! losslessly.

@@ -500,3 +500,144 @@ fn native_robot_listed_twice() {
         Err(other) => panic!("expected Error::Malformed, got {other:?}"),
     }
 }
+
+/// A key twice in one object is refused wherever it is (serde_json alone keeps the last
+/// one: `"task_id": 7, "task_id": 0` would plan as task 0), with the path of the repeat.
+#[test]
+fn duplicate_keys_are_refused_with_their_path() {
+    let text = serde_json::to_string(&json!([env0_task0()])).expect("JSON serializes");
+    assert!(text.starts_with("[{\"task_id\":0,"), "{}", &text[..40]);
+    // At the top of a task: the second "task_id" is the file's own.
+    let twice = text.replacen("[{", "[{\"task_id\": 7, ", 1);
+    let (_dir, path) = write("duplicate-key", "env0.json", &twice);
+    let err = load::read_tasks(&path).expect_err("a repeated key");
+    let message = assert_malformed(&err, &path, "$[0].task_id", &["duplicate key \"task_id\""]);
+    assert!(message.contains("line 1 column"), "{message}");
+
+    // Written with an escape, it is still the same key.
+    let escaped = text.replacen("[{", "[{\"task\\u005fid\": 7, ", 1);
+    let (_dir, path) = write("duplicate-key-escaped", "env0.json", &escaped);
+    let err = load::read_tasks(&path).expect_err("a repeated key");
+    assert_malformed(&err, &path, "$[0].task_id", &["duplicate key \"task_id\""]);
+
+    // Deep inside: an edge with two `to_id`s.
+    let edge = "{\"from_id\":";
+    let at = text.find(edge).expect("an edge");
+    let deep = format!(
+        "{}{{\"to_id\": 1, \"from_id\":{}",
+        &text[..at],
+        &text[at + edge.len()..]
+    );
+    let deep = deep.replacen(
+        "\"to_id\": 1, \"from_id\":",
+        "\"to_id\": 1, \"to_id\": 2, \"from_id\":",
+        1,
+    );
+    let (_dir, path) = write("duplicate-key-deep", "env0.json", &deep);
+    let err = load::read_tasks(&path).expect_err("a repeated key");
+    assert_malformed(
+        &err,
+        &path,
+        "$[0].init_graph.edges[0].to_id",
+        &["duplicate key \"to_id\""],
+    );
+
+    // In a native task file too.
+    let native = serde_json::to_string_pretty(&native_from_env0()).expect("JSON serializes");
+    let twice = native.replacen('{', "{\n  \"scene\": \"elsewhere\",", 1);
+    let (_dir, path) = write("duplicate-key-native", "task-000.json", &twice);
+    let err = load::read_tasks(&path).expect_err("a repeated key");
+    assert_malformed(&err, &path, "$.scene", &["duplicate key \"scene\""]);
+}
+
+/// Bytes that are not UTF-8: the message gives the byte offset, line and column of the
+/// first bad byte (not only "stream did not contain valid UTF-8").
+#[test]
+fn text_that_is_not_utf8_names_the_byte_offset() {
+    let text = serde_json::to_string_pretty(&json!([env0_task0()])).expect("JSON serializes");
+    let name = "\"task_name\": \"";
+    let at = text.find(name).expect("a task name") + name.len();
+    let mut bytes = text.into_bytes();
+    bytes.insert(at, 0xff);
+    let line = bytes[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+    let (_dir, path) = write("not-utf8", "env0.json", "");
+    std::fs::write(&path, &bytes).expect("temporary file can be written");
+    let err = load::read_tasks(&path).expect_err("not UTF-8");
+    let message = assert_malformed(
+        &err,
+        &path,
+        "$",
+        &[
+            &format!("byte offset {at}"),
+            &format!("line {line} column"),
+            "0xff",
+        ],
+    );
+    assert!(message.contains("UTF-8"), "{message}");
+}
+
+/// A value repeated in a message is cut to 80 characters, with an ellipsis and its full
+/// length, wherever it comes from: a name core checks, a goal key (which is also part
+/// of the path), a wrong type serde reports, an unknown field.
+#[test]
+fn long_values_are_cut_in_messages() {
+    let long = "X".repeat(100_000);
+    let short_enough = |err: &Error| {
+        let line = err.to_string();
+        assert!(
+            line.len() < 1_000,
+            "{} bytes: {}...",
+            line.len(),
+            &line[..200]
+        );
+        assert!(
+            line.contains('…') && line.contains("(100000 chars)"),
+            "{line}"
+        );
+    };
+
+    let mut task = env0_task0();
+    task["init_graph"]["edges"][0]["relation_type"] = json!(long);
+    let (_dir, path) = write_json("long-relation", "env0.json", &json!([task]));
+    short_enough(&single_task_error(&path));
+
+    let mut task = env0_task0();
+    task["task_goal"] = json!({ long.clone(): [1, []] });
+    let (_dir, path) = write_json("long-goal", "env0.json", &json!([task]));
+    short_enough(&single_task_error(&path));
+
+    let mut task = env0_task0();
+    task["task_id"] = json!(long);
+    let (_dir, path) = write_json("long-type", "env0.json", &json!([task]));
+    short_enough(&single_task_error(&path));
+
+    let mut task = env0_task0();
+    task["init_graph"]["nodes"][0]["category"] = json!("Agents");
+    task["init_graph"]["nodes"][0]["class_name"] = json!(long);
+    let (_dir, path) = write_json("long-robot", "env0.json", &json!([task]));
+    short_enough(&single_task_error(&path));
+
+    let mut task = native_from_env0();
+    task[long.as_str()] = json!(1);
+    let (_dir, path) = write_json("long-field", "task-000.json", &task);
+    short_enough(&single_task_error(&path));
+
+    let mut task = native_from_env0();
+    task["format"] = json!(long);
+    let (_dir, path) = write_json("long-format", "task-000.json", &task);
+    short_enough(&single_task_error(&path));
+}
+
+/// An empty list holds no task: `read_tasks` says so by an empty result, `load_tasks`
+/// (every task or an error) by an error naming the file.
+#[test]
+fn an_empty_list_is_no_tasks() {
+    let (_dir, path) = write("empty", "env0.json", "[]");
+    assert!(
+        load::read_tasks(&path)
+            .expect("the file is JSON")
+            .is_empty()
+    );
+    let err = load::load_tasks(&path).expect_err("no tasks");
+    assert_malformed(&err, &path, "$", &["no tasks"]);
+}

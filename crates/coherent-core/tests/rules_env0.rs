@@ -1,7 +1,7 @@
 //! Scene env0 (bedroom 0, childroom 2, livingroom 4, kitchen 6; door 8 between bedroom
 //! and livingroom starts CLOSED, doors 9 and 10 are OPEN_FOREVER).
 //!
-//! Every expected list below was derived by hand from `env0.json` and SEMANTICS.md:
+//! Every expected list below was derived by hand from `env0.json` and docs/semantics.md:
 //! section 2 for observations, section 3 for action lists, section 4 for transitions.
 
 mod common;

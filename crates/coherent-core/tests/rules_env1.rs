@@ -1,7 +1,7 @@
 //! Scene env1 (livingroom 0, kitchen 2, utility room 34; door 24 between livingroom and
 //! kitchen is OPEN_FOREVER, door 35 between livingroom and utility room starts CLOSED).
 //!
-//! Every expected list below was derived by hand from `env1.json` and SEMANTICS.md:
+//! Every expected list below was derived by hand from `env1.json` and docs/semantics.md:
 //! section 2 for observations, section 3 for action lists, section 4 for transitions.
 
 mod common;

@@ -1,6 +1,6 @@
 //! Scene env2 (one room: grocery store 0, no doors).
 //!
-//! Every expected list below was derived by hand from `env2.json` and SEMANTICS.md:
+//! Every expected list below was derived by hand from `env2.json` and docs/semantics.md:
 //! section 2 for observations, section 3 for action lists, section 4 for transitions.
 
 mod common;

@@ -1,6 +1,6 @@
 //! Scene env3 (one room: restaurant 0, no doors; two robot arms on the bar counters).
 //!
-//! Every expected list below was derived by hand from `env3.json` and SEMANTICS.md:
+//! Every expected list below was derived by hand from `env3.json` and docs/semantics.md:
 //! section 2 for observations, section 3 for action lists, section 4 for transitions.
 
 mod common;

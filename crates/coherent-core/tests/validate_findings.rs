@@ -173,3 +173,27 @@ fn a_goal_that_holds_at_the_start_and_a_count_that_never_can() {
     t["task_goal"] = json!({"on_<socks>(29)_<bed>(27)": [2, []]});
     assert_names(&findings(t), "asks for 2 such edges, but edges form a set");
 }
+
+/// A ground truth no task can need is flagged with the limit; 2 x 2147483648 and
+/// 2 x 4294967295 wrap around in 32 bits (to 0 and 4294967294), so no budget is sized
+/// from them.
+#[test]
+fn a_ground_truth_beyond_any_task() {
+    for gt in [2_147_483_648_u64, 4_294_967_295, 10_001] {
+        let mut t = common::original_list(0).swap_remove(0);
+        t["ground_truth_step_num"] = json!([gt]);
+        let found = findings(t.clone());
+        assert_names(&found, &format!("ground truth says {gt} steps"));
+        assert_names(&found, "at most 10000");
+        let task = load::read_value("test.json", "env0", &Value::Array(vec![t]))
+            .expect("a list of tasks")
+            .pop()
+            .expect("one task")
+            .expect("well-formed");
+        let budget = task.meta.twice_ground_truth().expect("a ground truth");
+        assert!(budget.is_err(), "{gt}: {budget:?}");
+    }
+    let mut t = common::original_list(0).swap_remove(0);
+    t["ground_truth_step_num"] = json!([10_000]);
+    assert_eq!(findings(t), Vec::<String>::new());
+}

@@ -13,6 +13,7 @@ use coherent_agents::Cancel;
 use coherent_agents::bench::{
     self, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
 };
+use coherent_core::planner::Limits;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -81,7 +82,8 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 #[pyfunction]
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
-    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
+    concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES,
+    out = PathBuf::from("results.jsonl"),
     progress = false
 ))]
 #[allow(clippy::too_many_arguments)]

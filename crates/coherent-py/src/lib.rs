@@ -84,10 +84,10 @@ fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
 ///
-/// The default `max_states` is `Limits::DEFAULT_MAX_STATES`, written out so that Python
-/// shows it in the signature (a test pins the two together, through the CLI's `--help`).
+/// The default `max_states` is `Limits::DEFAULT_MAX_STATES` (Python shows it as `...` in
+/// the signature; the module has it as `DEFAULT_MAX_STATES`).
 #[pyfunction]
-#[pyo3(signature = (task, max_states = 5_000_000))]
+#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES))]
 fn plan<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
@@ -96,8 +96,8 @@ fn plan<'py>(
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
     let limits = Limits {
-        max_states,
         cancel: Some(Arc::clone(&cancel)),
+        ..Limits::max_states(max_states)
     };
     let stop = Arc::clone(&cancel);
     let json = interruptible(
@@ -111,7 +111,7 @@ fn plan<'py>(
 /// Problems of `task` (empty when it is clean), as `coherent validate` lists them: the
 /// rules' findings and the geometry's.
 #[pyfunction(name = "validate")]
-#[pyo3(signature = (task, max_states = 5_000_000))]
+#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES))]
 fn validate_task(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
@@ -120,8 +120,8 @@ fn validate_task(
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
     let limits = Limits {
-        max_states,
         cancel: Some(Arc::clone(&cancel)),
+        ..Limits::max_states(max_states)
     };
     let stop = Arc::clone(&cancel);
     interruptible(
@@ -165,6 +165,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("METHODS", Method::ALL.map(Method::name).to_vec())?;
+    m.add("DEFAULT_MAX_STATES", Limits::DEFAULT_MAX_STATES)?;
     let exc = errors::exceptions(py)?;
     m.add("CoherentError", exc.base.clone_ref(py))?;
     m.add("ArgumentError", exc.argument.clone_ref(py))?;

@@ -12,6 +12,7 @@ use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, 
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
 use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode};
+use coherent_core::planner::Limits;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -390,7 +391,8 @@ fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>
 #[pyfunction]
 #[pyo3(signature = (
     task, method = "pefa", *, llm = None, sim_errors = None, history = 5, max_steps = None,
-    physics = false, seed = None, out = PathBuf::from("runs"), max_states = 5_000_000
+    physics = false, seed = None, out = PathBuf::from("runs"),
+    max_states = Limits::DEFAULT_MAX_STATES
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(

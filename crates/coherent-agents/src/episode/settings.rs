@@ -111,12 +111,14 @@ impl Budget {
         if let Some(n) = max_steps {
             return Ok(Budget::Given(n));
         }
-        if let Some(gt) = task.meta.gt_steps {
-            return Ok(Budget::TwiceGroundTruth(2 * gt));
+        if let Some(budget) = task.meta.twice_ground_truth() {
+            return budget.map(Budget::TwiceGroundTruth);
         }
         let search = planner::search(task, &task.robots, &task.goal, limits);
         match search.plan {
-            Some(plan) => Ok(Budget::TwiceOptimum(2 * plan.len().max(1) as u32)),
+            Some(plan) => Ok(Budget::TwiceOptimum(
+                u32::try_from(plan.len().max(1)).map_or(u32::MAX, |n| n.saturating_mul(2)),
+            )),
             None => Err(
                 "the task has no ground truth and the planner finds no plan to size a budget \
                  from: pass a step budget (--max-steps)"

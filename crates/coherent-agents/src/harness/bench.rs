@@ -467,9 +467,9 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
 fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
     let analysis = planner::analyse(task, limits);
     let optimal = analysis.plan.as_ref().map(|p| p.len() as u32);
-    let budget = match (task.meta.gt_steps, optimal) {
-        (Some(gt), _) => Ok(Budget::TwiceGroundTruth(2 * gt)),
-        (None, Some(n)) => Ok(Budget::TwiceOptimum(2 * n.max(1))),
+    let budget = match (task.meta.twice_ground_truth(), optimal) {
+        (Some(budget), _) => budget.map(Budget::TwiceGroundTruth),
+        (None, Some(n)) => Ok(Budget::TwiceOptimum(n.max(1).saturating_mul(2))),
         (None, None) => Err(format!(
             "no ground truth, and the planner finds no plan to size a budget from ({})",
             analysis.reason.as_deref().unwrap_or("search stopped")

@@ -113,8 +113,8 @@ pub fn counted_steps(l: &ResultLine) -> f64 {
         f64::from(l.steps)
     } else {
         match l.gt_steps {
-            Some(gt) => f64::from(2 * gt + 1),
-            None => f64::from(l.max_steps + 1),
+            Some(gt) => 2.0 * f64::from(gt) + 1.0,
+            None => f64::from(l.max_steps) + 1.0,
         }
     }
 }

@@ -132,8 +132,8 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
 fn parse_line(
     de: &mut serde_json::Deserializer<serde_json::de::StrRead<'_>>,
 ) -> Result<ResultLine, String> {
-    let value: serde_json::Value =
-        serde::Deserialize::deserialize(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
+    // A key twice in one object is refused: serde_json alone would keep the last one.
+    let value = coherent_core::json::value(&mut *de).map_err(|e| format!("invalid JSON: {e}"))?;
     de.end().map_err(|e| format!("invalid JSON: {e}"))?;
     serde_json::from_value::<ResultLine>(value.clone()).map_err(|e| {
         // Name the field: serde_json's messages say what, not where.

@@ -2,19 +2,20 @@
 //! [`Scene`] that drives the hand-written rule tests (`rules_env*.rs`).
 //!
 //! Every expectation in the rule tests was derived by hand from the task's JSON and
-//! `SEMANTICS.md`; these helpers only drive a [`SymbolicEnv`] and compare, reporting
+//! `docs/semantics.md`; these helpers only drive a [`SymbolicEnv`] and compare, reporting
 //! what is missing and what is unexpected when a list differs.
 
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_core::{Environment, NodeId, Outcome, PropSet, Reason, SymbolicEnv, read_tasks};
 
-/// The original benchmark files: `shared/` lies beside the repository.
+/// The original benchmark files, from `COHERENT_ORIGINAL_ENV` (`.cargo/config.toml`:
+/// beside the checkout).
 pub fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/coherent-original/env")
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
 }
 
 /// The JSON list of `env<n>.json`, as released.
