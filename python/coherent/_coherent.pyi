@@ -223,6 +223,8 @@ class _BenchOutcome(TypedDict):
     interrupted: bool
     skipped_tasks: list[str]
     repaired_bytes: int
+    # Transcripts of episodes killed mid-run, renamed *.jsonl.unfinished before the run.
+    orphaned: list[str]
 
 class LLM:
     """An OpenAI-compatible endpoint (OpenAI, vLLM, Ollama, llama.cpp, LM Studio, ...).
