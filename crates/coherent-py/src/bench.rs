@@ -72,7 +72,8 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
     d.set_item("interrupted", o.interrupted)?;
     d.set_item("skipped_tasks", &o.skipped_tasks)?;
     d.set_item("repaired_bytes", o.repaired_bytes)?;
-    d.set_item("orphaned", &o.orphaned)?;
+    let orphaned: Vec<String> = o.orphaned.iter().map(|p| p.display().to_string()).collect();
+    d.set_item("orphaned", orphaned)?;
     Ok(d)
 }
 
