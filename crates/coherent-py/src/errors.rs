@@ -1,6 +1,7 @@
 //! The exception tree: `CoherentError` and a few subclasses, each raised for one kind of
 //! failure, with the attributes a caller needs to act on it.
 
+use coherent_agents::PromptError;
 use coherent_core::Error;
 use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -20,6 +21,7 @@ pub(crate) struct Exceptions {
     pub physics: Py<PyType>,
     pub backend: Py<PyType>,
     pub replay_mismatch: Py<PyType>,
+    pub prompt: Py<PyType>,
 }
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
@@ -85,6 +87,15 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
                 false,
                 "A replayed episode did not come out as recorded. Attribute `episode`: the\n\
                  replayed episode.",
+            )?,
+            prompt: sub(
+                "PromptError",
+                true,
+                "A prompt template that cannot be used, raised before any model call: a\n\
+                 file that cannot be read, a file named after no template, or a placeholder\n\
+                 the template's method does not fill. Attributes: `file` (None when the\n\
+                 error is about no one file), `line` and `placeholder` (None unless the\n\
+                 error is an unknown placeholder).",
             )?,
             base,
         })
@@ -171,4 +182,25 @@ pub(crate) fn physics(py: Python<'_>, e: coherent_sim::PhysicsError) -> PyErr {
 
 pub(crate) fn backend(py: Python<'_>, message: impl Into<String>) -> PyErr {
     error(py, Kind::Backend, message, None)
+}
+
+/// A `PromptError` with the file, the line and the placeholder as attributes.
+pub(crate) fn prompt(py: Python<'_>, e: &PromptError) -> PyErr {
+    let message = e.to_string();
+    let built = exceptions(py).and_then(|exc| {
+        let value = exc.prompt.bind(py).call1((message.clone(),))?;
+        value.setattr("file", e.file())?;
+        let (line, placeholder) = match e {
+            PromptError::UnknownPlaceholder {
+                line, placeholder, ..
+            } => (Some(*line), Some(placeholder.as_str())),
+            _ => (None, None),
+        };
+        value.setattr("line", line)?;
+        value.setattr("placeholder", placeholder)?;
+        Ok(PyErr::from_value(value))
+    });
+    built.unwrap_or_else(|inner| {
+        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
+    })
 }
