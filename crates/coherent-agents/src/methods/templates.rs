@@ -245,7 +245,7 @@ impl Prompts {
 
     /// The built-in templates, with those of `files` (`(name, text)`, the name a
     /// template's file name) in their place; each is checked, and errors name the file
-    /// as `origin/name`.
+    /// as `origin/name`. A file with the built-in text replaces nothing.
     pub fn from_texts(origin: &Path, files: Vec<(String, String)>) -> Result<Prompts, PromptError> {
         let mut replaced = BTreeMap::new();
         for (name, text) in files {
@@ -253,7 +253,9 @@ impl Prompts {
             let template = Template::from_file_name(&name)
                 .ok_or(PromptError::UnknownFile { file: file.clone() })?;
             check(template, &text, &file)?;
-            replaced.insert(template, text);
+            if text != template.builtin() {
+                replaced.insert(template, text);
+            }
         }
         Ok(Prompts::with(replaced))
     }
@@ -447,8 +449,8 @@ mod tests {
         assert_eq!(set.replaced_names(), ["assigner_user.txt"]);
         assert_ne!(set.hash(), Prompts::builtin().hash());
         assert_eq!(set.hash().len(), 32);
-        // The same texts, the same hash; a file that repeats the built-in text is the
-        // built-in set as far as the hash goes.
+        // The same texts, the same hash; a file that repeats the built-in text replaces
+        // nothing.
         let same = Prompts::from_texts(
             Path::new("elsewhere"),
             vec![("assigner_user.txt".into(), "Do {{instruction}}.".into())],
@@ -461,6 +463,7 @@ mod tests {
         )
         .expect("a set");
         assert_eq!(copy.hash(), Prompts::builtin().hash());
+        assert!(copy.replaced_names().is_empty());
         let unknown =
             Prompts::from_texts(Path::new("d"), vec![("asigner.txt".into(), String::new())]);
         assert!(matches!(unknown, Err(PromptError::UnknownFile { .. })));
