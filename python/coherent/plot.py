@@ -215,12 +215,13 @@ def _cost_points(results: Results) -> tuple[pd.DataFrame, list[str]]:
     frame = _frame(_lines(results))
     if frame.empty:
         return pd.DataFrame(columns=["method", "model", "episodes", "success_rate", "cost_per_task"]), []
-    # As the report counts them: the last final line of each episode.
-    final = frame[frame["status"].isin(["success", "failure"])]
-    final = final.drop_duplicates(["method", "scene", "task_id", "seed"], keep="last")
     # A method that asks no model has no model to tell apart.
-    model = final["backend_model"].where(final["uses_model"].astype(bool), "")
-    final = final.assign(model=model.fillna(""))
+    model = frame["backend_model"].where(frame["uses_model"].astype(bool), "")
+    frame = frame.assign(model=model.fillna(""))
+    # As the report counts them: the last final line of each episode, an episode being
+    # one per model too (results of several models may sit in one frame).
+    final = frame[frame["status"].isin(["success", "failure"])]
+    final = final.drop_duplicates(["method", "model", "scene", "task_id", "seed"], keep="last")
     rows, unpriced = [], []
     for (method, model), group in final.groupby(["method", "model"], sort=False):
         label = f"{method} ({model})" if model else method

@@ -115,6 +115,17 @@ def test_a_dict_of_templates_reaches_the_model_and_the_header(
     assert coherent.load_episode(episode.path).cost_usd is None
 
 
+def test_the_small_models_tokens_priced(model_episode: coherent.Episode, tmp_path: Path) -> None:
+    # SmolLM2 behind llama.cpp's server: real token counts, at a price given for it.
+    assert model_episode.cost_usd is None, "no built-in price for a local model"
+    prices = {"smollm2-135m": {"input": 0.02, "cached_input": 0.01, "output": 0.04}}
+    replayed = coherent.replay(model_episode.path, out=tmp_path, prices=prices)
+    fresh = model_episode.prompt_tokens - model_episode.cached_tokens
+    expected = (fresh * 0.02 + model_episode.cached_tokens * 0.01 + model_episode.completion_tokens * 0.04) / 1e6
+    assert replayed.cost_usd == pytest.approx(expected, rel=1e-12)
+    assert replayed.cost_usd > 0
+
+
 def test_an_unknown_placeholder_raises_prompt_error_before_any_call(
     task0: coherent.Task, stub: tuple[coherent.LLM, list[dict[str, Any]]], tmp_path: Path
 ) -> None:
@@ -231,10 +242,14 @@ def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path)
         ax = plot.pareto(data)
         labels = sorted(t.get_text() for t in ax.texts if not t.get_text().startswith("no price"))
         assert labels == ["cmrs (dear)", "optimal", "pefa (cheap)", "pefa (dear)"]
-        points = sorted(tuple(o) for c in ax.collections for o in c.get_offsets())
-        assert points == pytest.approx(sorted([(0.02, 0.5), (0.3, 1.0), (0.1, 0.5), (0.0, 0.0)]))
+        points = sorted((float(x), float(y)) for c in ax.collections for x, y in c.get_offsets())
+        expected = [(0.0, 0.0), (0.02, 0.5), (0.1, 0.5), (0.3, 1.0)]
+        assert len(points) == len(expected)
+        for (x, y), (ex, ey) in zip(points, expected):
+            assert (x, y) == (pytest.approx(ex), pytest.approx(ey))
         front = [line for line in ax.get_lines() if line.get_label() == "Pareto front"][0]
-        assert list(zip(front.get_xdata(), front.get_ydata())) == pytest.approx([(0.0, 0.0), (0.02, 0.5), (0.3, 1.0)])
+        assert list(front.get_xdata()) == pytest.approx([0.0, 0.02, 0.3])
+        assert list(front.get_ydata()) == pytest.approx([0.0, 0.5, 1.0])
         assert any("dmrs-1d (unpriced)" in t.get_text() for t in ax.texts)
         assert ax.get_xlabel() == "cost per task (USD)" and ax.get_ylabel() == "success rate"
     path = tmp_path / "r.jsonl"
