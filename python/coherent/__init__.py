@@ -13,9 +13,10 @@ Everything the ``coherent`` command line does, from Python::
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
 
-``coherent.plot`` draws the paper's tables, episode timelines, tokens per step and the
-scene map (matplotlib); ``coherent.gym`` is a Gymnasium environment. The engine is Rust
-(``coherent._coherent``); errors derive from :class:`CoherentError`.
+``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
+against cost (``pareto``) and the scene map (matplotlib); ``coherent.gym`` is a Gymnasium
+environment. The engine is Rust (``coherent._coherent``); errors derive from
+:class:`CoherentError`.
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
 ``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
@@ -39,6 +40,7 @@ from ._coherent import (
     Env,
     Episode,
     PhysicsError,
+    PromptError,
     ReplayMismatchError,
     Task,
     TaskFormatError,
@@ -71,6 +73,7 @@ __all__ = [
     "Env",
     "Episode",
     "PhysicsError",
+    "PromptError",
     "ReplayMismatchError",
     "Report",
     "Task",

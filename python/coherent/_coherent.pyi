@@ -22,6 +22,19 @@ _RobotType: TypeAlias = Literal["quadrotor", "robot dog", "robot arm"]
 _TaskType: TypeAlias = Literal["mono", "dual", "trio"]
 _Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted"]
 _PathLike: TypeAlias = str | os.PathLike[str]
+_Prompts: TypeAlias = _PathLike | Mapping[str, str]
+"""A folder of prompt templates, or ``{file name: text}`` (docs/prompts.md)."""
+
+class _Price(TypedDict, total=False):
+    input: float
+    cached_input: float
+    output: float
+    date: str
+    source: str
+
+_Prices: TypeAlias = _PathLike | Mapping[str, _Price]
+"""A price file (JSON, or TOML for ``.toml``), or ``{model: {"input", "cached_input",
+"output"}}`` in USD per million tokens (docs/bench.md)."""
 
 class _RawNode(TypedDict):
     id: int
@@ -107,6 +120,17 @@ class ReplayMismatchError(CoherentError):
 
     episode: Episode
     """The replayed episode."""
+
+class PromptError(CoherentError, ValueError):
+    """A prompt template that cannot be used, raised before any model call."""
+
+    file: str | None
+    """The template file (``prompts/NAME`` for a dict of texts); None when the error is
+    about no one file."""
+    line: int | None
+    """The line of an unknown placeholder (1-based); None for other errors."""
+    placeholder: str | None
+    """The unknown placeholder's name, as written between the braces."""
 
 class Task:
     """A task: the scene graph at the start, the robots, the goal and the ground truth.
@@ -212,6 +236,7 @@ class _Summary(TypedDict):
     llm_calls: int
     prompt_tokens: int
     completion_tokens: int
+    cached_tokens: int
     wall_ms: float
     error: str | None
 
@@ -290,6 +315,13 @@ class Episode:
     def tokens(self) -> int:
         """Prompt and completion tokens together."""
     @property
+    def cached_tokens(self) -> int:
+        """The part of ``prompt_tokens`` the server read from its prompt cache."""
+    @property
+    def cost_usd(self) -> float | None:
+        """What the model calls cost in USD at the price table given to :func:`run` or
+        :func:`replay` (the built-in one for :func:`load_episode`); None without a price."""
+    @property
     def wall_ms(self) -> float: ...
     @property
     def error(self) -> str | None: ...
@@ -321,16 +353,20 @@ def run(
     seed: int | None = None,
     out: _PathLike = "runs",
     max_states: int = ...,
+    prompts: _Prompts | None = None,
+    prices: _Prices | None = None,
 ) -> Episode:
     """Runs ``method`` (one of :data:`METHODS`) on ``task`` as ``coherent run`` does; the
     transcript goes to ``out``. Without ``llm`` the built-in planner plays the model's
     roles, or with ``sim_errors`` (``"all=0.1"``, or rates by kind) the simulated backend.
+    ``prompts`` replaces built-in templates (a bad one raises :class:`PromptError` before
+    anything runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``).
     Raises :class:`BackendError` when the server fails for good; Ctrl-C stops the episode
     and raises ``KeyboardInterrupt``."""
 
-def replay(transcript: _PathLike, *, out: _PathLike = "runs") -> Episode:
-    """Re-runs a transcript's episode answering from it (no network); raises
-    :class:`ReplayMismatchError` when a round comes out differently."""
+def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
+    """Re-runs a transcript's episode answering from it (no network) with the prompt set
+    it recorded; raises :class:`ReplayMismatchError` when a round comes out differently."""
 
 def load_episode(path: _PathLike) -> Episode:
     """The finished episode recorded in a transcript file."""
@@ -354,6 +390,8 @@ def run_bench(
     max_states: int = ...,
     out: _PathLike = "results.jsonl",
     progress: bool = False,
+    prompts: _Prompts | None = None,
+    prices: _Prices | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""

@@ -90,6 +90,8 @@ def bench(
     max_states: int = _coherent.DEFAULT_MAX_STATES,
     out: PathLike = "results.jsonl",
     progress: bool = False,
+    prompts: PathLike | Mapping[str, str] | None = None,
+    prices: PathLike | Mapping[str, Mapping[str, Any]] | None = None,
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
@@ -102,7 +104,12 @@ def bench(
     rates, e.g. ``"all=0.1"``), an :class:`LLM`, or ``"replay"``: the episodes of the
     earlier results file ``replay_from`` answer from their transcripts (no network), with
     their recorded settings; a line's ``error`` says when one came out differently.
-    What the run did is in
+    ``prompts`` (a folder of template files, or ``{file name: text}``) replaces built-in
+    prompt templates; a template with an unknown placeholder raises
+    :class:`~coherent.PromptError` before anything runs. ``prices`` (a JSON or TOML price
+    file, or ``{model: {"input": .., "cached_input": .., "output": ..}}`` in USD per
+    million tokens) adds to the built-in price table; each line's ``cost_usd`` is its
+    tokens at its model's price (NaN when the model has none). What the run did is in
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
     """
@@ -125,6 +132,8 @@ def bench(
         max_states=max_states,
         out=out,
         progress=progress,
+        prompts=prompts,
+        prices=prices,
     )
     frame = _frame(pandas, _coherent.read_results(out))
     frame.attrs["outcome"] = outcome
@@ -141,7 +150,8 @@ class Report:
     steps), and columns ``(column, stat)`` with ``stat`` one of ``SR``, ``SR ci95``,
     ``AS``, ``AS ci95`` (the half-width of a 95% interval over seeds; NaN with one
     seed). ``costs`` has a row per method: LLM calls and tokens per episode and per
-    step.
+    step, and the cost in USD in all, per task (episode) and per success (NaN where a
+    model has no price).
     """
 
     table1: pd.DataFrame
@@ -174,6 +184,9 @@ def report(data: Results) -> Report:
     lines = _lines(data)
     r = _coherent.report_tables(lines)
     costs = pandas.DataFrame(r["costs"]).set_index("method") if r["costs"] else pandas.DataFrame()
+    if not costs.empty:
+        # A model without a price leaves None: NaN, as in the results' cost_usd.
+        costs = costs.astype({name: float for name in _COST_COLUMNS})
     return Report(
         table1=_table(pandas, r["table1"]),
         table2=_table(pandas, r["table2"]),
@@ -184,6 +197,10 @@ def report(data: Results) -> Report:
         untyped_tasks=r["untyped_tasks"],
         lines=lines,
     )
+
+
+# The report's cost columns, in USD (None where a model has no price).
+_COST_COLUMNS = ("cost_usd", "cost_per_task", "cost_per_success")
 
 
 def _table(pandas: ModuleType, t: dict[str, Any]) -> pd.DataFrame:

@@ -7,11 +7,13 @@
 - :func:`timeline`: which robot acted at each step of an episode, failed steps marked,
   subtask boundaries;
 - :func:`tokens`: prompt and completion tokens (and model calls) per step;
+- :func:`pareto`: success rate against cost per task, a point per method and model, the
+  Pareto front drawn through the points no other beats on both;
 - :func:`scene`: the scene from above, a panel per storey, with the robots' paths.
 
 Each returns the matplotlib ``Figure`` (:func:`table`), ``Axes`` (:func:`timeline`,
-:func:`tokens`) or list of ``Axes``, one per storey (:func:`scene`), drawn into ``ax``
-when given, to save with ``savefig`` or adjust further.
+:func:`tokens`, :func:`pareto`) or list of ``Axes``, one per storey (:func:`scene`), drawn
+into ``ax`` when given, to save with ``savefig`` or adjust further.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 from . import _coherent
 from ._coherent import METHODS, ArgumentError, Episode, Task
 from ._extras import needs
-from .analysis import Report, Results, report
+from .analysis import Report, Results, _frame, _lines, report
 
 with needs("coherent.plot", "analysis"):
     import matplotlib.pyplot as plt
@@ -205,6 +207,84 @@ def tokens(episode: Episode, ax: Axes | None = None) -> Axes:
         f"{episode.tokens} tokens in {episode.llm_calls} calls",
         fontsize=10,
     )
+    return ax
+
+
+def _cost_points(results: Results) -> tuple[pd.DataFrame, list[str]]:
+    """One row per (method, model) of the final results lines: ``episodes``,
+    ``success_rate``, ``cost_per_task`` (mean ``cost_usd``); and the labels of the groups
+    left out because a line of theirs has no cost (its model has no price)."""
+    frame = _frame(pd, _lines(results))
+    if frame.empty:
+        return pd.DataFrame(columns=["method", "model", "episodes", "success_rate", "cost_per_task"]), []
+    # A method that asks no model has no model to tell apart.
+    model = frame["backend_model"].where(frame["uses_model"].astype(bool), "")
+    frame = frame.assign(model=model.fillna(""))
+    # As the report counts them: the last final line of each episode, an episode being
+    # one per model too (results of several models may sit in one frame).
+    final = frame[frame["status"].isin(["success", "failure"])]
+    final = final.drop_duplicates(["method", "model", "scene", "task_id", "seed"], keep="last")
+    rows, unpriced = [], []
+    for (method, model), group in final.groupby(["method", "model"], sort=False):
+        label = f"{method} ({model})" if model else method
+        costs = pd.to_numeric(group["cost_usd"], errors="coerce")
+        if costs.isna().any():
+            unpriced.append(label)
+            continue
+        rows.append(
+            {
+                "method": method,
+                "model": model,
+                "episodes": len(group),
+                "success_rate": float(group["success"].astype(bool).mean()),
+                "cost_per_task": float(costs.mean()),
+            }
+        )
+    return pd.DataFrame(rows, columns=["method", "model", "episodes", "success_rate", "cost_per_task"]), unpriced
+
+
+def pareto(results: Results, ax: Axes | None = None) -> Axes:
+    """Success rate against cost per task (mean ``cost_usd`` per episode, USD), one point
+    per method and model of ``results`` (a DataFrame of :func:`coherent.bench` or
+    :func:`coherent.results`, a results file, or its lines), labelled; a step line joins
+    the Pareto front, the points no other beats on both cost and success. Results lines
+    get their cost from the price table given to ``bench`` (``prices=``); a method and
+    model with a line that has none (a model without a price) is left out and named
+    below the axes. Raises ``ValueError`` when no point is left."""
+    points, unpriced = _cost_points(results)
+    if points.empty:
+        why = f" (no price for: {', '.join(unpriced)})" if unpriced else ""
+        raise ValueError(f"no results line with a cost_usd to plot{why}: pass prices= to coherent.bench")
+    if ax is None:
+        _, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
+    for row in points.itertuples():
+        label = f"{row.method} ({row.model})" if row.model else row.method
+        ax.scatter(row.cost_per_task, row.success_rate, s=50, color=_method_color(row.method), zorder=3)
+        ax.annotate(label, (row.cost_per_task, row.success_rate), xytext=(5, 4), textcoords="offset points", fontsize=8)
+    # The front: cheapest first, each point that succeeds more than every cheaper one.
+    front, best = [], -1.0
+    for row in points.sort_values(["cost_per_task", "success_rate"], ascending=[True, False]).itertuples():
+        if row.success_rate > best:
+            front.append((row.cost_per_task, row.success_rate))
+            best = row.success_rate
+    xs, ys = zip(*front)
+    ax.step(xs, ys, where="post", color="0.5", linestyle="--", linewidth=1, zorder=2, label="Pareto front")
+    ax.set_xlabel("cost per task (USD)")
+    ax.set_ylabel("success rate")
+    ax.set_ylim(-0.05, 1.08)
+    ax.set_xlim(left=min(0.0, min(xs)))
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower right", frameon=False, fontsize=8)
+    ax.set_title("Success rate against cost per task", fontsize=10)
+    if unpriced:
+        ax.text(
+            0.0,
+            -0.16,
+            textwrap.shorten("no price, left out: " + ", ".join(unpriced), 120),
+            transform=ax.transAxes,
+            fontsize=8,
+            color="0.4",
+        )
     return ax
 
 

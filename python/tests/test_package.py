@@ -182,12 +182,14 @@ def test_exception_tree() -> None:
         coherent.PhysicsError,
         coherent.BackendError,
         coherent.ReplayMismatchError,
+        coherent.PromptError,
     )
     for exc in errors:
         assert issubclass(exc, coherent.CoherentError)
         assert exc.__module__ == "coherent._coherent"
     assert issubclass(coherent.TaskFormatError, ValueError)
     assert issubclass(coherent.ActionParseError, ValueError)
+    assert issubclass(coherent.PromptError, ValueError)
     assert not issubclass(coherent.UnknownRobotError, ValueError)
 
 

@@ -1,12 +1,16 @@
 //! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
 //! that the same setting has the same flag; resolving them with the environment is the
-//! session layer's, [`crate::session::endpoint`]), `--sim-errors`, the method names.
+//! session layer's, [`crate::session::endpoint`]), `--prompts` and `--prices` (read by
+//! [`crate::session::prompts`]), `--sim-errors`, the method names.
+
+use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use coherent_agents::episode::Method;
-use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode};
+use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode, PriceTable, Prompts};
 
 use crate::session::endpoint::{Endpoint, Patience};
+use crate::session::prompts;
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -90,6 +94,43 @@ impl LlmArgs {
             max_response_bytes: self.max_response_bytes,
         }
         .config()
+    }
+}
+
+/// The prompt set and the price table, the same flags in `run` and `bench`.
+#[derive(Args, Debug)]
+pub(crate) struct PromptPriceArgs {
+    /// A folder of prompt templates: its files replace the built-in templates of the same
+    /// name (`coherent prompts export DIR` writes those), checked before any model call.
+    #[arg(long, value_name = "DIR")]
+    pub prompts: Option<PathBuf>,
+    /// A price table, JSON (TOML for a `.toml` file): USD per million input, cached input
+    /// and output tokens by model, added to the built-in table; prices `cost_usd`.
+    #[arg(long, value_name = "FILE")]
+    pub prices: Option<PathBuf>,
+}
+
+impl PromptPriceArgs {
+    /// The prompt set of `--prompts`; an error names the file, the line and the
+    /// placeholder.
+    pub fn prompt_set(&self) -> Result<Prompts, String> {
+        prompts::prompt_set(self.prompts.as_deref()).map_err(|e| e.to_string())
+    }
+
+    /// The built-in price table with the entries of `--prices`.
+    pub fn price_table(&self) -> Result<PriceTable, String> {
+        prompts::price_table(self.prices.as_deref())
+    }
+
+    /// Refuses `--prompts` for a replay, which renders the prompt set it recorded.
+    pub fn no_prompts_for_a_replay(&self, flag: &str) -> Result<(), String> {
+        match &self.prompts {
+            Some(_) => Err(format!(
+                "--prompts and {flag} do not go together: a replay renders the prompt set \
+                 its transcript recorded"
+            )),
+            None => Ok(()),
+        }
     }
 }
 

@@ -11,10 +11,10 @@ use coherent_agents::episode::Method;
 use coherent_core::planner::Limits;
 use coherent_core::text::{shown, shown_lines};
 
-use super::args::{LlmArgs, method_names, sim_errors};
-use crate::session;
+use super::args::{LlmArgs, PromptPriceArgs, method_names, sim_errors};
 use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
 use crate::session::bench::{self as session_bench, TableFormat as Tables};
+use crate::session::{self, prompts};
 
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
@@ -55,8 +55,9 @@ pub struct BenchArgs {
     /// Results file (JSON lines), appended to; re-running skips finished episodes.
     #[arg(long, required_unless_present = "report")]
     out: Option<PathBuf>,
-    /// Print the tables of this results file and run nothing.
-    #[arg(long, conflicts_with_all = ["tasks", "methods", "out"])]
+    /// Print the tables of this results file and run nothing (with --prices, its lines'
+    /// tokens priced anew).
+    #[arg(long, conflicts_with_all = ["tasks", "methods", "out", "prompts"])]
     report: Option<PathBuf>,
     /// Table format.
     #[arg(long, value_enum, default_value_t = TableFormat::Markdown)]
@@ -69,6 +70,8 @@ pub struct BenchArgs {
     max_states: usize,
     #[command(flatten)]
     llm: LlmArgs,
+    #[command(flatten)]
+    inputs: PromptPriceArgs,
     /// The old spelling of --seed (hidden; for one release).
     #[arg(long = "llm-seed", hide = true)]
     old_llm_seed: Option<u64>,
@@ -100,7 +103,12 @@ pub fn bench(mut args: BenchArgs) -> Result<u8, String> {
                 file.truncated_bytes
             );
         }
-        print_tables(&file.lines, args.format);
+        let mut lines = file.lines;
+        if args.inputs.prices.is_some() {
+            let prices = args.inputs.price_table()?;
+            lines = lines.into_iter().map(|l| l.priced(&prices)).collect();
+        }
+        print_tables(&lines, args.format);
         return Ok(0);
     }
     if let Some(seed) = args.old_llm_seed {
@@ -134,6 +142,12 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
     if args.seeds == 0 {
         return Err("--seeds must be at least 1".into());
     }
+    // Before anything else: a bad template must cost no model call.
+    if args.backend == BackendKind::Replay {
+        args.inputs.no_prompts_for_a_replay("--backend replay")?;
+    }
+    let prompt_set = args.inputs.prompt_set()?;
+    let prices = args.inputs.price_table()?;
     let backend = backend(&args)?;
     let subset = session_bench::subset(&args.subset)?;
     let chosen = session_bench::choose(tasks_path, &subset)?;
@@ -182,6 +196,8 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         max_states: args.max_states,
         out: out.clone(),
         backend,
+        prompts: prompt_set,
+        prices,
     };
     let info = config.backend.info();
     println!(
@@ -190,6 +206,9 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         info.model,
         info.base_url.map_or(String::new(), |u| format!(" at {u}"))
     );
+    if let Some(line) = prompts::describe(&config.prompts) {
+        println!("{line}");
+    }
     let cancel = Cancel::default();
     let ctrl_c = {
         let cancel = cancel.clone();

@@ -1,8 +1,10 @@
-//! The `coherent` command line: `run`, `plan`, `validate`, `import`. One implementation
-//! serves the `coherent` binary and the console script that `pip install` puts on the PATH.
+//! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
+//! `prompts`. One implementation serves the `coherent` binary and the console script
+//! that `pip install` puts on the PATH.
 
 mod args;
 mod bench;
+mod prompts;
 mod render;
 mod run;
 
@@ -63,6 +65,9 @@ enum Command {
         #[arg(short, long)]
         out: PathBuf,
     },
+    /// The prompt templates: `export DIR` writes the built-in ones, to edit and pass back
+    /// with `--prompts DIR` to run and bench. Exit 2 on an error.
+    Prompts(prompts::PromptsArgs),
     /// Plan optimally: shortest plan, task type, or why a task cannot be solved. Exit 1
     /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
     /// input.
@@ -118,6 +123,12 @@ where
         }
         Command::Bench(args) => {
             return bench::bench(*args).unwrap_or_else(|e| {
+                error(&e);
+                2
+            });
+        }
+        Command::Prompts(args) => {
+            return prompts::prompts(&args).unwrap_or_else(|e| {
                 error(&e);
                 2
             });

@@ -17,10 +17,10 @@ use coherent_core::text::shown;
 
 use serde_json::json;
 
-use super::args::{AnswerFormat, LlmArgs, method_names, sim_errors};
+use super::args::{AnswerFormat, LlmArgs, PromptPriceArgs, method_names, sim_errors};
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
-use crate::session::{self, tasks};
+use crate::session::{self, prompts, tasks};
 
 /// Exit status when the episode ran but the goal was not reached.
 const FAILED: u8 = 1;
@@ -62,6 +62,8 @@ pub(crate) struct RunArgs {
     physics: bool,
     #[command(flatten)]
     llm: LlmArgs,
+    #[command(flatten)]
+    inputs: PromptPriceArgs,
     /// The old spelling of --answer-format (hidden; for one release).
     #[arg(long = "format", value_enum, hide = true)]
     old_format: Option<AnswerFormat>,
@@ -107,14 +109,18 @@ pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
 
 /// The episode the flags ask for: a replay of a transcript, or a new one.
 fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
+    let prices = args.inputs.price_table()?;
     if let Some(path) = &args.replay {
+        args.inputs.no_prompts_for_a_replay("--replay")?;
         let given = match &args.task_file {
             Some(file) => Some(tasks::pick_task(file, args.task_id)?),
             None => None,
         };
-        return episode::prepare_replay(path, given.as_ref(), args.out.clone())
+        return episode::prepare_replay(path, given.as_ref(), args.out.clone(), prices)
             .map_err(|e| e.to_string());
     }
+    // Before anything else: a bad template must cost no model call.
+    let prompts = args.inputs.prompt_set()?;
     let file = args
         .task_file
         .as_deref()
@@ -140,11 +146,13 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
             temperature,
             seed: args.llm.seed,
             physics: args.physics,
+            prompts,
         },
         max_steps: args.max_steps,
         backend,
         max_states: args.max_states,
         out: args.out.clone(),
+        prices,
     };
     episode::prepare(spec, cancel).map_err(|e| e.to_string())
 }
@@ -161,6 +169,9 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         )
     });
     lines.say(&task_line(&prepared));
+    if let Some(line) = prompts::describe(&prepared.settings.prompts) {
+        lines.say(&line);
+    }
     let ctrl_c = {
         let cancel = cancel.clone();
         tokio::spawn(async move {
@@ -176,7 +187,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     ctrl_c.abort();
     let ran = result.map_err(|e| e.to_string())?;
     let s = ran.summary();
-    lines.say(&summary_line(s, ran.goal_satisfied));
+    lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
     lines.say(&format!("transcript: {}", ran.path.display()));
     match &ran.replay {
         Some(Ok(())) => lines.say(&format!(
@@ -201,6 +212,8 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
                 "llm_calls": s.llm_calls,
                 "prompt_tokens": s.prompt_tokens,
                 "completion_tokens": s.completion_tokens,
+                "cached_tokens": s.cached_tokens,
+                "cost_usd": ran.cost_usd,
                 "wall_ms": s.wall_ms,
                 "error": s.error,
                 "backend": info,
@@ -297,7 +310,7 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
     )
 }
 
-fn summary_line(s: &Summary, goal_satisfied: bool) -> String {
+fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {
     let result = match s.status {
         Status::Success => "success",
         Status::Failure => "failure: step budget spent",
@@ -310,8 +323,12 @@ fn summary_line(s: &Summary, goal_satisfied: bool) -> String {
     } else {
         "not reached"
     };
+    // A price for the model, and calls to price.
+    let cost = cost_usd
+        .filter(|_| s.llm_calls > 0)
+        .map_or(String::new(), |c| format!(" | cost ${c:.6}"));
     format!(
-        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion | wall {:.2} s",
+        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion{cost} | wall {:.2} s",
         s.steps,
         s.max_steps,
         s.llm_calls,

@@ -7,9 +7,9 @@ use std::sync::Arc;
 
 use coherent_agents::bench::BackendChoice;
 use coherent_agents::episode::{self, Budget, Settings};
-use coherent_agents::llm::{Backend, BackendInfo};
+use coherent_agents::llm::{Backend, BackendInfo, Usage};
 use coherent_agents::transcript::{self, Round, Transcript};
-use coherent_agents::{Cancel, Episode, Replay};
+use coherent_agents::{Cancel, Episode, PriceTable, Replay};
 use coherent_core::planner::Limits;
 use coherent_core::{Environment, SymbolicEnv, Task, native};
 
@@ -54,7 +54,8 @@ pub fn environment(
 #[derive(Debug)]
 pub struct EpisodeSpec {
     pub task: Arc<Task>,
-    /// The method, its history window, the sampling settings, physics or not.
+    /// The method, its history window, the sampling settings, physics or not, the
+    /// prompt set.
     pub settings: Settings,
     /// Overrides the budget of 2 x GT.
     pub max_steps: Option<u32>,
@@ -64,6 +65,8 @@ pub struct EpisodeSpec {
     pub max_states: usize,
     /// The folder the transcript goes to.
     pub out: PathBuf,
+    /// Prices the episode's tokens ([`Ran::cost_usd`]).
+    pub prices: PriceTable,
 }
 
 /// An episode ready to run.
@@ -74,6 +77,7 @@ pub struct Prepared {
     backend: Arc<dyn Backend>,
     env: Box<dyn Environment + Send + Sync>,
     out: PathBuf,
+    prices: PriceTable,
     /// The recording a replay answers from and is checked against, and its file.
     recording: Option<(Replay, PathBuf)>,
 }
@@ -99,6 +103,9 @@ pub struct Ran {
     pub goal_satisfied: bool,
     /// `Some(Err(why))` when a replayed round or summary differs from the recording.
     pub replay: Option<Result<(), String>>,
+    /// What the model calls cost in USD (`PriceTable::episode_cost`); `None` when the
+    /// model has no price.
+    pub cost_usd: Option<f64>,
 }
 
 impl Ran {
@@ -130,17 +137,19 @@ pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Failure> 
         backend,
         env,
         out: spec.out,
+        prices: spec.prices,
         recording: None,
     })
 }
 
-/// Prepares the replay of the episode recorded at `path`: the task, settings and budget
-/// as recorded, answered from the recording (no network). With `given`, the recorded
-/// task must be that task.
+/// Prepares the replay of the episode recorded at `path`: the task, settings (the prompt
+/// set included) and budget as recorded, answered from the recording (no network). With
+/// `given`, the recorded task must be that task. `prices` prices the recorded tokens.
 pub fn prepare_replay(
     path: &Path,
     given: Option<&Task>,
     out: PathBuf,
+    prices: PriceTable,
 ) -> Result<Prepared, Failure> {
     let recorded = transcript::read(path)?;
     if let Some(given) = given
@@ -160,6 +169,7 @@ pub fn prepare_replay(
         backend: Arc::clone(&replay.backend) as Arc<dyn Backend>,
         env,
         out,
+        prices,
         recording: Some((replay, path.to_owned())),
     })
 }
@@ -199,6 +209,15 @@ impl Prepared {
             .as_ref()
             .map(|(replay, _)| replay.check(&episode));
         let Episode { rounds, summary } = episode;
+        let usage = Usage {
+            prompt_tokens: summary.prompt_tokens,
+            completion_tokens: summary.completion_tokens,
+            cached_tokens: summary.cached_tokens,
+        };
+        let uses_model = self.settings.method.uses_model();
+        let cost_usd = self
+            .prices
+            .episode_cost(&header.backend.model, uses_model, &usage);
         Ok(Ran {
             task: self.task,
             transcript: Transcript {
@@ -209,6 +228,7 @@ impl Prepared {
             path,
             goal_satisfied: self.env.goal_satisfied(),
             replay,
+            cost_usd,
         })
     }
 }

@@ -11,6 +11,7 @@
 //!   OpenAI-compatible, replay), with the rules that tie the settings together;
 //! - [`tasks`]: reading task files, the compiled-in benchmark, picking one task;
 //! - [`episode`]: one episode, run or replayed, in a symbolic or physical environment;
+//! - [`prompts`]: the prompt set and the price table a run is given, checked up front;
 //! - [`bench`]: methods x tasks x seeds into a resumable results file;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
 //! - [`render`]: the scene from above and the robots' paths.
@@ -20,6 +21,7 @@ pub mod bench;
 pub mod check;
 pub mod endpoint;
 pub mod episode;
+pub mod prompts;
 pub mod render;
 pub mod tasks;
 

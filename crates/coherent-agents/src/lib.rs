@@ -7,7 +7,9 @@
 //!   (Proposal-Execution-Feedback-Adjustment) with its two roles, [`TaskAssigner`]
 //!   (`methods/assigner.rs`) and [`RobotExecutor`] (`methods/executor.rs`); the baselines
 //!   [`cmrs`], [`dmrs`] and [`mcts`] over the team's [`joint`] action space; and the
-//!   [`optimal`] plan, the tables' ground-truth row.
+//!   [`optimal`] plan, the tables' ground-truth row. Their prompts are rendered from a
+//!   prompt set, [`Prompts`] ([`templates`]): the built-in templates, or files given at
+//!   run time.
 //! - [`episode`]: what every method shares. The round loop and its [`Episode`], asking
 //!   a backend, executing on the `coherent_core::Environment`, [`Cancel`], the step
 //!   [`Budget`], the [`Method`] names and their [`Settings`]; and [`episode::run()`],
@@ -19,7 +21,8 @@
 //! - [`records`]: what an episode leaves behind. Its [`transcript`], and [`Replay`],
 //!   which sets up the replay of a recorded episode and checks it against the recording.
 //! - [`harness`]: the benchmark. [`bench`](mod@bench) runs methods x tasks x seeds into a
-//!   results file; [`report`] turns it into the paper's tables.
+//!   results file, each line priced from a [`PriceTable`] ([`prices`]); [`report`] turns
+//!   it into the paper's tables.
 //!
 //! No file reaches back to one that uses it. From the bottom: [`llm`] is the vocabulary
 //! of a model call; the transcript records calls in it; the backends answer them (the
@@ -39,8 +42,8 @@ pub mod records;
 pub mod rng;
 
 pub use backends::{builtin, llm, openai, replay, retry};
-pub use harness::{bench, report};
-pub use methods::{cmrs, dmrs, joint, mcts, optimal, pefa, prompt};
+pub use harness::{bench, prices, report};
+pub use methods::{cmrs, dmrs, joint, mcts, optimal, pefa, prompt, templates};
 pub use records::transcript;
 
 pub use backends::builtin::BuiltinBackend;
@@ -49,8 +52,10 @@ pub use backends::openai::{ApiKey, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
 pub use episode::{Budget, Cancel, Episode, Method, Settings};
+pub use harness::prices::PriceTable;
 pub use methods::assigner::TaskAssigner;
 pub use methods::executor::RobotExecutor;
 pub use methods::pefa::PefaConfig;
+pub use methods::templates::{PromptError, Prompts};
 pub use records::replay::Replay;
 pub use records::transcript::{Status, Summary, Transcript};

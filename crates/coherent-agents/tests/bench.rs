@@ -9,7 +9,7 @@ use coherent_agents::episode::Method;
 use coherent_agents::llm::BackendInfo;
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
-use coherent_agents::{Cancel, ErrorRates};
+use coherent_agents::{Cancel, ErrorRates, PriceTable, Prompts};
 use coherent_core::Task;
 use coherent_core::planner::Limits;
 
@@ -32,6 +32,8 @@ fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchCo
         temperature: None,
         max_states: Limits::DEFAULT_MAX_STATES,
         out,
+        prompts: Prompts::builtin(),
+        prices: PriceTable::builtin(),
     }
 }
 
@@ -97,6 +99,8 @@ fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
         llm_calls: 0,
         prompt_tokens: 0,
         completion_tokens: 0,
+        cached_tokens: 0,
+        cost_usd: None,
         wall_ms: 0.0,
         backend: BackendInfo {
             kind: "builtin".into(),
@@ -284,6 +288,8 @@ fn line(
         llm_calls: calls,
         prompt_tokens: u64::from(calls) * 100,
         completion_tokens: u64::from(calls) * 10,
+        cached_tokens: 0,
+        cost_usd: None,
         wall_ms: 1.0,
         backend: BackendInfo {
             kind: "simulated".into(),
@@ -373,6 +379,11 @@ fn report_numbers_match_a_hand_computation() {
     assert!(close(cost.calls_per_episode, 20.5));
     assert!(close(cost.calls_per_step.expect("steps"), 2.0));
     assert!(close(cost.tokens_per_step.expect("steps"), 220.0));
+    // The simulated backend has no price: no cost.
+    assert_eq!(
+        (cost.cost_usd, cost.cost_per_task, cost.cost_per_success),
+        (None, None, None)
+    );
 
     let md = report::markdown(&r);
     assert!(
@@ -497,5 +508,111 @@ fn a_huge_ground_truth_counts_without_wrapping() {
     assert_eq!(
         report::counted_steps(&lines[0]),
         2.0 * f64::from(u32::MAX) + 1.0
+}
+
+#[test]
+fn costs_per_task_and_per_success_come_from_the_priced_lines() {
+    let dir = scratch("costs");
+    let path = dir.join("r.jsonl");
+    // pefa on a model priced 1 USD per million prompt tokens and 10 per million
+    // completion tokens: an episode of c calls costs c x (100 + 10 x 10) / 1e6 USD.
+    let prices = PriceTable::parse_json(
+        r#"{"m": {"input": 1.0, "cached_input": 0.5, "output": 10.0}}"#,
+        "p.json",
+    )
+    .expect("a table");
+    let on_m = |text: String| {
+        let mut l: ResultLine = serde_json::from_str(&text).expect("a line");
+        l.backend.model = "m".into();
+        l
+    };
+    let lines = vec![
+        on_m(line(
+            "pefa",
+            "env0",
+            1,
+            Some("mono"),
+            5,
+            0,
+            Status::Success,
+            5,
+            10,
+        )),
+        on_m(line(
+            "pefa",
+            "env1",
+            2,
+            Some("dual"),
+            10,
+            0,
+            Status::Failure,
+            20,
+            30,
+        )),
+        on_m(line(
+            "mcts",
+            "env0",
+            1,
+            Some("mono"),
+            5,
+            0,
+            Status::Success,
+            5,
+            0,
+        )),
+        on_m(line(
+            "cmrs",
+            "env0",
+            1,
+            Some("mono"),
+            5,
+            0,
+            Status::Success,
+            5,
+            4,
+        )),
+    ];
+    let mut priced: Vec<ResultLine> = lines.into_iter().map(|l| l.priced(&prices)).collect();
+    let close = |a: f64, b: f64| (a - b).abs() < 1e-12;
+    assert!(close(
+        priced[0].cost_usd.expect("priced"),
+        10.0 * 200.0 / 1e6
+    ));
+    // A method that asks no model and used no tokens costs nothing.
+    assert_eq!(priced[2].cost_usd, Some(0.0));
+    // A line on a model without a price has no cost, and neither has its method's row.
+    priced[3] = ResultLine {
+        backend: BackendInfo {
+            model: "unpriced".into(),
+            ..priced[3].backend.clone()
+        },
+        ..priced[3].clone()
+    }
+    .priced(&prices);
+    assert_eq!(priced[3].cost_usd, None);
+    let text: String = priced
+        .iter()
+        .map(|l| serde_json::to_string(l).expect("encodes") + "\n")
+        .collect();
+    std::fs::write(&path, text).expect("write");
+    let back = bench::read_results(&path).expect("reads").lines;
+    assert_eq!(back, priced, "cost_usd round-trips through the file");
+    let r = report::build(&back);
+    let row = |m: &str| r.costs.iter().find(|c| c.method == m).expect("a row");
+    // pefa: 40 calls x 200 tokens-worth = 0.008 USD over 2 tasks, 1 success.
+    let pefa = row("pefa");
+    assert!(close(pefa.cost_usd.expect("all priced"), 0.008));
+    assert!(close(pefa.cost_per_task.expect("all priced"), 0.004));
+    assert!(close(pefa.cost_per_success.expect("a success"), 0.008));
+    assert_eq!(row("mcts").cost_per_task, Some(0.0));
+    assert_eq!(row("cmrs").cost_per_task, None);
+    let md = report::markdown(&r);
+    assert!(md.contains("| 0.004000 | 0.008000 |"), "{md}");
+    let csv = report::csv(&r);
+    assert!(csv.contains(",0.004,0.008,1,"), "{csv}");
+    assert!(
+        csv.lines()
+            .any(|l| l.starts_with("costs,cmrs,all,") && l.contains(",,,1,")),
+        "{csv}"
     );
 }

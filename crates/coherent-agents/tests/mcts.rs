@@ -95,6 +95,7 @@ fn answer(text: String, finish: Finish) -> Answer {
         usage: Usage {
             prompt_tokens: 100,
             completion_tokens: 10,
+            cached_tokens: 0,
         },
         latency_ms: 0.0,
         attempts: 1,

@@ -20,6 +20,7 @@ use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{interruptible, py_to_json, to_py};
 use crate::errors;
+use crate::prompts::{price_table, prompt_set};
 use crate::run::{PyLlm, method_of};
 use crate::task::PyTask;
 
@@ -79,13 +80,13 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 
 /// Runs every method on every task for every seed into the results file `out` (JSON
 /// lines, appended, resumable: finished episodes are skipped), as `coherent bench`
-/// does. Returns what the run did.
+/// does, with the prompt set `prompts` and each line priced from `prices`. Returns what
+/// the run did.
 #[pyfunction]
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
     concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES,
-    out = PathBuf::from("results.jsonl"),
-    progress = false
+    out = PathBuf::from("results.jsonl"), progress = false, prompts = None, prices = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
@@ -101,7 +102,12 @@ pub(crate) fn run_bench<'py>(
     max_states: usize,
     out: PathBuf,
     progress: bool,
+    prompts: Option<&Bound<'py, PyAny>>,
+    prices: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    // Before anything else: a bad template must cost no model call.
+    let prompt_set = prompt_set(prompts)?;
+    let prices = price_table(prices)?;
     let methods = methods
         .iter()
         .map(|m| method_of(m))
@@ -124,6 +130,12 @@ pub(crate) fn run_bench<'py>(
         Some(b) => match b.extract::<String>().as_deref() {
             Ok("builtin") => (BackendKind::Builtin, None),
             Ok("simulated") => (BackendKind::Simulated, None),
+            Ok("replay") if prompts.is_some() => {
+                return Err(PyValueError::new_err(
+                    "prompts= and backend=\"replay\" do not go together: a replay renders \
+                     the prompt set its transcripts recorded",
+                ));
+            }
             Ok("replay") => (BackendKind::Replay, None),
             _ => {
                 return Err(PyValueError::new_err(format!(
@@ -163,6 +175,8 @@ pub(crate) fn run_bench<'py>(
         temperature,
         max_states,
         out,
+        prompts: prompt_set,
+        prices,
     };
     let cancel = Cancel::default();
     let stop = cancel.clone();

@@ -3,6 +3,7 @@
 
 use std::fmt::Display;
 
+use coherent_agents::PromptError;
 use coherent_core::Error;
 use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -12,7 +13,7 @@ use pyo3::types::{PyDict, PyString, PyTuple, PyType};
 /// The native module's name, which its exceptions report as their `__module__`.
 const MODULE: &str = "coherent._coherent";
 
-/// Built with `type(...)` rather than `create_exception!` because three of them also
+/// Built with `type(...)` rather than `create_exception!` because several of them also
 /// derive from `ValueError` (bad input), which needs two bases.
 pub(crate) struct Exceptions {
     pub base: Py<PyType>,
@@ -23,6 +24,7 @@ pub(crate) struct Exceptions {
     pub physics: Py<PyType>,
     pub backend: Py<PyType>,
     pub replay_mismatch: Py<PyType>,
+    pub prompt: Py<PyType>,
 }
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
@@ -95,6 +97,15 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
                 false,
                 "A replayed episode did not come out as recorded. Attribute `episode`: the\n\
                  replayed episode.",
+            )?,
+            prompt: sub(
+                "PromptError",
+                true,
+                "A prompt template that cannot be used, raised before any model call: a\n\
+                 file that cannot be read, a file named after no template, or a placeholder\n\
+                 the template's method does not fill. Attributes: `file` (None when the\n\
+                 error is about no one file), `line` and `placeholder` (None unless the\n\
+                 error is an unknown placeholder).",
             )?,
             base,
         })
@@ -224,4 +235,25 @@ pub(crate) fn short_repr(value: &Bound<'_, PyAny>) -> String {
     let head: String = full.chars().take(HEAD).collect();
     let tail: String = full.chars().skip(chars - TAIL).collect();
     format!("{head}...{tail}")
+}
+
+/// A `PromptError` with the file, the line and the placeholder as attributes.
+pub(crate) fn prompt(py: Python<'_>, e: &PromptError) -> PyErr {
+    let message = e.to_string();
+    let built = exceptions(py).and_then(|exc| {
+        let value = exc.prompt.bind(py).call1((message.clone(),))?;
+        value.setattr("file", e.file())?;
+        let (line, placeholder) = match e {
+            PromptError::UnknownPlaceholder {
+                line, placeholder, ..
+            } => (Some(*line), Some(placeholder.as_str())),
+            _ => (None, None),
+        };
+        value.setattr("line", line)?;
+        value.setattr("placeholder", placeholder)?;
+        Ok(PyErr::from_value(value))
+    });
+    built.unwrap_or_else(|inner| {
+        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
+    })
 }

@@ -9,6 +9,7 @@
 mod bench;
 mod convert;
 mod errors;
+mod prompts;
 mod run;
 mod scene;
 mod task;
@@ -175,6 +176,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("PhysicsError", exc.physics.clone_ref(py))?;
     m.add("BackendError", exc.backend.clone_ref(py))?;
     m.add("ReplayMismatchError", exc.replay_mismatch.clone_ref(py))?;
+    m.add("PromptError", exc.prompt.clone_ref(py))?;
     m.add_class::<PyTask>()?;
     m.add_class::<task::PyEnv>()?;
     m.add_class::<run::PyLlm>()?;

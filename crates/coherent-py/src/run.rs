@@ -10,8 +10,11 @@ use coherent::session::backend::{BackendKind, BackendRequest};
 use coherent::session::endpoint::{Endpoint, Patience};
 use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
 use coherent_agents::episode::{self, Method, Settings};
+use coherent_agents::llm::Usage;
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
-use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode};
+use coherent_agents::{
+    ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode, PriceTable,
+};
 use coherent_core::planner::Limits;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -19,6 +22,7 @@ use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{interruptible, py_repr, to_py};
 use crate::errors::{self, Kind};
+use crate::prompts::{price_table, prompt_set};
 use crate::task::PyTask;
 
 /// How to reach an OpenAI-compatible endpoint. Arguments left out come from the
@@ -134,6 +138,7 @@ pub(crate) struct PyEpisode {
     summary: Summary,
     path: PathBuf,
     pub task: Py<PyTask>,
+    cost_usd: Option<f64>,
 }
 
 impl PyEpisode {
@@ -151,11 +156,25 @@ impl PyEpisode {
         })?;
         let task =
             episode::recorded_task(&transcript, path).map_err(|e| errors::coherent(py, e))?;
+        // Priced with the built-in table; a method of another name is taken to ask a model.
+        let uses_model =
+            Method::from_name(&transcript.header.method).is_none_or(Method::uses_model);
+        let usage = Usage {
+            prompt_tokens: summary.prompt_tokens,
+            completion_tokens: summary.completion_tokens,
+            cached_tokens: summary.cached_tokens,
+        };
+        let cost_usd = PriceTable::builtin().episode_cost(
+            &transcript.header.backend.model,
+            uses_model,
+            &usage,
+        );
         Ok(PyEpisode {
             transcript,
             summary,
             path: path.to_owned(),
             task: Py::new(py, PyTask::new(task))?,
+            cost_usd,
         })
     }
 }
@@ -169,6 +188,7 @@ impl PyEpisode {
             summary,
             path: ran.path,
             task,
+            cost_usd: ran.cost_usd,
         }
     }
 }
@@ -232,6 +252,19 @@ impl PyEpisode {
     #[getter]
     fn tokens(&self) -> u64 {
         self.summary.prompt_tokens + self.summary.completion_tokens
+    }
+
+    /// The part of `prompt_tokens` the server read from its prompt cache.
+    #[getter]
+    fn cached_tokens(&self) -> u64 {
+        self.summary.cached_tokens
+    }
+
+    /// What the model calls cost in USD, at the price table given to `run` or `replay`
+    /// (the built-in one for `load_episode`); None when the model has no price.
+    #[getter]
+    fn cost_usd(&self) -> Option<f64> {
+        self.cost_usd
     }
 
     #[getter]
@@ -392,7 +425,7 @@ fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>
 #[pyo3(signature = (
     task, method = "pefa", *, llm = None, sim_errors = None, history = 5, max_steps = None,
     physics = false, seed = None, out = PathBuf::from("runs"),
-    max_states = Limits::DEFAULT_MAX_STATES
+    max_states = Limits::DEFAULT_MAX_STATES, prompts = None, prices = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
@@ -407,7 +440,12 @@ pub(crate) fn run(
     seed: Option<u64>,
     out: PathBuf,
     max_states: usize,
+    prompts: Option<&Bound<'_, PyAny>>,
+    prices: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
+    // Before anything else: a bad template must cost no model call.
+    let prompts = prompt_set(prompts)?;
+    let prices = price_table(prices)?;
     let method = method_of(method)?;
     let backend = BackendRequest {
         kind: BackendKind::Auto,
@@ -425,24 +463,33 @@ pub(crate) fn run(
             temperature: llm.map(|l| l.get().config.temperature),
             seed,
             physics,
+            prompts,
         },
         max_steps,
         backend,
         max_states,
         out,
+        prices,
     };
     let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel))?;
     backend_failure(py, PyEpisode::from_ran(ran, task.clone().unbind()))
 }
 
-/// Re-runs the episode of a transcript, answering from it (no network), and checks that
-/// every round comes out as recorded; raises `ReplayMismatchError` when one does not.
+/// Re-runs the episode of a transcript, answering from it (no network) with the prompt
+/// set it recorded, and checks that every round comes out as recorded; raises
+/// `ReplayMismatchError` when one does not. `prices` prices the recorded tokens.
 #[pyfunction]
-#[pyo3(signature = (transcript, *, out = PathBuf::from("runs")))]
-pub(crate) fn replay(py: Python<'_>, transcript: PathBuf, out: PathBuf) -> PyResult<Py<PyEpisode>> {
+#[pyo3(signature = (transcript, *, out = PathBuf::from("runs"), prices = None))]
+pub(crate) fn replay(
+    py: Python<'_>,
+    transcript: PathBuf,
+    out: PathBuf,
+    prices: Option<&Bound<'_, PyAny>>,
+) -> PyResult<Py<PyEpisode>> {
     let path = transcript.clone();
+    let prices = price_table(prices)?;
     let ran = episode_off_the_gil(py, move |_| {
-        session_episode::prepare_replay(&path, None, out)
+        session_episode::prepare_replay(&path, None, out, prices)
     })?;
     let mismatch = ran.replay.clone().and_then(Result::err);
     let task = Py::new(py, PyTask::shared(Arc::clone(&ran.task)))?;

@@ -108,6 +108,10 @@ pub enum Finish {
 pub struct Usage {
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
+    /// The part of `prompt_tokens` the server read from its prompt cache (priced lower
+    /// by most providers); 0 when it does not say.
+    #[serde(default)]
+    pub cached_tokens: u64,
 }
 
 /// The most bytes of an answer's text that the loop reads and a round keeps: far more

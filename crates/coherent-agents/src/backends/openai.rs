@@ -394,6 +394,12 @@ struct MessageBody {
 struct UsageBody {
     prompt_tokens: Option<u64>,
     completion_tokens: Option<u64>,
+    prompt_tokens_details: Option<PromptTokensDetails>,
+}
+
+#[derive(Deserialize)]
+struct PromptTokensDetails {
+    cached_tokens: Option<u64>,
 }
 
 /// A chat completion body as an answer (latency, attempts and mode filled in later).
@@ -418,6 +424,10 @@ fn parse_completion(bytes: &[u8]) -> Result<Answer, String> {
     let usage = completion.usage.map_or(Usage::default(), |u| Usage {
         prompt_tokens: u.prompt_tokens.unwrap_or(0),
         completion_tokens: u.completion_tokens.unwrap_or(0),
+        cached_tokens: u
+            .prompt_tokens_details
+            .and_then(|d| d.cached_tokens)
+            .unwrap_or(0),
     });
     Ok(Answer {
         text: message.content.unwrap_or_default(),
@@ -455,6 +465,10 @@ mod tests {
         assert_eq!(a.finish, Finish::Length);
         assert_eq!(a.usage.prompt_tokens, 12);
         assert_eq!(a.usage.completion_tokens, 3);
+        assert_eq!(a.usage.cached_tokens, 0);
+        let cached = br#"{"choices":[{"message":{"content":"x"}}],"usage":{"prompt_tokens":12,"completion_tokens":3,"prompt_tokens_details":{"cached_tokens":8}}}"#;
+        let a = parse_completion(cached).expect("a completion");
+        assert_eq!((a.usage.prompt_tokens, a.usage.cached_tokens), (12, 8));
     }
 
     #[test]

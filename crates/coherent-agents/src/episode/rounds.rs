@@ -60,9 +60,14 @@ pub(crate) async fn rounds(
         .iter()
         .flat_map(|r| &r.calls)
         .filter_map(|c| c.answer.as_ref());
-    let (prompt_tokens, completion_tokens) = answers.fold((0, 0), |(p, c), a| {
-        (p + a.usage.prompt_tokens, c + a.usage.completion_tokens)
-    });
+    let (prompt_tokens, completion_tokens, cached_tokens) =
+        answers.fold((0, 0, 0), |(p, c, k), a| {
+            (
+                p + a.usage.prompt_tokens,
+                c + a.usage.completion_tokens,
+                k + a.usage.cached_tokens,
+            )
+        });
     let summary = Summary {
         status,
         success: status == Status::Success,
@@ -72,6 +77,7 @@ pub(crate) async fn rounds(
         llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum(),
         prompt_tokens,
         completion_tokens,
+        cached_tokens,
         wall_ms: start.elapsed().as_secs_f64() * 1e3,
         error,
     };

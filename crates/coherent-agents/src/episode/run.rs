@@ -12,10 +12,11 @@ use crate::backends::llm::{Backend, BackendInfo};
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::Episode;
 use crate::episode::settings::{Budget, Method, Settings};
+use crate::methods::cmrs::{self, CmrsConfig};
 use crate::methods::dmrs::{self, DmrsConfig};
 use crate::methods::mcts::{self, MctsConfig};
+use crate::methods::optimal;
 use crate::methods::pefa::{self, PefaConfig};
-use crate::methods::{cmrs, optimal};
 use crate::records::transcript::{self, Header, Record, Round, Writer};
 
 /// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists.
@@ -103,6 +104,7 @@ pub async fn run(
         backend: backend_info,
         temperature: settings.temperature,
         seed: settings.seed,
+        prompts: Some(settings.prompts.record()),
         started_ms: SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_millis() as u64),
@@ -113,9 +115,11 @@ pub async fn run(
         progress(r);
         writer.write(&Record::Round(Box::new(r.clone())))
     };
+    let prompts = settings.prompts.clone();
     let mcts = MctsConfig {
         seed: settings.seed.unwrap_or(0),
         history,
+        prompts: prompts.clone(),
         ..MctsConfig::default()
     };
     let steps = budget.steps();
@@ -123,11 +127,15 @@ pub async fn run(
         Method::Pefa | Method::PefaNoHistory => {
             let config = PefaConfig {
                 history,
+                prompts,
                 ..PefaConfig::new(steps)
             };
             pefa::run(env, task, backend, &config, cancel, &mut on_round).await
         }
-        Method::Cmrs => cmrs::run(env, task, backend, history, steps, cancel, &mut on_round).await,
+        Method::Cmrs => {
+            let config = CmrsConfig { history, prompts };
+            cmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
+        }
         Method::Dmrs1d | Method::Dmrs2d => {
             let config = DmrsConfig {
                 dialogue_rounds: if settings.method == Method::Dmrs1d {
@@ -137,6 +145,7 @@ pub async fn run(
                 },
                 history,
                 seed: settings.seed.unwrap_or(0),
+                prompts,
             };
             dmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
         }

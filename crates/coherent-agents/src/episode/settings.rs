@@ -4,6 +4,8 @@
 use coherent_core::Task;
 use coherent_core::planner::{self, Limits};
 
+use crate::methods::templates::Prompts;
+
 /// A planning method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Method {
@@ -74,6 +76,8 @@ pub struct Settings {
     pub seed: Option<u64>,
     /// Whether the environment is physical (recorded; the caller builds the environment).
     pub physics: bool,
+    /// The templates the method's prompts are rendered from (checked when made).
+    pub prompts: Prompts,
 }
 
 impl Settings {
@@ -84,6 +88,7 @@ impl Settings {
             temperature: None,
             seed: None,
             physics: false,
+            prompts: Prompts::builtin(),
         }
     }
 }

@@ -24,6 +24,8 @@ use crate::backends::simulated::ErrorRates;
 use crate::episode::cancel::Cancel;
 use crate::episode::run::{run as run_episode, transcript_path};
 use crate::episode::settings::{Budget, Method, Settings};
+use crate::harness::prices::PriceTable;
+use crate::methods::templates::Prompts;
 use crate::records::replay::Replay;
 use crate::records::transcript;
 
@@ -135,6 +137,11 @@ pub struct BenchConfig {
     pub max_states: usize,
     /// The results file; transcripts go to [`transcripts_dir`] of it.
     pub out: PathBuf,
+    /// The templates the methods' prompts are rendered from (a replay renders the
+    /// recorded ones).
+    pub prompts: Prompts,
+    /// Prices each line's tokens (`cost_usd`).
+    pub prices: PriceTable,
 }
 
 /// The seed of one episode: a hash of the seed index, the method and the task, so that
@@ -271,6 +278,8 @@ pub async fn run(
         history: config.history,
         temperature: config.temperature,
         max_states: config.max_states,
+        prompts: config.prompts.clone(),
+        prices: config.prices.clone(),
         transcripts: transcripts_dir(out),
         cancel: cancel.clone(),
         permits: Semaphore::new(config.concurrency.max(1)),
@@ -327,6 +336,8 @@ struct Shared {
     history: usize,
     temperature: Option<f32>,
     max_states: usize,
+    prompts: Prompts,
+    prices: PriceTable,
     transcripts: PathBuf,
     cancel: Cancel,
     permits: Semaphore,
@@ -375,6 +386,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         history: shared.history,
         temperature: shared.temperature,
         seed: Some(seed),
+        prompts: shared.prompts.clone(),
         ..Settings::new(method)
     };
     let mut budget = budget;
@@ -440,7 +452,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         .and_then(|r| r.check(&episode).err())
         .map(|why| format!("replay mismatch: {why}"));
     let s = episode.summary;
-    Ok(JobResult::Line(Box::new(ResultLine {
+    let line = ResultLine {
         method: method.name().to_owned(),
         scene: task.meta.scene.clone(),
         task_id: task.meta.task_id,
@@ -456,12 +468,15 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         llm_calls: s.llm_calls,
         prompt_tokens: s.prompt_tokens,
         completion_tokens: s.completion_tokens,
+        cached_tokens: s.cached_tokens,
+        cost_usd: None,
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
         backend: shared.backend_info.clone(),
         uses_model: method.uses_model(),
         error: mismatch.or(s.error),
         transcript: path.display().to_string(),
-    })))
+    };
+    Ok(JobResult::Line(Box::new(line.priced(&shared.prices))))
 }
 
 fn task_info(task: &Task, limits: &Limits) -> TaskInfo {

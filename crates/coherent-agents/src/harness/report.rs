@@ -1,6 +1,7 @@
 //! The paper's tables from a results file ([`crate::harness::bench`]): Table I (success rate and
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
-//! scene), each with the ground-truth row, and each method's LLM calls and tokens.
+//! scene), each with the ground-truth row, and each method's LLM calls, tokens and cost
+//! (per task and per success, from the lines' `cost_usd`).
 //!
 //! AS counts a failed episode as 2 x GT + 1 steps (docs/semantics.md, "Steps, the budget and the scores"; for a task
 //! without GT, its budget plus one). With several seeds each cell is the mean over seeds of the
@@ -91,6 +92,12 @@ pub struct Cost {
     pub tokens_per_episode: f64,
     pub calls_per_step: Option<f64>,
     pub tokens_per_step: Option<f64>,
+    /// USD of all its episodes; `None` unless every one has a `cost_usd`.
+    pub cost_usd: Option<f64>,
+    /// USD per episode (one run of one task).
+    pub cost_per_task: Option<f64>,
+    /// USD per successful episode: all of the cost over the successes (`None` without one).
+    pub cost_per_success: Option<f64>,
 }
 
 #[derive(Clone, Debug, PartialEq, Serialize)]
@@ -204,6 +211,8 @@ pub fn build(lines: &[ResultLine]) -> Report {
             let completion: u64 = mine.iter().map(|l| l.completion_tokens).sum();
             let n = mine.len().max(1) as f64;
             let per_step = |x: u64| (steps > 0).then(|| x as f64 / steps as f64);
+            let cost: Option<f64> = mine.iter().map(|l| l.cost_usd).sum();
+            let successes = mine.iter().filter(|l| l.success).count();
             Cost {
                 method: m.clone(),
                 episodes: mine.len(),
@@ -215,6 +224,9 @@ pub fn build(lines: &[ResultLine]) -> Report {
                 tokens_per_episode: (prompt + completion) as f64 / n,
                 calls_per_step: per_step(calls),
                 tokens_per_step: per_step(prompt + completion),
+                cost_usd: cost,
+                cost_per_task: cost.map(|c| c / n),
+                cost_per_success: cost.filter(|_| successes > 0).map(|c| c / successes as f64),
             }
         })
         .collect();
@@ -374,20 +386,23 @@ pub fn markdown(r: &Report) -> String {
                 .collect();
         out.push_str(&format!("| Ground truth | {} |\n\n", gt.join(" | ")));
     }
-    out.push_str("### LLM calls and tokens per method\n\n");
-    out.push_str(&format!("{}  \n\n", header_lines(r)[0]));
-    out.push_str("| Method | Episodes | Steps | LLM calls / episode | Tokens / episode | LLM calls / step | Tokens / step |\n|---|---|---|---|---|---|---|\n");
+    out.push_str("### LLM calls, tokens and cost per method\n\n");
+    out.push_str(&format!("{}  \n", header_lines(r)[0]));
+    out.push_str("Cost in USD from each episode's `cost_usd`; - where a model has no price.  \n\n");
+    out.push_str("| Method | Episodes | Steps | LLM calls / episode | Tokens / episode | LLM calls / step | Tokens / step | Cost / task | Cost / success |\n|---|---|---|---|---|---|---|---|---|\n");
     for c in &r.costs {
         let opt = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| format!("{x:.d$}"));
         out.push_str(&format!(
-            "| {} | {} | {} | {:.2} | {:.0} | {} | {} |\n",
+            "| {} | {} | {} | {:.2} | {:.0} | {} | {} | {} | {} |\n",
             c.method,
             c.episodes,
             c.steps,
             c.calls_per_episode,
             c.tokens_per_episode,
             opt(c.calls_per_step, 2),
-            opt(c.tokens_per_step, 0)
+            opt(c.tokens_per_step, 0),
+            opt(c.cost_per_task, 6),
+            opt(c.cost_per_success, 6)
         ));
     }
     out
@@ -402,20 +417,23 @@ fn csv_field(s: &str) -> String {
 }
 
 /// One CSV: a row per (table, method, column), ground-truth rows with `method` =
-/// `ground truth`, and a `costs` row per method.
+/// `ground truth`, and a `costs` row per method (with its cost per task and per success
+/// in USD, empty where a model has no price).
 pub fn csv(r: &Report) -> String {
     let backend = csv_field(&r.backends.join("; "));
     let mut out = String::from(
-        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,seeds,backend\n",
+        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend\n",
     );
     let num = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
+    // Dollars in full: a small model's cost per task is a millionth of one.
+    let usd = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
     let seeds = r.seeds.len();
     for (name, t) in [("I", &r.table1), ("II", &r.table2)] {
         for row in &t.rows {
             for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
                 let Some(cell) = cell else { continue };
                 out.push_str(&format!(
-                    "{name},{},{c},{n},{},{},{},{},{},,,,,,{seeds},{backend}\n",
+                    "{name},{},{c},{n},{},{},{},{},{},,,,,,,,{seeds},{backend}\n",
                     csv_field(&row.method),
                     cell.episodes,
                     num(Some(cell.sr.mean)),
@@ -427,20 +445,22 @@ pub fn csv(r: &Report) -> String {
         }
         for ((c, n), gt) in t.columns.iter().zip(&t.tasks).zip(&t.gt) {
             out.push_str(&format!(
-                "{name},ground truth,{c},{n},,,,,,{},,,,,{seeds},{backend}\n",
+                "{name},ground truth,{c},{n},,,,,,{},,,,,,,{seeds},{backend}\n",
                 num(*gt)
             ));
         }
     }
     for c in &r.costs {
         out.push_str(&format!(
-            "costs,{},all,,{},,,,,,{},{},{},{},{seeds},{backend}\n",
+            "costs,{},all,,{},,,,,,{},{},{},{},{},{},{seeds},{backend}\n",
             csv_field(&c.method),
             c.episodes,
             num(Some(c.calls_per_episode)),
             num(Some(c.tokens_per_episode)),
             num(c.calls_per_step),
             num(c.tokens_per_step),
+            usd(c.cost_per_task),
+            usd(c.cost_per_success),
         ));
     }
     out

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
-use crate::backends::llm::BackendInfo;
+use crate::backends::llm::{BackendInfo, Usage};
+use crate::harness::prices::PriceTable;
 use crate::records::transcript::Status;
 
 /// One finished episode: a line of the results file.
@@ -35,6 +36,13 @@ pub struct ResultLine {
     pub llm_calls: u32,
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
+    /// The part of `prompt_tokens` read from the server's prompt cache.
+    #[serde(default)]
+    pub cached_tokens: u64,
+    /// What the model calls cost in USD ([`ResultLine::priced`]); null when the model has
+    /// no price.
+    #[serde(default)]
+    pub cost_usd: Option<f64>,
     pub wall_ms: f64,
     /// The run's backend (even for a method that asks no model; see `uses_model`).
     pub backend: BackendInfo,
@@ -53,6 +61,18 @@ impl ResultLine {
     /// Whether the episode ended in a way that counts: success or budget spent.
     pub fn is_final(&self) -> bool {
         matches!(self.status, Status::Success | Status::Failure)
+    }
+
+    /// The line with its `cost_usd` from `prices` ([`PriceTable::episode_cost`] of its
+    /// backend's model and its tokens).
+    pub fn priced(mut self, prices: &PriceTable) -> ResultLine {
+        let usage = Usage {
+            prompt_tokens: self.prompt_tokens,
+            completion_tokens: self.completion_tokens,
+            cached_tokens: self.cached_tokens,
+        };
+        self.cost_usd = prices.episode_cost(&self.backend.model, self.uses_model, &usage);
+        self
     }
 
     pub fn key(&self) -> EpisodeKey {

@@ -4,8 +4,8 @@
 //! and proposes one subtask for one robot: the Proposal of Proposal-Execution-Feedback-
 //! Adjustment ([`crate::methods::pefa`]).
 //!
-//! Its prompt is `prompts/assigner_system.txt` and `prompts/assigner_user.txt`; its
-//! answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
+//! Its prompt is the prompt set's `assigner_system.txt` and `assigner_user.txt`
+//! ([`crate::methods::templates`]); its answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
 //! to the team's labels, read into a [`Proposal`] wherever it sits in the text (or,
 //! without one, from the first line that names a robot).
 
@@ -18,10 +18,8 @@ use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::episode::environment::team_observation;
 use crate::methods::answer::{field_text, json_object, string_field};
 use crate::methods::prompt::{fill, team};
+use crate::methods::templates::{Prompts, Template};
 use crate::records::transcript::Proposal;
-
-const SYSTEM: &str = include_str!("../../prompts/assigner_system.txt");
-const USER: &str = include_str!("../../prompts/assigner_user.txt");
 
 /// What the assigner is told each round.
 #[derive(Clone, Debug)]
@@ -38,14 +36,17 @@ pub struct AssignerView<'a> {
 #[derive(Clone, Debug)]
 pub struct TaskAssigner {
     task: Arc<Task>,
+    prompts: Prompts,
     /// Most tokens of one answer.
     max_tokens: u32,
 }
 
 impl TaskAssigner {
-    pub fn new(task: &Arc<Task>, max_tokens: u32) -> TaskAssigner {
+    /// The assigner of `task`, its prompts rendered from `prompts`.
+    pub fn new(task: &Arc<Task>, prompts: &Prompts, max_tokens: u32) -> TaskAssigner {
         TaskAssigner {
             task: Arc::clone(task),
+            prompts: prompts.clone(),
             max_tokens,
         }
     }
@@ -77,11 +78,12 @@ impl TaskAssigner {
         } else {
             view.history.join("\n")
         };
+        let system = self.prompts.text(Template::AssignerSystem);
         vec![
-            Message::system(fill(SYSTEM, &[("team", &team(task))]).trim_end().to_owned()),
+            Message::system(fill(system, &[("team", &team(task))]).trim_end().to_owned()),
             Message::user(
                 fill(
-                    USER,
+                    self.prompts.text(Template::AssignerUser),
                     &[
                         ("instruction", &task.meta.instruction),
                         ("robots", view.robots),
@@ -234,11 +236,34 @@ fn team_list(task: &Task) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::check_placeholders;
+    use crate::methods::prompt::{check_placeholders, every_placeholder};
+    use coherent_core::SymbolicEnv;
 
     #[test]
     fn every_template_placeholder_is_filled() {
-        check_placeholders(SYSTEM, &["team"]);
-        check_placeholders(USER, &["instruction", "robots", "observation", "history"]);
+        check_placeholders(Template::AssignerSystem.builtin(), &["team"]);
+        check_placeholders(
+            Template::AssignerUser.builtin(),
+            &["instruction", "robots", "observation", "history"],
+        );
+    }
+
+    #[test]
+    fn every_placeholder_a_template_may_use_is_filled() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+        let task = Arc::new(
+            coherent_core::load_tasks(&path)
+                .expect("the demo")
+                .remove(0),
+        );
+        let env = SymbolicEnv::new(Arc::clone(&task));
+        for template in [Template::AssignerSystem, Template::AssignerUser] {
+            let assigner = TaskAssigner::new(&task, &every_placeholder(template), 100);
+            let messages = assigner.query(&env, &["Round 1: ...".to_owned()]).messages;
+            for m in &messages {
+                assert!(!m.content.contains("{{"), "{}", m.content);
+            }
+        }
     }
 }

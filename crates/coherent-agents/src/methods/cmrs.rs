@@ -15,25 +15,36 @@ use crate::episode::cancel::Cancel;
 use crate::episode::environment::team_observation;
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint::{self, Executed, joint_actions};
+use crate::methods::templates::Prompts;
 use crate::records::transcript::Round;
 
 /// Most tokens of one answer (a line and a little reasoning).
 const MAX_TOKENS: u32 = 200;
 
+/// Settings of a CMRS episode.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct CmrsConfig {
+    /// Executed actions shown (the paper: 5).
+    pub history: usize,
+    /// The central template (`central.txt`) comes from here.
+    pub prompts: Prompts,
+}
+
 /// Runs CMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
-/// good, or `cancel` fires; `history` executed actions are shown (the paper: 5).
+/// good, or `cancel` fires.
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     backend: &dyn Backend,
-    history: usize,
+    config: &CmrsConfig,
     max_steps: u32,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let mut executed = Executed::new(history);
+    let mut executed = Executed::new(config.history);
+    let prompts = &config.prompts;
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, cancel, &executed.lines(), step).await;
+        let r = round(env, task, backend, prompts, cancel, &executed.lines(), step).await;
         if let Some(r) = &r {
             executed.record(r);
         }
@@ -46,6 +57,7 @@ async fn round(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     backend: &dyn Backend,
+    prompts: &Prompts,
     cancel: &Cancel,
     history: &[String],
     step: u32,
@@ -60,7 +72,13 @@ async fn round(
     let query = Query {
         role: Role::Assigner,
         robot: None,
-        messages: joint::central_messages(task, &team_observation(env, task), &lines, history),
+        messages: joint::central_messages(
+            prompts,
+            task,
+            &team_observation(env, task),
+            &lines,
+            history,
+        ),
         schema_name: "joint_action",
         schema: joint::central_schema(&lines),
         max_tokens: MAX_TOKENS,

@@ -20,12 +20,9 @@ use crate::episode::rounds::{Episode, rounds};
 use crate::methods::answer::{field_text, json_object};
 use crate::methods::joint::{self, Executed, joint_actions};
 use crate::methods::prompt::{self, robot_label};
+use crate::methods::templates::{self, Prompts, Template};
 use crate::records::transcript::Round;
 use crate::rng::{Rng, seed_of};
-
-const TEMPLATE: &str = include_str!("../../prompts/dmrs_speaker.txt");
-/// The line that separates the template's system part from its user part.
-const USER_MARK: &str = "@@user@@";
 /// Most tokens of one turn (a sentence and a line).
 const MAX_TOKENS: u32 = 200;
 
@@ -38,6 +35,8 @@ pub struct DmrsConfig {
     pub history: usize,
     /// Seeds the speaking order of every step.
     pub seed: u64,
+    /// The speakers' template (`dmrs_speaker.txt`) comes from here.
+    pub prompts: Prompts,
 }
 
 /// Runs DMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
@@ -110,7 +109,15 @@ async fn round(
             let query = Query {
                 role: Role::Executor,
                 robot: Some(speaker),
-                messages: speaker_messages(env, task, speaker, history, &dialogue, &lines),
+                messages: speaker_messages(
+                    &config.prompts,
+                    env,
+                    task,
+                    speaker,
+                    history,
+                    &dialogue,
+                    &lines,
+                ),
                 schema_name: "joint_action",
                 schema: speaker_schema(&lines),
                 max_tokens: MAX_TOKENS,
@@ -149,6 +156,7 @@ fn close(env: &(dyn Environment + Send), mut round: Round, why: Unusable, start:
 }
 
 fn speaker_messages(
+    prompts: &Prompts,
     env: &(dyn Environment + Send),
     task: &Task,
     speaker: NodeId,
@@ -181,7 +189,7 @@ fn speaker_messages(
         ("actions", or_none(lines)),
     ];
     let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
-    let (system, user) = TEMPLATE.split_once(USER_MARK).unwrap_or(("", TEMPLATE));
+    let (system, user) = templates::split(prompts.text(Template::DmrsSpeaker));
     vec![
         Message::system(prompt::fill(system, &values).trim().to_owned()),
         Message::user(prompt::fill(user, &values).trim().to_owned()),
@@ -206,7 +214,10 @@ mod tests {
 
     #[test]
     fn every_placeholder_of_the_template_is_filled() {
-        let (system, user) = TEMPLATE.split_once(USER_MARK).expect("a user part");
+        let (system, user) = Template::DmrsSpeaker
+            .builtin()
+            .split_once(templates::USER_MARK)
+            .expect("a user part");
         for key in ["robot", "kind", "team"] {
             assert!(system.contains(&format!("{{{{{key}}}}}")), "{key}");
         }
@@ -218,6 +229,24 @@ mod tests {
             "actions",
         ] {
             assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
+        }
+    }
+
+    #[test]
+    fn every_placeholder_a_template_may_use_is_filled() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+        let task = Arc::new(
+            coherent_core::load_tasks(&path)
+                .expect("the demo")
+                .remove(0),
+        );
+        let env = coherent_core::SymbolicEnv::new(Arc::clone(&task));
+        let prompts = crate::methods::prompt::every_placeholder(Template::DmrsSpeaker);
+        let speaker = task.id(task.robots[0].node);
+        let lines = ["a: b".to_owned()];
+        for m in &speaker_messages(&prompts, &env, &task, speaker, &[], &[], &lines) {
+            assert!(!m.content.contains("{{"), "{}", m.content);
         }
     }
 }

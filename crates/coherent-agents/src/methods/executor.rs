@@ -5,9 +5,9 @@
 //! ([`crate::methods::pefa`]). What came of it, in words, is the round's Feedback
 //! ([`feedback`]).
 //!
-//! Its prompt is one system prompt per robot type (`prompts/executor_quadrotor.txt`,
-//! `executor_robot_dog.txt`, `executor_robot_arm.txt`) and `prompts/executor_user.txt`;
-//! its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
+//! Its prompt is one system prompt per robot type (`executor_quadrotor.txt`,
+//! `executor_robot_dog.txt`, `executor_robot_arm.txt`) and `executor_user.txt`, from the
+//! prompt set ([`crate::methods::templates`]); its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
 //! constrained to its list or `none`, read into a [`Decision`] (or, without an object,
 //! from the first action of the list the text names).
 
@@ -19,12 +19,8 @@ use serde_json::{Value, json};
 use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
 use crate::methods::prompt::{fill, robot_label};
+use crate::methods::templates::{Prompts, Template};
 use crate::records::transcript::{Decision, Outcome, Round};
-
-const USER: &str = include_str!("../../prompts/executor_user.txt");
-const QUADROTOR: &str = include_str!("../../prompts/executor_quadrotor.txt");
-const ROBOT_DOG: &str = include_str!("../../prompts/executor_robot_dog.txt");
-const ROBOT_ARM: &str = include_str!("../../prompts/executor_robot_arm.txt");
 
 /// What one executor is told.
 #[derive(Clone, Debug)]
@@ -42,13 +38,19 @@ pub struct RobotExecutor {
     /// `<label>(id)`.
     label: String,
     kind: RobotKind,
+    prompts: Prompts,
     /// Most tokens of one answer.
     max_tokens: u32,
 }
 
 impl RobotExecutor {
-    /// The executor of `robot`, or why there is none.
-    pub fn of(task: &Arc<Task>, robot: NodeId, max_tokens: u32) -> Result<RobotExecutor, String> {
+    /// The executor of `robot`, its prompts rendered from `prompts`, or why there is none.
+    pub fn of(
+        task: &Arc<Task>,
+        robot: NodeId,
+        prompts: &Prompts,
+        max_tokens: u32,
+    ) -> Result<RobotExecutor, String> {
         let Ok(r) = task.robot_by_id(robot) else {
             return Err(format!("robot {robot} is not in the team"));
         };
@@ -57,6 +59,7 @@ impl RobotExecutor {
             robot,
             label: task.node(r.node).label(),
             kind: r.kind,
+            prompts: prompts.clone(),
             max_tokens,
         })
     }
@@ -96,11 +99,11 @@ impl RobotExecutor {
 
     /// The system prompt (its type's) and the user prompt (the subtask and its list).
     pub fn messages(&self, view: &ExecutorView<'_>) -> Vec<Message> {
-        let system = match self.kind {
-            RobotKind::Quadrotor => QUADROTOR,
-            RobotKind::RobotDog => ROBOT_DOG,
-            RobotKind::RobotArm => ROBOT_ARM,
-        };
+        let system = self.prompts.text(match self.kind {
+            RobotKind::Quadrotor => Template::ExecutorQuadrotor,
+            RobotKind::RobotDog => Template::ExecutorRobotDog,
+            RobotKind::RobotArm => Template::ExecutorRobotArm,
+        });
         let actions = if view.actions.is_empty() {
             "(none)".to_owned()
         } else {
@@ -118,7 +121,7 @@ impl RobotExecutor {
             ),
             Message::user(
                 fill(
-                    USER,
+                    self.prompts.text(Template::ExecutorUser),
                     &[
                         ("subtask", view.subtask),
                         ("observation", view.observation),
@@ -285,13 +288,50 @@ pub fn feedback(task: &Task, round: &Round, outcome: &Outcome) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::check_placeholders;
+    use crate::methods::prompt::{check_placeholders, every_placeholder};
+    use coherent_core::SymbolicEnv;
 
     #[test]
     fn every_template_placeholder_is_filled() {
-        check_placeholders(USER, &["subtask", "observation", "actions"]);
-        for system in [QUADROTOR, ROBOT_DOG, ROBOT_ARM] {
-            check_placeholders(system, &["robot"]);
+        check_placeholders(
+            Template::ExecutorUser.builtin(),
+            &["subtask", "observation", "actions"],
+        );
+        for system in [
+            Template::ExecutorQuadrotor,
+            Template::ExecutorRobotDog,
+            Template::ExecutorRobotArm,
+        ] {
+            check_placeholders(system.builtin(), &["robot"]);
+        }
+    }
+
+    #[test]
+    fn every_placeholder_a_template_may_use_is_filled() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+        let task = Arc::new(
+            coherent_core::load_tasks(&path)
+                .expect("the demo")
+                .remove(0),
+        );
+        let env = SymbolicEnv::new(Arc::clone(&task));
+        let templates = [
+            Template::ExecutorQuadrotor,
+            Template::ExecutorRobotDog,
+            Template::ExecutorRobotArm,
+            Template::ExecutorUser,
+        ];
+        for template in templates {
+            let prompts = every_placeholder(template);
+            for r in &task.robots {
+                let executor =
+                    RobotExecutor::of(&task, task.id(r.node), &prompts, 100).expect("a robot");
+                let query = executor.query(&env, "go", &executor.actions(&env));
+                for m in &query.messages {
+                    assert!(!m.content.contains("{{"), "{}", m.content);
+                }
+            }
         }
     }
 

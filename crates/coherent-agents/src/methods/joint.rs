@@ -1,7 +1,7 @@
 //! The team's joint action space as text, for the methods that choose one robot's
 //! action centrally or in dialogue (CMRS, DMRS, LLM-MCTS): one line per `(robot,
-//! action)`, `<robot dog>(13): [grab] <mug>(7)`; the central prompt; and reading an
-//! answer back to a line.
+//! action)`, `<robot dog>(13): [grab] <mug>(7)`; the central prompt (the prompt set's
+//! `central.txt`); and reading an answer back to a line.
 
 use std::collections::VecDeque;
 
@@ -12,11 +12,8 @@ use crate::backends::llm::Message;
 use crate::episode::environment::execute;
 use crate::methods::answer::{field_text, json_object, normal};
 use crate::methods::prompt::{self, robot_label};
+use crate::methods::templates::{self, Prompts, Template};
 use crate::records::transcript::{Decision, Outcome, Round};
-
-const TEMPLATE: &str = include_str!("../../prompts/central.txt");
-/// The line that separates the template's system part from its user part.
-const USER_MARK: &str = "@@user@@";
 
 /// One robot's action: an element of the joint action space.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -143,8 +140,10 @@ pub fn read_line(text: &str) -> String {
 }
 
 /// The central prompt: the team, the rules, the instruction, the team's observation,
-/// the last executed actions and every joint action line (CMRS, LLM-MCTS samples).
+/// the last executed actions and every joint action line (CMRS, LLM-MCTS samples),
+/// rendered from `prompts`.
 pub fn central_messages(
+    prompts: &Prompts,
     task: &Task,
     observation: &str,
     lines: &[String],
@@ -164,7 +163,7 @@ pub fn central_messages(
         ("history", history.as_str()),
         ("actions", actions.as_str()),
     ];
-    let (system, user) = TEMPLATE.split_once(USER_MARK).unwrap_or(("", TEMPLATE));
+    let (system, user) = templates::split(prompts.text(Template::Central));
     let mut messages = Vec::new();
     if !system.trim().is_empty() {
         messages.push(Message::system(
@@ -289,10 +288,27 @@ mod tests {
 
     #[test]
     fn the_template_is_filled_and_split() {
-        let (system, user) = TEMPLATE.split_once(USER_MARK).expect("a user part");
+        let (system, user) = Template::Central
+            .builtin()
+            .split_once(templates::USER_MARK)
+            .expect("a user part");
         assert!(system.contains("{{team}}"));
         for key in ["instruction", "observation", "history", "actions"] {
             assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
+        }
+    }
+
+    #[test]
+    fn every_placeholder_a_template_may_use_is_filled() {
+        let path =
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+        let task = coherent_core::load_tasks(&path)
+            .expect("the demo")
+            .remove(0);
+        let prompts = crate::methods::prompt::every_placeholder(Template::Central);
+        let messages = central_messages(&prompts, &task, "facts", &["a: b".into()], &[]);
+        for m in &messages {
+            assert!(!m.content.contains("{{"), "{}", m.content);
         }
     }
 }

@@ -77,6 +77,7 @@ use crate::episode::cancel::Cancel;
 use crate::episode::environment::{execute, team_observation};
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint::{self, Executed, JointAction, joint_actions};
+use crate::methods::templates::Prompts;
 use crate::records::transcript::{Call, Decision, Outcome, Round};
 use crate::rng::{Rng, seed_of};
 
@@ -104,6 +105,8 @@ pub struct MctsConfig {
     pub history: usize,
     /// LLM-MCTS: the answer is one short line.
     pub max_tokens: u32,
+    /// LLM-MCTS: the prompt's template (`central.txt`) comes from here.
+    pub prompts: Prompts,
 }
 
 impl Default for MctsConfig {
@@ -120,6 +123,7 @@ impl Default for MctsConfig {
             llm_weight: 0.5,
             history: 5,
             max_tokens: 120,
+            prompts: Prompts::builtin(),
         }
     }
 }
@@ -437,7 +441,9 @@ async fn round(
     // The prior, from the model's samples.
     let mut prior = None;
     if let Some(backend) = backend {
-        let messages = joint::central_messages(task, &team_observation(env, task), &lines, history);
+        let observation = team_observation(env, task);
+        let messages =
+            joint::central_messages(&config.prompts, task, &observation, &lines, history);
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {

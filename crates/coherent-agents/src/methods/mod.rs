@@ -8,7 +8,8 @@
 //!   action space they choose from, as text.
 //! - [`optimal`]: the optimal planner's plan, the tables' ground-truth row.
 //!
-//! [`prompt`] and `answer` are what the methods' prompts and answer readers share.
+//! [`templates`] is the prompt set the methods render their prompts from; [`prompt`] and
+//! `answer` are what the methods' prompts and answer readers share.
 
 pub(crate) mod answer;
 pub mod assigner;
@@ -20,3 +21,4 @@ pub mod mcts;
 pub mod optimal;
 pub mod pefa;
 pub mod prompt;
+pub mod templates;

@@ -19,6 +19,7 @@ use crate::episode::rounds::rounds;
 use crate::methods::assigner::TaskAssigner;
 use crate::methods::executor::{self, RobotExecutor};
 use crate::methods::prompt::robot_label;
+use crate::methods::templates::Prompts;
 use crate::records::transcript::{Outcome, Round};
 
 /// The shared loop's types, where PEFA's callers have always found them.
@@ -34,6 +35,8 @@ pub struct PefaConfig {
     pub max_steps: u32,
     pub assigner_max_tokens: u32,
     pub executor_max_tokens: u32,
+    /// The roles' templates come from here.
+    pub prompts: Prompts,
 }
 
 impl PefaConfig {
@@ -43,6 +46,7 @@ impl PefaConfig {
             max_steps,
             assigner_max_tokens: 400,
             executor_max_tokens: 200,
+            prompts: Prompts::builtin(),
         }
     }
 }
@@ -89,7 +93,7 @@ async fn round(
     let mut round = Round::new(step);
 
     // Proposal.
-    let assigner = TaskAssigner::new(task, config.assigner_max_tokens);
+    let assigner = TaskAssigner::new(task, &config.prompts, config.assigner_max_tokens);
     let history: Vec<String> = history.iter().cloned().collect();
     let query = assigner.query(env, &history);
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
@@ -101,7 +105,8 @@ async fn round(
 
     // Execution.
     let robot = proposal.robot;
-    let executor = match RobotExecutor::of(task, robot, config.executor_max_tokens) {
+    let executor = match RobotExecutor::of(task, robot, &config.prompts, config.executor_max_tokens)
+    {
         Ok(executor) => executor,
         Err(why) => return Some(finish(env, round, Outcome::NoProposal { why }, start)),
     };

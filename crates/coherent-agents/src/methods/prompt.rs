@@ -1,8 +1,8 @@
-//! What the methods' prompts share: template files under `prompts/` filled with the
-//! situation, the team list, and robot labels. Each role's own templates sit with it
-//! ([`crate::methods::assigner`], [`crate::methods::executor`], [`crate::methods::joint`],
-//! [`crate::methods::dmrs`]). Observations are written as relation facts
-//! (`coherent_core::describe`).
+//! What the methods' prompts share: filling a template of the prompt set
+//! ([`crate::methods::templates`]) with the situation, the team list, and robot labels.
+//! Each role renders its own templates ([`crate::methods::assigner`],
+//! [`crate::methods::executor`], [`crate::methods::joint`], [`crate::methods::dmrs`]).
+//! Observations are written as relation facts (`coherent_core::describe`).
 
 use coherent_core::{NodeId, Task};
 
@@ -61,6 +61,24 @@ pub(crate) fn check_placeholders(template: &str, keys: &[&str]) {
     for k in keys {
         assert!(template.contains(&format!("{{{{{k}}}}}")), "{k} unused");
     }
+}
+
+/// The built-in set with `template` replaced by every one of its placeholders, one a
+/// line: rendering it must leave none unfilled.
+#[cfg(test)]
+pub(crate) fn every_placeholder(
+    template: crate::methods::templates::Template,
+) -> crate::methods::templates::Prompts {
+    let text: Vec<String> = template
+        .placeholders()
+        .iter()
+        .map(|p| format!("{p}: {{{{{p}}}}}"))
+        .collect();
+    crate::methods::templates::Prompts::from_texts(
+        std::path::Path::new("test"),
+        vec![(template.file_name().to_owned(), text.join("\n"))],
+    )
+    .expect("its own placeholders check")
 }
 
 #[cfg(test)]

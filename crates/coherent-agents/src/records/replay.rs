@@ -11,6 +11,7 @@ use coherent_core::{Task, native};
 use crate::backends::replay::ReplayBackend;
 use crate::episode::rounds::Episode;
 use crate::episode::settings::{Budget, Method, Settings};
+use crate::methods::templates::Prompts;
 use crate::records::transcript::{Round, Summary, Transcript};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
@@ -19,7 +20,7 @@ use crate::records::transcript::{Round, Summary, Transcript};
 pub struct Replay {
     /// The task recorded in the transcript's header.
     pub task: Arc<Task>,
-    /// The recorded method, history window, temperature, seed and physics.
+    /// The recorded method, history window, temperature, seed, physics and prompt set.
     pub settings: Settings,
     /// The recorded budget, as given.
     pub budget: Budget,
@@ -48,16 +49,22 @@ impl Replay {
     }
 }
 
-/// The settings and budget a transcript was recorded with, to replay it.
+/// The settings and budget a transcript was recorded with, to replay it; the prompt set
+/// is the recorded one, or an error when this version cannot render it again.
 pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
     let method = Method::from_name(&t.header.method)
         .ok_or_else(|| format!("unknown method {:?} in the transcript", t.header.method))?;
+    let prompts = match &t.header.prompts {
+        Some(record) => Prompts::from_record(record).map_err(|e| e.to_string())?,
+        None => Prompts::builtin(),
+    };
     let settings = Settings {
         method,
         history: t.header.history,
         temperature: t.header.temperature,
         seed: t.header.seed,
         physics: t.header.physics,
+        prompts,
     };
     Ok((settings, Budget::Given(t.header.max_steps)))
 }

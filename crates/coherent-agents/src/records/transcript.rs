@@ -13,6 +13,7 @@ use serde::{Deserialize, Serialize};
 use coherent_core::NodeId;
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
+use crate::methods::templates::PromptRecord;
 
 pub const FORMAT: &str = "coherent-transcript";
 pub const VERSION: u32 = 1;
@@ -36,6 +37,10 @@ pub struct Header {
     pub backend: BackendInfo,
     pub temperature: Option<f32>,
     pub seed: Option<u64>,
+    /// The prompt set: its hash and the files that replaced built-in templates (absent
+    /// in transcripts written before prompt sets: the built-in templates).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub prompts: Option<PromptRecord>,
     /// Milliseconds since the Unix epoch.
     pub started_ms: u64,
 }
@@ -151,6 +156,9 @@ pub struct Summary {
     pub llm_calls: u32,
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
+    /// The part of `prompt_tokens` read from the server's prompt cache.
+    #[serde(default)]
+    pub cached_tokens: u64,
     pub wall_ms: f64,
     pub error: Option<String>,
 }

@@ -1,0 +1,509 @@
+//! The prompt set: the eight templates the methods render their prompts from, each the
+//! built-in one (`prompts/*.txt`, compiled in) or a file of the same name from a folder
+//! given at run time. A set is one value, passed down to the methods with the episode's
+//! settings; it is checked when it is made, so that a template naming a placeholder its
+//! method does not fill is refused before any model call.
+//!
+//! A transcript's header records the set ([`PromptRecord`]): a hash of every template's
+//! text and the text of each file that replaced a built-in template, so that two runs
+//! can be told apart and a replay renders the very prompts that were recorded.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+/// The line of a two-part template ([`Template::Central`], [`Template::DmrsSpeaker`])
+/// that separates its system part from its user part.
+pub const USER_MARK: &str = "@@user@@";
+
+/// One template of the prompt set.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Template {
+    /// PEFA's task assigner, system prompt: the team and the world's rules.
+    AssignerSystem,
+    /// PEFA's task assigner, each round: the instruction, the robots, the history.
+    AssignerUser,
+    /// A quadrotor's executor, system prompt.
+    ExecutorQuadrotor,
+    /// A robot dog's executor, system prompt.
+    ExecutorRobotDog,
+    /// A robot arm's executor, system prompt.
+    ExecutorRobotArm,
+    /// Every executor, each round: the subtask, its observation, its action list.
+    ExecutorUser,
+    /// CMRS and LLM-MCTS: one central model choosing a line of the joint action space.
+    Central,
+    /// DMRS: one robot's turn in the team's dialogue.
+    DmrsSpeaker,
+}
+
+impl Template {
+    pub const ALL: [Template; 8] = [
+        Template::AssignerSystem,
+        Template::AssignerUser,
+        Template::ExecutorQuadrotor,
+        Template::ExecutorRobotDog,
+        Template::ExecutorRobotArm,
+        Template::ExecutorUser,
+        Template::Central,
+        Template::DmrsSpeaker,
+    ];
+
+    /// Its file's name, in `prompts/` and in a prompt folder.
+    pub fn file_name(self) -> &'static str {
+        match self {
+            Template::AssignerSystem => "assigner_system.txt",
+            Template::AssignerUser => "assigner_user.txt",
+            Template::ExecutorQuadrotor => "executor_quadrotor.txt",
+            Template::ExecutorRobotDog => "executor_robot_dog.txt",
+            Template::ExecutorRobotArm => "executor_robot_arm.txt",
+            Template::ExecutorUser => "executor_user.txt",
+            Template::Central => "central.txt",
+            Template::DmrsSpeaker => "dmrs_speaker.txt",
+        }
+    }
+
+    /// The template of this name, if one has it.
+    pub fn from_file_name(name: &str) -> Option<Template> {
+        Template::ALL.into_iter().find(|t| t.file_name() == name)
+    }
+
+    /// The compiled-in text.
+    pub fn builtin(self) -> &'static str {
+        match self {
+            Template::AssignerSystem => include_str!("../../prompts/assigner_system.txt"),
+            Template::AssignerUser => include_str!("../../prompts/assigner_user.txt"),
+            Template::ExecutorQuadrotor => include_str!("../../prompts/executor_quadrotor.txt"),
+            Template::ExecutorRobotDog => include_str!("../../prompts/executor_robot_dog.txt"),
+            Template::ExecutorRobotArm => include_str!("../../prompts/executor_robot_arm.txt"),
+            Template::ExecutorUser => include_str!("../../prompts/executor_user.txt"),
+            Template::Central => include_str!("../../prompts/central.txt"),
+            Template::DmrsSpeaker => include_str!("../../prompts/dmrs_speaker.txt"),
+        }
+    }
+
+    /// The placeholders its method fills (`{{name}}` in the text); any other is refused.
+    pub fn placeholders(self) -> &'static [&'static str] {
+        match self {
+            Template::AssignerSystem => &["team"],
+            Template::AssignerUser => &["instruction", "robots", "observation", "history"],
+            Template::ExecutorQuadrotor
+            | Template::ExecutorRobotDog
+            | Template::ExecutorRobotArm => &["robot"],
+            Template::ExecutorUser => &["subtask", "observation", "actions"],
+            Template::Central => &["team", "instruction", "observation", "history", "actions"],
+            Template::DmrsSpeaker => &[
+                "robot",
+                "kind",
+                "team",
+                "instruction",
+                "observation",
+                "history",
+                "dialogue",
+                "actions",
+            ],
+        }
+    }
+}
+
+/// `text`'s system part and user part, split at the [`USER_MARK`] line; without one, all
+/// of it is the user part.
+pub fn split(text: &str) -> (&str, &str) {
+    text.split_once(USER_MARK).unwrap_or(("", text))
+}
+
+/// Why a prompt set could not be made.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PromptError {
+    /// A folder or a file that cannot be read.
+    Io { file: String, message: String },
+    /// A `.txt` file whose name is no template's (a typo would otherwise be ignored).
+    UnknownFile { file: String },
+    /// `{{placeholder}}` on line `line` of `file`, which its template does not fill.
+    UnknownPlaceholder {
+        file: String,
+        line: usize,
+        placeholder: String,
+        known: &'static [&'static str],
+    },
+    /// A recorded set that this version cannot render again.
+    Recorded(String),
+}
+
+impl PromptError {
+    /// The file the error is about, when it is about one.
+    pub fn file(&self) -> Option<&str> {
+        match self {
+            PromptError::Io { file, .. }
+            | PromptError::UnknownFile { file }
+            | PromptError::UnknownPlaceholder { file, .. } => Some(file),
+            PromptError::Recorded(_) => None,
+        }
+    }
+}
+
+impl fmt::Display for PromptError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            PromptError::Io { file, message } => write!(f, "{file}: {message}"),
+            PromptError::UnknownFile { file } => {
+                let names: Vec<&str> = Template::ALL.iter().map(|t| t.file_name()).collect();
+                write!(
+                    f,
+                    "{file}: not a template of the prompt set; the templates: {}",
+                    names.join(", ")
+                )
+            }
+            PromptError::UnknownPlaceholder {
+                file,
+                line,
+                placeholder,
+                known,
+            } => write!(
+                f,
+                "{file}:{line}: unknown placeholder {{{{{placeholder}}}}}; the placeholders \
+                 of this template: {}",
+                known.join(", ")
+            ),
+            PromptError::Recorded(why) => f.write_str(why),
+        }
+    }
+}
+
+impl std::error::Error for PromptError {}
+
+/// The first placeholder of `text` its template does not fill, as an error naming
+/// `file`; a placeholder is `{{name}}` on one line, as the methods fill it.
+pub fn check(template: Template, text: &str, file: &str) -> Result<(), PromptError> {
+    for (i, line) in text.lines().enumerate() {
+        let mut rest = line;
+        while let Some(open) = rest.find("{{") {
+            let after = &rest[open + 2..];
+            let Some(close) = after.find("}}") else { break };
+            let name = &after[..close];
+            if name.contains("{{") {
+                // `{{` before the placeholder: literal braces, as `fill` leaves them.
+                rest = after;
+                continue;
+            }
+            if !template.placeholders().contains(&name) {
+                return Err(PromptError::UnknownPlaceholder {
+                    file: file.to_owned(),
+                    line: i + 1,
+                    placeholder: name.to_owned(),
+                    known: template.placeholders(),
+                });
+            }
+            rest = &after[close + 2..];
+        }
+    }
+    Ok(())
+}
+
+/// The templates the methods render, checked. Cheap to clone (shared).
+#[derive(Clone, PartialEq, Eq)]
+pub struct Prompts(Arc<Set>);
+
+#[derive(PartialEq, Eq)]
+struct Set {
+    /// The templates that replace built-in ones, with their text.
+    replaced: BTreeMap<Template, String>,
+    hash: String,
+}
+
+impl Default for Prompts {
+    fn default() -> Prompts {
+        Prompts::builtin()
+    }
+}
+
+impl fmt::Debug for Prompts {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Prompts")
+            .field("hash", &self.0.hash)
+            .field("replaced", &self.replaced_names())
+            .finish()
+    }
+}
+
+impl Prompts {
+    /// The compiled-in templates.
+    pub fn builtin() -> Prompts {
+        Prompts::with(BTreeMap::new())
+    }
+
+    fn with(replaced: BTreeMap<Template, String>) -> Prompts {
+        let hash = hash(Template::ALL.map(|t| {
+            let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
+            (t.file_name(), text)
+        }));
+        Prompts(Arc::new(Set { replaced, hash }))
+    }
+
+    /// The built-in templates, with those of `files` (`(name, text)`, the name a
+    /// template's file name) in their place; each is checked, and errors name the file
+    /// as `origin/name`. A file with the built-in text replaces nothing.
+    pub fn from_texts(origin: &Path, files: Vec<(String, String)>) -> Result<Prompts, PromptError> {
+        let mut replaced = BTreeMap::new();
+        for (name, text) in files {
+            let file = origin.join(&name).display().to_string();
+            let template = Template::from_file_name(&name)
+                .ok_or(PromptError::UnknownFile { file: file.clone() })?;
+            check(template, &text, &file)?;
+            if text != template.builtin() {
+                replaced.insert(template, text);
+            }
+        }
+        Ok(Prompts::with(replaced))
+    }
+
+    /// The built-in templates, with the files of folder `dir` that are named after one in
+    /// their place. Other `.txt` files are refused (a misspelt name would silently leave
+    /// the built-in template in use); anything else in the folder is ignored.
+    pub fn read_dir(dir: &Path) -> Result<Prompts, PromptError> {
+        let io = |file: &Path, e: std::io::Error| PromptError::Io {
+            file: file.display().to_string(),
+            message: e.to_string(),
+        };
+        let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+            .map_err(|e| io(dir, e))?
+            .map(|entry| entry.map(|e| e.path()).map_err(|e| io(dir, e)))
+            .collect::<Result<_, _>>()?;
+        paths.sort();
+        let mut files = Vec::new();
+        for path in paths {
+            let is_txt = path.extension().is_some_and(|e| e == "txt");
+            let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
+                continue;
+            };
+            if !is_txt || name.starts_with('.') || !path.is_file() {
+                continue;
+            }
+            let text = std::fs::read_to_string(&path).map_err(|e| io(&path, e))?;
+            files.push((name.to_owned(), text));
+        }
+        Prompts::from_texts(dir, files)
+    }
+
+    /// The set a transcript recorded: the built-in templates with the recorded
+    /// replacements, which must hash as recorded (else the built-in templates changed
+    /// since, and the recorded prompts cannot be rendered again).
+    pub fn from_record(record: &PromptRecord) -> Result<Prompts, PromptError> {
+        let files = record
+            .replaced
+            .iter()
+            .map(|(name, text)| (name.clone(), text.clone()))
+            .collect();
+        let prompts = Prompts::from_texts(Path::new("(recorded)"), files)?;
+        if prompts.hash() != record.hash {
+            return Err(PromptError::Recorded(format!(
+                "the transcript was recorded with prompt set {}, but its replaced templates \
+                 ({}) with this version's built-in ones give {}: the built-in templates \
+                 changed since, so its prompts cannot be rendered again",
+                record.hash,
+                if record.replaced.is_empty() {
+                    "none".to_owned()
+                } else {
+                    record
+                        .replaced
+                        .keys()
+                        .cloned()
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                },
+                prompts.hash()
+            )));
+        }
+        Ok(prompts)
+    }
+
+    /// The text of `template` in this set.
+    pub fn text(&self, template: Template) -> &str {
+        self.0
+            .replaced
+            .get(&template)
+            .map_or(template.builtin(), String::as_str)
+    }
+
+    /// 32 hex digits: FNV-1a (128 bits) of every template's file name and text, in
+    /// [`Template::ALL`] order.
+    pub fn hash(&self) -> &str {
+        &self.0.hash
+    }
+
+    /// The file names of the templates that replace built-in ones.
+    pub fn replaced_names(&self) -> Vec<&'static str> {
+        self.0.replaced.keys().map(|t| t.file_name()).collect()
+    }
+
+    /// What a transcript's header records of the set.
+    pub fn record(&self) -> PromptRecord {
+        PromptRecord {
+            hash: self.0.hash.clone(),
+            replaced: self
+                .0
+                .replaced
+                .iter()
+                .map(|(t, text)| (t.file_name().to_owned(), text.clone()))
+                .collect(),
+        }
+    }
+}
+
+/// The prompt set as a transcript's header records it.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct PromptRecord {
+    /// [`Prompts::hash`]: equal hashes, equal templates.
+    pub hash: String,
+    /// The files that replaced built-in templates, by name, with their text.
+    pub replaced: BTreeMap<String, String>,
+}
+
+/// FNV-1a, 128 bits, of each `(name, text)` with a 0 byte after each part.
+fn hash<'a>(parts: impl IntoIterator<Item = (&'a str, &'a str)>) -> String {
+    const PRIME: u128 = 0x0000_0000_0100_0000_0000_0000_0000_013b;
+    let mut h: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
+    for (name, text) in parts {
+        for bytes in [name.as_bytes(), text.as_bytes()] {
+            for &b in bytes.iter().chain(&[0]) {
+                h ^= u128::from(b);
+                h = h.wrapping_mul(PRIME);
+            }
+        }
+    }
+    format!("{h:032x}")
+}
+
+/// Writes every built-in template into `dir` (made when missing), one file each; an
+/// existing file is an error unless `overwrite`. Returns the files written.
+pub fn export(dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>, PromptError> {
+    let io = |file: &Path, e: std::io::Error| PromptError::Io {
+        file: file.display().to_string(),
+        message: e.to_string(),
+    };
+    std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
+    let paths: Vec<PathBuf> = Template::ALL
+        .iter()
+        .map(|t| dir.join(t.file_name()))
+        .collect();
+    if !overwrite && let Some(there) = paths.iter().find(|p| p.exists()) {
+        return Err(PromptError::Io {
+            file: there.display().to_string(),
+            message: "exists already (pass --force to overwrite)".into(),
+        });
+    }
+    for (t, path) in Template::ALL.iter().zip(&paths) {
+        std::fs::write(path, t.builtin()).map_err(|e| io(path, e))?;
+    }
+    Ok(paths)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_builtin_template_uses_exactly_its_placeholders() {
+        for t in Template::ALL {
+            check(t, t.builtin(), t.file_name()).expect("the built-in templates check");
+            for p in t.placeholders() {
+                assert!(
+                    t.builtin().contains(&format!("{{{{{p}}}}}")),
+                    "{} does not use {{{{{p}}}}}",
+                    t.file_name()
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn unknown_placeholders_are_named_with_file_and_line() {
+        let text = "Task: {{instruction}}\n\nSee {{robots}} and {{no_such_thing}}.\n";
+        let e = check(Template::AssignerUser, text, "d/assigner_user.txt").expect_err("refused");
+        assert_eq!(
+            e.to_string(),
+            "d/assigner_user.txt:3: unknown placeholder {{no_such_thing}}; the placeholders of \
+             this template: instruction, robots, observation, history"
+        );
+        // A placeholder of another template is unknown here too.
+        assert!(check(Template::AssignerSystem, "{{history}}", "f").is_err());
+        // Braces that are no placeholder pass: a JSON example, an unclosed pair.
+        check(Template::AssignerSystem, "{\"a\": 1} {{ and {{team}}", "f").expect("fine");
+    }
+
+    #[test]
+    fn a_set_replaces_only_the_templates_given() {
+        let set = Prompts::from_texts(
+            Path::new("d"),
+            vec![("assigner_user.txt".into(), "Do {{instruction}}.".into())],
+        )
+        .expect("a set");
+        assert_eq!(set.text(Template::AssignerUser), "Do {{instruction}}.");
+        assert_eq!(
+            set.text(Template::AssignerSystem),
+            Template::AssignerSystem.builtin()
+        );
+        assert_eq!(set.replaced_names(), ["assigner_user.txt"]);
+        assert_ne!(set.hash(), Prompts::builtin().hash());
+        assert_eq!(set.hash().len(), 32);
+        // The same texts, the same hash; a file that repeats the built-in text replaces
+        // nothing.
+        let same = Prompts::from_texts(
+            Path::new("elsewhere"),
+            vec![("assigner_user.txt".into(), "Do {{instruction}}.".into())],
+        )
+        .expect("a set");
+        assert_eq!(same, set);
+        let copy = Prompts::from_texts(
+            Path::new("d"),
+            vec![("central.txt".into(), Template::Central.builtin().to_owned())],
+        )
+        .expect("a set");
+        assert_eq!(copy.hash(), Prompts::builtin().hash());
+        assert!(copy.replaced_names().is_empty());
+        let unknown =
+            Prompts::from_texts(Path::new("d"), vec![("asigner.txt".into(), String::new())]);
+        assert!(matches!(unknown, Err(PromptError::UnknownFile { .. })));
+    }
+
+    #[test]
+    fn records_round_trip_and_refuse_a_changed_set() {
+        let set = Prompts::from_texts(
+            Path::new("d"),
+            vec![("executor_user.txt".into(), "{{subtask}} {{actions}}".into())],
+        )
+        .expect("a set");
+        let record = set.record();
+        assert_eq!(Prompts::from_record(&record).expect("rebuilt"), set);
+        let changed = PromptRecord {
+            hash: "0".repeat(32),
+            ..record
+        };
+        let e = Prompts::from_record(&changed).expect_err("refused");
+        assert!(e.to_string().contains("executor_user.txt"), "{e}");
+    }
+
+    #[test]
+    fn split_at_the_user_mark() {
+        assert_eq!(split("a\n@@user@@\nb"), ("a\n", "\nb"));
+        assert_eq!(split("only user"), ("", "only user"));
+    }
+
+    #[test]
+    fn export_writes_every_template_once() {
+        let dir = std::env::temp_dir().join(format!("coherent-export-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let written = export(&dir, false).expect("exported");
+        assert_eq!(written.len(), Template::ALL.len());
+        assert_eq!(
+            Prompts::read_dir(&dir).expect("reads back").hash(),
+            Prompts::builtin().hash()
+        );
+        assert!(export(&dir, false).is_err(), "no silent overwrite");
+        export(&dir, true).expect("overwritten on request");
+        std::fs::remove_dir_all(&dir).expect("cleaned up");
+    }
+}

@@ -1,0 +1,261 @@
+"""Prompt files at run time and cost, from Python: ``prompts=`` (a folder or a dict) and
+the ``PromptError`` of a bad template, ``prices=`` and ``cost_usd`` (episodes, the
+results DataFrame, the report's cost columns), and ``coherent.plot.pareto``. A stub
+OpenAI-compatible server on loopback answers with fixed token counts, so that costs
+are known exactly."""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+from collections.abc import Iterator
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from pathlib import Path
+from typing import Any
+
+import matplotlib.pyplot as plt
+import pandas as pd
+import pytest
+
+import coherent
+from coherent import plot
+
+# What the stub answers every call with, in tokens.
+PROMPT, CACHED, COMPLETION = 1000, 400, 50
+PRICES = {"stub-model": {"input": 2.0, "cached_input": 0.5, "output": 8.0}}
+PER_CALL = (600 * 2.0 + 400 * 0.5 + 50 * 8.0) / 1e6
+
+
+class _Stub(BaseHTTPRequestHandler):
+    """Chat completions: the first robot for the assigner, the first action otherwise."""
+
+    seen: list[dict[str, Any]]
+
+    def do_POST(self) -> None:  # noqa: N802 (the standard library's name)
+        request = json.loads(self.rfile.read(int(self.headers["content-length"])))
+        self.seen.append(request)
+        schema = request["response_format"]["json_schema"]
+        props = schema["schema"]["properties"]
+        if schema["name"] == "proposal":
+            content = {"reasoning": "go", "robot": props["robot"]["enum"][0], "subtask": "the first thing"}
+        else:
+            content = {"action": props["action"]["enum"][0], "subtask_complete": False, "note": ""}
+        body = json.dumps(
+            {
+                "choices": [{"message": {"role": "assistant", "content": json.dumps(content)}, "finish_reason": "stop"}],
+                "usage": {
+                    "prompt_tokens": PROMPT,
+                    "completion_tokens": COMPLETION,
+                    "prompt_tokens_details": {"cached_tokens": CACHED},
+                },
+            }
+        ).encode()
+        self.send_response(200)
+        self.send_header("content-type", "application/json")
+        self.send_header("content-length", str(len(body)))
+        self.end_headers()
+        self.wfile.write(body)
+
+    def log_message(self, *args: Any) -> None:
+        pass
+
+
+@pytest.fixture()
+def stub() -> Iterator[tuple[coherent.LLM, list[dict[str, Any]]]]:
+    seen: list[dict[str, Any]] = []
+    handler = type("Handler", (_Stub,), {"seen": seen})
+    server = ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    llm = coherent.LLM(base_url=f"http://127.0.0.1:{server.server_port}/v1", model="stub-model")
+    yield llm, seen
+    server.shutdown()
+    server.server_close()
+
+
+@pytest.fixture(autouse=True)
+def close_figures() -> Iterator[None]:
+    yield
+    plt.close("all")
+
+
+def _sent(requests: list[dict[str, Any]]) -> str:
+    return json.dumps([r["messages"] for r in requests])
+
+
+def test_a_dict_of_templates_reaches_the_model_and_the_header(
+    task0: coherent.Task, stub: tuple[coherent.LLM, list[dict[str, Any]]], tmp_path: Path
+) -> None:
+    llm, seen = stub
+    mine = "You assign subtasks (MARKER-PY-1). The team:\n{{team}}\nAnswer in JSON."
+    episode = coherent.run(
+        task0, llm=llm, max_steps=1, out=tmp_path, prompts={"assigner_system.txt": mine}, prices=PRICES
+    )
+    assert "MARKER-PY-1" in _sent(seen)
+    assert "MARKER-PY-1" in episode.transcript[0]["calls"][0]["messages"][0]["content"]
+    record = episode.header["prompts"]
+    assert list(record["replaced"]) == ["assigner_system.txt"]
+    assert len(record["hash"]) == 32
+    # Priced: two calls at the table given.
+    assert episode.cached_tokens == 2 * CACHED
+    assert episode.cost_usd == pytest.approx(2 * PER_CALL, rel=1e-12)
+    # The same file name from a folder: the same set, the same hash.
+    folder = tmp_path / "prompts"
+    folder.mkdir()
+    (folder / "assigner_system.txt").write_text(mine)
+    (folder / "README.md").write_text("not a template: ignored")
+    again = coherent.run(task0, llm=llm, max_steps=1, out=tmp_path, prompts=folder)
+    assert again.header["prompts"] == record
+    assert again.cost_usd is None, "stub-model has no built-in price"
+    # The replay renders the recorded set and prices the recorded tokens.
+    replayed = coherent.replay(episode.path, out=tmp_path, prices=PRICES)
+    assert [r["calls"] for r in replayed.transcript] == [r["calls"] for r in episode.transcript]
+    assert replayed.cost_usd == pytest.approx(episode.cost_usd)
+    assert coherent.load_episode(episode.path).cost_usd is None
+
+
+def test_the_small_models_tokens_priced(model_episode: coherent.Episode, tmp_path: Path) -> None:
+    # SmolLM2 behind llama.cpp's server: real token counts, at a price given for it.
+    assert model_episode.cost_usd is None, "no built-in price for a local model"
+    prices = {"smollm2-135m": {"input": 0.02, "cached_input": 0.01, "output": 0.04}}
+    replayed = coherent.replay(model_episode.path, out=tmp_path, prices=prices)
+    fresh = model_episode.prompt_tokens - model_episode.cached_tokens
+    expected = (fresh * 0.02 + model_episode.cached_tokens * 0.01 + model_episode.completion_tokens * 0.04) / 1e6
+    assert replayed.cost_usd == pytest.approx(expected, rel=1e-12)
+    assert replayed.cost_usd > 0
+
+
+def test_an_unknown_placeholder_raises_prompt_error_before_any_call(
+    task0: coherent.Task, stub: tuple[coherent.LLM, list[dict[str, Any]]], tmp_path: Path
+) -> None:
+    llm, seen = stub
+    bad = {"executor_user.txt": "Subtask: {{subtask}}\nActions:\n{{actions}} {{no_such_thing}}"}
+    with pytest.raises(coherent.PromptError) as raised:
+        coherent.run(task0, llm=llm, out=tmp_path, prompts=bad)
+    e = raised.value
+    assert isinstance(e, coherent.CoherentError) and isinstance(e, ValueError)
+    assert (e.file, e.line, e.placeholder) == (str(Path("prompts") / "executor_user.txt"), 3, "no_such_thing")
+    assert str(e).endswith(
+        "executor_user.txt:3: unknown placeholder {{no_such_thing}}; the placeholders of this "
+        "template: subtask, observation, actions"
+    )
+    with pytest.raises(coherent.PromptError, match="no_such_thing"):
+        coherent.bench([task0], ["pefa"], backend=llm, out=tmp_path / "r.jsonl", prompts=bad)
+    assert not (tmp_path / "r.jsonl").exists()
+    with pytest.raises(coherent.PromptError, match="not a template") as typo:
+        coherent.run(task0, out=tmp_path, prompts={"asigner_user.txt": "x"})
+    assert typo.value.line is None and typo.value.placeholder is None
+    with pytest.raises(TypeError, match="prompts"):
+        coherent.run(task0, out=tmp_path, prompts=42)  # type: ignore[arg-type]
+    assert seen == [], "no model call was made"
+
+
+def test_bench_prices_lines_and_the_report_has_cost_per_task_and_per_success(
+    env0_tasks: list[coherent.Task], stub: tuple[coherent.LLM, list[dict[str, Any]]], tmp_path: Path
+) -> None:
+    llm, seen = stub
+    tasks, _ = coherent.select(env0_tasks, [("env0", 0), ("env0", 2)])
+    prices = tmp_path / "prices.toml"
+    prices.write_text('["stub-model"]\ninput = 2.0\ncached_input = 0.5\noutput = 8.0\n')
+    marker = "MARKER-BENCH: {{instruction}}\n{{robots}}\n{{observation}}\n{{history}}"
+    frame = coherent.bench(
+        tasks,
+        ["pefa", "optimal"],
+        backend=llm,
+        out=tmp_path / "r.jsonl",
+        prices=prices,
+        prompts={"assigner_user.txt": marker},
+    )
+    assert "MARKER-BENCH" in _sent(seen)
+    assert "cost_usd" in frame.columns and "cached_tokens" in frame.columns
+    pefa = frame[frame["method"] == "pefa"]
+    assert (pefa["llm_calls"] > 0).all()
+    for cost, calls in zip(pefa["cost_usd"], pefa["llm_calls"]):
+        assert cost == pytest.approx(calls * PER_CALL, rel=1e-12)
+    assert (frame[frame["method"] == "optimal"]["cost_usd"] == 0.0).all()
+    costs = coherent.report(frame).costs
+    assert {"cost_usd", "cost_per_task", "cost_per_success"} <= set(costs.columns)
+    total = float(pefa["cost_usd"].sum())
+    successes = int(pefa["success"].sum())
+    assert costs.loc["pefa", "cost_per_task"] == pytest.approx(total / len(pefa))
+    if successes:
+        assert costs.loc["pefa", "cost_per_success"] == pytest.approx(total / successes)
+    else:
+        assert math.isnan(costs.loc["pefa", "cost_per_success"])
+    assert costs.loc["optimal", "cost_per_task"] == 0.0
+    assert "Cost / task" in coherent.report(frame).markdown()
+    # The same tokens without a price: NaN, and so are the report's cost columns.
+    unpriced = coherent.bench(tasks[:1], ["pefa"], backend=llm, out=tmp_path / "u.jsonl")
+    assert unpriced["cost_usd"].isna().all()
+    assert math.isnan(coherent.report(unpriced).costs.loc["pefa", "cost_per_task"])
+    with pytest.raises(coherent.CoherentError, match="outptu"):
+        coherent.bench(tasks[:1], ["pefa"], out=tmp_path / "x.jsonl", prices={"m": {"input": 1, "outptu": 2}})
+
+
+def _line(method: str, model: str, task_id: int, success: bool, cost: float | None) -> dict[str, Any]:
+    return {
+        "method": method,
+        "scene": "env0",
+        "task_id": task_id,
+        "task_type": "mono",
+        "seed": 0,
+        "success": success,
+        "status": "success" if success else "failure",
+        "steps": 5,
+        "gt_steps": 5,
+        "max_steps": 10,
+        "llm_calls": 10,
+        "prompt_tokens": 1000,
+        "completion_tokens": 100,
+        "cost_usd": cost,
+        "wall_ms": 1.0,
+        "backend": {"kind": "openai", "model": model, "base_url": None},
+        "uses_model": method != "optimal",
+        "transcript": "t.jsonl",
+    }
+
+
+def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path) -> None:
+    lines = [
+        # pefa on a cheap model: SR 0.5 at 0.02 per task; on a dear one: SR 1.0 at 0.3.
+        _line("pefa", "cheap", 0, True, 0.01),
+        _line("pefa", "cheap", 1, False, 0.03),
+        _line("pefa", "dear", 0, True, 0.2),
+        _line("pefa", "dear", 1, True, 0.4),
+        # cmrs on the dear model: SR 0.5 at 0.1, beaten by pefa on the cheap one.
+        _line("cmrs", "dear", 0, True, 0.1),
+        _line("cmrs", "dear", 1, False, 0.1),
+        # The optimal plan asks no model: one point whatever the backend, at no cost.
+        _line("optimal", "dear", 0, False, 0.0),
+        _line("optimal", "cheap", 1, False, 0.0),
+        # A model without a price is left out and named.
+        _line("dmrs-1d", "unpriced", 0, True, None),
+    ]
+    frame = pd.DataFrame(
+        [
+            {**{k: v for k, v in line.items() if k != "backend"}, **{f"backend_{k}": v for k, v in line["backend"].items()}}
+            for line in lines
+        ]
+    )
+    for data in (frame, lines):
+        ax = plot.pareto(data)
+        labels = sorted(t.get_text() for t in ax.texts if not t.get_text().startswith("no price"))
+        assert labels == ["cmrs (dear)", "optimal", "pefa (cheap)", "pefa (dear)"]
+        points = sorted((float(x), float(y)) for c in ax.collections for x, y in c.get_offsets())
+        expected = [(0.0, 0.0), (0.02, 0.5), (0.1, 0.5), (0.3, 1.0)]
+        assert len(points) == len(expected)
+        for (x, y), (ex, ey) in zip(points, expected):
+            assert (x, y) == (pytest.approx(ex), pytest.approx(ey))
+        front = [line for line in ax.get_lines() if line.get_label() == "Pareto front"][0]
+        assert list(front.get_xdata()) == pytest.approx([0.0, 0.02, 0.3])
+        assert list(front.get_ydata()) == pytest.approx([0.0, 0.5, 1.0])
+        assert any("dmrs-1d (unpriced)" in t.get_text() for t in ax.texts)
+        assert ax.get_xlabel() == "cost per task (USD)" and ax.get_ylabel() == "success rate"
+    path = tmp_path / "r.jsonl"
+    path.write_text("".join(json.dumps(line) + "\n" for line in lines))
+    ax = plot.pareto(path)
+    ax.figure.savefig(tmp_path / "pareto.png")
+    assert (tmp_path / "pareto.png").stat().st_size > 5_000
+    with pytest.raises(ValueError, match="prices="):
+        plot.pareto([_line("pefa", "unpriced", 0, True, None)])
