@@ -508,6 +508,7 @@ fn a_huge_ground_truth_counts_without_wrapping() {
     assert_eq!(
         report::counted_steps(&lines[0]),
         2.0 * f64::from(u32::MAX) + 1.0
+    );
 }
 
 #[test]
