@@ -510,8 +510,7 @@ def test_bench_refused(kwargs: dict[str, Any], message: str, demo: coherent.Task
 
 @pytest.mark.parametrize("call", ["run", "replay", "bench"])
 def test_an_empty_out(call: str, demo: coherent.Task, transcript: Path, in_tmp: Path) -> None:
-    # run and replay wrote their transcripts into the current folder; bench failed to
-    # open the results file as a CoherentError.
+    # run and replay wrote their transcripts into the current folder.
     calls = {
         "run": lambda: coherent.run(demo, "optimal", out=""),
         "replay": lambda: coherent.replay(transcript, out=""),

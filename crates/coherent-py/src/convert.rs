@@ -193,7 +193,7 @@ pub(crate) fn unsigned<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str) -> PyRes
     at_most(obj, name, T::MAX)
 }
 
-/// [`unsigned`], with `max` (below `T::MAX`) the largest value taken.
+/// [`unsigned`] up to `max` (no more than `T::MAX`), for a count with a smaller limit.
 pub(crate) fn at_most<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str, max: u64) -> PyResult<T> {
     let out_of_range = || errors::argument(name, obj, format!("out of range: 0 to {max}"));
     match obj.extract::<u64>() {
