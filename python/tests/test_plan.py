@@ -56,7 +56,7 @@ def test_plan_stops_at_the_state_limit(task0: coherent.Task) -> None:
 
 
 def test_plan_rejects_negative_limit(task0: coherent.Task) -> None:
-    with pytest.raises(OverflowError):
+    with pytest.raises(coherent.ArgumentError, match=r"^max_states=-1: out of range: 0 to 18446744073709551615$"):
         coherent.plan(task0, max_states=-1)
 
 

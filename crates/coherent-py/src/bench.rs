@@ -14,35 +14,60 @@ use coherent_agents::bench::{
     self, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
 };
 use coherent_core::planner::Limits;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
-use crate::convert::{interruptible, py_to_json, to_py};
-use crate::errors;
+use crate::convert::{self, interruptible, to_py};
 use crate::prompts::{price_table, prompt_set};
 use crate::run::{PyLlm, method_of};
 use crate::task::PyTask;
+use crate::{args, errors};
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
 fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
+    let py = subset.py();
+    // A str that is not text (a lone surrogate) may still be a file's name.
     if let Ok(s) = subset.cast::<PyString>()
-        && let Some(named) = Subset::named(&s.to_cow()?)
+        && let Some(named) = convert::utf8(s).ok().and_then(Subset::named)
     {
         return Ok(named);
     }
-    if let Ok(path) = subset.extract::<PathBuf>() {
-        return Subset::read_file(&path).map_err(|e| errors::coherent(subset.py(), e));
+    match convert::path(subset, "subset") {
+        Ok(path) => return Subset::read_file(&path).map_err(|e| errors::coherent(py, e)),
+        // A `TypeError`: no path, so maybe pairs; else a path that names no file.
+        Err(e) if !e.is_instance_of::<PyTypeError>(py) => return Err(e),
+        Err(_) => {}
     }
-    subset
-        .extract::<Vec<(String, i64)>>()
-        .map(Subset::Listed)
-        .map_err(|_| {
-            PyTypeError::new_err(
-                "subset: expected \"all\", \"paper40\", \"native40\", a path to a file of \
-                 `scene task_id` lines, or a list of (scene, task_id) pairs",
-            )
-        })
+    let wrong = || {
+        PyTypeError::new_err(
+            "subset: expected \"all\", \"paper40\", \"native40\", a path to a file of \
+             `scene task_id` lines, or a list of (scene, task_id) pairs",
+        )
+    };
+    let pairs = subset
+        .extract::<Vec<Bound<'_, PyAny>>>()
+        .map_err(|_| wrong())?;
+    let mut listed = Vec::with_capacity(pairs.len());
+    for (i, pair) in pairs.iter().enumerate() {
+        let Ok((scene, task_id)) = pair.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>() else {
+            return Err(wrong());
+        };
+        if !scene.is_instance_of::<PyString>() {
+            return Err(wrong());
+        }
+        let scene = convert::text(&scene, &format!("subset[{i}][0]"))?.to_owned();
+        let task_id = match task_id.extract::<i64>() {
+            Ok(id) => id,
+            Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
+                let why = "beyond the 64 bits of task ids";
+                return Err(errors::argument(&format!("subset[{i}][1]"), &task_id, why));
+            }
+            Err(_) => return Err(wrong()),
+        };
+        listed.push((scene, task_id));
+    }
+    Ok(Subset::Listed(listed))
 }
 
 /// The tasks picked, and the `(scene, task_id)` pairs named but missing.
@@ -52,12 +77,14 @@ type Selected = (Vec<PyTask>, Vec<(String, i64)>);
 /// `(scene, task_id)` pairs it names that are not among them.
 #[pyfunction]
 pub(crate) fn select(
+    py: Python<'_>,
     tasks: Vec<Bound<'_, PyTask>>,
     subset: &Bound<'_, PyAny>,
 ) -> PyResult<Selected> {
     let subset = subset_of(subset)?;
     let owned = tasks.iter().map(|t| (*t.get().task).clone()).collect();
-    let selection = bench::select(owned, &subset).map_err(PyValueError::new_err)?;
+    let selection =
+        bench::select(owned, &subset).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
     Ok((
         selection.tasks.into_iter().map(PyTask::shared).collect(),
         selection.missing,
@@ -92,15 +119,15 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 pub(crate) fn run_bench<'py>(
     py: Python<'py>,
     tasks: Vec<Bound<'py, PyTask>>,
-    methods: Vec<String>,
+    #[pyo3(from_py_with = args::methods)] methods: Vec<String>,
     backend: Option<&Bound<'py, PyAny>>,
     sim_errors: Option<&Bound<'py, PyAny>>,
-    replay_from: Option<PathBuf>,
-    seeds: u32,
-    concurrency: usize,
-    history: usize,
-    max_states: usize,
-    out: PathBuf,
+    #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
+    #[pyo3(from_py_with = args::seeds)] seeds: u32,
+    #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
+    #[pyo3(from_py_with = args::history)] history: usize,
+    #[pyo3(from_py_with = args::max_states)] max_states: usize,
+    #[pyo3(from_py_with = args::out)] out: PathBuf,
     progress: bool,
     prompts: Option<&Bound<'py, PyAny>>,
     prices: Option<&Bound<'py, PyAny>>,
@@ -110,16 +137,16 @@ pub(crate) fn run_bench<'py>(
     let prices = price_table(prices)?;
     let methods = methods
         .iter()
-        .map(|m| method_of(m))
+        .map(|m| method_of(py, m))
         .collect::<PyResult<Vec<_>>>()?;
     if methods.is_empty() {
-        return Err(PyValueError::new_err("methods: name at least one method"));
+        return Err(errors::invalid(py, "methods: name at least one method"));
     }
     if seeds == 0 {
-        return Err(PyValueError::new_err("seeds must be at least 1"));
+        return Err(errors::invalid(py, "seeds must be at least 1"));
     }
     if tasks.is_empty() {
-        return Err(PyValueError::new_err("tasks: no tasks to run"));
+        return Err(errors::invalid(py, "tasks: no tasks to run"));
     }
     let (kind, endpoint) = match backend {
         Some(b) if b.is_instance_of::<PyLlm>() => (
@@ -127,21 +154,19 @@ pub(crate) fn run_bench<'py>(
             Some(b.cast::<PyLlm>()?.get().config.clone()),
         ),
         None => (BackendKind::Builtin, None),
-        Some(b) => match b.extract::<String>().as_deref() {
-            Ok("builtin") => (BackendKind::Builtin, None),
-            Ok("simulated") => (BackendKind::Simulated, None),
-            Ok("replay") if prompts.is_some() => {
+        Some(b) => match b.cast::<PyString>().map(convert::utf8) {
+            Ok(Ok("builtin")) => (BackendKind::Builtin, None),
+            Ok(Ok("simulated")) => (BackendKind::Simulated, None),
+            Ok(Ok("replay")) if prompts.is_some() => {
                 return Err(PyValueError::new_err(
                     "prompts= and backend=\"replay\" do not go together: a replay renders \
                      the prompt set its transcripts recorded",
                 ));
             }
-            Ok("replay") => (BackendKind::Replay, None),
+            Ok(Ok("replay")) => (BackendKind::Replay, None),
             _ => {
-                return Err(PyValueError::new_err(format!(
-                    "backend {}: expected \"builtin\", \"simulated\", \"replay\" or an LLM",
-                    b.repr()?
-                )));
+                let expected = "expected \"builtin\", \"simulated\", \"replay\" or an LLM";
+                return Err(errors::argument("backend", b, expected));
             }
         },
     };
@@ -155,13 +180,14 @@ pub(crate) fn run_bench<'py>(
     .choose()
     .map_err(|e| match e {
         BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
-            PyValueError::new_err("sim_errors needs backend=\"simulated\"")
+            errors::invalid(py, "sim_errors needs backend=\"simulated\"")
         }
-        BackendProblem::ReplayNeedsFile => {
-            PyValueError::new_err("backend=\"replay\" needs replay_from=, an earlier results file")
-        }
+        BackendProblem::ReplayNeedsFile => errors::invalid(
+            py,
+            "backend=\"replay\" needs replay_from=, an earlier results file",
+        ),
         BackendProblem::FileNeedsReplay => {
-            PyValueError::new_err("replay_from needs backend=\"replay\"")
+            errors::invalid(py, "replay_from needs backend=\"replay\"")
         }
         other => errors::coherent(py, other.to_string()),
     })?;
@@ -199,7 +225,10 @@ pub(crate) fn run_bench<'py>(
 
 /// The lines of a results file, as dicts; a last line cut off mid-write is left out.
 #[pyfunction]
-pub(crate) fn read_results(py: Python<'_>, path: PathBuf) -> PyResult<Bound<'_, PyList>> {
+pub(crate) fn read_results(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::path)] path: PathBuf,
+) -> PyResult<Bound<'_, PyList>> {
     let file = py
         .detach(|| bench::read_results(&path))
         .map_err(|e| errors::coherent(py, e))?;
@@ -217,9 +246,9 @@ fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine>> {
         .iter()
         .enumerate()
         .map(|(i, item)| {
-            let value = py_to_json(&item)?;
+            let value = convert::json_at(&item, &format!("lines[{i}]"))?;
             serde_json::from_value(value)
-                .map_err(|e| PyValueError::new_err(format!("results line {i}: {e}")))
+                .map_err(|e| errors::invalid(lines.py(), format!("results line {i}: {e}")))
         })
         .collect()
 }
@@ -239,12 +268,19 @@ pub(crate) fn report_tables<'py>(
 /// prints them.
 #[pyfunction]
 #[pyo3(signature = (lines, format = "markdown"))]
-pub(crate) fn report_text(lines: &Bound<'_, PyList>, format: &str) -> PyResult<String> {
+pub(crate) fn report_text(
+    lines: &Bound<'_, PyList>,
+    #[pyo3(from_py_with = args::format)] format: &str,
+) -> PyResult<String> {
+    let py = lines.py();
     let lines = result_lines(lines)?;
     let format = TableFormat::from_name(format).ok_or_else(|| {
-        PyValueError::new_err(format!(
-            "format {format:?}: expected \"markdown\", \"csv\" or \"json\""
-        ))
+        errors::choice(
+            py,
+            "format",
+            format,
+            "expected \"markdown\", \"csv\" or \"json\"",
+        )
     })?;
     Ok(session_bench::tables(&lines, format))
 }

@@ -2,7 +2,6 @@
 //! cannot take as they are (into `ArgumentError`s that name them), and running long work
 //! off the GIL where Ctrl-C can stop it.
 
-use std::borrow::Cow;
 use std::path::PathBuf;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
@@ -59,14 +58,8 @@ pub(crate) fn to_py<'py, T: serde::Serialize>(
 /// A Python object made of dicts, lists, tuples, strings, numbers, booleans and None as
 /// JSON. A float NaN is null and a whole float an integer, as a pandas column with
 /// missing values holds them. A value JSON cannot hold (an infinite float, an int beyond
-/// 64 bits, a str with a lone surrogate) is an `ArgumentError` naming where it is, as a
-/// JSON path from `$`, the object itself.
-pub(crate) fn py_to_json(obj: &Bound<'_, PyAny>) -> PyResult<Value> {
-    json_at(obj, "$")
-}
-
-/// [`py_to_json`], with errors naming the place from `at` (an argument's name, an item
-/// of it: `lines[3]`).
+/// 64 bits, a str with a lone surrogate) is an `ArgumentError` naming where it is: `at`
+/// (an argument's name, an item of it: `lines[3]`) and the path below it.
 pub(crate) fn json_at(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
     if obj.is_none() {
         Ok(Value::Null)
@@ -91,7 +84,7 @@ pub(crate) fn json_at(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
                 .ok_or_else(|| errors::argument(at, obj, "not a JSON number"))
         }
     } else if obj.is_instance_of::<PyString>() {
-        Ok(Value::String(text(obj, at)?))
+        Ok(Value::String(text(obj, at)?.to_owned()))
     } else if let Ok(d) = obj.cast::<PyDict>() {
         let mut map = serde_json::Map::new();
         for (k, v) in d.iter() {
@@ -101,7 +94,7 @@ pub(crate) fn json_at(obj: &Bound<'_, PyAny>, at: &str) -> PyResult<Value> {
                     "{place}: a key that is not a string"
                 )));
             }
-            map.insert(text(&k, &place)?, json_at(&v, &place)?);
+            map.insert(text(&k, &place)?.to_owned(), json_at(&v, &place)?);
         }
         Ok(Value::Object(map))
     } else if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
@@ -127,8 +120,8 @@ pub(crate) fn py_repr(py: Python<'_>, s: &str) -> String {
 
 /// The UTF-8 text of a str, or why it has none: a Python str may hold a lone surrogate,
 /// which is no character and which UTF-8 (so Rust) cannot encode.
-pub(crate) fn utf8<'a>(s: &'a Bound<'_, PyString>) -> Result<Cow<'a, str>, String> {
-    s.to_cow().map_err(|e| unencodable(s, &e))
+pub(crate) fn utf8<'a>(s: &'a Bound<'_, PyString>) -> Result<&'a str, String> {
+    s.to_str().map_err(|e| unencodable(s, &e))
 }
 
 /// What the `UnicodeEncodeError` `e` of encoding `s` is about: the lone surrogate and where.
@@ -145,16 +138,14 @@ fn unencodable(s: &Bound<'_, PyAny>, e: &PyErr) -> String {
 
 /// A str argument's text: another type is a `TypeError`, a str with a lone surrogate an
 /// `ArgumentError` naming `name`.
-pub(crate) fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+pub(crate) fn text<'a>(obj: &'a Bound<'_, PyAny>, name: &str) -> PyResult<&'a str> {
     let Ok(s) = obj.cast::<PyString>() else {
         return Err(PyTypeError::new_err(format!(
             "{name}: expected a str, not {}",
             obj.get_type().name()?
         )));
     };
-    utf8(s)
-        .map(Cow::into_owned)
-        .map_err(|why| errors::argument(name, obj, why))
+    utf8(s).map_err(|why| errors::argument(name, obj, why))
 }
 
 /// An action argument's text (`[verb] <name>(id)`); a str with a lone surrogate is an
@@ -162,7 +153,7 @@ pub(crate) fn text(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
 pub(crate) fn action_text(obj: &Bound<'_, PyAny>) -> PyResult<String> {
     let s = obj.cast::<PyString>()?;
     utf8(s)
-        .map(Cow::into_owned)
+        .map(str::to_owned)
         .map_err(|why| errors::not_text_action(s, why))
 }
 
@@ -198,14 +189,16 @@ impl Unsigned for usize {
 
 /// An int argument as `T`: a negative int, or one above `T::MAX`, is an `ArgumentError`
 /// naming `name` and the range; another type is a `TypeError`.
-#[expect(
-    dead_code,
-    reason = "for the arguments of lib.rs, run.rs and bench.rs, on another branch"
-)]
 pub(crate) fn unsigned<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
-    let out_of_range = || errors::argument(name, obj, format!("out of range: 0 to {}", T::MAX));
+    at_most(obj, name, T::MAX)
+}
+
+/// [`unsigned`] up to `max` (no more than `T::MAX`), for a count with a smaller limit.
+pub(crate) fn at_most<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str, max: u64) -> PyResult<T> {
+    let out_of_range = || errors::argument(name, obj, format!("out of range: 0 to {max}"));
     match obj.extract::<u64>() {
-        Ok(n) => T::try_from(n).map_err(|_| out_of_range()),
+        Ok(n) if n <= max => T::try_from(n).map_err(|_| out_of_range()),
+        Ok(_) => Err(out_of_range()),
         Err(e) if e.is_instance_of::<PyOverflowError>(obj.py()) => Err(out_of_range()),
         Err(e) => Err(e),
     }
@@ -215,10 +208,6 @@ pub(crate) fn unsigned<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str) -> PyRes
 /// `argv` too, with `into_os_string`): a str the file system encoding cannot encode (a
 /// lone surrogate that is no escaped byte) is an `ArgumentError` naming `name`, where
 /// PyO3's own conversion panics; another type is a `TypeError`.
-#[expect(
-    dead_code,
-    reason = "for the arguments of lib.rs, run.rs and bench.rs, on another branch"
-)]
 pub(crate) fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<PathBuf> {
     let py = obj.py();
     let fspath = py.import("os")?.call_method1("fspath", (obj,))?;
@@ -230,6 +219,18 @@ pub(crate) fn path(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<PathBuf> {
         });
     }
     fspath.extract()
+}
+
+/// An argument that may be None: None is `None`, any other value goes through `convert`.
+pub(crate) fn optional<'a, 'py, T>(
+    obj: &'a Bound<'py, PyAny>,
+    convert: impl FnOnce(&'a Bound<'py, PyAny>) -> PyResult<T>,
+) -> PyResult<Option<T>> {
+    if obj.is_none() {
+        Ok(None)
+    } else {
+        convert(obj).map(Some)
+    }
 }
 
 /// Runs `f` on its own thread with the GIL released, checking for Ctrl-C (and other

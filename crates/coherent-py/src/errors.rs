@@ -205,6 +205,17 @@ pub(crate) fn argument(name: &str, value: &Bound<'_, PyAny>, why: impl Display) 
     error(value.py(), Kind::Argument, message, None)
 }
 
+/// An `ArgumentError` whose message says it all: arguments that do not fit together, an
+/// argument refused with the engine's own words.
+pub(crate) fn invalid(py: Python<'_>, message: impl Into<String>) -> PyErr {
+    error(py, Kind::Argument, message, None)
+}
+
+/// An `ArgumentError`: text argument `name` is `value`, none of its choices (`expected`).
+pub(crate) fn choice(py: Python<'_>, name: &str, value: &str, expected: &str) -> PyErr {
+    argument(name, PyString::new(py, value).as_any(), expected)
+}
+
 /// An `ActionParseError` for a str that Rust cannot hold as text (one with a lone
 /// surrogate): its `action` attribute is the str as given.
 pub(crate) fn not_text_action(action: &Bound<'_, PyString>, reason: String) -> PyErr {

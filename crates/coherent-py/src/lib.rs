@@ -6,6 +6,7 @@
 //! `coherent-agents` below it. `cli_main` starts that very command for the console
 //! script.
 
+mod args;
 mod bench;
 mod convert;
 mod errors;
@@ -37,7 +38,10 @@ use task::PyTask;
 
 /// Every task at `path`: an original env file, a native task file, or a folder of them.
 #[pyfunction]
-fn load_tasks(py: Python<'_>, path: PathBuf) -> PyResult<Vec<PyTask>> {
+fn load_tasks(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::path)] path: PathBuf,
+) -> PyResult<Vec<PyTask>> {
     let tasks = py
         .detach(|| load::load_tasks(&path))
         .map_err(|e| core_err(py, e))?;
@@ -48,7 +52,10 @@ fn load_tasks(py: Python<'_>, path: PathBuf) -> PyResult<Vec<PyTask>> {
 /// that one bad task does not hide the others (as `coherent validate` reports them).
 /// A path that cannot be read, or a file that is not JSON, still raises.
 #[pyfunction]
-fn read_tasks(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
+fn read_tasks(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::path)] path: PathBuf,
+) -> PyResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
     let results = py
         .detach(|| load::read_tasks(&path))
         .map_err(|e| core_err(py, e))?;
@@ -67,14 +74,20 @@ fn read_tasks(py: Python<'_>, path: PathBuf) -> PyResult<(Vec<PyTask>, Vec<Py<Py
 /// 40-task subset (per scene 2 mono, 3 dual, 3 trio).
 #[pyfunction]
 #[pyo3(signature = (subset = None))]
-fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>> {
+fn benchmark_tasks(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::subset)] subset: Option<&str>,
+) -> PyResult<Vec<PyTask>> {
     let subset = match subset {
         None => Subset::All,
         Some("40") => Subset::named("native40").expect("a subset name"),
         Some(other) => {
-            return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "subset must be None or \"40\", not {other:?}"
-            )));
+            return Err(errors::choice(
+                py,
+                "subset",
+                other,
+                "expected None or \"40\"",
+            ));
         }
     };
     let tasks = py.detach(benchmark::tasks).map_err(|e| core_err(py, e))?;
@@ -92,7 +105,7 @@ fn benchmark_tasks(py: Python<'_>, subset: Option<&str>) -> PyResult<Vec<PyTask>
 fn plan<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
-    max_states: usize,
+    #[pyo3(from_py_with = args::max_states)] max_states: usize,
 ) -> PyResult<Bound<'py, PyAny>> {
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
@@ -116,7 +129,7 @@ fn plan<'py>(
 fn validate_task(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
-    max_states: usize,
+    #[pyo3(from_py_with = args::max_states)] max_states: usize,
 ) -> PyResult<Vec<String>> {
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
@@ -134,8 +147,11 @@ fn validate_task(
 
 /// Parses an action string: `{"verb", "object": {"name", "id"}, "target": ... | None}`.
 #[pyfunction]
-fn parse_action<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyDict>> {
-    let parsed = action::parse(text).map_err(|e| core_err(py, e))?;
+fn parse_action<'py>(
+    py: Python<'py>,
+    #[pyo3(from_py_with = convert::action_text)] text: String,
+) -> PyResult<Bound<'py, PyDict>> {
+    let parsed = action::parse(&text).map_err(|e| core_err(py, e))?;
     let mention = |m: &action::Mention| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("name", &m.name)?;
@@ -152,7 +168,7 @@ fn parse_action<'py>(py: Python<'py>, text: &str) -> PyResult<Bound<'py, PyDict>
 /// Runs the `coherent` command line; `argv` starts with the program name. Returns the
 /// exit status.
 #[pyfunction]
-fn cli_main(py: Python<'_>, argv: Vec<OsString>) -> u8 {
+fn cli_main(py: Python<'_>, #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>) -> u8 {
     py.detach(|| {
         let code = coherent::cli::run(argv);
         // Python may exit right after; lines already end in newlines, this is for the rest.

@@ -2,16 +2,21 @@
 //! the prompt set and the price table, read by the session layer
 //! (`coherent::session::prompts`) as `--prompts` and `--prices` are.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use coherent::session::prompts;
 use coherent_agents::{PriceTable, Prompts};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyString};
 
-use crate::convert::py_to_json;
+use crate::convert::{json_at, path, text};
 use crate::errors;
+
+/// Whether `obj` names a file: a str or an `os.PathLike`.
+fn is_path(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
+    Ok(obj.is_instance_of::<PyString>() || obj.hasattr("__fspath__")?)
+}
 
 /// `prompts=`: None (the built-in templates), a folder of template files, or a dict of
 /// `{file name: text}`; each replaces the built-in template of that name. A template
@@ -24,12 +29,17 @@ pub(crate) fn prompt_set(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Prompts> {
     let set = if let Ok(d) = spec.cast::<PyDict>() {
         let files = d
             .iter()
-            .map(|(k, v)| Ok((k.extract::<String>()?, v.extract::<String>()?)))
-            .collect::<PyResult<Vec<_>>>()
-            .map_err(|_| PyTypeError::new_err("prompts: a dict of {file name: text}, both str"))?;
+            .map(|(k, v)| {
+                let name = text(&k, "prompts")?.to_owned();
+                Ok((
+                    name.clone(),
+                    text(&v, &format!("prompts[{name:?}]"))?.to_owned(),
+                ))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
         Prompts::from_texts(Path::new("prompts"), files)
-    } else if let Ok(dir) = spec.extract::<PathBuf>() {
-        prompts::prompt_set(Some(&dir))
+    } else if is_path(spec)? {
+        prompts::prompt_set(Some(&path(spec, "prompts")?))
     } else {
         return Err(PyTypeError::new_err(
             "prompts: expected a folder of template files or a dict of {file name: text}",
@@ -47,12 +57,15 @@ pub(crate) fn price_table(spec: Option<&Bound<'_, PyAny>>) -> PyResult<PriceTabl
     };
     let py = spec.py();
     if spec.is_instance_of::<PyDict>() {
-        let text = py_to_json(spec)?.to_string();
+        let text = json_at(spec, "prices")?.to_string();
         let table = PriceTable::parse_json(&text, "prices").map_err(|e| errors::coherent(py, e))?;
         return Ok(PriceTable::builtin().overridden_by(table));
     }
-    let file = spec.extract::<PathBuf>().map_err(|_| {
-        PyTypeError::new_err("prices: expected a price file (JSON or TOML) or a dict by model")
-    })?;
+    if !is_path(spec)? {
+        return Err(PyTypeError::new_err(
+            "prices: expected a price file (JSON or TOML) or a dict by model",
+        ));
+    }
+    let file = path(spec, "prices")?;
     prompts::price_table(Some(&file)).map_err(|e| errors::coherent(py, e))
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use coherent::session;
-use coherent::session::backend::{BackendKind, BackendRequest};
+use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::endpoint::{Endpoint, Patience};
 use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
 use coherent_agents::episode::{self, Method, Settings};
@@ -16,12 +16,13 @@ use coherent_agents::{
     ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode, PriceTable,
 };
 use coherent_core::planner::Limits;
-use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
-use crate::convert::{interruptible, py_repr, to_py};
-use crate::errors::{self, Kind};
+use crate::args;
+use crate::convert::{finite, interruptible, py_repr, text, to_py};
+use crate::errors::{self, Kind, short_repr};
 use crate::prompts::{price_table, prompt_set};
 use crate::task::PyTask;
 
@@ -45,23 +46,26 @@ impl PyLlm {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        base_url: Option<String>,
-        model: Option<String>,
-        api_key: Option<String>,
-        temperature: f32,
-        seed: Option<u64>,
-        format: &str,
-        connect_timeout: f64,
-        read_timeout: f64,
-        timeout: f64,
-        max_retries: u32,
-        concurrency: usize,
-        max_response_bytes: usize,
+        #[pyo3(from_py_with = args::base_url)] base_url: Option<String>,
+        #[pyo3(from_py_with = args::model)] model: Option<String>,
+        #[pyo3(from_py_with = args::api_key)] api_key: Option<String>,
+        #[pyo3(from_py_with = args::temperature)] temperature: f32,
+        #[pyo3(from_py_with = args::seed)] seed: Option<u64>,
+        #[pyo3(from_py_with = args::format)] format: &str,
+        #[pyo3(from_py_with = args::connect_timeout)] connect_timeout: f64,
+        #[pyo3(from_py_with = args::read_timeout)] read_timeout: f64,
+        #[pyo3(from_py_with = args::timeout)] timeout: f64,
+        #[pyo3(from_py_with = args::max_retries)] max_retries: u32,
+        #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
+        #[pyo3(from_py_with = args::max_response_bytes)] max_response_bytes: usize,
     ) -> PyResult<PyLlm> {
         let format: OutputMode = serde_json::from_value(format.into()).map_err(|_| {
-            PyValueError::new_err(format!(
-                "format {format:?}: expected \"json_schema\", \"json_object\" or \"text\""
-            ))
+            errors::choice(
+                py,
+                "format",
+                format,
+                "expected \"json_schema\", \"json_object\" or \"text\"",
+            )
         })?;
         let endpoint = Endpoint {
             base_url,
@@ -341,16 +345,18 @@ impl PyEpisode {
 /// `"all=0.1"`, `{"hallucinate": 0.1, ...}` or None.
 pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<ErrorRates>> {
     let Some(spec) = spec else { return Ok(None) };
-    let text = if let Ok(s) = spec.cast::<PyString>() {
-        s.to_cow()?.into_owned()
+    let written = if spec.is_instance_of::<PyString>() {
+        text(spec, "sim_errors")?.to_owned()
     } else if let Ok(d) = spec.cast::<PyDict>() {
         let mut parts = Vec::new();
         for (k, v) in d.iter() {
-            parts.push(format!(
-                "{}={}",
-                k.extract::<String>()?,
-                v.extract::<f64>()?
-            ));
+            let place = format!("sim_errors[{}]", short_repr(&k));
+            let kind = text(&k, &place)?;
+            // A key must not read as more than one kind (`"all=1,hallucinate"`).
+            if kind.contains([',', '=']) {
+                return Err(errors::argument(&place, &k, "not an error kind"));
+            }
+            parts.push(format!("{kind}={}", finite(&v, &place)?));
         }
         parts.join(",")
     } else {
@@ -358,18 +364,18 @@ pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Er
             "sim_errors: expected a str such as \"all=0.1\" or a dict of rates by kind",
         ));
     };
-    ErrorRates::parse(&text)
+    ErrorRates::parse(&written)
         .map(Some)
-        .map_err(|e| PyValueError::new_err(format!("sim_errors: {e}")))
+        .map_err(|e| errors::invalid(spec.py(), format!("sim_errors: {e}")))
 }
 
-pub(crate) fn method_of(name: &str) -> PyResult<Method> {
+pub(crate) fn method_of(py: Python<'_>, name: &str) -> PyResult<Method> {
     Method::from_name(name).ok_or_else(|| {
         let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        PyValueError::new_err(format!(
-            "unknown method {name:?}; the methods: {}",
-            names.join(", ")
-        ))
+        errors::invalid(
+            py,
+            format!("unknown method {name:?}; the methods: {}", names.join(", ")),
+        )
     })
 }
 
@@ -431,22 +437,22 @@ fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>
 pub(crate) fn run(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
-    method: &str,
+    #[pyo3(from_py_with = args::method)] method: &str,
     llm: Option<&Bound<'_, PyLlm>>,
     sim_errors: Option<&Bound<'_, PyAny>>,
-    history: usize,
-    max_steps: Option<u32>,
+    #[pyo3(from_py_with = args::history)] history: usize,
+    #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
     physics: bool,
-    seed: Option<u64>,
-    out: PathBuf,
-    max_states: usize,
+    #[pyo3(from_py_with = args::seed)] seed: Option<u64>,
+    #[pyo3(from_py_with = args::out)] out: PathBuf,
+    #[pyo3(from_py_with = args::max_states)] max_states: usize,
     prompts: Option<&Bound<'_, PyAny>>,
     prices: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
     // Before anything else: a bad template must cost no model call.
     let prompts = prompt_set(prompts)?;
     let prices = price_table(prices)?;
-    let method = method_of(method)?;
+    let method = method_of(py, method)?;
     let backend = BackendRequest {
         kind: BackendKind::Auto,
         endpoint: llm.map(|l| l.get().config.clone()),
@@ -454,7 +460,10 @@ pub(crate) fn run(
         replay_from: None,
     }
     .choose()
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    .map_err(|e| match e {
+        BackendProblem::Setup(why) => errors::backend(py, why),
+        other => errors::invalid(py, other.to_string()),
+    })?;
     let spec = EpisodeSpec {
         task: Arc::clone(&task.get().task),
         settings: Settings {
@@ -482,8 +491,8 @@ pub(crate) fn run(
 #[pyo3(signature = (transcript, *, out = PathBuf::from("runs"), prices = None))]
 pub(crate) fn replay(
     py: Python<'_>,
-    transcript: PathBuf,
-    out: PathBuf,
+    #[pyo3(from_py_with = args::transcript)] transcript: PathBuf,
+    #[pyo3(from_py_with = args::out)] out: PathBuf,
     prices: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
     let path = transcript.clone();
@@ -509,6 +518,9 @@ pub(crate) fn replay(
 
 /// The episode recorded in a transcript file (`coherent run` or `coherent bench` wrote it).
 #[pyfunction]
-pub(crate) fn load_episode(py: Python<'_>, path: PathBuf) -> PyResult<PyEpisode> {
+pub(crate) fn load_episode(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::path)] path: PathBuf,
+) -> PyResult<PyEpisode> {
     PyEpisode::read(py, &path)
 }
