@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use clap::Args;
 use coherent_agents::Cancel;
-use coherent_agents::episode::{Budget, Method, Settings};
+use coherent_agents::episode::{Budget, MethodSpec, Settings};
 use coherent_agents::llm::BackendInfo;
 use coherent_agents::transcript::{Outcome, Round, Status, Summary};
 use coherent_core::Task;
@@ -17,7 +17,7 @@ use coherent_core::text::shown;
 
 use serde_json::json;
 
-use super::args::{AnswerFormat, LlmArgs, method_names, sim_errors};
+use super::args::{AnswerFormat, LlmArgs, LoadMethod, method_name, method_spec, sim_errors};
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, tasks};
@@ -26,6 +26,8 @@ use crate::session::{self, tasks};
 const FAILED: u8 = 1;
 /// Exit status when the model's server failed for good or a replay diverged.
 const BACKEND_FAILED: u8 = 3;
+/// Exit status when a method written in Python raised an error.
+const METHOD_FAILED: u8 = 4;
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
 
@@ -37,8 +39,10 @@ pub(crate) struct RunArgs {
     /// Which task of the file (its task_id).
     #[arg(long = "task")]
     task_id: Option<i64>,
-    /// The planning method.
-    #[arg(long, default_value = "pefa", value_parser = method_names())]
+    /// The planning method: pefa, pefa-no-history, cmrs, dmrs-1d, dmrs-2d, mcts,
+    /// llm-mcts, optimal, or MODULE:CLASS, a method written in Python (a module or a
+    /// .py file, and its class; from the Python package's `coherent` only).
+    #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = 5)]
@@ -93,7 +97,7 @@ impl Lines {
     }
 }
 
-pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
+pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod>) -> Result<u8, String> {
     if let Some(format) = args.old_format {
         args.llm.answer_format = format;
     }
@@ -101,12 +105,12 @@ pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
         args.llm.requests = n;
     }
     let cancel = Cancel::default();
-    let prepared = prepare(&args, &cancel)?;
+    let prepared = prepare(&args, &cancel, load)?;
     session::block_on(run_prepared(prepared, &args, cancel))?
 }
 
 /// The episode the flags ask for: a replay of a transcript, or a new one.
-fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
+fn prepare(args: &RunArgs, cancel: &Cancel, load: Option<&LoadMethod>) -> Result<Prepared, String> {
     if let Some(path) = &args.replay {
         let given = match &args.task_file {
             Some(file) => Some(tasks::pick_task(file, args.task_id)?),
@@ -120,8 +124,7 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
         .as_deref()
         .ok_or("a task file is needed without --replay")?;
     let task = tasks::pick_task(file, args.task_id)?;
-    let method = Method::from_name(&args.method)
-        .ok_or_else(|| format!("unknown method {:?}", args.method))?;
+    let method = method_spec(&args.method, load)?;
     let endpoint = args.llm.config()?;
     let temperature = endpoint.as_ref().map(|_| args.llm.temperature);
     let backend = BackendRequest {
@@ -152,13 +155,14 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
 async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Result<u8, String> {
     let lines = Lines { json: args.json };
     let info = prepared.backend_info();
-    lines.say(&if prepared.settings.method.uses_model() {
-        backend_line(&info, prepared.replaying())
-    } else {
-        format!(
-            "backend: none ({} asks no model)",
-            prepared.settings.method.name()
-        )
+    let method = &prepared.settings.method;
+    lines.say(&match method {
+        _ if method.uses_model() => backend_line(&info, prepared.replaying()),
+        MethodSpec::External(_) => format!(
+            "backend: none ({} is a method written in Python: the models it calls are its own)",
+            shown(method.name())
+        ),
+        MethodSpec::Builtin(_) => format!("backend: none ({} asks no model)", method.name()),
     });
     lines.say(&task_line(&prepared));
     let ctrl_c = {
@@ -213,6 +217,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         Status::Failure => FAILED,
         Status::BackendError => BACKEND_FAILED,
         Status::Interrupted => INTERRUPTED,
+        Status::Error => METHOD_FAILED,
     })
 }
 
@@ -232,7 +237,7 @@ fn task_line(p: &Prepared) -> String {
         shown(&task.meta.scene),
         task.meta.task_id,
         shown(&task.meta.instruction),
-        p.settings.method.name()
+        shown(p.settings.method.name())
     )
 }
 
@@ -289,6 +294,11 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
         Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
         Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
         Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
+        // The last line of the error (a Python traceback ends with the exception).
+        Outcome::MethodError { message } => format!(
+            "the method failed: {}",
+            shown(message.trim_end().lines().last().unwrap_or(""))
+        ),
     };
     let width = max.to_string().len();
     format!(
@@ -303,6 +313,7 @@ fn summary_line(s: &Summary, goal_satisfied: bool) -> String {
         Status::Failure => "failure: step budget spent",
         Status::BackendError => "stopped: the backend failed",
         Status::Interrupted => "interrupted",
+        Status::Error => "stopped: the method raised an error",
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {
