@@ -49,7 +49,7 @@ pub use records::transcript;
 
 pub use backends::builtin::BuiltinBackend;
 pub use backends::llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
-pub use backends::openai::{ApiKey, OpenAiClient, OpenAiConfig};
+pub use backends::openai::{ApiKey, Chat, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
 pub use episode::{Budget, Cancel, Episode, External, Method, MethodSpec, Policy, Settings, View};
