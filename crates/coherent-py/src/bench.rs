@@ -19,7 +19,8 @@ use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{interruptible, py_to_json, to_py};
 use crate::errors;
-use crate::run::{PyLlm, method_of};
+use crate::llm::PyLlm;
+use crate::run::method_of;
 use crate::task::PyTask;
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.

@@ -9,6 +9,7 @@
 mod bench;
 mod convert;
 mod errors;
+mod llm;
 mod run;
 mod scene;
 mod task;
@@ -175,7 +176,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ReplayMismatchError", exc.replay_mismatch.clone_ref(py))?;
     m.add_class::<PyTask>()?;
     m.add_class::<task::PyEnv>()?;
-    m.add_class::<run::PyLlm>()?;
+    m.add_class::<llm::PyLlm>()?;
     m.add_class::<run::PyEpisode>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;

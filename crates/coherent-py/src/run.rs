@@ -1,5 +1,4 @@
-//! Episodes: `LLM` (an endpoint's settings), `run`, `replay`, `load_episode` and the
-//! `Episode` they give. The episode is the session layer's
+//! Episodes: `run`, `replay`, `load_episode` and the `Episode` they give. The episode is the session layer's
 //! (`coherent::session::episode`), as for `coherent run`.
 
 use std::path::{Path, PathBuf};
@@ -7,121 +6,18 @@ use std::sync::Arc;
 
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendRequest};
-use coherent::session::endpoint::{Endpoint, Patience};
 use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
-use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode};
+use coherent_agents::{Cancel, ErrorRates};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{interruptible, py_repr, to_py};
 use crate::errors::{self, Kind};
+use crate::llm::PyLlm;
 use crate::task::PyTask;
-
-/// How to reach an OpenAI-compatible endpoint. Arguments left out come from the
-/// environment as on the command line (`OPENAI_BASE_URL`, `OPENAI_API_KEY`,
-/// `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and logs.
-#[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
-pub(crate) struct PyLlm {
-    pub config: OpenAiConfig,
-}
-
-#[pymethods]
-impl PyLlm {
-    #[new]
-    #[pyo3(signature = (
-        base_url = None, model = None, api_key = None, *, temperature = 0.0, seed = None,
-        format = "json_schema", connect_timeout = 10.0, read_timeout = 120.0, timeout = 300.0,
-        max_retries = 4, concurrency = 4
-    ))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        base_url: Option<String>,
-        model: Option<String>,
-        api_key: Option<String>,
-        temperature: f32,
-        seed: Option<u64>,
-        format: &str,
-        connect_timeout: f64,
-        read_timeout: f64,
-        timeout: f64,
-        max_retries: u32,
-        concurrency: usize,
-    ) -> PyResult<PyLlm> {
-        let format: OutputMode = serde_json::from_value(format.into()).map_err(|_| {
-            PyValueError::new_err(format!(
-                "format {format:?}: expected \"json_schema\", \"json_object\" or \"text\""
-            ))
-        })?;
-        let endpoint = Endpoint {
-            base_url,
-            api_key: api_key.map(ApiKey::new),
-            model,
-            temperature,
-            seed,
-            format,
-            patience: Patience {
-                connect_timeout,
-                read_timeout,
-                timeout,
-                max_retries,
-            },
-            requests: concurrency,
-        };
-        let config = endpoint.config().map_err(|e| errors::backend(py, e))?.ok_or_else(|| {
-            errors::backend(
-                py,
-                "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and COHERENT_MODEL)",
-            )
-        })?;
-        // The client checks the rest (the model name, the URL); fail here, not mid-run.
-        OpenAiClient::new(config.clone()).map_err(|e| errors::backend(py, e.to_string()))?;
-        Ok(PyLlm { config })
-    }
-
-    #[getter]
-    fn base_url(&self) -> &str {
-        &self.config.base_url
-    }
-
-    #[getter]
-    fn model(&self) -> &str {
-        &self.config.model
-    }
-
-    /// Whether a key is set (the key itself cannot be read back).
-    #[getter]
-    fn has_api_key(&self) -> bool {
-        self.config.api_key.is_some()
-    }
-
-    #[getter]
-    fn temperature(&self) -> f32 {
-        self.config.temperature
-    }
-
-    #[getter]
-    fn seed(&self) -> Option<u64> {
-        self.config.seed
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        format!(
-            "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
-            py_repr(py, &self.config.base_url),
-            py_repr(py, &self.config.model),
-            if self.has_api_key() {
-                "'[hidden]'"
-            } else {
-                "None"
-            },
-            self.config.temperature
-        )
-    }
-}
 
 /// An episode as recorded in its transcript: the settings, every round, the summary.
 #[pyclass(name = "Episode", module = "coherent._coherent", frozen)]
