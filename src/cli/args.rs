@@ -113,10 +113,13 @@ pub(crate) fn method_name(value: &str) -> Result<String, String> {
 
 /// Loads a method written in Python from `MODULE:CLASS` (an importable module or a `.py`
 /// file, and the class or callable in it); the Python package's console script has one.
-pub type LoadMethod = dyn Fn(&str) -> Result<External, String> + Send + Sync;
+pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, String> + Send + Sync + 'a;
 
 /// The method a value of [`method_name`] names: a built-in one, or one that `load` loads.
-pub(crate) fn method_spec(value: &str, load: Option<&LoadMethod>) -> Result<MethodSpec, String> {
+pub(crate) fn method_spec(
+    value: &str,
+    load: Option<&LoadMethod<'_>>,
+) -> Result<MethodSpec, String> {
     if let Some(method) = Method::from_name(value) {
         return Ok(method.into());
     }

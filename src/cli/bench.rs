@@ -95,7 +95,7 @@ enum TableFormat {
     Json,
 }
 
-pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod>) -> Result<u8, String> {
+pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     if let Some(path) = &args.report {
         let file = bench::read_results(path)?;
         if file.truncated_bytes > 0 {
@@ -127,7 +127,7 @@ fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
     let _ = std::io::stdout().write_all(text.as_bytes());
 }
 
-async fn run_async(args: BenchArgs, load: Option<&LoadMethod>) -> Result<u8, String> {
+async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     let (Some(tasks_path), Some(out)) = (&args.tasks, &args.out) else {
         return Err("--tasks, --methods and --out are needed to run".into());
     };

@@ -97,7 +97,7 @@ where
 /// [`run`], with `load` to load the methods written in Python that `--method` and
 /// `--methods` name as `MODULE:CLASS` (without it, such a name is an error that says
 /// what is needed).
-pub fn run_with<I, T>(args: I, load: Option<&LoadMethod>) -> u8
+pub fn run_with<I, T>(args: I, load: Option<&LoadMethod<'_>>) -> u8
 where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,

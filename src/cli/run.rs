@@ -97,7 +97,7 @@ impl Lines {
     }
 }
 
-pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod>) -> Result<u8, String> {
+pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     if let Some(format) = args.old_format {
         args.llm.answer_format = format;
     }
@@ -110,7 +110,11 @@ pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod>) -> Result<u8, St
 }
 
 /// The episode the flags ask for: a replay of a transcript, or a new one.
-fn prepare(args: &RunArgs, cancel: &Cancel, load: Option<&LoadMethod>) -> Result<Prepared, String> {
+fn prepare(
+    args: &RunArgs,
+    cancel: &Cancel,
+    load: Option<&LoadMethod<'_>>,
+) -> Result<Prepared, String> {
     if let Some(path) = &args.replay {
         let given = match &args.task_file {
             Some(file) => Some(tasks::pick_task(file, args.task_id)?),

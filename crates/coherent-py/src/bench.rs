@@ -20,7 +20,8 @@ use pyo3::types::{PyDict, PyList, PyString};
 use crate::convert::{interruptible, py_to_json, to_py};
 use crate::errors;
 use crate::llm::PyLlm;
-use crate::run::method_of;
+use crate::method::Methods;
+use crate::run::MethodArg;
 use crate::task::PyTask;
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
@@ -81,14 +82,14 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 #[pyfunction]
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
-    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
-    progress = false
+    concurrency = 4, history = 5, max_states = 5_000_000, max_steps = None,
+    out = PathBuf::from("results.jsonl"), progress = false
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
     py: Python<'py>,
     tasks: Vec<Bound<'py, PyTask>>,
-    methods: Vec<String>,
+    methods: Vec<MethodArg>,
     backend: Option<&Bound<'py, PyAny>>,
     sim_errors: Option<&Bound<'py, PyAny>>,
     replay_from: Option<PathBuf>,
@@ -96,12 +97,15 @@ pub(crate) fn run_bench<'py>(
     concurrency: usize,
     history: usize,
     max_states: usize,
+    max_steps: Option<u32>,
     out: PathBuf,
     progress: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
+    let mut python = Methods::new(py)?;
     let methods = methods
         .iter()
-        .map(|m| method_of(m))
+        .map(|m| m.spec(py, &mut python, &objects))
         .collect::<PyResult<Vec<_>>>()?;
     if methods.is_empty() {
         return Err(PyValueError::new_err("methods: name at least one method"));
@@ -159,6 +163,7 @@ pub(crate) fn run_bench<'py>(
         history,
         temperature,
         max_states,
+        max_steps,
         out,
     };
     let cancel = Cancel::default();
@@ -175,8 +180,9 @@ pub(crate) fn run_bench<'py>(
             };
             session::block_on(session_bench::run(&tasks, &config, &cancel, &mut show))?
         },
-    )?;
-    let outcome = result.map_err(|e| errors::coherent(py, e))?;
+    );
+    python.close(py)?;
+    let outcome = result?.map_err(|e| errors::coherent(py, e))?;
     outcome_dict(py, &outcome)
 }
 

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendRequest};
 use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
-use coherent_agents::episode::{self, Method, Settings};
+use coherent_agents::episode::{self, Method, MethodSpec, Settings};
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
 use coherent_agents::{Cancel, ErrorRates};
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -17,6 +17,7 @@ use pyo3::types::{PyDict, PyList, PyString};
 use crate::convert::{interruptible, py_repr, to_py};
 use crate::errors::{self, Kind};
 use crate::llm::PyLlm;
+use crate::method::{Methods, helpers};
 use crate::task::PyTask;
 
 /// An episode as recorded in its transcript: the settings, every round, the summary.
@@ -78,8 +79,8 @@ impl PyEpisode {
         &self.transcript.header.method
     }
 
-    /// `"success"`, `"failure"` (the step budget is spent), `"backend_error"` or
-    /// `"interrupted"`.
+    /// `"success"`, `"failure"` (the step budget is spent), `"backend_error"`,
+    /// `"interrupted"` or `"error"` (a method written in Python raised).
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.summary.status)
@@ -254,42 +255,71 @@ fn episode_off_the_gil(
     })
 }
 
-/// Raises `BackendError` when the backend failed for good, with the episode attached.
-fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>> {
-    let failed = episode.summary.status == Status::BackendError;
-    let message = format!(
-        "{} (transcript: {})",
-        episode
-            .summary
-            .error
-            .as_deref()
-            .unwrap_or("the backend failed"),
-        episode.path.display()
-    );
+/// Raises `BackendError` when the backend failed for good, or `MethodError` (with the
+/// method's exception as its cause, when there is one) when the method raised; either
+/// with the episode attached.
+fn failure(py: Python<'_>, episode: PyEpisode, cause: Option<PyErr>) -> PyResult<Py<PyEpisode>> {
+    let kind = match episode.summary.status {
+        Status::BackendError => Kind::Backend,
+        Status::Error => Kind::Method,
+        _ => return Py::new(py, episode),
+    };
+    let error = episode
+        .summary
+        .error
+        .as_deref()
+        .unwrap_or("the episode failed");
+    // A traceback's last line is the exception; the whole of it is in the transcript.
+    let last = error.trim_end().lines().last().unwrap_or(error);
+    let message = format!("{last} (transcript: {})", episode.path.display());
     let episode = Py::new(py, episode)?;
-    if failed {
-        return Err(errors::error(
-            py,
-            Kind::Backend,
-            message,
-            Some(episode.into_any()),
-        ));
+    let raised = errors::error(py, kind, message, Some(episode.into_any()));
+    raised.set_cause(py, cause);
+    Err(raised)
+}
+
+/// What `method=` and `methods=` take: a built-in method's name, `"MODULE:CLASS"`, or a
+/// class (any callable) of a method written in Python.
+#[derive(FromPyObject)]
+pub(crate) enum MethodArg {
+    Name(String),
+    Python(Py<PyAny>),
+}
+
+impl MethodArg {
+    /// The method, with those written in Python added to `methods` (`tasks`: the run's).
+    pub(crate) fn spec(
+        &self,
+        py: Python<'_>,
+        methods: &mut Methods,
+        tasks: &[Py<PyTask>],
+    ) -> PyResult<MethodSpec> {
+        match self {
+            MethodArg::Name(name) if name.contains(':') => {
+                let found = helpers(py)?.call_method1("load", (name,))?;
+                methods.add(&found, tasks).map(MethodSpec::External)
+            }
+            MethodArg::Name(name) => method_of(name).map(MethodSpec::from),
+            MethodArg::Python(object) => methods
+                .add(object.bind(py), tasks)
+                .map(MethodSpec::External),
+        }
     }
-    Ok(episode)
 }
 
 /// Runs `method` on `task` as `coherent run` does and returns the episode; its
 /// transcript goes to `out`.
 #[pyfunction]
 #[pyo3(signature = (
-    task, method = "pefa", *, llm = None, sim_errors = None, history = 5, max_steps = None,
-    physics = false, seed = None, out = PathBuf::from("runs"), max_states = 5_000_000
+    task, method = MethodArg::Name("pefa".to_owned()), *, llm = None, sim_errors = None,
+    history = 5, max_steps = None, physics = false, seed = None, out = PathBuf::from("runs"),
+    max_states = 5_000_000
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
-    method: &str,
+    method: MethodArg,
     llm: Option<&Bound<'_, PyLlm>>,
     sim_errors: Option<&Bound<'_, PyAny>>,
     history: usize,
@@ -299,7 +329,8 @@ pub(crate) fn run(
     out: PathBuf,
     max_states: usize,
 ) -> PyResult<Py<PyEpisode>> {
-    let method = method_of(method)?;
+    let mut methods = Methods::new(py)?;
+    let method = method.spec(py, &mut methods, &[task.clone().unbind()])?;
     let backend = BackendRequest {
         kind: BackendKind::Auto,
         endpoint: llm.map(|l| l.get().config.clone()),
@@ -322,8 +353,10 @@ pub(crate) fn run(
         max_states,
         out,
     };
-    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel))?;
-    backend_failure(py, PyEpisode::from_ran(ran, task.clone().unbind()))
+    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel));
+    methods.close(py)?;
+    let cause = methods.methods.first().and_then(|m| m.take_error());
+    failure(py, PyEpisode::from_ran(ran?, task.clone().unbind()), cause)
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network), and checks that
@@ -348,7 +381,7 @@ pub(crate) fn replay(py: Python<'_>, transcript: PathBuf, out: PathBuf) -> PyRes
             Some(episode),
         ));
     }
-    backend_failure(py, episode)
+    failure(py, episode, None)
 }
 
 /// The episode recorded in a transcript file (`coherent run` or `coherent bench` wrote it).
