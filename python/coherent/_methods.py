@@ -36,9 +36,10 @@ def method_name(method: Any) -> str:
     return own if isinstance(own, str) else type(method).__name__
 
 
-def describe(error: BaseException) -> str:
-    """An exception as Python prints it: the traceback, then the exception's line."""
-    return "".join(traceback.format_exception(error)).rstrip()
+def describe(error: BaseException, tb: Any = None) -> str:
+    """An exception as Python prints it: the traceback (``tb``, else its own), then the
+    exception's line."""
+    return "".join(traceback.format_exception(type(error), error, tb or error.__traceback__)).rstrip()
 
 
 async def _with_step(coroutine: Coroutine[Any, Any, Any], recorder: Any) -> Any:

@@ -110,6 +110,14 @@ pub(crate) fn run_bench<'py>(
     if methods.is_empty() {
         return Err(PyValueError::new_err("methods: name at least one method"));
     }
+    for m in methods.iter().filter(|m| m.builtin().is_none()) {
+        if methods.iter().filter(|o| o.name() == m.name()).count() > 1 {
+            return Err(PyValueError::new_err(format!(
+                "methods: two methods are named {:?}: give each its own name (its `name`)",
+                m.name()
+            )));
+        }
+    }
     if seeds == 0 {
         return Err(PyValueError::new_err("seeds must be at least 1"));
     }

@@ -286,7 +286,7 @@ impl PythonMethod {
     /// `error` as the text of the transcript and results line, kept for `run` to chain.
     fn failed(&self, py: Python<'_>, error: PyErr) -> String {
         let text = helpers(py)
-            .and_then(|h| h.call_method1("describe", (error.value(py),)))
+            .and_then(|h| h.call_method1("describe", (error.value(py), error.traceback(py))))
             .and_then(|t| t.extract::<String>())
             .unwrap_or_else(|_| error.to_string());
         *self
