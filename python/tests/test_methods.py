@@ -316,3 +316,108 @@ def test_the_greedy_example(env0_tasks: list[coherent.Task], tmp_path: Path) -> 
     assert len(greedy) == 21 and set(greedy["status"]) <= {"success", "failure"}
     # It solves the tasks one robot does in a few steps (env0 tasks 1 and 3, say).
     assert set(greedy[greedy["success"]]["task_id"]) >= {1, 3}
+
+
+KEY = "sk-methods-test-SECRET-5151"
+
+
+@pytest.fixture(scope="module")
+def small_llm(local_model: str) -> coherent.LLM:
+    return coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", api_key=KEY)
+
+
+def test_llm_chat_goes_through_the_rust_client(small_llm: coherent.LLM) -> None:
+    reply = small_llm.chat([{"role": "user", "content": "Say hello."}], max_tokens=8)
+    assert isinstance(reply, coherent.Reply) and str(reply) == reply.text
+    assert reply.prompt_tokens > 0 and reply.completion_tokens > 0
+    assert reply.latency_ms > 0 and reply.attempts == 1 and reply.format == "text"
+    assert reply.finish in ("stop", "length") and reply.refusal is None
+    schema = {
+        "type": "object",
+        "properties": {"answer": {"type": "string", "enum": ["yes", "no"]}},
+        "required": ["answer"],
+        "additionalProperties": False,
+    }
+    structured = small_llm.chat("Is the sky blue? Answer in JSON.", schema=schema, max_tokens=20)
+    assert structured.format == "json_schema"
+    assert json.loads(structured.text)["answer"] in ("yes", "no")
+
+    async def both() -> list[coherent.Reply]:
+        return await asyncio.gather(small_llm.achat("Say A.", max_tokens=4), small_llm.achat("Say B.", max_tokens=4))
+
+    assert all(r.completion_tokens > 0 for r in asyncio.run(both()))
+    unreachable = coherent.LLM(base_url="http://127.0.0.1:9/v1", model="m", api_key=KEY, max_retries=1)
+    with pytest.raises(coherent.BackendError, match="connection failed.*after 2 attempts") as info:
+        unreachable.chat("hi")
+    assert KEY not in str(info.value)
+    with pytest.raises(TypeError, match="messages"):
+        small_llm.chat(42)  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="role"):
+        small_llm.chat("hi", role="critic")  # type: ignore[arg-type]
+
+
+def test_the_central_example_with_a_real_model(
+    small_llm: coherent.LLM, env0_tasks: list[coherent.Task], tmp_path: Path
+) -> None:
+    sys.path.insert(0, str(REPO / "examples" / "methods"))
+    try:
+        from central import CentralPlanner
+    finally:
+        sys.path.pop(0)
+
+    class Small(CentralPlanner):
+        llm = small_llm
+
+    # env0 task 2: bread into the plate, milk box into the microwave (GT 5); two steps.
+    task = env0_tasks[2]
+    out = tmp_path / "r.jsonl"
+    frame = coherent.bench([task], [Small], max_steps=2, out=out)
+    (line,) = frame.to_dict("records")
+    assert (line["method"], line["steps"], line["max_steps"]) == ("central", 2, 2)
+    assert line["status"] in ("success", "failure")
+    assert line["llm_calls"] == 2 and line["prompt_tokens"] > 0 and line["completion_tokens"] > 0
+    assert line["uses_model"] and line["backend_kind"] == "openai"
+    assert line["backend_model"] == "smollm2-135m" and line["backend_base_url"] == small_llm.base_url
+    records = read_transcript(line["transcript"])
+    assert records[0]["external"] is True and records[0]["backend"]["kind"] == "none"
+    for r in records[1:-1]:
+        (call,) = r["calls"]
+        assert call["client"] == {"kind": "openai", "model": "smollm2-135m", "base_url": small_llm.base_url}
+        assert call["role"] == "assigner" and call["messages"][0]["role"] == "system"
+        assert "Actions (robot: action)" in call["messages"][1]["content"]
+        assert call["answer"]["latency_ms"] > 0 and call["answer"]["usage"]["prompt_tokens"] > 0
+        assert r["external"]["note"]
+    assert KEY not in out.read_text() + Path(line["transcript"]).read_text()
+    # The recording replays with no model and no Python method behind it.
+    replayed = coherent.bench(
+        [task], [Small], backend="replay", replay_from=out, max_steps=2, out=tmp_path / "again.jsonl"
+    )
+    (again,) = replayed.to_dict("records")
+    assert again["error"] is None, again["error"]
+    assert (again["steps"], again["prompt_tokens"], again["backend_kind"]) == (2, line["prompt_tokens"], "replay")
+
+
+def test_calls_of_an_async_method_are_filed_under_its_step(
+    small_llm: coherent.LLM, task0: coherent.Task, tmp_path: Path
+) -> None:
+    class AskTwice:
+        name = "ask-twice"
+
+        def __init__(self, task: coherent.Task) -> None:
+            pass
+
+        async def act(self, view: coherent.View) -> coherent.Decision:
+            first, second = await asyncio.gather(
+                small_llm.achat("Say yes.", max_tokens=4),
+                small_llm.achat("Say no.", max_tokens=4, role="executor", robot=view.robots[0]),
+            )
+            return coherent.Decision(None, None, note=first.text + " / " + second.text)
+
+    episode = coherent.run(task0, method=AskTwice, max_steps=2, out=tmp_path)
+    assert episode.steps == 2 and episode.llm_calls == 4 and episode.prompt_tokens > 0
+    for r in episode.transcript:
+        roles = sorted((c["role"], c["robot"]) for c in r["calls"])
+        assert roles == [("assigner", None), ("executor", task0.robots[0])]
+    # Outside a method's act, a call is nobody's step.
+    small_llm.chat("Say nothing.", max_tokens=2)
+    assert coherent.load_episode(episode.path).llm_calls == 4
