@@ -35,7 +35,7 @@ struct FollowPlan {
 }
 
 impl Policy for FollowPlan {
-    fn act<'a>(&'a mut self, _view: &'a View) -> BoxFuture<'a, Act> {
+    fn act(&mut self, _view: Arc<View>) -> BoxFuture<'_, Act> {
         let choice = match self.plan.pop_front() {
             Some((robot, action)) => Choice {
                 robot: Some(robot),
@@ -71,12 +71,12 @@ fn follow_plan() -> External {
 /// Answers from a script, one entry per step, and keeps every view it was shown.
 struct Scripted {
     script: VecDeque<Result<Choice, String>>,
-    views: Arc<Mutex<Vec<View>>>,
+    views: Arc<Mutex<Vec<Arc<View>>>>,
 }
 
 impl Policy for Scripted {
-    fn act<'a>(&'a mut self, view: &'a View) -> BoxFuture<'a, Act> {
-        self.views.lock().expect("views").push(view.clone());
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+        self.views.lock().expect("views").push(view);
         let choice = self
             .script
             .pop_front()
@@ -93,7 +93,7 @@ impl Policy for Scripted {
 fn scripted(
     name: &str,
     script: Vec<Result<Choice, String>>,
-    views: &Arc<Mutex<Vec<View>>>,
+    views: &Arc<Mutex<Vec<Arc<View>>>>,
 ) -> External {
     let views = Arc::clone(views);
     let make: Arc<MakePolicy> = Arc::new(move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {

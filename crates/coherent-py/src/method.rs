@@ -391,15 +391,9 @@ enum Started {
 
 impl PythonPolicy {
     /// Calls `act(view)` with the step's recorder current; a coroutine goes to the loop.
-    fn start(&self, py: Python<'_>, view: &View, recorder: &Py<Recorder>) -> PyResult<Started> {
+    fn start(&self, py: Python<'_>, view: Arc<View>, recorder: &Py<Recorder>) -> PyResult<Started> {
         let task = self.method.task_object(py, &view.task)?;
-        let view = Py::new(
-            py,
-            PyView {
-                view: Arc::new(view.clone()),
-                task,
-            },
-        )?;
+        let view = Py::new(py, PyView { view, task })?;
         let step = helpers(py)?.getattr("_step")?;
         let token = step.call_method1("set", (recorder,))?;
         let answer = self.object.call_method1(py, "act", (view,));
@@ -423,7 +417,7 @@ impl PythonPolicy {
 }
 
 impl Policy for PythonPolicy {
-    fn act<'a>(&'a mut self, view: &'a View) -> BoxFuture<'a, Act> {
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
         Box::pin(async move {
             let calls = Arc::new(Mutex::new(Vec::new()));
             let started = Python::attach(|py| {

@@ -128,8 +128,8 @@ pub struct Act {
 
 /// A method written outside the crate: asked once per step.
 pub trait Policy: Send {
-    /// The decision for the step `view` describes.
-    fn act<'a>(&'a mut self, view: &'a View) -> BoxFuture<'a, Act>;
+    /// The decision for the step `view` describes (shared, so that a policy may keep it).
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act>;
 }
 
 /// Makes the policy of one episode, or says why it cannot.

@@ -39,11 +39,11 @@ pub async fn run(
         let start = Instant::now();
         let act = match &mut policy {
             Ok(policy) => {
-                let view = View::now(env, task, step, max_steps, &history);
+                let view = Arc::new(View::now(env, task, step, max_steps, &history));
                 tokio::select! {
                     biased;
                     () = cancel.cancelled() => return Ok(None),
-                    act = policy.act(&view) => act,
+                    act = policy.act(view) => act,
                 }
             }
             Err(why) => Act {

@@ -123,7 +123,7 @@ struct Recorded {
 }
 
 impl Policy for Recorded {
-    fn act<'a>(&'a mut self, view: &'a View) -> BoxFuture<'a, Act> {
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
         let act = match self.rounds.pop_front() {
             None => Act {
                 choice: Err(format!(
