@@ -589,3 +589,40 @@ fn validate_stops_at_the_memory_bound_and_says_the_goal_was_not_decided() {
         show(&out)
     );
 }
+
+#[test]
+fn a_method_written_in_python_needs_the_python_package() {
+    let dir = TempDir::new("python-method");
+    let out_dir = dir.path().to_str().expect("UTF-8 path");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json");
+    let demo = demo.to_str().expect("UTF-8 path");
+    let run = coherent(&["run", demo, "--method", "greedy:Greedy", "--out", out_dir]);
+    assert_eq!(code(&run), 2, "{}", show(&run));
+    assert!(
+        stderr(&run)
+            .contains("method greedy:Greedy: a method written in Python needs the Python package"),
+        "{}",
+        show(&run)
+    );
+    let results = dir.path().join("r.jsonl");
+    let bench = coherent(&[
+        "bench",
+        "--tasks",
+        demo,
+        "--methods",
+        "optimal,examples/methods/greedy.py:Greedy",
+        "--out",
+        results.to_str().expect("UTF-8 path"),
+    ]);
+    assert_eq!(code(&bench), 2, "{}", show(&bench));
+    assert!(
+        stderr(&bench).contains("needs the Python package"),
+        "{}",
+        show(&bench)
+    );
+    assert!(!results.exists(), "nothing ran");
+    // A name that is neither a method nor MODULE:CLASS is a usage error that lists them.
+    let typo = coherent(&["run", demo, "--method", "greddy", "--out", out_dir]);
+    assert_eq!(code(&typo), 2, "{}", show(&typo));
+    assert!(stderr(&typo).contains("or MODULE:CLASS"), "{}", show(&typo));
+}

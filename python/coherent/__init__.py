@@ -10,6 +10,7 @@ Everything the ``coherent`` command line does, from Python::
     env = coherent.Env(task)                          # step the world by hand
     episode = coherent.run(task, method="pefa")       # an episode (the built-in backend here)
     episode = coherent.run(task, llm=coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m"))
+    episode = coherent.run(task, method=MyMethod)     # a method written in Python: MyMethod(task).act(view)
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
 
@@ -37,10 +38,13 @@ from ._coherent import (
     ArgumentError,
     BackendError,
     CoherentError,
+    Decision,
     Env,
     Episode,
+    MethodError,
     PhysicsError,
     PromptError,
+    Reply,
     ReplayMismatchError,
     Task,
     TaskFormatError,
@@ -59,6 +63,7 @@ from ._coherent import (
     scene_layout,
     select,
     validate,
+    View,
 )
 from .analysis import Report, bench, report, results
 
@@ -70,10 +75,13 @@ __all__ = [
     "ArgumentError",
     "BackendError",
     "CoherentError",
+    "Decision",
     "Env",
     "Episode",
+    "MethodError",
     "PhysicsError",
     "PromptError",
+    "Reply",
     "ReplayMismatchError",
     "Report",
     "Task",
@@ -96,6 +104,7 @@ __all__ = [
     "scene_layout",
     "select",
     "validate",
+    "View",
 ]
 
 # Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the

@@ -3,8 +3,9 @@
 Names starting with ``_`` exist only here, to describe the dicts the module returns.
 """
 
+import asyncio
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any, Literal, TypeAlias, TypedDict
 
@@ -20,7 +21,7 @@ given (the command line's ``--max-states`` default)."""
 
 _RobotType: TypeAlias = Literal["quadrotor", "robot dog", "robot arm"]
 _TaskType: TypeAlias = Literal["mono", "dual", "trio"]
-_Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted"]
+_Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted", "error"]
 _PathLike: TypeAlias = str | os.PathLike[str]
 _Prompts: TypeAlias = _PathLike | Mapping[str, str]
 """A folder of prompt templates, or ``{file name: text}`` (docs/prompts.md)."""
@@ -131,6 +132,13 @@ class PromptError(CoherentError, ValueError):
     """The line of an unknown placeholder (1-based); None for other errors."""
     placeholder: str | None
     """The unknown placeholder's name, as written between the braces."""
+
+class MethodError(CoherentError):
+    """A method written in Python raised an error during an episode (in its ``act``, or
+    when it was made); the method's own exception is the ``__cause__``."""
+
+    episode: Episode
+    """The episode up to there (status ``"error"``; the transcript has the traceback)."""
 
 class Task:
     """A task: the scene graph at the start, the robots, the goal and the ground truth.
@@ -286,6 +294,120 @@ class LLM:
     def temperature(self) -> float: ...
     @property
     def seed(self) -> int | None: ...
+    def chat(
+        self,
+        messages: str | Sequence[Mapping[str, str]],
+        schema: Mapping[str, Any] | None = None,
+        *,
+        max_tokens: int = 400,
+        role: Literal["assigner", "executor"] = "assigner",
+        robot: int | None = None,
+    ) -> Reply:
+        """Asks the model through the project's client: ``messages`` are
+        ``{"role", "content"}`` dicts (or one str, a user message); with ``schema`` (a JSON
+        schema) the answer follows it, by the server's structured outputs or the client's
+        fallbacks (check it). Timeouts, retries with backoff and ``Retry-After``, the key
+        in no text; raises :class:`BackendError` when the server fails for good. Inside a
+        method's ``act`` the call, its tokens and latency are filed in the step's round
+        (``role`` and ``robot`` say whom it was for)."""
+    def achat(
+        self,
+        messages: str | Sequence[Mapping[str, str]],
+        schema: Mapping[str, Any] | None = None,
+        *,
+        max_tokens: int = 400,
+        role: Literal["assigner", "executor"] = "assigner",
+        robot: int | None = None,
+    ) -> asyncio.Future[Reply]:
+        """:meth:`chat`, to await in a coroutine (``reply = await llm.achat(...)``)."""
+
+class Reply:
+    """A model's answer to :meth:`LLM.chat`; ``str(reply)`` is its text."""
+
+    @property
+    def text(self) -> str: ...
+    @property
+    def prompt_tokens(self) -> int: ...
+    @property
+    def completion_tokens(self) -> int: ...
+    @property
+    def latency_ms(self) -> float:
+        """From the request to the answer, retries included."""
+    @property
+    def attempts(self) -> int:
+        """HTTP attempts it took (1 without retries)."""
+    @property
+    def finish(self) -> str:
+        """``"stop"``, ``"length"`` (cut at ``max_tokens``), ``"refusal"``, ``"content_filter"``
+        or the server's own word."""
+    @property
+    def refusal(self) -> str | None:
+        """The model's words when it refused."""
+    @property
+    def format(self) -> Literal["json_schema", "json_object", "text"]:
+        """The answer format asked for (a server that refuses a schema gets the next)."""
+
+_History: TypeAlias = tuple[int | None, str | None, bool, str | None]
+
+class View:
+    """What a method written in Python is shown at each step (``act(view)``)."""
+
+    @property
+    def task(self) -> Task:
+        """The episode's task (the object the method was made with)."""
+    @property
+    def step(self) -> int:
+        """The step about to be taken, from 1."""
+    @property
+    def max_steps(self) -> int:
+        """The step budget (2 x GT unless set)."""
+    @property
+    def robots(self) -> list[int]:
+        """Node ids of the robots."""
+    @property
+    def robot_types(self) -> dict[int, _RobotType]: ...
+    @property
+    def actions(self) -> dict[int, list[str]]:
+        """Each robot's action strings now."""
+    @property
+    def history(self) -> list[_History]:
+        """Every earlier step, oldest first: ``(robot, action, ok, reason)``; robot and
+        action None for a step without an action, reason None when it ran."""
+    def observation(self, robot: int) -> _Observation:
+        """What ``robot`` sees, as :meth:`Env.observe` gives it."""
+    def observation_text(self, robot: int | None = None) -> str:
+        """The observation of ``robot`` as the executors' prompts write it (facts, one per
+        line); with no robot, every robot's merged, as the assigner's and CMRS's prompts."""
+
+class Decision:
+    """A method's decision for one step; a ``(robot, action)`` tuple will do as well."""
+
+    def __init__(
+        self,
+        robot: int | None,
+        action: str | None,
+        note: str = "",
+        prompt_tokens: int = 0,
+        completion_tokens: int = 0,
+        calls: int = 0,
+    ) -> None: ...
+    @property
+    def robot(self) -> int | None:
+        """The robot that acts; None for no action this step (the step still counts)."""
+    @property
+    def action(self) -> str | None:
+        """As written; one outside the robot's list is refused with the reason."""
+    @property
+    def note(self) -> str:
+        """Your words about the step, kept in the transcript."""
+    @property
+    def prompt_tokens(self) -> int:
+        """Tokens and calls of models asked through your own clients (calls through
+        :class:`LLM` inside ``act`` are counted already)."""
+    @property
+    def completion_tokens(self) -> int: ...
+    @property
+    def calls(self) -> int: ...
 
 class Episode:
     """An episode as recorded in its transcript; from :func:`run`, :func:`replay` or
@@ -341,9 +463,11 @@ class Episode:
     def to_dataframe(self) -> Any:
         """One row per step (a pandas DataFrame; see ``coherent.analysis.episode_frame``)."""
 
+_MethodFactory: TypeAlias = Callable[[Task], Any]
+
 def run(
     task: Task,
-    method: str = "pefa",
+    method: str | _MethodFactory = "pefa",
     *,
     llm: LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
@@ -356,13 +480,16 @@ def run(
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
 ) -> Episode:
-    """Runs ``method`` (one of :data:`METHODS`) on ``task`` as ``coherent run`` does; the
-    transcript goes to ``out``. Without ``llm`` the built-in planner plays the model's
-    roles, or with ``sim_errors`` (``"all=0.1"``, or rates by kind) the simulated backend.
-    ``prompts`` replaces built-in templates (a bad one raises :class:`PromptError` before
-    anything runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``).
-    Raises :class:`BackendError` when the server fails for good; Ctrl-C stops the episode
-    and raises ``KeyboardInterrupt``."""
+    """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
+    ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
+    (or any callable) ``M``, made as ``M(task)``, whose ``act(view)`` (plain or ``async``)
+    gives each step's :class:`Decision` or ``(robot, action)`` (``"MODULE:CLASS"`` loads
+    one). Without ``llm`` the built-in planner plays the model's roles, or with
+    ``sim_errors`` (``"all=0.1"``, or rates by kind) the simulated backend. ``prompts``
+    replaces built-in templates (a bad one raises :class:`PromptError` before anything
+    runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``). Raises
+    :class:`BackendError` when the server fails for good, :class:`MethodError` when the
+    method raises; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -379,7 +506,7 @@ def select(
 
 def run_bench(
     tasks: Sequence[Task],
-    methods: Sequence[str],
+    methods: Sequence[str | _MethodFactory],
     *,
     backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
@@ -388,6 +515,7 @@ def run_bench(
     concurrency: int = 4,
     history: int = 5,
     max_states: int = ...,
+    max_steps: int | None = None,
     out: _PathLike = "results.jsonl",
     progress: bool = False,
     prompts: _Prompts | None = None,

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Literal, Union
@@ -79,7 +79,7 @@ def _missing_to_none(value: Any) -> Any:
 
 def bench(
     tasks: PathLike | Iterable[Task],
-    methods: Sequence[str],
+    methods: Sequence[str | Callable[[Task], Any]],
     *,
     backend: Literal["builtin", "simulated", "replay"] | LLM = "builtin",
     sim_errors: str | Mapping[str, float] | None = None,
@@ -88,6 +88,7 @@ def bench(
     concurrency: int = 4,
     history: int = 5,
     max_states: int = _coherent.DEFAULT_MAX_STATES,
+    max_steps: int | None = None,
     out: PathLike = "results.jsonl",
     progress: bool = False,
     prompts: PathLike | Mapping[str, str] | None = None,
@@ -104,6 +105,15 @@ def bench(
     rates, e.g. ``"all=0.1"``), an :class:`LLM`, or ``"replay"``: the episodes of the
     earlier results file ``replay_from`` answer from their transcripts (no network), with
     their recorded settings; a line's ``error`` says when one came out differently.
+
+    ``methods`` are built-in methods' names (:data:`METHODS`) and methods written in
+    Python: a class (or any callable) ``M``, made once per episode as ``M(task)``, whose
+    ``act(view)`` gives each step's :class:`Decision` (see :func:`coherent.run` and
+    ``docs/methods.md``), named ``M.name`` or its class's name; ``"MODULE:CLASS"`` loads
+    one. An exception in ``act`` ends that episode alone with status ``"error"`` and the
+    traceback in ``error``; such episodes run again when the call is repeated.
+    ``max_steps`` sets every episode's budget (2 x GT by default).
+
     ``prompts`` (a folder of template files, or ``{file name: text}``) replaces built-in
     prompt templates; a template with an unknown placeholder raises
     :class:`~coherent.PromptError` before anything runs. ``prices`` (a JSON or TOML price
@@ -130,6 +140,7 @@ def bench(
         concurrency=concurrency,
         history=history,
         max_states=max_states,
+        max_steps=max_steps,
         out=out,
         progress=progress,
         prompts=prompts,
@@ -160,7 +171,10 @@ class Report:
     backends: list[str]
     seeds: list[int]
     unfinished: int
-    """Episodes without a final result (backend error or interrupted), left out."""
+    """Episodes without a final result (backend error, the method's error or interrupted),
+    left out."""
+    errors: int
+    """Those of them that ended in an error raised by the method (status ``error``)."""
     untyped_tasks: int
     """Tasks the planner finds no plan for: counted in Avg only."""
     lines: list[dict[str, Any]] = field(repr=False)
@@ -194,6 +208,7 @@ def report(data: Results) -> Report:
         backends=r["backends"],
         seeds=r["seeds"],
         unfinished=r["unfinished"],
+        errors=r["errors"],
         untyped_tasks=r["untyped_tasks"],
         lines=lines,
     )
@@ -229,9 +244,10 @@ def _table(pandas: ModuleType, t: dict[str, Any]) -> pd.DataFrame:
 
 
 def episode_frame(episode: Episode) -> pd.DataFrame:
-    """One row per step of ``episode``: the robot the assigner chose and its type, the
-    subtask, the action, the outcome (``executed``, ``infeasible``, ``declined``,
-    ``no_proposal``, ``no_decision``, ``backend_error``) and why, whether the executor
+    """One row per step of ``episode``: the robot the assigner (or a method written in
+    Python) chose and its type, the subtask, the action, the outcome (``executed``,
+    ``infeasible``, ``declined``, ``no_proposal``, ``no_decision``, ``backend_error``,
+    ``method_error``) and why, whether the executor
     judged the subtask complete, whether the goal holds after it, the model calls and
     tokens, and the time."""
     pandas = _pandas("Episode.to_dataframe (coherent.analysis.episode_frame)")
@@ -240,7 +256,8 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
     for r in episode.transcript:
         proposal, decision, outcome = r["proposal"], r["decision"], r["outcome"]
         answers = [c["answer"] for c in r["calls"] if c["answer"] is not None]
-        robot = proposal["robot"] if proposal else None
+        external = r.get("external")
+        robot = proposal["robot"] if proposal else (external["robot"] if external else None)
         rows.append(
             {
                 "step": r["step"],
@@ -252,9 +269,12 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
                 "reason": outcome.get("reason") or outcome.get("why") or outcome.get("message"),
                 "subtask_complete": bool(decision and decision["subtask_complete"]),
                 "done": r["done"],
-                "llm_calls": len(r["calls"]),
-                "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers),
-                "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers),
+                # With what a method written in Python reported of its own clients.
+                "llm_calls": len(r["calls"]) + (external["calls"] if external else 0),
+                "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers)
+                + (external["prompt_tokens"] if external else 0),
+                "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers)
+                + (external["completion_tokens"] if external else 0),
                 "latency_ms": sum(a["latency_ms"] for a in answers),
                 "wall_ms": r["wall_ms"],
             }

@@ -183,6 +183,7 @@ def test_exception_tree() -> None:
         coherent.BackendError,
         coherent.ReplayMismatchError,
         coherent.PromptError,
+        coherent.MethodError,
     )
     for exc in errors:
         assert issubclass(exc, coherent.CoherentError)
@@ -194,7 +195,15 @@ def test_exception_tree() -> None:
 
 
 def test_classes_live_in_the_native_module() -> None:
-    for cls in (coherent.Task, coherent.Env, coherent.LLM, coherent.Episode):
+    for cls in (
+        coherent.Task,
+        coherent.Env,
+        coherent.LLM,
+        coherent.Episode,
+        coherent.View,
+        coherent.Decision,
+        coherent.Reply,
+    ):
         assert cls.__module__ == "coherent._coherent"
 
 

@@ -1,12 +1,13 @@
 //! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
 //! that the same setting has the same flag; resolving them with the environment is the
 //! session layer's, [`crate::session::endpoint`]), `--prompts` and `--prices` (read by
-//! [`crate::session::prompts`]), `--sim-errors`, the method names.
+//! [`crate::session::prompts`]), `--sim-errors`, the method names (and `MODULE:CLASS`, a
+//! method written in Python, which the Python package loads).
 
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use coherent_agents::episode::Method;
+use coherent_agents::episode::{External, Method, MethodSpec};
 use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode, PriceTable, Prompts};
 
 use crate::session::endpoint::{Endpoint, Patience};
@@ -142,7 +143,37 @@ pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, Strin
         .map_err(|e| format!("--sim-errors: {e}"))
 }
 
-/// The method names `--method` and `--methods` accept.
-pub(crate) fn method_names() -> clap::builder::PossibleValuesParser {
-    clap::builder::PossibleValuesParser::new(Method::ALL.map(Method::name))
+/// A value of `--method` and `--methods`: a built-in method's name, or `MODULE:CLASS`,
+/// a method written in Python (loaded when the command runs from the Python package).
+pub(crate) fn method_name(value: &str) -> Result<String, String> {
+    if Method::from_name(value).is_some() || value.contains(':') {
+        return Ok(value.to_owned());
+    }
+    let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+    Err(format!(
+        "not a method: the methods are {}, or MODULE:CLASS for one written in Python",
+        names.join(", ")
+    ))
+}
+
+/// Loads a method written in Python from `MODULE:CLASS` (an importable module or a `.py`
+/// file, and the class or callable in it); the Python package's console script has one.
+pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, String> + Send + Sync + 'a;
+
+/// The method a value of [`method_name`] names: a built-in one, or one that `load` loads.
+pub(crate) fn method_spec(
+    value: &str,
+    load: Option<&LoadMethod<'_>>,
+) -> Result<MethodSpec, String> {
+    if let Some(method) = Method::from_name(value) {
+        return Ok(method.into());
+    }
+    match load {
+        Some(load) => load(value).map(MethodSpec::External),
+        None => Err(format!(
+            "method {value}: a method written in Python needs the Python package: run the \
+             `coherent` command that `pip install .` installs (or `python -m coherent._cli`), \
+             not the plain binary"
+        )),
+    }
 }

@@ -7,11 +7,10 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use coherent_agents::Cancel;
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
-use coherent_agents::episode::Method;
 use coherent_core::planner::Limits;
 use coherent_core::text::{shown, shown_lines};
 
-use super::args::{LlmArgs, PromptPriceArgs, method_names, sim_errors};
+use super::args::{LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors};
 use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
 use crate::session::bench::{self as session_bench, TableFormat as Tables};
 use crate::session::{self, prompts};
@@ -30,8 +29,10 @@ pub struct BenchArgs {
     /// `scene task_id` lines.
     #[arg(long, default_value = "all")]
     subset: String,
-    /// Comma-separated methods.
-    #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_names())]
+    /// Comma-separated methods: pefa, pefa-no-history, cmrs, dmrs-1d, dmrs-2d, mcts,
+    /// llm-mcts, optimal, or MODULE:CLASS, a method written in Python (a module or a .py
+    /// file, and its class; from the Python package's `coherent` only).
+    #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,
     /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
     /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
@@ -68,6 +69,10 @@ pub struct BenchArgs {
     /// Most states one search of the built-in planner may visit.
     #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
     max_states: usize,
+    /// Step budget of every episode; by default 2 x the task's ground truth (2 x the
+    /// optimum without one).
+    #[arg(long)]
+    max_steps: Option<u32>,
     #[command(flatten)]
     llm: LlmArgs,
     #[command(flatten)]
@@ -93,7 +98,7 @@ enum TableFormat {
     Json,
 }
 
-pub fn bench(mut args: BenchArgs) -> Result<u8, String> {
+pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     if let Some(path) = &args.report {
         let file = bench::read_results(path)?;
         if file.truncated_bytes > 0 {
@@ -114,7 +119,7 @@ pub fn bench(mut args: BenchArgs) -> Result<u8, String> {
     if let Some(seed) = args.old_llm_seed {
         args.llm.seed = Some(seed);
     }
-    session::block_on(run_async(args))?
+    session::block_on(run_async(args, load))?
 }
 
 fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
@@ -130,15 +135,15 @@ fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
     let _ = std::io::stdout().write_all(text.as_bytes());
 }
 
-async fn run_async(args: BenchArgs) -> Result<u8, String> {
+async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     let (Some(tasks_path), Some(out)) = (&args.tasks, &args.out) else {
         return Err("--tasks, --methods and --out are needed to run".into());
     };
-    let methods: Vec<Method> = args
+    let methods = args
         .methods
         .iter()
-        .map(|m| Method::from_name(m).ok_or_else(|| format!("unknown method {m:?}")))
-        .collect::<Result<_, _>>()?;
+        .map(|m| method_spec(m, load))
+        .collect::<Result<Vec<_>, _>>()?;
     if args.seeds == 0 {
         return Err("--seeds must be at least 1".into());
     }
@@ -194,6 +199,7 @@ async fn run_async(args: BenchArgs) -> Result<u8, String> {
         history: args.history,
         temperature: matches!(backend, BackendChoice::OpenAi(_)).then_some(args.llm.temperature),
         max_states: args.max_states,
+        max_steps: args.max_steps,
         out: out.clone(),
         backend,
         prompts: prompt_set,

@@ -1,6 +1,7 @@
 //! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
 //! `prompts`. One implementation serves the `coherent` binary and the console script
-//! that `pip install` puts on the PATH.
+//! that `pip install` puts on the PATH (which also loads methods written in Python,
+//! [`LoadMethod`]).
 
 mod args;
 mod bench;
@@ -18,6 +19,8 @@ use coherent_core::planner::{Analysis, Limits};
 use coherent_core::text::{shown, shown_lines};
 
 use crate::session::{check, tasks};
+
+pub use args::LoadMethod;
 
 #[derive(Parser)]
 #[command(
@@ -101,6 +104,17 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
+    run_with(args, None)
+}
+
+/// [`run`], with `load` to load the methods written in Python that `--method` and
+/// `--methods` name as `MODULE:CLASS` (without it, such a name is an error that says
+/// what is needed).
+pub fn run_with<I, T>(args: I, load: Option<&LoadMethod<'_>>) -> u8
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
     let cli = match Cli::try_parse_from(args) {
         Ok(cli) => cli,
         Err(e) => {
@@ -116,13 +130,13 @@ where
             });
         }
         Command::Run(args) => {
-            return run::run(*args).unwrap_or_else(|e| {
+            return run::run(*args, load).unwrap_or_else(|e| {
                 error(&e);
                 2
             });
         }
         Command::Bench(args) => {
-            return bench::bench(*args).unwrap_or_else(|e| {
+            return bench::bench(*args, load).unwrap_or_else(|e| {
                 error(&e);
                 2
             });

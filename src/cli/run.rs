@@ -8,7 +8,7 @@ use std::sync::Arc;
 
 use clap::Args;
 use coherent_agents::Cancel;
-use coherent_agents::episode::{Budget, Method, Settings};
+use coherent_agents::episode::{Budget, MethodSpec, Settings};
 use coherent_agents::llm::BackendInfo;
 use coherent_agents::transcript::{Outcome, Round, Status, Summary};
 use coherent_core::Task;
@@ -17,7 +17,9 @@ use coherent_core::text::shown;
 
 use serde_json::json;
 
-use super::args::{AnswerFormat, LlmArgs, PromptPriceArgs, method_names, sim_errors};
+use super::args::{
+    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors,
+};
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, prompts, tasks};
@@ -26,6 +28,8 @@ use crate::session::{self, prompts, tasks};
 const FAILED: u8 = 1;
 /// Exit status when the model's server failed for good or a replay diverged.
 const BACKEND_FAILED: u8 = 3;
+/// Exit status when a method written in Python raised an error.
+const METHOD_FAILED: u8 = 4;
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
 
@@ -37,8 +41,10 @@ pub(crate) struct RunArgs {
     /// Which task of the file (its task_id).
     #[arg(long = "task")]
     task_id: Option<i64>,
-    /// The planning method.
-    #[arg(long, default_value = "pefa", value_parser = method_names())]
+    /// The planning method: pefa, pefa-no-history, cmrs, dmrs-1d, dmrs-2d, mcts,
+    /// llm-mcts, optimal, or MODULE:CLASS, a method written in Python (a module or a
+    /// .py file, and its class; from the Python package's `coherent` only).
+    #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = 5)]
@@ -95,7 +101,7 @@ impl Lines {
     }
 }
 
-pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
+pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     if let Some(format) = args.old_format {
         args.llm.answer_format = format;
     }
@@ -103,12 +109,16 @@ pub(crate) fn run(mut args: RunArgs) -> Result<u8, String> {
         args.llm.requests = n;
     }
     let cancel = Cancel::default();
-    let prepared = prepare(&args, &cancel)?;
+    let prepared = prepare(&args, &cancel, load)?;
     session::block_on(run_prepared(prepared, &args, cancel))?
 }
 
 /// The episode the flags ask for: a replay of a transcript, or a new one.
-fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
+fn prepare(
+    args: &RunArgs,
+    cancel: &Cancel,
+    load: Option<&LoadMethod<'_>>,
+) -> Result<Prepared, String> {
     let prices = args.inputs.price_table()?;
     if let Some(path) = &args.replay {
         args.inputs.no_prompts_for_a_replay("--replay")?;
@@ -126,8 +136,7 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
         .as_deref()
         .ok_or("a task file is needed without --replay")?;
     let task = tasks::pick_task(file, args.task_id)?;
-    let method = Method::from_name(&args.method)
-        .ok_or_else(|| format!("unknown method {:?}", args.method))?;
+    let method = method_spec(&args.method, load)?;
     let endpoint = args.llm.config()?;
     let temperature = endpoint.as_ref().map(|_| args.llm.temperature);
     let backend = BackendRequest {
@@ -160,13 +169,14 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
 async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Result<u8, String> {
     let lines = Lines { json: args.json };
     let info = prepared.backend_info();
-    lines.say(&if prepared.settings.method.uses_model() {
-        backend_line(&info, prepared.replaying())
-    } else {
-        format!(
-            "backend: none ({} asks no model)",
-            prepared.settings.method.name()
-        )
+    let method = &prepared.settings.method;
+    lines.say(&match method {
+        _ if method.uses_model() => backend_line(&info, prepared.replaying()),
+        MethodSpec::External(_) => format!(
+            "backend: none ({} is a method written in Python: the models it calls are its own)",
+            shown(method.name())
+        ),
+        MethodSpec::Builtin(_) => format!("backend: none ({} asks no model)", method.name()),
     });
     lines.say(&task_line(&prepared));
     if let Some(line) = prompts::describe(&prepared.settings.prompts) {
@@ -226,6 +236,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         Status::Failure => FAILED,
         Status::BackendError => BACKEND_FAILED,
         Status::Interrupted => INTERRUPTED,
+        Status::Error => METHOD_FAILED,
     })
 }
 
@@ -245,7 +256,7 @@ fn task_line(p: &Prepared) -> String {
         shown(&task.meta.scene),
         task.meta.task_id,
         shown(&task.meta.instruction),
-        p.settings.method.name()
+        shown(p.settings.method.name())
     )
 }
 
@@ -302,6 +313,11 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
         Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
         Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
         Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
+        // The last line of the error (a Python traceback ends with the exception).
+        Outcome::MethodError { message } => format!(
+            "the method failed: {}",
+            shown(message.trim_end().lines().last().unwrap_or(""))
+        ),
     };
     let width = max.to_string().len();
     format!(
@@ -316,6 +332,7 @@ fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> Str
         Status::Failure => "failure: step budget spent",
         Status::BackendError => "stopped: the backend failed",
         Status::Interrupted => "interrupted",
+        Status::Error => "stopped: the method raised an error",
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {

@@ -56,6 +56,18 @@ pub async fn run(
     if config.methods.is_empty() {
         return Err("no methods to run".into());
     }
+    // Results are keyed by the method's name: one written outside the crate needs its own.
+    let names: Vec<&str> = config.methods.iter().map(|m| m.name()).collect();
+    if let Some(m) = config
+        .methods
+        .iter()
+        .find(|m| m.builtin().is_none() && names.iter().filter(|&&n| n == m.name()).count() > 1)
+    {
+        return Err(format!(
+            "two methods are named {:?}: give each its own name",
+            m.name()
+        ));
+    }
     if config.seeds == 0 {
         return Err("seeds must be at least 1".into());
     }

@@ -192,7 +192,7 @@ impl Prepared {
         cancel: &Cancel,
         progress: &mut (dyn FnMut(&Round) + Send),
     ) -> Result<Ran, Failure> {
-        let path = episode::transcript_path(&self.out, &self.task, self.settings.method);
+        let path = episode::transcript_path(&self.out, &self.task, self.settings.method.name());
         let (episode, header) = episode::run(
             &self.task,
             self.env.as_mut(),

@@ -6,14 +6,17 @@
 //! - [`methods`]: the planning methods. The paper's [`pefa`] loop
 //!   (Proposal-Execution-Feedback-Adjustment) with its two roles, [`TaskAssigner`]
 //!   (`methods/assigner.rs`) and [`RobotExecutor`] (`methods/executor.rs`); the baselines
-//!   [`cmrs`], [`dmrs`] and [`mcts`] over the team's [`joint`] action space; and the
-//!   [`optimal`] plan, the tables' ground-truth row. Their prompts are rendered from a
-//!   prompt set, [`Prompts`] ([`templates`]): the built-in templates, or files given at
-//!   run time.
+//!   [`cmrs`], [`dmrs`] and [`mcts`] over the team's [`joint`] action space; the
+//!   [`optimal`] plan, the tables' ground-truth row; and [`external`], the loop of a
+//!   method written outside the crate (a Python class) that answers through a
+//!   [`Policy`]. Their prompts are rendered from a prompt set, [`Prompts`]
+//!   ([`templates`]): the built-in templates, or files given at run time.
 //! - [`episode`]: what every method shares. The round loop and its [`Episode`], asking
 //!   a backend, executing on the `coherent_core::Environment`, [`Cancel`], the step
-//!   [`Budget`], the [`Method`] names and their [`Settings`]; and [`episode::run()`],
-//!   the front door that writes the transcript and runs the method the settings name.
+//!   [`Budget`], the [`Method`] names, a method written outside the crate
+//!   ([`External`], its [`Policy`] and the [`View`] it is shown) and their [`Settings`];
+//!   and [`episode::run()`], the front door that writes the transcript and runs the
+//!   method the settings name.
 //! - [`backends`]: who answers the methods' questions. The [`Backend`] trait ([`llm`])
 //!   and an OpenAI-compatible server ([`openai`], with [`retry`]), the optimal planner
 //!   ([`builtin`]; with seeded mistakes, the simulated backend) and a recorded transcript
@@ -43,15 +46,15 @@ pub mod rng;
 
 pub use backends::{builtin, llm, openai, replay, retry};
 pub use harness::{bench, prices, report};
-pub use methods::{cmrs, dmrs, joint, mcts, optimal, pefa, prompt, templates};
+pub use methods::{cmrs, dmrs, external, joint, mcts, optimal, pefa, prompt, templates};
 pub use records::transcript;
 
 pub use backends::builtin::BuiltinBackend;
 pub use backends::llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
-pub use backends::openai::{ApiKey, OpenAiClient, OpenAiConfig};
+pub use backends::openai::{ApiKey, Chat, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
-pub use episode::{Budget, Cancel, Episode, Method, Settings};
+pub use episode::{Budget, Cancel, Episode, External, Method, MethodSpec, Policy, Settings, View};
 pub use harness::prices::PriceTable;
 pub use methods::assigner::TaskAssigner;
 pub use methods::executor::RobotExecutor;

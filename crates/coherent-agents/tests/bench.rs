@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_agents::bench::{self, BackendChoice, BenchConfig, ResultLine, Subset};
-use coherent_agents::episode::Method;
+use coherent_agents::episode::{Method, MethodSpec};
 use coherent_agents::llm::BackendInfo;
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
@@ -24,13 +24,14 @@ fn scratch(name: &str) -> PathBuf {
 
 fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchConfig {
     BenchConfig {
-        methods,
+        methods: methods.into_iter().map(MethodSpec::from).collect(),
         seeds: 1,
         concurrency: 2,
         backend,
         history: 5,
         temperature: None,
         max_states: Limits::DEFAULT_MAX_STATES,
+        max_steps: None,
         out,
         prompts: Prompts::builtin(),
         prices: PriceTable::builtin(),

@@ -26,7 +26,7 @@ async fn run_builtin(
     out: &Path,
 ) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
     let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
-    let path = episode::transcript_path(out, task, Method::Pefa);
+    let path = episode::transcript_path(out, task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     let e = episode::run(
         task,
@@ -116,7 +116,7 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
         async move {
             let task = &replay.task;
             let mut env = SymbolicEnv::new(Arc::clone(task));
-            let path = episode::transcript_path(&out, task, replay.settings.method);
+            let path = episode::transcript_path(&out, task, replay.settings.method.name());
             let episode = episode::run(
                 task,
                 &mut env,

@@ -193,7 +193,7 @@ async fn run(name: &str, server: &Server, steps: u32) -> Run {
     let _ = std::fs::remove_dir_all(&out);
     let task = demo();
     let client = OpenAiClient::new(config(&server.url)).expect("a client");
-    let path = episode::transcript_path(&out, &task, Method::Pefa);
+    let path = episode::transcript_path(&out, &task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
     let episode = episode::run(
         &task,

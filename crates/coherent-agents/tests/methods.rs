@@ -18,7 +18,7 @@ fn out(name: &str) -> PathBuf {
 
 async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Episode {
     let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
-    let path = episode::transcript_path(&out(method.name()), task, method);
+    let path = episode::transcript_path(&out(method.name()), task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     episode::run(
         task,

@@ -15,6 +15,7 @@ use tokio::sync::Semaphore;
 
 use crate::convert::{self, at_most, finite, optional, text, unsigned};
 use crate::errors;
+use crate::method::MethodArg;
 
 // ---------------------------------------------------------------------------------------
 // Paths
@@ -171,15 +172,23 @@ pub(crate) fn format<'a>(obj: &'a Bound<'_, PyAny>) -> PyResult<&'a str> {
 }
 
 /// `method` of `run`.
-pub(crate) fn method<'a>(obj: &'a Bound<'_, PyAny>) -> PyResult<&'a str> {
-    text(obj, "method")
+pub(crate) fn method(obj: &Bound<'_, PyAny>) -> PyResult<MethodArg> {
+    method_arg(obj, "method")
 }
 
-/// `methods` of `run_bench`: a sequence of names, not a str.
-pub(crate) fn methods(obj: &Bound<'_, PyAny>) -> PyResult<Vec<String>> {
-    each(obj, "methods", |item, name| {
-        text(item, name).map(str::to_owned)
-    })
+/// `methods` of `run_bench`: a sequence (not a str) of names and methods.
+pub(crate) fn methods(obj: &Bound<'_, PyAny>) -> PyResult<Vec<MethodArg>> {
+    each(obj, "methods", method_arg)
+}
+
+/// A method argument: a str is a name (a built-in method's, or `MODULE:CLASS`), which
+/// must be text; anything else is a method written in Python (checked when it is made).
+fn method_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<MethodArg> {
+    if obj.is_instance_of::<PyString>() {
+        Ok(MethodArg::Name(text(obj, name)?.to_owned()))
+    } else {
+        Ok(MethodArg::Python(obj.clone().unbind()))
+    }
 }
 
 /// `subset` of `benchmark_tasks`.

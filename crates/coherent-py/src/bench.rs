@@ -19,8 +19,9 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{self, interruptible, to_py};
+use crate::llm::PyLlm;
+use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_table, prompt_set};
-use crate::run::{PyLlm, method_of};
 use crate::task::PyTask;
 use crate::{args, errors};
 
@@ -112,14 +113,14 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
 #[pyfunction]
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
-    concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES,
+    concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
     out = PathBuf::from("results.jsonl"), progress = false, prompts = None, prices = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
     py: Python<'py>,
     tasks: Vec<Bound<'py, PyTask>>,
-    #[pyo3(from_py_with = args::methods)] methods: Vec<String>,
+    #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
     backend: Option<&Bound<'py, PyAny>>,
     sim_errors: Option<&Bound<'py, PyAny>>,
     #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -127,6 +128,7 @@ pub(crate) fn run_bench<'py>(
     #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
     #[pyo3(from_py_with = args::history)] history: usize,
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
+    #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
     #[pyo3(from_py_with = args::out)] out: PathBuf,
     progress: bool,
     prompts: Option<&Bound<'py, PyAny>>,
@@ -135,12 +137,22 @@ pub(crate) fn run_bench<'py>(
     // Before anything else: a bad template must cost no model call.
     let prompt_set = prompt_set(prompts)?;
     let prices = price_table(prices)?;
+    let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
+    let mut python = Methods::new(py)?;
     let methods = methods
         .iter()
-        .map(|m| method_of(py, m))
+        .map(|m| m.spec(py, &mut python, &objects))
         .collect::<PyResult<Vec<_>>>()?;
     if methods.is_empty() {
         return Err(errors::invalid(py, "methods: name at least one method"));
+    }
+    for m in methods.iter().filter(|m| m.builtin().is_none()) {
+        if methods.iter().filter(|o| o.name() == m.name()).count() > 1 {
+            return Err(PyValueError::new_err(format!(
+                "methods: two methods are named {:?}: give each its own name (its `name`)",
+                m.name()
+            )));
+        }
     }
     if seeds == 0 {
         return Err(errors::invalid(py, "seeds must be at least 1"));
@@ -200,6 +212,7 @@ pub(crate) fn run_bench<'py>(
         history,
         temperature,
         max_states,
+        max_steps,
         out,
         prompts: prompt_set,
         prices,
@@ -218,8 +231,9 @@ pub(crate) fn run_bench<'py>(
             };
             session::block_on(session_bench::run(&tasks, &config, &cancel, &mut show))?
         },
-    )?;
-    let outcome = result.map_err(|e| errors::coherent(py, e))?;
+    );
+    python.close(py)?;
+    let outcome = result?.map_err(|e| errors::coherent(py, e))?;
     outcome_dict(py, &outcome)
 }
 

@@ -25,6 +25,7 @@ pub(crate) struct Exceptions {
     pub backend: Py<PyType>,
     pub replay_mismatch: Py<PyType>,
     pub prompt: Py<PyType>,
+    pub method: Py<PyType>,
 }
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
@@ -107,6 +108,14 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
                  error is about no one file), `line` and `placeholder` (None unless the\n\
                  error is an unknown placeholder).",
             )?,
+            method: sub(
+                "MethodError",
+                false,
+                "A method written in Python raised an error during an episode (in its\n\
+                 act, or when it was made). Attribute `episode`: the episode up to there\n\
+                 (status \"error\"; the transcript has the traceback); the method's own\n\
+                 exception is the `__cause__`.",
+            )?,
             base,
         })
     })
@@ -158,6 +167,7 @@ pub(crate) enum Kind {
     Physics,
     Backend,
     ReplayMismatch,
+    Method,
 }
 
 /// An exception of class `kind` with `message`, and `episode` as its attribute for the
@@ -176,9 +186,10 @@ pub(crate) fn error(
             Kind::Physics => &exc.physics,
             Kind::Backend => &exc.backend,
             Kind::ReplayMismatch => &exc.replay_mismatch,
+            Kind::Method => &exc.method,
         };
         let value = class.bind(py).call1((message.clone(),))?;
-        if matches!(kind, Kind::Backend | Kind::ReplayMismatch) {
+        if matches!(kind, Kind::Backend | Kind::ReplayMismatch | Kind::Method) {
             value.setattr("episode", episode)?;
         }
         Ok(PyErr::from_value(value))

@@ -10,6 +10,8 @@ mod args;
 mod bench;
 mod convert;
 mod errors;
+mod llm;
+mod method;
 mod prompts;
 mod run;
 mod scene;
@@ -18,12 +20,12 @@ mod task;
 use std::ffi::OsString;
 use std::io::Write;
 use std::path::PathBuf;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent::session::check;
 use coherent_agents::bench::{self as agents_bench, Subset};
-use coherent_agents::episode::Method;
+use coherent_agents::episode::{External, Method};
 use coherent_core::planner::Limits;
 use coherent_core::{action, benchmark, load};
 use pyo3::prelude::*;
@@ -31,6 +33,7 @@ use pyo3::types::PyDict;
 
 use convert::{interruptible, json_to_py};
 use errors::core_err;
+use method::Methods;
 use task::PyTask;
 
 // ---------------------------------------------------------------------------------------
@@ -166,15 +169,33 @@ fn parse_action<'py>(
 }
 
 /// Runs the `coherent` command line; `argv` starts with the program name. Returns the
-/// exit status.
+/// exit status. `--method` and `--methods` take methods written in Python here, as
+/// `MODULE:CLASS` (a module or a `.py` file).
 #[pyfunction]
-fn cli_main(py: Python<'_>, #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>) -> u8 {
-    py.detach(|| {
-        let code = coherent::cli::run(argv);
+fn cli_main(
+    py: Python<'_>,
+    #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>,
+) -> PyResult<u8> {
+    let methods = Mutex::new(Methods::new(py)?);
+    let load = |spec: &str| -> Result<External, String> {
+        Python::attach(|py| {
+            let found = method::helpers(py)?.call_method1("load", (spec,))?;
+            let mut methods = methods.lock().unwrap_or_else(PoisonError::into_inner);
+            methods.add(&found, &[])
+        })
+        .map_err(|e| format!("{spec}: {e}"))
+    };
+    let code = py.detach(|| {
+        let code = coherent::cli::run_with(argv, Some(&load));
         // Python may exit right after; lines already end in newlines, this is for the rest.
         let _ = std::io::stdout().flush();
         code
-    })
+    });
+    methods
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .close(py)?;
+    Ok(code)
 }
 
 #[pymodule]
@@ -193,9 +214,13 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("BackendError", exc.backend.clone_ref(py))?;
     m.add("ReplayMismatchError", exc.replay_mismatch.clone_ref(py))?;
     m.add("PromptError", exc.prompt.clone_ref(py))?;
+    m.add("MethodError", exc.method.clone_ref(py))?;
     m.add_class::<PyTask>()?;
     m.add_class::<task::PyEnv>()?;
-    m.add_class::<run::PyLlm>()?;
+    m.add_class::<llm::PyLlm>()?;
+    m.add_class::<llm::PyReply>()?;
+    m.add_class::<method::PyView>()?;
+    m.add_class::<method::PyDecision>()?;
     m.add_class::<run::PyEpisode>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;

@@ -1,5 +1,4 @@
-//! Episodes: `LLM` (an endpoint's settings), `run`, `replay`, `load_episode` and the
-//! `Episode` they give. The episode is the session layer's
+//! Episodes: `run`, `replay`, `load_episode` and the `Episode` they give. The episode is the session layer's
 //! (`coherent::session::episode`), as for `coherent run`.
 
 use std::path::{Path, PathBuf};
@@ -7,14 +6,11 @@ use std::sync::Arc;
 
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
-use coherent::session::endpoint::{Endpoint, Patience};
 use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::llm::Usage;
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
-use coherent_agents::{
-    ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode, PriceTable,
-};
+use coherent_agents::{Cancel, ErrorRates, PriceTable};
 use coherent_core::planner::Limits;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -23,117 +19,10 @@ use pyo3::types::{PyDict, PyList, PyString};
 use crate::args;
 use crate::convert::{finite, interruptible, py_repr, text, to_py};
 use crate::errors::{self, Kind, short_repr};
+use crate::llm::PyLlm;
+use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_table, prompt_set};
 use crate::task::PyTask;
-
-/// How to reach an OpenAI-compatible endpoint. Arguments left out come from the
-/// environment as on the command line (`OPENAI_BASE_URL`, `OPENAI_API_KEY`,
-/// `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and logs.
-#[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
-pub(crate) struct PyLlm {
-    pub config: OpenAiConfig,
-}
-
-#[pymethods]
-impl PyLlm {
-    #[new]
-    #[pyo3(signature = (
-        base_url = None, model = None, api_key = None, *, temperature = 0.0, seed = None,
-        format = "json_schema", connect_timeout = 10.0, read_timeout = 120.0, timeout = 300.0,
-        max_retries = 4, concurrency = 4,
-        max_response_bytes = OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES
-    ))]
-    #[allow(clippy::too_many_arguments)]
-    fn new(
-        py: Python<'_>,
-        #[pyo3(from_py_with = args::base_url)] base_url: Option<String>,
-        #[pyo3(from_py_with = args::model)] model: Option<String>,
-        #[pyo3(from_py_with = args::api_key)] api_key: Option<String>,
-        #[pyo3(from_py_with = args::temperature)] temperature: f32,
-        #[pyo3(from_py_with = args::seed)] seed: Option<u64>,
-        #[pyo3(from_py_with = args::format)] format: &str,
-        #[pyo3(from_py_with = args::connect_timeout)] connect_timeout: f64,
-        #[pyo3(from_py_with = args::read_timeout)] read_timeout: f64,
-        #[pyo3(from_py_with = args::timeout)] timeout: f64,
-        #[pyo3(from_py_with = args::max_retries)] max_retries: u32,
-        #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
-        #[pyo3(from_py_with = args::max_response_bytes)] max_response_bytes: usize,
-    ) -> PyResult<PyLlm> {
-        let format: OutputMode = serde_json::from_value(format.into()).map_err(|_| {
-            errors::choice(
-                py,
-                "format",
-                format,
-                "expected \"json_schema\", \"json_object\" or \"text\"",
-            )
-        })?;
-        let endpoint = Endpoint {
-            base_url,
-            api_key: api_key.map(ApiKey::new),
-            model,
-            temperature,
-            seed,
-            format,
-            patience: Patience {
-                connect_timeout,
-                read_timeout,
-                timeout,
-                max_retries,
-            },
-            requests: concurrency,
-            max_response_bytes,
-        };
-        let config = endpoint.config().map_err(|e| errors::backend(py, e))?.ok_or_else(|| {
-            errors::backend(
-                py,
-                "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and COHERENT_MODEL)",
-            )
-        })?;
-        // The client checks the rest (the model name, the URL); fail here, not mid-run.
-        OpenAiClient::new(config.clone()).map_err(|e| errors::backend(py, e.to_string()))?;
-        Ok(PyLlm { config })
-    }
-
-    #[getter]
-    fn base_url(&self) -> &str {
-        &self.config.base_url
-    }
-
-    #[getter]
-    fn model(&self) -> &str {
-        &self.config.model
-    }
-
-    /// Whether a key is set (the key itself cannot be read back).
-    #[getter]
-    fn has_api_key(&self) -> bool {
-        self.config.api_key.is_some()
-    }
-
-    #[getter]
-    fn temperature(&self) -> f32 {
-        self.config.temperature
-    }
-
-    #[getter]
-    fn seed(&self) -> Option<u64> {
-        self.config.seed
-    }
-
-    fn __repr__(&self, py: Python<'_>) -> String {
-        format!(
-            "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
-            py_repr(py, &self.config.base_url),
-            py_repr(py, &self.config.model),
-            if self.has_api_key() {
-                "'[hidden]'"
-            } else {
-                "None"
-            },
-            self.config.temperature
-        )
-    }
-}
 
 /// An episode as recorded in its transcript: the settings, every round, the summary.
 #[pyclass(name = "Episode", module = "coherent._coherent", frozen)]
@@ -210,8 +99,8 @@ impl PyEpisode {
         &self.transcript.header.method
     }
 
-    /// `"success"`, `"failure"` (the step budget is spent), `"backend_error"` or
-    /// `"interrupted"`.
+    /// `"success"`, `"failure"` (the step budget is spent), `"backend_error"`,
+    /// `"interrupted"` or `"error"` (a method written in Python raised).
     #[getter]
     fn status<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         to_py(py, &self.summary.status)
@@ -369,16 +258,6 @@ pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Er
         .map_err(|e| errors::invalid(spec.py(), format!("sim_errors: {e}")))
 }
 
-pub(crate) fn method_of(py: Python<'_>, name: &str) -> PyResult<Method> {
-    Method::from_name(name).ok_or_else(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-        errors::invalid(
-            py,
-            format!("unknown method {name:?}; the methods: {}", names.join(", ")),
-        )
-    })
-}
-
 /// Runs a prepared episode on a worker thread (Ctrl-C cancels it between rounds or in a
 /// model call); `prepare` runs there too, since sizing a budget may plan.
 fn episode_off_the_gil(
@@ -401,43 +280,42 @@ fn episode_off_the_gil(
     })
 }
 
-/// Raises `BackendError` when the backend failed for good, with the episode attached.
-fn backend_failure(py: Python<'_>, episode: PyEpisode) -> PyResult<Py<PyEpisode>> {
-    let failed = episode.summary.status == Status::BackendError;
-    let message = format!(
-        "{} (transcript: {})",
-        episode
-            .summary
-            .error
-            .as_deref()
-            .unwrap_or("the backend failed"),
-        episode.path.display()
-    );
+/// Raises `BackendError` when the backend failed for good, or `MethodError` (with the
+/// method's exception as its cause, when there is one) when the method raised; either
+/// with the episode attached.
+fn failure(py: Python<'_>, episode: PyEpisode, cause: Option<PyErr>) -> PyResult<Py<PyEpisode>> {
+    let kind = match episode.summary.status {
+        Status::BackendError => Kind::Backend,
+        Status::Error => Kind::Method,
+        _ => return Py::new(py, episode),
+    };
+    let error = episode
+        .summary
+        .error
+        .as_deref()
+        .unwrap_or("the episode failed");
+    // A traceback's last line is the exception; the whole of it is in the transcript.
+    let last = error.trim_end().lines().last().unwrap_or(error);
+    let message = format!("{last} (transcript: {})", episode.path.display());
     let episode = Py::new(py, episode)?;
-    if failed {
-        return Err(errors::error(
-            py,
-            Kind::Backend,
-            message,
-            Some(episode.into_any()),
-        ));
-    }
-    Ok(episode)
+    let raised = errors::error(py, kind, message, Some(episode.into_any()));
+    raised.set_cause(py, cause);
+    Err(raised)
 }
 
 /// Runs `method` on `task` as `coherent run` does and returns the episode; its
 /// transcript goes to `out`.
 #[pyfunction]
 #[pyo3(signature = (
-    task, method = "pefa", *, llm = None, sim_errors = None, history = 5, max_steps = None,
-    physics = false, seed = None, out = PathBuf::from("runs"),
+    task, method = MethodArg::Name("pefa".to_owned()), *, llm = None, sim_errors = None,
+    history = 5, max_steps = None, physics = false, seed = None, out = PathBuf::from("runs"),
     max_states = Limits::DEFAULT_MAX_STATES, prompts = None, prices = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
-    #[pyo3(from_py_with = args::method)] method: &str,
+    #[pyo3(from_py_with = args::method)] method: MethodArg,
     llm: Option<&Bound<'_, PyLlm>>,
     sim_errors: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = args::history)] history: usize,
@@ -452,7 +330,8 @@ pub(crate) fn run(
     // Before anything else: a bad template must cost no model call.
     let prompts = prompt_set(prompts)?;
     let prices = price_table(prices)?;
-    let method = method_of(py, method)?;
+    let mut methods = Methods::new(py)?;
+    let method = method.spec(py, &mut methods, &[task.clone().unbind()])?;
     let backend = BackendRequest {
         kind: BackendKind::Auto,
         endpoint: llm.map(|l| l.get().config.clone()),
@@ -480,8 +359,10 @@ pub(crate) fn run(
         out,
         prices,
     };
-    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel))?;
-    backend_failure(py, PyEpisode::from_ran(ran, task.clone().unbind()))
+    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel));
+    methods.close(py)?;
+    let cause = methods.methods.first().and_then(|m| m.take_error());
+    failure(py, PyEpisode::from_ran(ran?, task.clone().unbind()), cause)
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network) with the prompt
@@ -513,7 +394,7 @@ pub(crate) fn replay(
             Some(episode),
         ));
     }
-    backend_failure(py, episode)
+    failure(py, episode, None)
 }
 
 /// The episode recorded in a transcript file (`coherent run` or `coherent bench` wrote it).

@@ -16,7 +16,7 @@ use coherent_core::text::cut;
 
 use crate::backends::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, MAX_ANSWER_BYTES,
-    OutputMode, Query, Usage,
+    Message, OutputMode, Query, Usage,
 };
 use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
@@ -151,6 +151,27 @@ impl OpenAiConfig {
     }
 }
 
+/// One chat request as the client sends it: a role's [`Query`], or a question of a
+/// method written outside the crate ([`OpenAiClient::chat`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Chat {
+    pub messages: Vec<Message>,
+    /// The name and JSON schema the answer must follow (structured outputs, with the
+    /// client's fallbacks); `None` asks for free text.
+    pub schema: Option<(String, Value)>,
+    pub max_tokens: u32,
+}
+
+impl Chat {
+    fn of(q: Query) -> Chat {
+        Chat {
+            messages: q.messages,
+            schema: Some((q.schema_name.to_owned(), q.schema)),
+            max_tokens: q.max_tokens,
+        }
+    }
+}
+
 /// The HTTP backend.
 #[derive(Debug)]
 pub struct OpenAiClient {
@@ -212,7 +233,7 @@ impl OpenAiClient {
         }
     }
 
-    fn body(&self, q: &Query, mode: OutputMode) -> Value {
+    fn body(&self, q: &Chat, mode: OutputMode) -> Value {
         let mut body = json!({
             "model": self.config.model,
             "messages": q.messages,
@@ -222,15 +243,17 @@ impl OpenAiClient {
         if let Some(seed) = self.config.seed {
             body["seed"] = json!(seed);
         }
-        match mode {
-            OutputMode::JsonSchema => {
+        match (mode, &q.schema) {
+            (OutputMode::JsonSchema, Some((name, schema))) => {
                 body["response_format"] = json!({
                     "type": "json_schema",
-                    "json_schema": {"name": q.schema_name, "strict": true, "schema": q.schema},
+                    "json_schema": {"name": name, "strict": true, "schema": schema},
                 });
             }
-            OutputMode::JsonObject => body["response_format"] = json!({"type": "json_object"}),
-            OutputMode::Text => {}
+            (OutputMode::JsonObject, Some(_)) => {
+                body["response_format"] = json!({"type": "json_object"});
+            }
+            _ => {}
         }
         body
     }
@@ -292,7 +315,11 @@ impl OpenAiClient {
         LlmError::new(kind, self.scrub(&message))
     }
 
-    async fn ask_http(&self, q: Query) -> Result<Answer, LlmError> {
+    /// Sends one chat request: retried with backoff (and `Retry-After`) on 408, 429, 5xx,
+    /// connection errors and timeouts; with a schema, in the answer format the server
+    /// takes (a refusal moves the client to the next one for good), without one as free
+    /// text. The answer has its tokens, latency and attempts; the key is in no text.
+    pub async fn chat(&self, q: &Chat) -> Result<Answer, LlmError> {
         let _permit = self
             .limit
             .acquire()
@@ -302,9 +329,12 @@ impl OpenAiClient {
         let mut attempts = 0;
         let mut retries = 0;
         loop {
-            let mode = MODES[usize::from(self.mode.load(Ordering::Relaxed))];
+            let mode = match q.schema {
+                Some(_) => MODES[usize::from(self.mode.load(Ordering::Relaxed))],
+                None => OutputMode::Text,
+            };
             attempts += 1;
-            let failure = match self.exchange(&self.body(&q, mode)).await {
+            let failure = match self.exchange(&self.body(q, mode)).await {
                 Ok((status, _, bytes)) if status.is_success() => {
                     let mut answer = parse_completion(&bytes).map_err(|message| LlmError {
                         kind: LlmErrorKind::Malformed,
@@ -449,7 +479,7 @@ impl Backend for OpenAiClient {
     }
 
     fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
-        Box::pin(self.ask_http(query))
+        Box::pin(async move { self.chat(&Chat::of(query)).await })
     }
 }
 
@@ -528,6 +558,27 @@ mod tests {
         let key = ApiKey::new("sk-secret-123");
         assert_eq!(key.scrub("echo sk-secret-123!"), "echo [api key]!");
         assert!(!format!("{key:?}").contains("secret"));
+    }
+
+    #[test]
+    fn a_chat_without_a_schema_asks_for_text_in_any_mode() {
+        let client =
+            OpenAiClient::new(OpenAiConfig::new("http://127.0.0.1:9/v1", "m")).expect("a client");
+        let mut chat = Chat {
+            messages: vec![Message::user("hi".into())],
+            schema: None,
+            max_tokens: 7,
+        };
+        for mode in MODES {
+            let body = client.body(&chat, mode);
+            assert!(body.get("response_format").is_none(), "{mode:?}");
+            assert_eq!(body["max_tokens"], 7);
+        }
+        chat.schema = Some(("answer".into(), json!({"type": "object"})));
+        let body = client.body(&chat, OutputMode::JsonSchema);
+        assert_eq!(body["response_format"]["json_schema"]["name"], "answer");
+        let body = client.body(&chat, OutputMode::JsonObject);
+        assert_eq!(body["response_format"]["type"], "json_object");
     }
 
     #[test]

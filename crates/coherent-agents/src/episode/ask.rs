@@ -75,6 +75,7 @@ pub(crate) async fn ask(
         messages: query.messages.clone(),
         answer: None,
         error: None,
+        client: None,
     };
     let result = tokio::select! {
         biased;

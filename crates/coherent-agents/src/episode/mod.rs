@@ -1,7 +1,10 @@
 //! The episode: what every method shares, and the one way to run any of them.
 //!
-//! - [`settings`]: the method names ([`Method`]), the settings a transcript records
+//! - [`settings`]: the method names ([`Method`]), a method written outside the crate
+//!   ([`External`]) beside them ([`MethodSpec`]), the settings a transcript records
 //!   ([`Settings`]) and the step budget ([`Budget`]).
+//! - [`policy`]: what a method written outside the crate answers each step
+//!   ([`Policy`]) and what it is shown ([`View`]).
 //! - [`rounds`]: the round loop and its result ([`Episode`]): one round per step until
 //!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires.
 //! - `ask`: asking a backend one question and recording the call.
@@ -11,11 +14,12 @@
 //!   runs the method the settings name.
 //!
 //! Every method of [`crate::methods`] is built on `rounds`, `ask`, `environment` and
-//! `cancel`; only [`run()`] looks at the methods.
+//! `cancel` (`methods::external` on `policy` too); only [`run()`] looks at the methods.
 
 pub(crate) mod ask;
 pub mod cancel;
 pub(crate) mod environment;
+pub mod policy;
 pub mod rounds;
 pub mod run;
 pub mod settings;
@@ -24,6 +28,7 @@ pub mod settings;
 // one call.
 pub use crate::records::replay::{check_replay, recorded_settings, recorded_task};
 pub use cancel::Cancel;
+pub use policy::{Act, Choice, Executed, MakePolicy, Policy, RobotView, View};
 pub use rounds::Episode;
 pub use run::{run, transcript_path};
-pub use settings::{Budget, Method, Settings};
+pub use settings::{Budget, External, Method, MethodSpec, Settings};

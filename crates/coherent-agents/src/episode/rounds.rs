@@ -18,7 +18,8 @@ pub struct Episode {
 }
 
 /// The loop every method shares: `play` one round per step until the goal holds, the
-/// budget is spent, a round ends in a backend failure, or `cancel` fires (`play` gives
+/// budget is spent, a round ends in a backend failure or the method's error, or `cancel`
+/// fires (`play` gives
 /// `None` when cancelled during a round); then the summary. `on_round` sees each round
 /// as it ends (the transcript writer, progress lines); its error stops the episode, so
 /// that no round goes unrecorded.
@@ -48,11 +49,17 @@ pub(crate) async fn rounds(
             break;
         };
         on_round(&round)?;
-        if let Outcome::BackendError { message } = &round.outcome {
-            status = Status::BackendError;
-            error = Some(message.clone());
-        } else if round.done {
-            status = Status::Success;
+        match &round.outcome {
+            Outcome::BackendError { message } => {
+                status = Status::BackendError;
+                error = Some(message.clone());
+            }
+            Outcome::MethodError { message } => {
+                status = Status::Error;
+                error = Some(message.clone());
+            }
+            _ if round.done => status = Status::Success,
+            _ => {}
         }
         rounds.push(round);
     }
@@ -68,13 +75,19 @@ pub(crate) async fn rounds(
                 k + a.usage.cached_tokens,
             )
         });
+    // What a method written outside the crate reported of its own clients' calls.
+    let reported = rounds.iter().filter_map(|r| r.external.as_ref());
+    let (prompt_tokens, completion_tokens, reported_calls) = reported
+        .fold((prompt_tokens, completion_tokens, 0), |(p, c, n), e| {
+            (p + e.prompt_tokens, c + e.completion_tokens, n + e.calls)
+        });
     let summary = Summary {
         status,
         success: status == Status::Success,
         steps: rounds.len() as u32,
         gt_steps: task.meta.gt_steps,
         max_steps,
-        llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum(),
+        llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum::<u32>() + reported_calls,
         prompt_tokens,
         completion_tokens,
         cached_tokens,

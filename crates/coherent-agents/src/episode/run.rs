@@ -11,16 +11,18 @@ use coherent_core::{Environment, Task, native};
 use crate::backends::llm::{Backend, BackendInfo};
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::Episode;
-use crate::episode::settings::{Budget, Method, Settings};
+use crate::episode::settings::{Budget, Method, MethodSpec, Settings};
 use crate::methods::cmrs::{self, CmrsConfig};
 use crate::methods::dmrs::{self, DmrsConfig};
+use crate::methods::external;
 use crate::methods::mcts::{self, MctsConfig};
 use crate::methods::optimal;
 use crate::methods::pefa::{self, PefaConfig};
 use crate::records::transcript::{self, Header, Record, Round, Writer};
 
-/// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists.
-pub fn transcript_path(out: &Path, task: &Task, method: Method) -> PathBuf {
+/// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists;
+/// `method` is the method's name.
+pub fn transcript_path(out: &Path, task: &Task, method: &str) -> PathBuf {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
@@ -28,7 +30,7 @@ pub fn transcript_path(out: &Path, task: &Task, method: Method) -> PathBuf {
         "{}-task{}-{}-{}",
         task.meta.scene.replace(['/', '\\'], "_"),
         task.meta.task_id,
-        method.name(),
+        method,
         utc_stamp(secs)
     );
     let mut path = out.join(format!("{stem}.jsonl"));
@@ -78,7 +80,7 @@ pub async fn run(
     progress: &mut (dyn FnMut(&Round) + Send),
 ) -> Result<(Episode, Header), String> {
     let history = match settings.method {
-        Method::PefaNoHistory => 0,
+        MethodSpec::Builtin(Method::PefaNoHistory) => 0,
         _ => settings.history,
     };
     let backend_info = if settings.method.uses_model() {
@@ -108,6 +110,7 @@ pub async fn run(
         started_ms: SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_millis() as u64),
+        external: matches!(settings.method, MethodSpec::External(_)),
     };
     let io = |e: std::io::Error| format!("{}: {e}", transcript.display());
     let mut writer = Writer::create(transcript, header.clone()).map_err(io)?;
@@ -123,7 +126,15 @@ pub async fn run(
         ..MctsConfig::default()
     };
     let steps = budget.steps();
-    let episode = match settings.method {
+    let method = match &settings.method {
+        MethodSpec::Builtin(method) => *method,
+        MethodSpec::External(method) => {
+            let made = method.make(task);
+            let episode = external::run(env, task, made, steps, cancel, &mut on_round).await;
+            return finish(episode.map_err(io)?, header, &mut writer, transcript);
+        }
+    };
+    let episode = match method {
         Method::Pefa | Method::PefaNoHistory => {
             let config = PefaConfig {
                 history,
@@ -138,11 +149,7 @@ pub async fn run(
         }
         Method::Dmrs1d | Method::Dmrs2d => {
             let config = DmrsConfig {
-                dialogue_rounds: if settings.method == Method::Dmrs1d {
-                    1
-                } else {
-                    2
-                },
+                dialogue_rounds: if method == Method::Dmrs1d { 1 } else { 2 },
                 history,
                 seed: settings.seed.unwrap_or(0),
                 prompts,
@@ -163,9 +170,19 @@ pub async fn run(
         }
     }
     .map_err(io)?;
+    finish(episode, header, &mut writer, transcript)
+}
+
+/// Writes the summary line: the transcript is complete.
+fn finish(
+    episode: Episode,
+    header: Header,
+    writer: &mut Writer,
+    transcript: &Path,
+) -> Result<(Episode, Header), String> {
     writer
         .write(&Record::Summary(episode.summary.clone()))
-        .map_err(io)?;
+        .map_err(|e| format!("{}: {e}", transcript.display()))?;
     Ok((episode, header))
 }
 

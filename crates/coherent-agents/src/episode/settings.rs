@@ -1,9 +1,13 @@
-//! How an episode is run: the method, its settings as a transcript records them, and
-//! the step budget.
+//! How an episode is run: the method (built in, or written outside the crate), its
+//! settings as a transcript records them, and the step budget.
+
+use std::fmt;
+use std::sync::Arc;
 
 use coherent_core::Task;
 use coherent_core::planner::{self, Limits};
 
+use crate::episode::policy::{MakePolicy, Policy};
 use crate::methods::templates::Prompts;
 
 /// A planning method.
@@ -62,11 +66,106 @@ impl Method {
     }
 }
 
+/// A method written outside the crate (a Python class, say), by name: each episode gets
+/// its own [`Policy`] from the maker.
+#[derive(Clone)]
+pub struct External {
+    name: String,
+    make: Arc<MakePolicy>,
+}
+
+impl External {
+    /// The method `name`, whose episodes get their policy from `make`. The name goes
+    /// into results, tables and transcript file names: letters, digits, `-`, `_` and `.`
+    /// (not first), and none of the built-in methods' names.
+    pub fn new(name: &str, make: Arc<MakePolicy>) -> Result<External, String> {
+        let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
+        if name.is_empty() || !name.chars().all(allowed) || name.starts_with('.') {
+            return Err(format!(
+                "method name {name:?}: use letters, digits, '-', '_' and '.' (not first)"
+            ));
+        }
+        if Method::from_name(name).is_some() {
+            return Err(format!(
+                "method name {name:?} is a built-in method's: give yours another name"
+            ));
+        }
+        Ok(External {
+            name: name.to_owned(),
+            make,
+        })
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// The policy of one episode of `task`, or why there is none.
+    pub fn make(&self, task: &Arc<Task>) -> Result<Box<dyn Policy>, String> {
+        (self.make)(task)
+    }
+}
+
+impl fmt::Debug for External {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("External")
+            .field("name", &self.name)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Two are the same method when they have the same name and the same maker.
+impl PartialEq for External {
+    fn eq(&self, other: &External) -> bool {
+        self.name == other.name && Arc::ptr_eq(&self.make, &other.make)
+    }
+}
+
+/// The method of an episode: one of the built-in ones, or one written outside the crate.
+#[derive(Clone, Debug, PartialEq)]
+pub enum MethodSpec {
+    Builtin(Method),
+    External(External),
+}
+
+impl MethodSpec {
+    /// The name in results, tables and transcripts.
+    pub fn name(&self) -> &str {
+        match self {
+            MethodSpec::Builtin(m) => m.name(),
+            MethodSpec::External(e) => e.name(),
+        }
+    }
+
+    /// Whether the episode's backend answers the method's questions (a method written
+    /// outside the crate asks its own models, if any).
+    pub fn uses_model(&self) -> bool {
+        match self {
+            MethodSpec::Builtin(m) => m.uses_model(),
+            MethodSpec::External(_) => false,
+        }
+    }
+
+    /// The built-in method, when it is one.
+    pub fn builtin(&self) -> Option<Method> {
+        match self {
+            MethodSpec::Builtin(m) => Some(*m),
+            MethodSpec::External(_) => None,
+        }
+    }
+}
+
+impl From<Method> for MethodSpec {
+    fn from(m: Method) -> MethodSpec {
+        MethodSpec::Builtin(m)
+    }
+}
+
 /// How an episode is run, as recorded in its transcript's header. The step budget is
 /// apart ([`Budget`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
-    pub method: Method,
+    pub method: MethodSpec,
     /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
     /// baselines, the executed actions in their prompts (the paper: 5 for both).
     pub history: usize,
@@ -81,9 +180,9 @@ pub struct Settings {
 }
 
 impl Settings {
-    pub fn new(method: Method) -> Settings {
+    pub fn new(method: impl Into<MethodSpec>) -> Settings {
         Settings {
-            method,
+            method: method.into(),
             history: 5,
             temperature: None,
             seed: None,

@@ -22,8 +22,9 @@ use crate::backends::llm::{Backend, BackendInfo};
 use crate::backends::openai::OpenAiClient;
 use crate::backends::simulated::ErrorRates;
 use crate::episode::cancel::Cancel;
+use crate::episode::rounds::Episode;
 use crate::episode::run::{run as run_episode, transcript_path};
-use crate::episode::settings::{Budget, Method, Settings};
+use crate::episode::settings::{Budget, MethodSpec, Settings};
 use crate::harness::prices::PriceTable;
 use crate::methods::templates::Prompts;
 use crate::records::replay::Replay;
@@ -123,7 +124,8 @@ impl BackendChoice {
 /// What to run.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
-    pub methods: Vec<Method>,
+    /// Built-in methods and methods written outside the crate, each by its own name.
+    pub methods: Vec<MethodSpec>,
     /// Seed indices `0..seeds`.
     pub seeds: u32,
     /// Episodes at once.
@@ -135,6 +137,8 @@ pub struct BenchConfig {
     pub temperature: Option<f32>,
     /// Most states one planner search may visit.
     pub max_states: usize,
+    /// The step budget of every episode; `None` for the paper's 2 x GT.
+    pub max_steps: Option<u32>,
     /// The results file; transcripts go to [`transcripts_dir`] of it.
     pub out: PathBuf,
     /// The templates the methods' prompts are rendered from (a replay renders the
@@ -178,7 +182,7 @@ struct TaskInfo {
 /// One episode to run.
 #[derive(Clone, Debug)]
 struct Job {
-    method: Method,
+    method: MethodSpec,
     task: Arc<Task>,
     info: Arc<OnceCell<TaskInfo>>,
     seed: u32,
@@ -246,7 +250,7 @@ pub async fn run(
     for task in tasks {
         let info = Arc::new(OnceCell::new());
         for seed in 0..config.seeds {
-            for &method in &config.methods {
+            for method in &config.methods {
                 outcome.total += 1;
                 let key = EpisodeKey {
                     method: method.name().to_owned(),
@@ -259,7 +263,7 @@ pub async fn run(
                     continue;
                 }
                 jobs.push(Job {
-                    method,
+                    method: method.clone(),
                     task: Arc::clone(task),
                     info: Arc::clone(&info),
                     seed,
@@ -280,6 +284,7 @@ pub async fn run(
         max_states: config.max_states,
         prompts: config.prompts.clone(),
         prices: config.prices.clone(),
+        max_steps: config.max_steps,
         transcripts: transcripts_dir(out),
         cancel: cancel.clone(),
         permits: Semaphore::new(config.concurrency.max(1)),
@@ -338,6 +343,7 @@ struct Shared {
     max_states: usize,
     prompts: Prompts,
     prices: PriceTable,
+    max_steps: Option<u32>,
     transcripts: PathBuf,
     cancel: Cancel,
     permits: Semaphore,
@@ -373,9 +379,10 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         .await?
         .clone();
     let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
-    let budget = match info.budget {
-        Ok(b) => b,
-        Err(why) => return Ok(JobResult::TaskSkipped(format!("{name}: {why}"))),
+    let budget = match (shared.max_steps, &info.budget) {
+        (Some(n), _) => Budget::Given(n),
+        (None, Ok(b)) => *b,
+        (None, Err(why)) => return Ok(JobResult::TaskSkipped(format!("{name}: {why}"))),
     };
     if shared.cancel.is_cancelled() {
         return Ok(JobResult::NotStarted);
@@ -387,7 +394,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         temperature: shared.temperature,
         seed: Some(seed),
         prompts: shared.prompts.clone(),
-        ..Settings::new(method)
+        ..Settings::new(method.clone())
     };
     let mut budget = budget;
     let mut recording = None;
@@ -418,7 +425,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
             .expect("every backend but a replay serves any episode"),
     };
     let dir = shared.transcripts.join(format!("seed{}", job.seed));
-    let path = transcript_path(&dir, task, method);
+    let path = transcript_path(&dir, task, method.name());
     // An episode's future holds `&dyn Environment` across awaits, so it is not `Send`:
     // each runs to completion on a blocking-pool thread of the same multi-thread runtime
     // (its model calls, timers and planner searches still use the runtime).
@@ -451,6 +458,7 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         .as_ref()
         .and_then(|r| r.check(&episode).err())
         .map(|why| format!("replay mismatch: {why}"));
+    let (backend, uses_model) = line_backend(shared, &method, &episode);
     let s = episode.summary;
     let line = ResultLine {
         method: method.name().to_owned(),
@@ -471,12 +479,41 @@ async fn run_job(job: Job, shared: &Shared) -> Result<JobResult, String> {
         cached_tokens: s.cached_tokens,
         cost_usd: None,
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
-        backend: shared.backend_info.clone(),
-        uses_model: method.uses_model(),
+        backend,
+        uses_model,
         error: mismatch.or(s.error),
         transcript: path.display().to_string(),
     };
     Ok(JobResult::Line(Box::new(line.priced(&shared.prices))))
+}
+
+/// The backend of a results line, and whether the method asked a model: the run's
+/// backend for a built-in method; for a method written outside the crate, the endpoint
+/// its first call through the project's client went to (as a replay labels it when the
+/// run replays), or none, and whether it made or reported any call.
+fn line_backend(shared: &Shared, method: &MethodSpec, episode: &Episode) -> (BackendInfo, bool) {
+    if method.builtin().is_some() {
+        return (shared.backend_info.clone(), method.uses_model());
+    }
+    let client = episode
+        .rounds
+        .iter()
+        .flat_map(|r| &r.calls)
+        .find_map(|c| c.client.clone());
+    let backend = match (client, &shared.backend) {
+        (Some(c), BackendChoice::Replay(_)) => BackendInfo {
+            kind: "replay".into(),
+            model: c.model,
+            base_url: None,
+        },
+        (Some(c), _) => c,
+        (None, _) => BackendInfo {
+            kind: "none".into(),
+            model: String::new(),
+            base_url: None,
+        },
+    };
+    (backend, episode.summary.llm_calls > 0)
 }
 
 fn task_info(task: &Task, limits: &Limits) -> TaskInfo {

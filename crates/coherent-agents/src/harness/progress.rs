@@ -104,6 +104,7 @@ fn status_word(s: Status) -> &'static str {
         Status::Failure => "failure",
         Status::BackendError => "backend error",
         Status::Interrupted => "interrupted",
+        Status::Error => "error",
     }
 }
 

@@ -13,6 +13,7 @@ use serde::Serialize;
 
 use crate::episode::settings::Method;
 use crate::harness::results::{EpisodeKey, ResultLine};
+use crate::records::transcript::Status;
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
 /// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the
@@ -108,8 +109,11 @@ pub struct Report {
     pub table1: Table,
     pub table2: Table,
     pub costs: Vec<Cost>,
-    /// Episodes with no final line (only backend errors or interruptions).
+    /// Episodes with no final line (only backend errors, the method's errors or
+    /// interruptions).
     pub unfinished: usize,
+    /// Those of them whose last line is the method's error (status `error`).
+    pub errors: usize,
     /// Tasks the planner finds no plan for (task type null): in the average only.
     pub untyped_tasks: usize,
 }
@@ -149,6 +153,22 @@ pub fn final_lines(lines: &[ResultLine]) -> (Vec<&ResultLine>, usize) {
     }
     let unfinished = all.len() - last.len();
     (last.into_values().collect(), unfinished)
+}
+
+/// The episodes with no final line whose last line is the method's error.
+fn errors(lines: &[ResultLine]) -> usize {
+    let mut last: BTreeMap<EpisodeKey, &ResultLine> = BTreeMap::new();
+    for l in lines {
+        last.insert(l.key(), l);
+    }
+    let finished: BTreeSet<EpisodeKey> = lines
+        .iter()
+        .filter(|l| l.is_final())
+        .map(ResultLine::key)
+        .collect();
+    last.values()
+        .filter(|l| l.status == Status::Error && !finished.contains(&l.key()))
+        .count()
 }
 
 fn method_order(name: &str) -> (usize, String) {
@@ -237,6 +257,7 @@ pub fn build(lines: &[ResultLine]) -> Report {
         table2,
         costs,
         unfinished,
+        errors: errors(lines),
         untyped_tasks,
     }
 }
@@ -329,8 +350,14 @@ fn header_lines(r: &Report) -> Vec<String> {
     }
     if r.unfinished > 0 {
         out.push(format!(
-            "{} episode(s) have no final result (backend error or interrupted) and are left out; re-run the same command to finish them.",
+            "{} episode(s) have no final result (backend error, the method's error or interrupted) and are left out; re-run the same command to finish them.",
             r.unfinished
+        ));
+    }
+    if r.errors > 0 {
+        out.push(format!(
+            "{} of them ended in an error raised by the method (status error; its results line and transcript have the text).",
+            r.errors
         ));
     }
     out

@@ -282,6 +282,7 @@ pub fn feedback(task: &Task, round: &Round, outcome: &Outcome) -> String {
             format!("{robot} gave no usable answer ({why}). {}", can_do_now())
         }
         Outcome::BackendError { message } => format!("The model could not be reached: {message}"),
+        Outcome::MethodError { message } => format!("The method failed: {message}"),
     }
 }
 

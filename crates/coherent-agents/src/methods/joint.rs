@@ -240,6 +240,7 @@ pub(crate) fn feedback(line: &str, outcome: &Outcome) -> String {
             format!("No usable answer: {why}")
         }
         Outcome::BackendError { message } => format!("The model could not be reached: {message}"),
+        Outcome::MethodError { message } => format!("The method failed: {message}"),
         Outcome::Declined => "No action was chosen.".to_owned(),
     }
 }

@@ -461,6 +461,7 @@ async fn round(
                 messages: messages.clone(),
                 answer: None,
                 error: None,
+                client: None,
             };
             let result = tokio::select! {
                 biased;

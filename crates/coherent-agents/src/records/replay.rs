@@ -1,18 +1,23 @@
 //! Setting up the replay of a recorded episode: the task, the settings and the budget
-//! it ran with, a backend that answers from the recording, and afterwards the check
-//! that the replay did exactly what the recording did. `coherent run --replay`, the
-//! Python `replay` and `coherent bench --backend replay` all start here.
+//! it ran with, a backend that answers from the recording (for a method written outside
+//! the crate, a policy that gives the recorded decisions back, so that no Python is
+//! needed), and afterwards the check that the replay did exactly what the recording did.
+//! `coherent run --replay`, the Python `replay` and `coherent bench --backend replay` all
+//! start here.
 
+use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::{Task, native};
 
+use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
+use crate::episode::policy::{Act, Choice, Policy, View};
 use crate::episode::rounds::Episode;
-use crate::episode::settings::{Budget, Method, Settings};
+use crate::episode::settings::{Budget, External, Method, MethodSpec, Settings};
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Round, Summary, Transcript};
+use crate::records::transcript::{Outcome, Round, Summary, Transcript};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
 /// `backend` and `budget`, then [`Replay::check`] the episode.
@@ -49,11 +54,24 @@ impl Replay {
     }
 }
 
-/// The settings and budget a transcript was recorded with, to replay it; the prompt set
-/// is the recorded one, or an error when this version cannot render it again.
+/// The settings and budget a transcript was recorded with, to replay it: the prompt set
+/// is the recorded one (or an error when this version cannot render it again), and a
+/// method written outside the crate replays its recorded decisions.
 pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
-    let method = Method::from_name(&t.header.method)
-        .ok_or_else(|| format!("unknown method {:?} in the transcript", t.header.method))?;
+    let name = &t.header.method;
+    let method = if t.header.external {
+        let rounds: Arc<[Round]> = t.rounds.clone().into();
+        let make = move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
+            Ok(Box::new(Recorded {
+                rounds: rounds.iter().cloned().collect(),
+            }))
+        };
+        MethodSpec::External(External::new(name, Arc::new(make))?)
+    } else {
+        Method::from_name(name)
+            .ok_or_else(|| format!("unknown method {name:?} in the transcript"))?
+            .into()
+    };
     let prompts = match &t.header.prompts {
         Some(record) => Prompts::from_record(record).map_err(|e| e.to_string())?,
         None => Prompts::builtin(),
@@ -103,4 +121,43 @@ pub fn check_replay(recorded: &Transcript, replayed: &Episode) -> Result<(), Str
         return Err("the summary differs from the recording".into());
     }
     Ok(())
+}
+
+/// The decisions recorded in the rounds of a method written outside the crate, given
+/// back one per step with the calls the method made then.
+struct Recorded {
+    rounds: VecDeque<Round>,
+}
+
+impl Policy for Recorded {
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+        let act = match self.rounds.pop_front() {
+            None => Act {
+                choice: Err(format!(
+                    "replay diverged: step {} is not in the recording",
+                    view.step
+                )),
+                calls: Vec::new(),
+            },
+            Some(round) => Act {
+                choice: match (round.external, round.outcome) {
+                    (Some(e), _) => Ok(Choice {
+                        robot: e.robot,
+                        action: e.action,
+                        note: e.note,
+                        prompt_tokens: e.prompt_tokens,
+                        completion_tokens: e.completion_tokens,
+                        calls: e.calls,
+                    }),
+                    (None, Outcome::MethodError { message }) => Err(message),
+                    (None, _) => Err(format!(
+                        "replay diverged: round {} of the recording holds no decision",
+                        round.step
+                    )),
+                },
+                calls: round.calls,
+            },
+        };
+        Box::pin(async move { act })
+    }
 }

@@ -43,6 +43,10 @@ pub struct Header {
     pub prompts: Option<PromptRecord>,
     /// Milliseconds since the Unix epoch.
     pub started_ms: u64,
+    /// Whether the method was written outside the crate (a Python class, say): its
+    /// rounds hold its decisions ([`Round::external`]), and a replay re-feeds them.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub external: bool,
 }
 
 /// One call to a role: what was sent and what came back (or why nothing did).
@@ -53,6 +57,10 @@ pub struct Call {
     pub messages: Vec<Message>,
     pub answer: Option<Answer>,
     pub error: Option<LlmError>,
+    /// The endpoint a method written outside the crate called through the project's
+    /// client; absent for the episode's own backend.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub client: Option<BackendInfo>,
 }
 
 /// The task assigner's proposal, as read from its answer
@@ -94,6 +102,25 @@ pub enum Outcome {
     NoDecision { why: String },
     /// The backend failed for good; the episode ends here.
     BackendError { message: String },
+    /// A method written outside the crate raised an error instead of deciding; the
+    /// episode ends here.
+    MethodError { message: String },
+}
+
+/// What a method written outside the crate decided in one round
+/// ([`crate::episode::policy`]), as it gave it, and the model use it reported itself
+/// (calls through its own clients; those through the project's are in [`Round::calls`]).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ExternalDecision {
+    /// The robot that acts; `None` for no action this step.
+    pub robot: Option<NodeId>,
+    /// The action, as written.
+    pub action: Option<String>,
+    /// The method's own words about the step.
+    pub note: String,
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub calls: u32,
 }
 
 /// One PEFA round, which is one step.
@@ -112,6 +139,9 @@ pub struct Round {
     pub done: bool,
     /// Time the round took, model time included.
     pub wall_ms: f64,
+    /// The decision of a method written outside the crate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<ExternalDecision>,
 }
 
 impl Round {
@@ -127,6 +157,7 @@ impl Round {
             feedback: String::new(),
             done: false,
             wall_ms: 0.0,
+            external: None,
         }
     }
 }
@@ -143,6 +174,8 @@ pub enum Status {
     BackendError,
     /// Stopped from outside (Ctrl-C).
     Interrupted,
+    /// The method raised an error (see the last round and the summary's `error`).
+    Error,
 }
 
 /// The last line.

@@ -1,0 +1,136 @@
+//! A method written outside the crate (a Python class, say) as the episode loop sees it:
+//! a [`Policy`] that is asked once per step for one decision, given a [`View`] of where
+//! the episode stands. The loop that asks it is [`crate::methods::external`]; everything
+//! else (the step budget, the feasibility check, the transcript, the benchmark) is the
+//! same as for the built-in methods.
+
+use std::sync::Arc;
+
+use coherent_core::rules::Observation;
+use coherent_core::{Environment, NodeId, RobotKind, State, Task, describe};
+
+use crate::backends::llm::BoxFuture;
+use crate::records::transcript::Call;
+
+/// One robot as a method sees it at a step.
+#[derive(Clone, Debug)]
+pub struct RobotView {
+    pub id: NodeId,
+    pub kind: RobotKind,
+    /// What it sees: the nodes and edges of its observation.
+    pub observation: Observation,
+    /// The action strings it may use now, in the rules' order.
+    pub actions: Vec<String>,
+}
+
+/// One earlier step: who acted, what, whether it ran, and why not.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Executed {
+    /// `None` when the method chose no action.
+    pub robot: Option<NodeId>,
+    pub action: Option<String>,
+    pub ok: bool,
+    /// Why it did not run (the feasibility check's words), when it did not.
+    pub reason: Option<String>,
+}
+
+/// Where an episode stands when a method is asked for a step.
+#[derive(Clone, Debug)]
+pub struct View {
+    pub task: Arc<Task>,
+    /// The step about to be taken, from 1.
+    pub step: u32,
+    /// The step budget (2 x GT unless set).
+    pub max_steps: u32,
+    /// The team, in the task's order.
+    pub robots: Vec<RobotView>,
+    /// Every earlier step, oldest first.
+    pub history: Vec<Executed>,
+    /// The symbolic state, for the observations' text.
+    pub state: State,
+}
+
+impl View {
+    /// Where `env` stands before step `step` of `max_steps`, after `history`.
+    pub fn now(
+        env: &(dyn Environment + Send),
+        task: &Arc<Task>,
+        step: u32,
+        max_steps: u32,
+        history: &[Executed],
+    ) -> View {
+        let robots = task
+            .robots
+            .iter()
+            .map(|r| {
+                let id = task.id(r.node);
+                RobotView {
+                    id,
+                    kind: r.kind,
+                    observation: env.observe(id).unwrap_or_else(|_| Observation {
+                        room: None,
+                        nodes: Vec::new(),
+                        edges: Vec::new(),
+                    }),
+                    actions: env.actions(id).unwrap_or_default(),
+                }
+            })
+            .collect();
+        View {
+            task: Arc::clone(task),
+            step,
+            max_steps,
+            robots,
+            history: history.to_vec(),
+            state: env.state().clone(),
+        }
+    }
+
+    /// The robot `id` of the team.
+    pub fn robot(&self, id: NodeId) -> Option<&RobotView> {
+        self.robots.iter().find(|r| r.id == id)
+    }
+
+    /// The observation of `robot` as the executors' prompts write it (relation facts, one
+    /// per line), or with `None` every robot's merged, as the assigner's and the central
+    /// prompts write it; `None` for a robot that is not in the team.
+    pub fn observation_text(&self, robot: Option<NodeId>) -> Option<String> {
+        let seen: Vec<&Observation> = match robot {
+            Some(id) => vec![&self.robot(id)?.observation],
+            None => self.robots.iter().map(|r| &r.observation).collect(),
+        };
+        Some(describe::facts(&self.task, &self.state, &seen))
+    }
+}
+
+/// What a method decided for one step.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Choice {
+    /// The robot that acts; `None` for no action this step (the step still counts).
+    pub robot: Option<NodeId>,
+    /// The action, as written: one outside the robot's list is checked like any other
+    /// and refused with the reason.
+    pub action: Option<String>,
+    pub note: String,
+    /// Model use the method reports itself (calls through its own clients).
+    pub prompt_tokens: u64,
+    pub completion_tokens: u64,
+    pub calls: u32,
+}
+
+/// A step's answer: the choice, or why the method failed (which ends the episode with
+/// status `error`), and the calls it made through the project's client meanwhile.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Act {
+    pub choice: Result<Choice, String>,
+    pub calls: Vec<Call>,
+}
+
+/// A method written outside the crate: asked once per step.
+pub trait Policy: Send {
+    /// The decision for the step `view` describes (shared, so that a policy may keep it).
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act>;
+}
+
+/// Makes the policy of one episode, or says why it cannot.
+pub type MakePolicy = dyn Fn(&Arc<Task>) -> Result<Box<dyn Policy>, String> + Send + Sync;

@@ -1,0 +1,144 @@
+//! A method written outside the crate ([`crate::episode::policy`]): each step its
+//! [`Policy`] gets a [`View`] and answers one robot and one action, or none; the action
+//! is checked and run through the same [`Environment`] as every method's, the round is
+//! recorded with the method's decision, note and model calls, and the episode goes on
+//! under the same budget.
+//!
+//! Faults are steps like any: an action outside the robot's list is run as written, so
+//! that the feasibility check gives the reason; a robot that is not in the team is a
+//! failed step that says so; no robot is no action (the step still counts). A policy
+//! that fails (raises, in Python) ends the episode with status `error` and its words.
+
+use std::io;
+use std::sync::Arc;
+use std::time::Instant;
+
+use coherent_core::{Environment, NodeId, Task};
+
+use crate::episode::cancel::Cancel;
+use crate::episode::policy::{Act, Executed, Policy, View};
+use crate::episode::rounds::{Episode, rounds};
+use crate::methods::joint;
+use crate::methods::prompt::robot_label;
+use crate::records::transcript::{Decision, ExternalDecision, Outcome, Round};
+
+/// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
+/// spent, the policy fails, or `cancel` fires. A policy that could not be made fails
+/// the first step.
+pub async fn run(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    made: Result<Box<dyn Policy>, String>,
+    max_steps: u32,
+    cancel: &Cancel,
+    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
+) -> io::Result<Episode> {
+    let mut policy = made;
+    let mut history: Vec<Executed> = Vec::new();
+    let play = async |env: &mut (dyn Environment + Send), step: u32| {
+        let start = Instant::now();
+        let act = match &mut policy {
+            Ok(policy) => {
+                let view = Arc::new(View::now(env, task, step, max_steps, &history));
+                tokio::select! {
+                    biased;
+                    () = cancel.cancelled() => return Ok(None),
+                    act = policy.act(view) => act,
+                }
+            }
+            Err(why) => Act {
+                choice: Err(why.clone()),
+                calls: Vec::new(),
+            },
+        };
+        let mut round = Round::new(step);
+        round.calls = act.calls;
+        match act.choice {
+            Ok(choice) => {
+                round.external = Some(ExternalDecision {
+                    robot: choice.robot,
+                    action: choice.action.clone(),
+                    note: choice.note.clone(),
+                    prompt_tokens: choice.prompt_tokens,
+                    completion_tokens: choice.completion_tokens,
+                    calls: choice.calls,
+                });
+                let action = choice.action.unwrap_or_default();
+                match choice.robot {
+                    Some(robot) => take(env, task, &mut round, robot, &action, choice.note),
+                    None => {
+                        round.decision = Some(Decision {
+                            can_do: false,
+                            action: None,
+                            subtask_complete: false,
+                            note: choice.note,
+                        });
+                        round.outcome = Outcome::Declined;
+                        round.feedback = joint::feedback("", &round.outcome);
+                    }
+                }
+            }
+            Err(message) => {
+                round.outcome = Outcome::MethodError { message };
+                round.feedback = joint::feedback("", &round.outcome);
+            }
+        }
+        history.push(executed(&round));
+        round.done = env.goal_satisfied();
+        round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+        Ok(Some(round))
+    };
+    rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// Runs `robot`'s `action` as the round's decision; a robot that is not in the team is a
+/// refused step (`unknown_robot`) with the team in its message.
+fn take(
+    env: &mut (dyn Environment + Send),
+    task: &Task,
+    round: &mut Round,
+    robot: NodeId,
+    action: &str,
+    note: String,
+) {
+    match task.robot_by_id(robot) {
+        Ok(_) => {
+            round.actions = env.actions(robot).unwrap_or_default();
+            joint::act(env, task, round, robot, action, note);
+        }
+        Err(e) => {
+            let line = format!("{}: {action}", robot_label(task, robot));
+            round.outcome = Outcome::Infeasible {
+                reason: "unknown_robot".into(),
+                message: e.to_string(),
+            };
+            round.feedback = joint::feedback(&line, &round.outcome);
+            round.decision = Some(Decision {
+                can_do: true,
+                action: Some(line),
+                subtask_complete: true,
+                note,
+            });
+        }
+    }
+}
+
+/// The round as the next steps' views show it.
+fn executed(round: &Round) -> Executed {
+    let chosen = round.external.as_ref();
+    let (ok, reason) = match &round.outcome {
+        Outcome::Executed => (true, None),
+        Outcome::Infeasible { message, .. } => (false, Some(message.clone())),
+        Outcome::Declined => (false, Some("no action was chosen".to_owned())),
+        Outcome::NoProposal { why } | Outcome::NoDecision { why } => (false, Some(why.clone())),
+        Outcome::BackendError { message } | Outcome::MethodError { message } => {
+            (false, Some(message.clone()))
+        }
+    };
+    Executed {
+        robot: chosen.and_then(|c| c.robot),
+        action: chosen.and_then(|c| c.action.clone()),
+        ok,
+        reason,
+    }
+}

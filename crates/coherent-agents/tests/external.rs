@@ -1,0 +1,400 @@
+//! Methods written outside the crate, through the `Policy` trait: a policy that follows
+//! the optimal plan is a method like the built-in ones in the benchmark and its tables;
+//! each fault (an action outside the list, an unknown robot, no robot, an error) is a
+//! step as described, with a complete transcript; a replay re-feeds the recorded
+//! decisions and checks every outcome; an error episode does not count and runs again
+//! on resume.
+
+use std::collections::VecDeque;
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex};
+
+use coherent_agents::bench::{self, BackendChoice, BenchConfig, Subset};
+use coherent_agents::episode::{
+    self, Act, Budget, Choice, Executed, External, MakePolicy, Method, MethodSpec, Policy,
+    Settings, View,
+};
+use coherent_agents::llm::BoxFuture;
+use coherent_agents::transcript::{self, Outcome, Status};
+use coherent_agents::{BuiltinBackend, Cancel, Replay, report};
+use coherent_agents::{PriceTable, Prompts};
+use coherent_core::planner::{self, Limits};
+use coherent_core::{NodeId, SymbolicEnv, Task};
+
+mod common;
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coherent-external-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+/// Gives the steps of the task's shortest plan one by one.
+struct FollowPlan {
+    plan: VecDeque<(NodeId, String)>,
+}
+
+impl Policy for FollowPlan {
+    fn act(&mut self, _view: Arc<View>) -> BoxFuture<'_, Act> {
+        let choice = match self.plan.pop_front() {
+            Some((robot, action)) => Choice {
+                robot: Some(robot),
+                action: Some(action),
+                note: "the plan's next step".into(),
+                ..Choice::default()
+            },
+            None => Choice::default(),
+        };
+        Box::pin(async move {
+            Act {
+                choice: Ok(choice),
+                calls: Vec::new(),
+            }
+        })
+    }
+}
+
+fn follow_plan() -> External {
+    let make: Arc<MakePolicy> = Arc::new(|task: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
+        let plan = planner::search(task, &task.robots, &task.goal, &Limits::default())
+            .plan
+            .ok_or("no plan")?;
+        let plan = plan
+            .iter()
+            .map(|s| (task.id(s.robot), s.action.render(task)))
+            .collect();
+        Ok(Box::new(FollowPlan { plan }))
+    });
+    External::new("follow-plan", make).expect("a valid name")
+}
+
+/// Answers from a script, one entry per step, and keeps every view it was shown.
+struct Scripted {
+    script: VecDeque<Result<Choice, String>>,
+    views: Arc<Mutex<Vec<Arc<View>>>>,
+}
+
+impl Policy for Scripted {
+    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+        self.views.lock().expect("views").push(view);
+        let choice = self
+            .script
+            .pop_front()
+            .unwrap_or_else(|| Err("the script is over".into()));
+        Box::pin(async move {
+            Act {
+                choice,
+                calls: Vec::new(),
+            }
+        })
+    }
+}
+
+fn scripted(
+    name: &str,
+    script: Vec<Result<Choice, String>>,
+    views: &Arc<Mutex<Vec<Arc<View>>>>,
+) -> External {
+    let views = Arc::clone(views);
+    let make: Arc<MakePolicy> = Arc::new(move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
+        Ok(Box::new(Scripted {
+            script: script.clone().into(),
+            views: Arc::clone(&views),
+        }))
+    });
+    External::new(name, make).expect("a valid name")
+}
+
+fn config(out: PathBuf, methods: Vec<MethodSpec>, concurrency: usize) -> BenchConfig {
+    BenchConfig {
+        methods,
+        seeds: 1,
+        concurrency,
+        backend: BackendChoice::Builtin,
+        history: 5,
+        temperature: None,
+        max_states: Limits::DEFAULT_MAX_STATES,
+        max_steps: None,
+        out,
+        prompts: Prompts::builtin(),
+        prices: PriceTable::builtin(),
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_policy_that_follows_the_plan_is_a_method_like_optimal() {
+    let out = scratch("follow").join("results.jsonl");
+    let selection = bench::select(common::released_tasks(), &Subset::Paper40).expect("distinct");
+    let methods = vec![Method::Optimal.into(), MethodSpec::External(follow_plan())];
+    let outcome = bench::run(
+        &selection.tasks,
+        &config(out.clone(), methods, 4),
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the run");
+    assert_eq!((outcome.total, outcome.written), (64, 64));
+    let lines = bench::read_results(&out).expect("results").lines;
+    for l in &lines {
+        assert_eq!(
+            l.status,
+            Status::Success,
+            "{} {} {}",
+            l.method,
+            l.scene,
+            l.task_id
+        );
+        assert_eq!(Some(l.steps), l.optimal_steps, "{} {}", l.scene, l.task_id);
+        assert_eq!((l.llm_calls, l.prompt_tokens), (0, 0));
+    }
+    let external: Vec<_> = lines.iter().filter(|l| l.method == "follow-plan").collect();
+    assert_eq!(external.len(), 32);
+    assert!(
+        external
+            .iter()
+            .all(|l| !l.uses_model && l.backend.kind == "none")
+    );
+    let transcript =
+        transcript::read(PathBuf::from(&external[0].transcript).as_path()).expect("a transcript");
+    assert!(transcript.header.external);
+    assert!(transcript.rounds.iter().all(|r| r.external.is_some()));
+    let r = report::build(&lines);
+    let rows: Vec<&str> = r.table1.rows.iter().map(|r| r.method.as_str()).collect();
+    assert_eq!(rows, ["optimal", "follow-plan"]);
+    assert_eq!(r.table1.rows[0].cells, r.table1.rows[1].cells);
+}
+
+fn choice(robot: Option<i64>, action: &str) -> Result<Choice, String> {
+    Ok(Choice {
+        robot: robot.map(NodeId),
+        action: Some(action.to_owned()),
+        note: format!("trying {action}"),
+        prompt_tokens: 10,
+        completion_tokens: 2,
+        calls: 1,
+    })
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn faults_are_steps_and_an_error_ends_the_episode() {
+    let out = scratch("faults");
+    // env0 task 0: quadrotor 22 flies from the child room to the kitchen table.
+    let task = common::task("env0", 0);
+    let views = Arc::new(Mutex::new(Vec::new()));
+    let script = vec![
+        choice(Some(22), "[grab] <high kitchen table>(35)"),
+        choice(Some(999), "[takeoff_from] <childroom floor>(3)"),
+        Ok(Choice::default()),
+        choice(Some(22), "[takeoff_from] <childroom floor>(3)"),
+        Err("ValueError: no idea".into()),
+    ];
+    let method = scripted("scripted", script, &views);
+    let path = episode::transcript_path(&out, &task, method.name());
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let (e, _) = episode::run(
+        &task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(10),
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs");
+    let outcomes: Vec<&Outcome> = e.rounds.iter().map(|r| &r.outcome).collect();
+    assert!(matches!(outcomes[0], Outcome::Infeasible { reason, .. } if reason != "error"));
+    assert!(
+        matches!(outcomes[1], Outcome::Infeasible { reason, message } if reason == "unknown_robot" && message.contains("999 is not a robot"))
+    );
+    assert_eq!(outcomes[2], &Outcome::Declined);
+    assert_eq!(outcomes[3], &Outcome::Executed);
+    assert_eq!(
+        outcomes[4],
+        &Outcome::MethodError {
+            message: "ValueError: no idea".into()
+        }
+    );
+    let s = &e.summary;
+    assert_eq!((s.status, s.steps, s.success), (Status::Error, 5, false));
+    assert_eq!(s.error.as_deref(), Some("ValueError: no idea"));
+    // The reported model use counts: three steps reported one call of 10 + 2 tokens each.
+    assert_eq!(
+        (s.llm_calls, s.prompt_tokens, s.completion_tokens),
+        (3, 30, 6)
+    );
+    // The views: the step, the budget, the actions now, the history so far.
+    let views = views.lock().expect("views").clone();
+    assert_eq!(views.len(), 5);
+    let last = &views[4];
+    assert_eq!((last.step, last.max_steps), (5, 10));
+    let quadrotor = last.robot(NodeId(22)).expect("the quadrotor");
+    assert!(
+        quadrotor
+            .actions
+            .contains(&"[movetowards] <livingroom>(4)".to_owned())
+    );
+    assert!(views[0].robot(NodeId(22)).expect("22").actions[0].starts_with("[takeoff_from]"));
+    let history: Vec<(Option<i64>, bool)> = last
+        .history
+        .iter()
+        .map(|h| (h.robot.map(|r| r.0), h.ok))
+        .collect();
+    assert_eq!(
+        history,
+        [
+            (Some(22), false),
+            (Some(999), false),
+            (None, false),
+            (Some(22), true)
+        ]
+    );
+    assert!(
+        last.history[1]
+            .reason
+            .as_deref()
+            .is_some_and(|r| r.contains("999"))
+    );
+    assert_eq!(
+        last.history[3],
+        Executed {
+            robot: Some(NodeId(22)),
+            action: Some("[takeoff_from] <childroom floor>(3)".into()),
+            ok: true,
+            reason: None
+        }
+    );
+    let text = last.observation_text(Some(NodeId(22))).expect("a text");
+    assert!(text.contains("<quadrotor>(22)"), "{text}");
+    assert!(last.observation_text(Some(NodeId(999))).is_none());
+    // The transcript is complete, and replays without the script.
+    let recorded = transcript::read(&path).expect("reads back");
+    assert!(recorded.header.external);
+    assert_eq!(recorded.rounds, e.rounds);
+    assert_eq!(recorded.summary.as_ref(), Some(&e.summary));
+    let replay = Replay::prepare(&recorded, &path).expect("a replay");
+    assert_eq!(replay.settings.method.name(), "scripted");
+    let again = out.join("again.jsonl");
+    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
+    let (replayed, _) = episode::run(
+        &replay.task,
+        &mut env,
+        replay.backend.as_ref(),
+        &replay.settings,
+        replay.budget,
+        &again,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the replay runs");
+    assert_eq!(replay.check(&replayed), Ok(()));
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_replay_that_comes_out_differently_says_so() {
+    let out = scratch("diverge");
+    let task = common::task("env0", 0);
+    let views = Arc::new(Mutex::new(Vec::new()));
+    let script = vec![choice(Some(22), "[takeoff_from] <childroom floor>(3)")];
+    let method = scripted("once", script, &views);
+    let path = episode::transcript_path(&out, &task, method.name());
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    episode::run(
+        &task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(1),
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs");
+    // The recording says the action ran; make it say it was another.
+    let mut recorded = transcript::read(&path).expect("reads back");
+    let decision = recorded.rounds[0].external.as_mut().expect("a decision");
+    decision.action = Some("[grab] <high kitchen table>(35)".into());
+    let replay = Replay::prepare(&recorded, &path).expect("a replay");
+    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
+    let (replayed, _) = episode::run(
+        &replay.task,
+        &mut env,
+        replay.backend.as_ref(),
+        &replay.settings,
+        replay.budget,
+        &out.join("again.jsonl"),
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the replay runs");
+    assert_eq!(
+        replay.check(&replayed),
+        Err("round 1 differs from the recording".into())
+    );
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_error_does_not_count_and_runs_again_on_resume() {
+    let out = scratch("resume").join("results.jsonl");
+    let tasks: Vec<Arc<Task>> = ["env0", "env1"]
+        .iter()
+        .map(|scene| common::task(scene, 1))
+        .collect();
+    // The policy fails on env1's task only.
+    let make: Arc<MakePolicy> = Arc::new(|task: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
+        if task.meta.scene == "env1" {
+            return Err("RuntimeError: env1 is not for me".into());
+        }
+        follow_plan().make(task)
+    });
+    let picky = External::new("picky", make).expect("a name");
+    let methods = vec![Method::Pefa.into(), MethodSpec::External(picky)];
+    let cfg = config(out.clone(), methods, 2);
+    let first = bench::run(&tasks, &cfg, &Cancel::default(), &mut |_| {})
+        .await
+        .expect("the run");
+    assert_eq!((first.written, first.unfinished), (4, 1));
+    let lines = bench::read_results(&out).expect("results").lines;
+    let failed: Vec<_> = lines.iter().filter(|l| l.status == Status::Error).collect();
+    assert_eq!(failed.len(), 1);
+    assert_eq!(
+        (failed[0].method.as_str(), failed[0].scene.as_str()),
+        ("picky", "env1")
+    );
+    assert_eq!(
+        failed[0].error.as_deref(),
+        Some("RuntimeError: env1 is not for me")
+    );
+    assert_eq!(failed[0].steps, 1);
+    assert!(
+        lines
+            .iter()
+            .filter(|l| l.status != Status::Error)
+            .all(|l| l.success)
+    );
+    let r = report::build(&lines);
+    assert_eq!((r.unfinished, r.errors), (1, 1));
+    assert!(report::markdown(&r).contains("1 of them ended in an error raised by the method"));
+    // On resume only the error episode runs again.
+    let second = bench::run(&tasks, &cfg, &Cancel::default(), &mut |_| {})
+        .await
+        .expect("the run");
+    assert_eq!((second.skipped, second.written), (3, 1));
+}
+
+#[test]
+fn names_are_checked() {
+    let make: Arc<MakePolicy> = Arc::new(|_: &Arc<Task>| Err("never made".into()));
+    for bad in ["", "pefa", "optimal", "my method", "a/b", ".hidden"] {
+        let e = External::new(bad, Arc::clone(&make)).expect_err(bad);
+        assert!(e.contains(&format!("{bad:?}")), "{e}");
+    }
+    let fine = External::new("My_Method-2.0", make).expect("a valid name");
+    assert_eq!(fine.name(), "My_Method-2.0");
+}
