@@ -317,6 +317,7 @@ impl Environment for PhysicalEnv {
         Ok(Outcome {
             infeasible,
             done: self.goal_satisfied(),
+            report: None,
         })
     }
 
