@@ -226,7 +226,7 @@ pub(crate) fn act(
     note: String,
 ) {
     let line = format!("{}: {action}", label(task, robot));
-    round.outcome = pefa::execute(env, robot, action);
+    round.outcome = pefa::execute(env, round, robot, action);
     round.feedback = feedback(&line, &round.outcome);
     round.decision = Some(Decision {
         can_do: true,

@@ -146,6 +146,9 @@ pub(crate) async fn rounds(
             error = Some(message.clone());
         } else if round.done {
             status = Status::Success;
+        } else if let Some(why) = env.stopped() {
+            status = Status::Interrupted;
+            error = Some(why);
         }
         rounds.push(round);
     }
@@ -250,22 +253,31 @@ async fn round(
         };
     round.decision = Some(decision.clone());
     let outcome = match &decision.action {
-        Some(action) if decision.can_do => execute(env, robot, action),
+        Some(action) if decision.can_do => execute(env, &mut round, robot, action),
         _ => Outcome::Declined,
     };
     Some(finish(env, round, outcome, start))
 }
 
-/// Checks and runs `action` for `robot`: executed, or why not.
-pub(crate) fn execute(env: &mut (dyn Environment + Send), robot: NodeId, action: &str) -> Outcome {
+/// Checks and runs `action` for `robot`: executed, or why not; what a robot outside this
+/// process said about it goes into `round`.
+pub(crate) fn execute(
+    env: &mut (dyn Environment + Send),
+    round: &mut Round,
+    robot: NodeId,
+    action: &str,
+) -> Outcome {
     match env.step(robot, action) {
-        Ok(o) => match o.infeasible {
-            None => Outcome::Executed,
-            Some(why) => Outcome::Infeasible {
-                reason: why.reason.name().to_owned(),
-                message: why.message,
-            },
-        },
+        Ok(o) => {
+            round.robot = o.report;
+            match o.infeasible {
+                None => Outcome::Executed,
+                Some(why) => Outcome::Infeasible {
+                    reason: why.reason.name().to_owned(),
+                    message: why.message,
+                },
+            }
+        }
         Err(e) => Outcome::Infeasible {
             reason: "error".into(),
             message: e.to_string(),

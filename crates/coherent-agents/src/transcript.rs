@@ -7,6 +7,7 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
 
+use coherent_core::RobotReport;
 use serde::{Deserialize, Serialize};
 
 use crate::answer::{Decision, Proposal};
@@ -82,6 +83,10 @@ pub struct Round {
     pub done: bool,
     /// Time the round took, model time included.
     pub wall_ms: f64,
+    /// What the robot said when the action was sent to one outside this process (over
+    /// ROS 2): which robot, how, and its result's message.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<RobotReport>,
 }
 
 impl Round {
@@ -97,6 +102,7 @@ impl Round {
             feedback: String::new(),
             done: false,
             wall_ms: 0.0,
+            robot: None,
         }
     }
 }
@@ -111,7 +117,8 @@ pub enum Status {
     Failure,
     /// The backend failed for good (see the last round).
     BackendError,
-    /// Stopped from outside (Ctrl-C).
+    /// Stopped from outside (Ctrl-C), or by the environment when it could go on no
+    /// longer (a robot that stopped answering; `error` says why).
     Interrupted,
 }
 
