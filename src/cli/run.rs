@@ -18,6 +18,7 @@ use serde_json::json;
 
 use super::llm::{AnswerFormat, LlmArgs, sim_errors};
 use super::method_names;
+use super::robots::RobotFlags;
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, tasks};
@@ -26,6 +27,8 @@ use crate::session::{self, tasks};
 const FAILED: u8 = 1;
 /// Exit status when the model's server failed for good or a replay diverged.
 const BACKEND_FAILED: u8 = 3;
+/// Exit status when a robot over ROS 2 stopped answering (the environment stopped).
+const ROBOT_STOPPED: u8 = 4;
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
 
@@ -62,6 +65,8 @@ pub(crate) struct RunArgs {
     physics: bool,
     #[command(flatten)]
     llm: LlmArgs,
+    #[command(flatten)]
+    robots: RobotFlags,
     /// The old spelling of --answer-format (hidden; for one release).
     #[arg(long = "format", value_enum, hide = true)]
     old_format: Option<AnswerFormat>,
@@ -145,6 +150,7 @@ fn prepare(args: &RunArgs, cancel: &Cancel) -> Result<Prepared, String> {
         backend,
         max_states: args.max_states,
         out: args.out.clone(),
+        robots: args.robots.robots()?,
     };
     episode::prepare(spec, cancel).map_err(|e| e.to_string())
 }
@@ -207,6 +213,10 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
                 "transcript": ran.path.display().to_string(),
             })
         );
+    }
+    if let (Status::Interrupted, Some(why)) = (s.status, &s.error) {
+        lines.say(&format!("stopped: {why}"));
+        return Ok(ROBOT_STOPPED);
     }
     Ok(match s.status {
         Status::Success => 0,

@@ -8,7 +8,9 @@ use std::sync::Arc;
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendRequest};
 use coherent::session::endpoint::{Endpoint, Patience};
-use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
+use coherent::session::episode::{
+    self as session_episode, EpisodeSpec, Failure, Prepared, Ran, Robots,
+};
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
 use coherent_agents::{ApiKey, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, OutputMode};
@@ -425,6 +427,7 @@ pub(crate) fn run(
         backend,
         max_states,
         out,
+        robots: Robots::Local,
     };
     let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel))?;
     backend_failure(py, PyEpisode::from_ran(ran, task.clone().unbind()))
