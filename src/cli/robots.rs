@@ -54,6 +54,9 @@ struct ServeArgs {
     /// Fault: a robot (ROS name) whose server refuses every goal; repeatable.
     #[arg(long = "refuse", value_name = "ROBOT")]
     refuse: Vec<String>,
+    /// Fault: a robot (ROS name) whose server is not started; repeatable.
+    #[arg(long = "absent", value_name = "ROBOT")]
+    absent: Vec<String>,
 }
 
 /// Who carries `coherent run`'s actions out.
@@ -119,6 +122,7 @@ fn serve(args: ServeArgs) -> Result<u8, String> {
             seed: args.seed,
             silent: args.silent,
             refuse: args.refuse,
+            absent: args.absent,
         },
     };
     let log = |line: &str| println!("{line}");

@@ -1,5 +1,6 @@
 //! Faults the reference servers inject for tests and demonstrations: a delay per action,
-//! failures at a seeded rate, a robot that never answers, a robot that refuses goals.
+//! failures at a seeded rate, a robot that never answers, a robot that refuses goals, a
+//! robot whose server never starts.
 
 use std::time::Duration;
 
@@ -16,6 +17,8 @@ pub struct Faults {
     pub silent: Vec<String>,
     /// Robots (ROS names) whose server refuses every goal.
     pub refuse: Vec<String>,
+    /// Robots (ROS names) whose server is never started.
+    pub absent: Vec<String>,
 }
 
 impl Faults {
@@ -31,6 +34,7 @@ impl Faults {
             .silent
             .iter()
             .chain(&self.refuse)
+            .chain(&self.absent)
             .filter(|r| !robots.contains(r))
             .map(String::as_str)
             .collect();
@@ -51,6 +55,10 @@ impl Faults {
 
     pub fn refuses(&self, robot: &str) -> bool {
         self.refuse.iter().any(|r| r == robot)
+    }
+
+    pub fn is_absent(&self, robot: &str) -> bool {
+        self.absent.iter().any(|r| r == robot)
     }
 
     /// The failure draws of one robot, seeded by the seed and the robot's name.
@@ -125,20 +133,34 @@ mod tests {
         let ok = Faults {
             silent: vec!["quadrotor_11".into()],
             refuse: vec!["robot_dog_13".into()],
+            absent: vec!["quadrotor_11".into()],
             ..Faults::default()
         };
         assert_eq!(ok.check(&robots), Ok(()));
         assert!(ok.is_silent("quadrotor_11") && !ok.is_silent("robot_dog_13"));
         assert!(ok.refuses("robot_dog_13") && !ok.refuses("quadrotor_11"));
-        let bad = Faults {
-            silent: vec!["drone_1".into()],
-            ..Faults::default()
-        };
-        let why = bad.check(&robots).expect_err("drone_1 is no robot");
-        assert!(
-            why.contains("drone_1") && why.contains("robot_dog_13"),
-            "{why}"
-        );
+        assert!(ok.is_absent("quadrotor_11") && !ok.is_absent("robot_dog_13"));
+        let drone = vec!["drone_1".to_owned()];
+        for bad in [
+            Faults {
+                silent: drone.clone(),
+                ..Faults::default()
+            },
+            Faults {
+                refuse: drone.clone(),
+                ..Faults::default()
+            },
+            Faults {
+                absent: drone.clone(),
+                ..Faults::default()
+            },
+        ] {
+            let why = bad.check(&robots).expect_err("drone_1 is no robot");
+            assert!(
+                why.contains("drone_1") && why.contains("robot_dog_13"),
+                "{why}"
+            );
+        }
         let rate = Faults {
             fail_rate: 1.5,
             ..Faults::default()

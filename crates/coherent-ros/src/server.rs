@@ -123,6 +123,9 @@ pub async fn serve(
         .map_err(|e| format!("cannot make a node: {e:?}"))?;
     let mut servers = Vec::new();
     for (r, name) in task.robots.iter().zip(&names) {
+        if options.faults.is_absent(name) {
+            continue;
+        }
         let action = wire::ros_action_name(&options.namespace, name)?;
         let server = node
             .create_action_server::<Goal, ExecuteResult, Feedback>(
@@ -140,13 +143,13 @@ pub async fn serve(
         };
         servers.push((AsyncActionServer::new(server), me));
     }
-    let actions: Vec<String> = names
+    let actions: Vec<String> = servers
         .iter()
-        .map(|n| wire::action_name(&options.namespace, n))
+        .map(|(_, me)| wire::action_name(&options.namespace, &me.name))
         .collect();
     log(&format!(
         "serving {} robots of {} task {} ({}): {}",
-        names.len(),
+        actions.len(),
         task.meta.scene,
         task.meta.task_id,
         if options.physics { "physics" } else { "rules" },
