@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
 use coherent_ros::wire::{self, DEFAULT_NAMESPACE};
-use coherent_ros::{BridgeOptions, Faults, ServeOptions};
+use coherent_ros::{Faults, ServeOptions};
 
 use crate::session::episode::Robots;
 use crate::session::{self, tasks};
@@ -90,19 +90,11 @@ pub(crate) struct RobotFlags {
 
 impl RobotFlags {
     pub(crate) fn robots(&self) -> Result<Robots, String> {
-        Ok(match self.robots {
-            RobotsKind::Local => Robots::Local,
-            RobotsKind::Ros2 => Robots::Ros2(BridgeOptions {
-                namespace: wire::namespace(&self.namespace)?,
-                robot_timeout: seconds("--robot-timeout", self.robot_timeout)?,
-                server_wait: seconds("--server-wait", self.server_wait)?,
-            }),
-        })
+        match self.robots {
+            RobotsKind::Local => Ok(Robots::Local),
+            RobotsKind::Ros2 => Robots::ros2(&self.namespace, self.robot_timeout, self.server_wait),
+        }
     }
-}
-
-fn seconds(flag: &str, s: f64) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(s).map_err(|_| format!("{flag} must be seconds >= 0, not {s}"))
 }
 
 pub(crate) fn robots(args: RobotsArgs) -> Result<u8, String> {
@@ -117,7 +109,8 @@ fn serve(args: ServeArgs) -> Result<u8, String> {
         namespace: wire::namespace(&args.namespace)?,
         physics: args.physics,
         faults: Faults {
-            delay: seconds("--delay", args.delay)?,
+            delay: Duration::try_from_secs_f64(args.delay)
+                .map_err(|_| format!("--delay must be seconds >= 0, not {}", args.delay))?,
             fail_rate: args.fail_rate,
             seed: args.seed,
             silent: args.silent,

@@ -48,6 +48,22 @@ pub enum Robots {
     Ros2(coherent_ros::BridgeOptions),
 }
 
+impl Robots {
+    /// Robots over ROS 2 under `namespace` (made absolute), each allowed `robot_timeout`
+    /// seconds of silence in a step, all awaited `server_wait` seconds before the first.
+    pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, String> {
+        let seconds = |what: &str, s: f64| {
+            std::time::Duration::try_from_secs_f64(s)
+                .map_err(|_| format!("{what} must be seconds >= 0, not {s}"))
+        };
+        Ok(Robots::Ros2(coherent_ros::BridgeOptions {
+            namespace: coherent_ros::wire::namespace(namespace)?,
+            robot_timeout: seconds("the robot timeout", robot_timeout)?,
+            server_wait: seconds("the wait for the servers", server_wait)?,
+        }))
+    }
+}
+
 /// The environment an episode runs in: Rapier with `physics`, else the rules alone; over
 /// ROS 2 with [`Robots::Ros2`] (physics is then the servers' business), once every
 /// robot's server is there, with `cancel` cancelling the goal in flight.

@@ -3,10 +3,11 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
+use coherent::session::episode::{Failure, Robots, environment};
+use coherent_agents::Cancel;
 use coherent_core::planner::{self, Limits};
-use coherent_core::{
-    Environment, NodeId, RawGraph, SymbolicEnv, Task, feasibility, native, original,
-};
+use coherent_core::{Environment, NodeId, RawGraph, Task, feasibility, native, original};
+use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -156,30 +157,65 @@ fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
 }
 
 /// A task's environment: robots observe and act one action at a time, by the rules, and
-/// with `physics=True` also in Rapier.
+/// with `physics=True` also in Rapier; with `robots="ros2"` robots behind ROS 2 action
+/// servers carry the actions out.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 pub(crate) struct PyEnv {
     env: Box<dyn Environment + Send + Sync>,
     task: Py<PyTask>,
     physics: bool,
+    /// The namespace of the robots' actions over ROS 2; None when local.
+    namespace: Option<String>,
 }
 
 #[pymethods]
 impl PyEnv {
     #[new]
-    #[pyo3(signature = (task, physics = false))]
-    fn new(py: Python<'_>, task: Bound<'_, PyTask>, physics: bool) -> PyResult<PyEnv> {
+    #[pyo3(signature = (
+        task, physics = false, *, robots = "local", namespace = None, robot_timeout = 10.0,
+        server_wait = 10.0
+    ))]
+    fn new(
+        py: Python<'_>,
+        task: Bound<'_, PyTask>,
+        physics: bool,
+        robots: &str,
+        namespace: Option<&str>,
+        robot_timeout: f64,
+        server_wait: f64,
+    ) -> PyResult<PyEnv> {
         let t = Arc::clone(&task.get().task);
-        let env: Box<dyn Environment + Send + Sync> = if physics {
-            let built = py.detach(|| coherent_sim::PhysicalEnv::new(t));
-            Box::new(built.map_err(|e| errors::physics(py, e))?)
-        } else {
-            Box::new(SymbolicEnv::new(t))
+        let robots = match (robots, namespace) {
+            ("local", None) => Robots::Local,
+            ("local", Some(_)) => {
+                return Err(PyValueError::new_err("a namespace is for robots=\"ros2\""));
+            }
+            ("ros2", ns) => Robots::ros2(
+                ns.unwrap_or(coherent_ros::wire::DEFAULT_NAMESPACE),
+                robot_timeout,
+                server_wait,
+            )
+            .map_err(PyValueError::new_err)?,
+            (other, _) => {
+                return Err(PyValueError::new_err(format!(
+                    "robots={other:?}: \"local\" or \"ros2\""
+                )));
+            }
         };
+        let namespace = match &robots {
+            Robots::Ros2(options) => Some(options.namespace.clone()),
+            Robots::Local => None,
+        };
+        let built = py.detach(|| environment(&t, physics, &robots, &Cancel::default()));
+        let env = built.map_err(|f| match f {
+            Failure::Physics(e) => errors::physics(py, e),
+            Failure::Other(why) => errors::coherent(py, why),
+        })?;
         Ok(PyEnv {
             env,
             task: task.unbind(),
             physics,
+            namespace,
         })
     }
 
@@ -187,6 +223,12 @@ impl PyEnv {
     #[getter]
     fn physics(&self) -> bool {
         self.physics
+    }
+
+    /// The namespace of the robots' ROS 2 actions; None when they act in this process.
+    #[getter]
+    fn namespace(&self) -> Option<String> {
+        self.namespace.clone()
     }
 
     /// The task this environment runs.
@@ -241,7 +283,7 @@ impl PyEnv {
         robot: i64,
         action: &str,
     ) -> PyResult<(bool, Option<String>, bool)> {
-        let outcome = if self.physics {
+        let outcome = if self.physics || self.namespace.is_some() {
             let env = &mut self.env;
             py.detach(|| env.step(NodeId(robot), action))
         } else {
