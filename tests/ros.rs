@@ -615,3 +615,38 @@ fn ctrl_c_during_an_action_cancels_the_goal() {
         "{message}"
     );
 }
+
+#[test]
+fn bad_robot_flags_exit_2_before_anything_runs() {
+    let demo = demo();
+    for (args, says) in [
+        (
+            vec!["--robots", "ros2", "--physics"],
+            "pass --physics to `coherent robots serve`",
+        ),
+        (
+            vec!["--robots", "ros2", "--namespace", "/2lab"],
+            "\"/2lab\" is not a ROS namespace",
+        ),
+        (
+            vec!["--robots", "ros2", "--robot-timeout=-1"],
+            "the robot timeout must be seconds >= 0",
+        ),
+    ] {
+        let out = Command::new(BIN)
+            .args(["run", &demo, "--out", "/nonexistent/never-written"])
+            .args(&args)
+            .output()
+            .expect("coherent runs");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(says), "{args:?}: {err}");
+    }
+    let out = Command::new(BIN)
+        .args(["robots", "serve", &demo, "--refuse", "drone_1"])
+        .output()
+        .expect("coherent runs");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("no robot named drone_1 in the task; its robots: robot_arm_6, quadrotor_11, robot_dog_13"), "{err}");
+}
