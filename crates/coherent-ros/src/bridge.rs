@@ -7,7 +7,7 @@ use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
 use coherent_core::feasibility::{self, Infeasible, Reason};
-use coherent_core::{Environment, NodeId, Outcome, RobotReport, State, Task, rules};
+use coherent_core::{Action, Environment, NodeId, Outcome, Robot, RobotReport, State, Task, rules};
 use ros2_client::action::GoalStatusEnum;
 
 use crate::link::{ConnectError, Exchange, Link};
@@ -47,7 +47,7 @@ pub struct Ros2Env {
     link: Link,
     /// The episode's cancel flag (Ctrl-C): a goal in flight is cancelled when it rises.
     cancel: Option<Arc<AtomicBool>>,
-    /// Steps taken since the start or the last reset.
+    /// Actions tried since the start or the last reset (the goals' `step`).
     steps: u32,
     /// Why the bridge stopped, once it has.
     stopped: Option<(Reason, String)>,
@@ -152,15 +152,21 @@ impl Environment for Ros2Env {
         let (reason, message) = match exchange {
             Exchange::Result { status, result } => {
                 report.message = result.message.clone();
-                match self.settle(&name, r, a, status, result) {
-                    Ok(()) => {
+                let succeeded = status == GoalStatusEnum::Succeeded;
+                match judge(&self.task, &self.state, &name, r, a, succeeded, result) {
+                    Verdict::Done(after) => {
+                        self.state = after;
                         return Ok(Outcome {
                             infeasible: None,
                             done: self.goal_satisfied(),
                             report: Some(report),
                         });
                     }
-                    Err(refused) => refused,
+                    Verdict::Failed(reason, message) => (reason, message),
+                    Verdict::Disagrees(why) => {
+                        self.stop(Reason::Disagreement, &why);
+                        (Reason::Disagreement, why)
+                    }
                 }
             }
             Exchange::Rejected => (Reason::Rejected, format!("{name} refused the goal {text}")),
@@ -209,39 +215,134 @@ impl Environment for Ros2Env {
     }
 }
 
-impl Ros2Env {
-    /// Applies a result: on success with agreeing relations the state moves; otherwise
-    /// the reason and message of the refusal (a disagreement also stops the bridge).
-    fn settle(
-        &mut self,
-        name: &str,
-        r: coherent_core::Robot,
-        a: coherent_core::Action,
-        status: GoalStatusEnum,
-        result: ExecuteResult,
-    ) -> Result<(), (Reason, String)> {
-        if status != GoalStatusEnum::Succeeded || !result.success {
-            let reason = Reason::from_name(&result.reason).unwrap_or(Reason::Robot);
-            let message = if result.message.is_empty() {
-                format!("{name} did not carry it out ({status:?})")
-            } else {
-                result.message
+/// What a robot's result does to the rules' state.
+#[derive(Debug)]
+enum Verdict {
+    /// The robot succeeded and what it observes holds: the state after the action.
+    Done(State),
+    /// The robot failed: its reason (a feasibility reason's name, else `robot`) and its
+    /// message.
+    Failed(Reason, String),
+    /// The robot succeeded, but what it observes disagrees with the rules: each relation
+    /// with what the rules have.
+    Disagrees(String),
+}
+
+/// Judges the result of action `a` of robot `r` (ROS name `name`) from `state`;
+/// `succeeded` is whether the goal ended as succeeded.
+fn judge(
+    task: &Task,
+    state: &State,
+    name: &str,
+    r: Robot,
+    a: Action,
+    succeeded: bool,
+    result: ExecuteResult,
+) -> Verdict {
+    if !succeeded || !result.success {
+        let reason = Reason::from_name(&result.reason).unwrap_or(Reason::Robot);
+        let message = if result.message.is_empty() {
+            format!("{name} did not carry it out")
+        } else {
+            result.message
+        };
+        return Verdict::Failed(reason, message);
+    }
+    let mut after = state.clone();
+    rules::apply(task, &mut after, r, a);
+    let diffs = relations::disagreements(task, &after, &result.relations);
+    if diffs.is_empty() {
+        Verdict::Done(after)
+    } else {
+        Verdict::Disagrees(format!(
+            "{name} reports {} done, but what it observes disagrees with the rules: {}",
+            a.render(task),
+            diffs.join("; ")
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::relations::tests::demo;
+
+    fn result(success: bool, reason: &str, message: &str) -> ExecuteResult {
+        ExecuteResult {
+            success,
+            reason: reason.into(),
+            message: message.into(),
+            relations: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_result_moves_the_state_only_on_success_with_agreeing_relations() {
+        let task = demo();
+        let arm = task.robots[0];
+        let grab = feasibility::check(&task, &task.init, arm, "[grab] <mug>(7)").expect("feasible");
+        let mut expected = task.init.clone();
+        rules::apply(&task, &mut expected, arm, grab);
+        let seen = relations::observed(&task, &expected, arm.node);
+        let ok = ExecuteResult {
+            relations: seen.clone(),
+            ..result(true, "", "done")
+        };
+        match judge(
+            &task,
+            &task.init,
+            "robot_arm_6",
+            arm,
+            grab,
+            true,
+            ok.clone(),
+        ) {
+            Verdict::Done(after) => assert!(after == expected),
+            other => panic!("{other:?}"),
+        }
+        // Succeeded by its word but not by the goal's status, or the other way round.
+        for (succeeded, r) in [(false, ok), (true, result(false, "", ""))] {
+            match judge(&task, &task.init, "robot_arm_6", arm, grab, succeeded, r) {
+                Verdict::Failed(Reason::Robot, _) => {}
+                other => panic!("{other:?}"),
+            }
+        }
+        // What it observed before grabbing is not what the rules have after it.
+        let before = ExecuteResult {
+            relations: relations::observed(&task, &task.init, arm.node),
+            ..result(true, "", "done")
+        };
+        match judge(&task, &task.init, "robot_arm_6", arm, grab, true, before) {
+            Verdict::Disagrees(why) => assert!(
+                why.starts_with("robot_arm_6 reports [grab] <mug>(7) done, but what it observes")
+                    && why.contains("<mug>(7) ON "),
+                "{why}"
+            ),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_failure_keeps_the_robots_reason_and_message() {
+        let task = demo();
+        let arm = task.robots[0];
+        let grab = feasibility::check(&task, &task.init, arm, "[grab] <mug>(7)").expect("feasible");
+        let judged =
+            |r: ExecuteResult| match judge(&task, &task.init, "robot_arm_6", arm, grab, false, r) {
+                Verdict::Failed(reason, message) => (reason, message),
+                other => panic!("{other:?}"),
             };
-            return Err((reason, message));
-        }
-        let mut after = self.state.clone();
-        rules::apply(&self.task, &mut after, r, a);
-        let diffs = relations::disagreements(&self.task, &after, &result.relations);
-        if !diffs.is_empty() {
-            let why = format!(
-                "{name} reports {} done, but what it observes disagrees with the rules: {}",
-                a.render(&self.task),
-                diffs.join("; ")
-            );
-            self.stop(Reason::Disagreement, &why);
-            return Err((Reason::Disagreement, why));
-        }
-        self.state = after;
-        Ok(())
+        assert_eq!(
+            judged(result(false, "out_of_reach", "the mug is too far")),
+            (Reason::OutOfReach, "the mug is too far".to_owned())
+        );
+        assert_eq!(
+            judged(result(false, "gripper_jammed", "the gripper jammed")),
+            (Reason::Robot, "the gripper jammed".to_owned())
+        );
+        assert_eq!(
+            judged(result(false, "", "")),
+            (Reason::Robot, "robot_arm_6 did not carry it out".to_owned())
+        );
     }
 }

@@ -106,11 +106,12 @@ fn node(task: &Task, label: &str) -> Option<Idx> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use coherent_core::native;
 
-    fn demo() -> Task {
+    /// The demo task of `examples/tasks`.
+    pub(crate) fn demo() -> Task {
         let text = include_str!("../../../examples/tasks/demo.json");
         let value: serde_json::Value = serde_json::from_str(text).expect("demo.json is JSON");
         native::read("demo.json", &value).expect("demo.json is a task")

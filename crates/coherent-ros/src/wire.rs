@@ -31,7 +31,8 @@ pub const STAGE_WORKING: &str = "working";
 pub const STAGE_FINISHED: &str = "finished";
 
 /// `Execute.action`'s goal: one action of the project's grammar, e.g.
-/// `[grab] <apple>(9)`, and the number of the step in the episode (1 first).
+/// `[grab] <apple>(9)`, and the count of the actions tried in the episode, this one
+/// included (1 first).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Goal {
     pub action: String,
