@@ -438,7 +438,7 @@ fn a_robot_that_never_answers_times_out_and_ends_the_run() {
         "--robots",
         "ros2",
         "--robot-timeout",
-        "1",
+        "2",
         "--out",
         &runs,
     ];
@@ -450,7 +450,7 @@ fn a_robot_that_never_answers_times_out_and_ends_the_run() {
     assert!(
         report(&t.rounds[0])
             .2
-            .contains("robot_arm_6 did not answer [grab] <mug>(7) within 1.0 s")
+            .contains("robot_arm_6 did not answer [grab] <mug>(7) within 2.0 s")
     );
     assert!(
         server
@@ -598,7 +598,7 @@ fn ctrl_c_during_an_action_cancels_the_goal() {
     let interrupted = Instant::now();
     assert_eq!(run.wait(LONG), 130, "{}", run.show());
     assert!(
-        interrupted.elapsed() < Duration::from_secs(5),
+        interrupted.elapsed() < Duration::from_secs(10),
         "{:?}",
         interrupted.elapsed()
     );
