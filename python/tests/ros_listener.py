@@ -82,7 +82,10 @@ def main() -> None:
         base = f"rt{namespace}/{robot}/execute/_action"
         feedback = Topic(participant, f"{base}/feedback", ExecuteFeedbackMessage)
         status = Topic(participant, f"{base}/status", GoalStatusArray)
-        readers[robot] = (DataReader(participant, feedback, qos=feedback_qos), DataReader(participant, status, qos=status_qos))
+        readers[robot] = (
+            DataReader(participant, feedback, qos=feedback_qos),
+            DataReader(participant, status, qos=status_qos),
+        )
     print("ready", flush=True)
     seen: dict[str, dict[str, list]] = {robot: {"feedback": [], "status": []} for robot in robots}
 
