@@ -236,17 +236,30 @@ async fn exchange(
     silence: Duration,
     cancel: Option<&AtomicBool>,
 ) -> Exchange {
+    if cancel.is_some_and(|flag| flag.load(Ordering::SeqCst)) {
+        return Exchange::Cancelled {
+            acknowledged: false,
+        };
+    }
     let cancelled = raised(cancel);
     tokio::pin!(cancelled);
-    let (goal_id, response) = tokio::select! {
-        sent = client.async_send_goal(goal) => match sent {
-            Ok(sent) => sent,
-            Err(e) => return Exchange::Failed(format!("cannot send the goal: {e}")),
+    // Sent at once, so that the goal's id is known should it have to be cancelled.
+    let (request, goal_id) = match client.send_goal(goal) {
+        Ok(sent) => sent,
+        Err(e) => return Exchange::Failed(format!("cannot send the goal: {e}")),
+    };
+    let response = tokio::select! {
+        answer = client.goal_client().async_receive_response(request) => match answer {
+            Ok(response) => response,
+            Err(e) => return Exchange::Failed(format!("cannot read the goal's answer: {e}")),
         },
         () = sleep(silence) => {
+            let _ = client.cancel_goal(goal_id);
             return Exchange::Silent { last: "nothing: the goal was never answered".into() };
         }
-        () = &mut cancelled => return Exchange::Cancelled { acknowledged: false },
+        () = &mut cancelled => {
+            return cancel_goal(client, goal_id, client.async_request_result(goal_id)).await;
+        }
     };
     if !response.accepted {
         return Exchange::Rejected;
