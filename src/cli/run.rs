@@ -20,6 +20,7 @@ use serde_json::json;
 use super::args::{
     AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors,
 };
+use super::robots::RobotFlags;
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, prompts, tasks};
@@ -30,6 +31,8 @@ const FAILED: u8 = 1;
 const BACKEND_FAILED: u8 = 3;
 /// Exit status when a method written in Python raised an error.
 const METHOD_FAILED: u8 = 4;
+/// Exit status when a robot over ROS 2 stopped answering (the environment stopped).
+const ROBOT_STOPPED: u8 = 5;
 /// Exit status after Ctrl-C, as shells report SIGINT.
 const INTERRUPTED: u8 = 130;
 
@@ -70,6 +73,8 @@ pub(crate) struct RunArgs {
     llm: LlmArgs,
     #[command(flatten)]
     inputs: PromptPriceArgs,
+    #[command(flatten)]
+    robots: RobotFlags,
     /// The old spelling of --answer-format (hidden; for one release).
     #[arg(long = "format", value_enum, hide = true)]
     old_format: Option<AnswerFormat>,
@@ -162,6 +167,7 @@ fn prepare(
         max_states: args.max_states,
         out: args.out.clone(),
         prices,
+        robots: args.robots.robots()?,
     };
     episode::prepare(spec, cancel).map_err(|e| e.to_string())
 }
@@ -230,6 +236,10 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
                 "transcript": ran.path.display().to_string(),
             })
         );
+    }
+    if let (Status::Interrupted, Some(why)) = (s.status, &s.error) {
+        lines.say(&format!("stopped: {why}"));
+        return Ok(ROBOT_STOPPED);
     }
     Ok(match s.status {
         Status::Success => 0,

@@ -38,15 +38,57 @@ impl From<String> for Failure {
     }
 }
 
-/// The environment an episode runs in: Rapier with `physics`, else the rules alone.
+/// Who carries an episode's actions out.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum Robots {
+    /// This process: the rules, and Rapier too with physics.
+    #[default]
+    Local,
+    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
+    Ros2(coherent_ros::BridgeOptions),
+}
+
+impl Robots {
+    /// Robots over ROS 2 under `namespace` (made absolute), each allowed `robot_timeout`
+    /// seconds of silence in a step, all awaited `server_wait` seconds before the first.
+    pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, String> {
+        let seconds = |what: &str, s: f64| {
+            std::time::Duration::try_from_secs_f64(s)
+                .map_err(|_| format!("{what} must be seconds >= 0, not {s}"))
+        };
+        Ok(Robots::Ros2(coherent_ros::BridgeOptions {
+            namespace: coherent_ros::wire::namespace(namespace)?,
+            robot_timeout: seconds("the robot timeout", robot_timeout)?,
+            server_wait: seconds("the wait for the servers", server_wait)?,
+        }))
+    }
+}
+
+/// The environment an episode runs in: Rapier with `physics`, else the rules alone; over
+/// ROS 2 with [`Robots::Ros2`] (physics is then the servers' business), once every
+/// robot's server is there, with `cancel` cancelling the goal in flight.
 pub fn environment(
     task: &Arc<Task>,
     physics: bool,
-) -> Result<Box<dyn Environment + Send + Sync>, coherent_sim::PhysicsError> {
-    Ok(if physics {
-        Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?)
-    } else {
-        Box::new(SymbolicEnv::new(Arc::clone(task)))
+    robots: &Robots,
+    cancel: &Cancel,
+) -> Result<Box<dyn Environment + Send + Sync>, Failure> {
+    Ok(match robots {
+        Robots::Local if physics => {
+            Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task)).map_err(Failure::Physics)?)
+        }
+        Robots::Local => Box::new(SymbolicEnv::new(Arc::clone(task))),
+        Robots::Ros2(_) if physics => {
+            return Err(Failure::Other(
+                "over ROS 2 physics is the robots' business: pass --physics to \
+                 `coherent robots serve` instead"
+                    .into(),
+            ));
+        }
+        Robots::Ros2(options) => Box::new(
+            coherent_ros::Ros2Env::connect(Arc::clone(task), options.clone(), Some(cancel.flag()))
+                .map_err(|e| Failure::Other(e.to_string()))?,
+        ),
     })
 }
 
@@ -67,6 +109,8 @@ pub struct EpisodeSpec {
     pub out: PathBuf,
     /// Prices the episode's tokens ([`Ran::cost_usd`]).
     pub prices: PriceTable,
+    /// Who carries the actions out.
+    pub robots: Robots,
 }
 
 /// An episode ready to run.
@@ -129,7 +173,7 @@ pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Failure> 
     let backend = spec.backend.for_episode(&limits, seed).ok_or_else(|| {
         Failure::Other("a benchmark's replay backend answers benchmark episodes only".into())
     })?;
-    let env = environment(&spec.task, spec.settings.physics).map_err(Failure::Physics)?;
+    let env = environment(&spec.task, spec.settings.physics, &spec.robots, cancel)?;
     Ok(Prepared {
         task: spec.task,
         settings: spec.settings,
@@ -161,7 +205,12 @@ pub fn prepare_replay(
         )));
     }
     let replay = Replay::prepare(&recorded, path)?;
-    let env = environment(&replay.task, replay.settings.physics).map_err(Failure::Physics)?;
+    let env = environment(
+        &replay.task,
+        replay.settings.physics,
+        &Robots::Local,
+        &Cancel::default(),
+    )?;
     Ok(Prepared {
         task: Arc::clone(&replay.task),
         settings: replay.settings.clone(),

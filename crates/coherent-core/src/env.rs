@@ -3,6 +3,8 @@
 
 use std::sync::Arc;
 
+use serde::{Deserialize, Serialize};
+
 use crate::error::Result;
 use crate::feasibility::{self, Infeasible};
 use crate::graph::{NodeId, State};
@@ -16,6 +18,21 @@ pub struct Outcome {
     pub infeasible: Option<Infeasible>,
     /// Whether the goal holds after the step.
     pub done: bool,
+    /// What the robot said, when the action was sent to a robot outside this process;
+    /// `None` when the rules (and physics) carried it out here, or nothing was sent.
+    pub report: Option<RobotReport>,
+}
+
+/// What a robot outside this process (behind a bridge such as `coherent-ros`) reported
+/// about an action it was sent.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RobotReport {
+    /// The robot's name on the other side, e.g. `quadrotor_11`.
+    pub robot: String,
+    /// How the action reached it, e.g. `ros2 /coherent/quadrotor_11/execute`.
+    pub via: String,
+    /// The robot's message about the result, or why none came.
+    pub message: String,
 }
 
 impl Outcome {
@@ -54,6 +71,13 @@ pub trait Environment {
     fn goal_satisfied(&self) -> bool {
         self.task().goal_satisfied(self.state())
     }
+
+    /// Why no further step can be trusted, once the environment has stopped (a robot
+    /// that no longer answers, a world that disagrees with the rules); an episode ends
+    /// with the round in which it stops. The rules and physics never stop.
+    fn stopped(&self) -> Option<String> {
+        None
+    }
 }
 
 /// The rules of docs/semantics.md, nothing else.
@@ -91,6 +115,7 @@ impl Environment for SymbolicEnv {
         Ok(Outcome {
             infeasible,
             done: self.goal_satisfied(),
+            report: None,
         })
     }
 

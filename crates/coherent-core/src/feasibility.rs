@@ -65,6 +65,19 @@ pub enum Reason {
     /// collision, a landing spot); the message has the numbers. Only physical
     /// environments give it.
     Physics,
+    /// Allowed by the rules, but the robot it was sent to reports that it could not
+    /// carry it out; the message is the robot's. This and the four below come only from
+    /// environments that send actions to robots outside the process (`coherent-ros`).
+    Robot,
+    /// The robot's server refused the action.
+    Rejected,
+    /// The robot did not answer in time: what it did is unknown.
+    Timeout,
+    /// Cancelled while the robot was carrying it out (Ctrl-C).
+    Cancelled,
+    /// The robot reports success, but the relations it observes afterwards disagree with
+    /// the rules' state.
+    Disagreement,
 }
 
 impl Reason {
@@ -101,7 +114,56 @@ impl Reason {
             Reason::Misplaced => "misplaced",
             Reason::NotOffered => "not_offered",
             Reason::Physics => "physics",
+            Reason::Robot => "robot",
+            Reason::Rejected => "rejected",
+            Reason::Timeout => "timeout",
+            Reason::Cancelled => "cancelled",
+            Reason::Disagreement => "disagreement",
         }
+    }
+
+    /// Every reason, in declaration order.
+    pub const ALL: [Reason; 35] = [
+        Reason::Unparsable,
+        Reason::NoSuchNode,
+        Reason::WrongRobotType,
+        Reason::NotInView,
+        Reason::NotClose,
+        Reason::OutOfReach,
+        Reason::TooHigh,
+        Reason::HandFull,
+        Reason::HandEmpty,
+        Reason::NotHolding,
+        Reason::NotGrabable,
+        Reason::NotContainer,
+        Reason::NotSurface,
+        Reason::NotOpenable,
+        Reason::AlreadyOpen,
+        Reason::AlreadyClosed,
+        Reason::AlwaysOpen,
+        Reason::ContainerClosed,
+        Reason::DoorClosed,
+        Reason::NoDoor,
+        Reason::AlreadyThere,
+        Reason::NotATarget,
+        Reason::NotLandable,
+        Reason::NotFlying,
+        Reason::NotLanded,
+        Reason::NotAbove,
+        Reason::NotOnSurface,
+        Reason::Misplaced,
+        Reason::NotOffered,
+        Reason::Physics,
+        Reason::Robot,
+        Reason::Rejected,
+        Reason::Timeout,
+        Reason::Cancelled,
+        Reason::Disagreement,
+    ];
+
+    /// The reason whose [`Reason::name`] is `name`.
+    pub fn from_name(name: &str) -> Option<Reason> {
+        Reason::ALL.into_iter().find(|r| r.name() == name)
     }
 }
 
@@ -636,5 +698,22 @@ impl Diag<'_, '_> {
                 self.within_reach(t)
             }
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Reason;
+
+    #[test]
+    fn every_reason_is_found_by_its_own_name_and_no_other() {
+        for r in Reason::ALL {
+            assert_eq!(Reason::from_name(r.name()), Some(r), "{r:?}");
+        }
+        let mut names: Vec<&str> = Reason::ALL.iter().map(|r| r.name()).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), Reason::ALL.len());
+        assert_eq!(Reason::from_name("no such reason"), None);
     }
 }

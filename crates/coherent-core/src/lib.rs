@@ -28,7 +28,7 @@ pub mod validate;
 pub mod vocab;
 
 pub use action::{Action, ParsedAction, Verb};
-pub use env::{Environment, Outcome, SymbolicEnv};
+pub use env::{Environment, Outcome, RobotReport, SymbolicEnv};
 pub use error::{Error, JsonPath, Result};
 pub use feasibility::{Infeasible, Reason};
 pub use geometry::Layout;

@@ -6,7 +6,9 @@ use std::sync::Arc;
 
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
-use coherent::session::episode::{self as session_episode, EpisodeSpec, Failure, Prepared, Ran};
+use coherent::session::episode::{
+    self as session_episode, EpisodeSpec, Failure, Prepared, Ran, Robots,
+};
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::llm::Usage;
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
@@ -358,6 +360,7 @@ pub(crate) fn run(
         max_states,
         out,
         prices,
+        robots: Robots::Local,
     };
     let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel));
     methods.close(py)?;

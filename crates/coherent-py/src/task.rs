@@ -3,10 +3,10 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
+use coherent::session::episode::{Failure, Robots, environment};
+use coherent_agents::Cancel;
 use coherent_core::planner::{self, Limits};
-use coherent_core::{
-    Environment, NodeId, RawGraph, SymbolicEnv, Task, feasibility, native, original,
-};
+use coherent_core::{Environment, NodeId, RawGraph, Task, feasibility, native, original};
 use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -192,30 +192,66 @@ fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
 }
 
 /// A task's environment: robots observe and act one action at a time, by the rules, and
-/// with `physics=True` also in Rapier.
+/// with `physics=True` also in Rapier; with `robots="ros2"` robots behind ROS 2 action
+/// servers carry the actions out.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 pub(crate) struct PyEnv {
     env: Box<dyn Environment + Send + Sync>,
     task: Py<PyTask>,
     physics: bool,
+    /// The namespace of the robots' actions over ROS 2; None when local.
+    namespace: Option<String>,
 }
 
 #[pymethods]
 impl PyEnv {
     #[new]
-    #[pyo3(signature = (task, physics = false))]
-    fn new(py: Python<'_>, task: Bound<'_, PyTask>, physics: bool) -> PyResult<PyEnv> {
+    #[pyo3(signature = (
+        task, physics = false, *, robots = "local", namespace = None, robot_timeout = 10.0,
+        server_wait = 10.0
+    ))]
+    fn new(
+        py: Python<'_>,
+        task: Bound<'_, PyTask>,
+        physics: bool,
+        robots: &str,
+        namespace: Option<&str>,
+        robot_timeout: f64,
+        server_wait: f64,
+    ) -> PyResult<PyEnv> {
         let t = Arc::clone(&task.get().task);
-        let env: Box<dyn Environment + Send + Sync> = if physics {
-            let built = py.detach(|| coherent_sim::PhysicalEnv::new(t));
-            Box::new(built.map_err(|e| errors::physics(py, e))?)
-        } else {
-            Box::new(SymbolicEnv::new(t))
+        let robots = match (robots, namespace) {
+            ("local", None) => Robots::Local,
+            ("local", Some(_)) => {
+                return Err(errors::invalid(py, "a namespace is for robots=\"ros2\""));
+            }
+            ("ros2", ns) => Robots::ros2(
+                ns.unwrap_or(coherent_ros::wire::DEFAULT_NAMESPACE),
+                robot_timeout,
+                server_wait,
+            )
+            .map_err(|e| errors::invalid(py, e))?,
+            (other, _) => {
+                return Err(errors::invalid(
+                    py,
+                    format!("robots={other:?}: \"local\" or \"ros2\""),
+                ));
+            }
         };
+        let namespace = match &robots {
+            Robots::Ros2(options) => Some(options.namespace.clone()),
+            Robots::Local => None,
+        };
+        let built = py.detach(|| environment(&t, physics, &robots, &Cancel::default()));
+        let env = built.map_err(|f| match f {
+            Failure::Physics(e) => errors::physics(py, e),
+            Failure::Other(why) => errors::coherent(py, why),
+        })?;
         Ok(PyEnv {
             env,
             task: task.unbind(),
             physics,
+            namespace,
         })
     }
 
@@ -223,6 +259,12 @@ impl PyEnv {
     #[getter]
     fn physics(&self) -> bool {
         self.physics
+    }
+
+    /// The namespace of the robots' ROS 2 actions; None when they act in this process.
+    #[getter]
+    fn namespace(&self) -> Option<String> {
+        self.namespace.clone()
     }
 
     /// The task this environment runs.
@@ -291,7 +333,7 @@ impl PyEnv {
         #[pyo3(from_py_with = action_text)] action: String,
     ) -> PyResult<(bool, Option<String>, bool)> {
         let robot = node_id(py, self.env.task(), robot)?;
-        let outcome = if self.physics {
+        let outcome = if self.physics || self.namespace.is_some() {
             let env = &mut self.env;
             py.detach(|| env.step(robot, &action))
         } else {

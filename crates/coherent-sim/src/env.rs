@@ -306,6 +306,7 @@ impl Environment for PhysicalEnv {
         Ok(Outcome {
             infeasible,
             done: self.goal_satisfied(),
+            report: None,
         })
     }
 

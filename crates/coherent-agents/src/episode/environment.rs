@@ -3,18 +3,27 @@
 
 use coherent_core::{Environment, NodeId, Task, describe};
 
-use crate::records::transcript::Outcome;
+use crate::records::transcript::{Outcome, Round};
 
-/// Checks and runs `action` for `robot`: executed, or why not.
-pub(crate) fn execute(env: &mut (dyn Environment + Send), robot: NodeId, action: &str) -> Outcome {
+/// Checks and runs `action` for `robot`: executed, or why not; what a robot outside this
+/// process said about it goes into `round`.
+pub(crate) fn execute(
+    env: &mut (dyn Environment + Send),
+    round: &mut Round,
+    robot: NodeId,
+    action: &str,
+) -> Outcome {
     match env.step(robot, action) {
-        Ok(o) => match o.infeasible {
-            None => Outcome::Executed,
-            Some(why) => Outcome::Infeasible {
-                reason: why.reason.name().to_owned(),
-                message: why.message,
-            },
-        },
+        Ok(o) => {
+            round.robot = o.report;
+            match o.infeasible {
+                None => Outcome::Executed,
+                Some(why) => Outcome::Infeasible {
+                    reason: why.reason.name().to_owned(),
+                    message: why.message,
+                },
+            }
+        }
         Err(e) => Outcome::Infeasible {
             reason: "error".into(),
             message: e.to_string(),

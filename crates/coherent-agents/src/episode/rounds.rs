@@ -59,7 +59,14 @@ pub(crate) async fn rounds(
                 error = Some(message.clone());
             }
             _ if round.done => status = Status::Success,
-            _ => {}
+            _ => {
+                // An environment that can go on no longer (a robot that stopped
+                // answering) ends the episode, saying why.
+                if let Some(why) = env.stopped() {
+                    status = Status::Interrupted;
+                    error = Some(why);
+                }
+            }
         }
         rounds.push(round);
     }

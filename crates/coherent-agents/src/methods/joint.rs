@@ -221,7 +221,7 @@ pub(crate) fn act(
     note: String,
 ) {
     let line = format!("{}: {action}", robot_label(task, robot));
-    round.outcome = execute(env, robot, action);
+    round.outcome = execute(env, round, robot, action);
     round.feedback = feedback(&line, &round.outcome);
     round.decision = Some(Decision {
         can_do: true,

@@ -532,7 +532,7 @@ async fn round(
             stats.visits[i], stats.simulations, stats.q[i], stats.prior[i]
         ),
     });
-    round.outcome = execute(env, task.id(chosen.robot.node), &action);
+    round.outcome = execute(env, &mut round, task.id(chosen.robot.node), &action);
     round.feedback = match &round.outcome {
         Outcome::Infeasible { message, .. } => {
             format!("{robot} tried {action}, which cannot be done: {message}")

@@ -119,7 +119,7 @@ async fn round(
     };
     round.decision = Some(decision.clone());
     let outcome = match &decision.action {
-        Some(action) if decision.can_do => execute(env, robot, action),
+        Some(action) if decision.can_do => execute(env, &mut round, robot, action),
         _ => Outcome::Declined,
     };
     Some(finish(env, round, outcome, start))

@@ -8,6 +8,7 @@ use std::fs::File;
 use std::io::{self, BufRead, BufReader, Write};
 use std::path::Path;
 
+use coherent_core::RobotReport;
 use serde::{Deserialize, Serialize};
 
 use coherent_core::NodeId;
@@ -142,6 +143,10 @@ pub struct Round {
     /// The decision of a method written outside the crate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub external: Option<ExternalDecision>,
+    /// What the robot said when the action was sent to one outside this process (over
+    /// ROS 2): which robot, how, and its result's message.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<RobotReport>,
 }
 
 impl Round {
@@ -158,6 +163,7 @@ impl Round {
             done: false,
             wall_ms: 0.0,
             external: None,
+            robot: None,
         }
     }
 }
@@ -172,7 +178,8 @@ pub enum Status {
     Failure,
     /// The backend failed for good (see the last round).
     BackendError,
-    /// Stopped from outside (Ctrl-C).
+    /// Stopped from outside (Ctrl-C), or by the environment when it could go on no
+    /// longer (a robot that stopped answering; `error` says why).
     Interrupted,
     /// The method raised an error (see the last round and the summary's `error`).
     Error,

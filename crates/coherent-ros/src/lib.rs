@@ -1,0 +1,23 @@
+//! `coherent-ros`: the robot executors of a COHERENT episode over ROS 2 actions, in pure
+//! Rust (ros2-client over RustDDS; no ROS installation needed), on ROS 2 Jazzy's wire
+//! format.
+//!
+//! Each robot of a task is one action server, `/<namespace>/<robot>/execute`, of type
+//! `coherent_msgs/action/Execute` (the package is `ros/coherent_msgs` in the repository;
+//! [`wire`] has its types). [`Ros2Env`] is the planner's side, an `Environment` of
+//! `coherent-core`: the rules check each action before it is sent, the robot carries it
+//! out and reports, and the symbolic state follows the robot's success. [`serve`] runs
+//! the reference robot servers, which act in the project's own engine (the rules, or
+//! Rapier) and inject faults on demand ([`Faults`]).
+
+pub mod bridge;
+pub mod faults;
+mod link;
+pub mod relations;
+pub mod server;
+pub mod wire;
+
+pub use bridge::{BridgeOptions, Ros2Env};
+pub use faults::Faults;
+pub use link::ConnectError;
+pub use server::{ServeOptions, World, serve};

@@ -1,0 +1,352 @@
+//! The reference robot servers: one ROS 2 action server per robot of a task, all acting
+//! in one world of the project's own engine (the rules, or Rapier with physics). Each
+//! goal is accepted (or refused), worked on with feedback, carried out, and answered with
+//! the result and what the robot then observes. This is the test partner of the bridge
+//! and the template of an adapter for a real robot: replace [`World::act`] with the
+//! robot's own controller and [`relations::observed`] with its perception.
+
+use std::future::Future;
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
+
+use coherent_core::feasibility::{Infeasible, Reason};
+use coherent_core::{Environment, Idx, NodeId, State, SymbolicEnv, Task};
+use coherent_sim::PhysicalEnv;
+use ros2_client::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus};
+use ros2_client::{NodeName, NodeOptions, ServiceMapping};
+use tokio::time::{Instant, interval, sleep_until, timeout};
+
+use crate::faults::Faults;
+use crate::relations;
+use crate::wire::{self, ExecuteResult, Feedback, Goal};
+
+type Server = AsyncActionServer<Goal, ExecuteResult, Feedback>;
+type Executing = ExecutingGoalHandle<Goal>;
+
+/// How often a robot at work sends feedback.
+const FEEDBACK_EVERY: Duration = Duration::from_millis(100);
+/// How long a result waits for the bridge to ask for it before it is dropped.
+const RESULT_WAIT: Duration = Duration::from_secs(10);
+
+/// What to serve and how.
+#[derive(Clone, Debug, Default)]
+pub struct ServeOptions {
+    /// The namespace of the actions (absolute, see [`wire::namespace`]).
+    pub namespace: String,
+    /// Carry the actions out in Rapier, not by the rules alone.
+    pub physics: bool,
+    pub faults: Faults,
+}
+
+/// The world the robots act in: the rules, or Rapier checked against them.
+#[derive(Debug)]
+pub enum World {
+    Rules(SymbolicEnv),
+    Physics(Box<PhysicalEnv>),
+}
+
+impl World {
+    pub fn new(task: &Arc<Task>, physics: bool) -> Result<World, String> {
+        Ok(if physics {
+            let env = PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {e}"))?;
+            World::Physics(Box::new(env))
+        } else {
+            World::Rules(SymbolicEnv::new(Arc::clone(task)))
+        })
+    }
+
+    pub fn state(&self) -> &State {
+        match self {
+            World::Rules(env) => env.state(),
+            World::Physics(env) => env.state(),
+        }
+    }
+
+    /// Carries `action` out for `robot`: what happened in words, or why it could not.
+    pub fn act(&mut self, robot: NodeId, action: &str) -> Result<String, Infeasible> {
+        let task = match self {
+            World::Rules(env) => env.task(),
+            World::Physics(env) => env.task(),
+        };
+        let me = task
+            .idx(robot)
+            .map(|n| task.node(n).label())
+            .unwrap_or_default();
+        let wrong = |e: coherent_core::Error| Infeasible {
+            reason: Reason::NoSuchNode,
+            message: e.to_string(),
+        };
+        match self {
+            World::Rules(env) => match env.step(robot, action).map_err(wrong)?.infeasible {
+                None => Ok(format!("{me} did {action}")),
+                Some(why) => Err(why),
+            },
+            World::Physics(env) => match env.step_physical(robot, action) {
+                Ok(Ok(done)) => Ok(format!(
+                    "{me} did {} in {:.2} s of simulated time",
+                    done.action, done.sim_seconds
+                )),
+                Ok(Err(why)) => Err(why),
+                Err(e) => Err(Infeasible {
+                    reason: Reason::Physics,
+                    message: format!("physics: {}", e.message),
+                }),
+            },
+        }
+    }
+}
+
+/// One robot as its server knows it.
+struct Me {
+    name: String,
+    node: Idx,
+    id: NodeId,
+    label: String,
+}
+
+/// Serves every robot of `task` under [`ServeOptions::namespace`] until `stop` resolves;
+/// `log` gets one line when the servers are up and one per goal.
+pub async fn serve(
+    task: Arc<Task>,
+    options: ServeOptions,
+    log: &(dyn Fn(&str) + Sync),
+    stop: impl Future<Output = ()>,
+) -> Result<(), String> {
+    let names = wire::robot_names(&task);
+    options.faults.check(&names)?;
+    let world = Arc::new(Mutex::new(World::new(&task, options.physics)?));
+    let context = wire::context()?;
+    let node_name = NodeName::new(&options.namespace, "coherent_robots")
+        .map_err(|e| format!("node name: {e:?}"))?;
+    let mut node = context
+        .new_node(node_name, NodeOptions::new().enable_rosout(false))
+        .map_err(|e| format!("cannot make a node: {e:?}"))?;
+    let mut servers = Vec::new();
+    for (r, name) in task.robots.iter().zip(&names) {
+        if options.faults.is_absent(name) {
+            continue;
+        }
+        let action = wire::ros_action_name(&options.namespace, name)?;
+        let server = node
+            .create_action_server::<Goal, ExecuteResult, Feedback>(
+                ServiceMapping::Enhanced,
+                &action,
+                &wire::action_type(),
+                wire::server_qos(),
+            )
+            .map_err(|e| format!("action server {name}: {e:?}"))?;
+        let me = Me {
+            name: name.clone(),
+            node: r.node,
+            id: task.id(r.node),
+            label: task.node(r.node).label(),
+        };
+        servers.push((AsyncActionServer::new(server), me));
+    }
+    let actions: Vec<String> = servers
+        .iter()
+        .map(|(_, me)| wire::action_name(&options.namespace, &me.name))
+        .collect();
+    log(&format!(
+        "serving {} robots of {} task {} ({}): {}",
+        actions.len(),
+        task.meta.scene,
+        task.meta.task_id,
+        if options.physics { "physics" } else { "rules" },
+        actions.join(" ")
+    ));
+    let robots = futures::future::join_all(servers.iter().map(|(server, me)| {
+        let at = Robot {
+            server,
+            me,
+            task: &task,
+            world: &world,
+            faults: &options.faults,
+            log,
+        };
+        at.serve()
+    }));
+    tokio::select! {
+        _ = robots => {}
+        () = stop => {}
+    }
+    drop(servers);
+    drop(node);
+    Ok(())
+}
+
+/// One robot's server at work.
+struct Robot<'a> {
+    server: &'a Server,
+    me: &'a Me,
+    task: &'a Arc<Task>,
+    world: &'a Arc<Mutex<World>>,
+    faults: &'a Faults,
+    log: &'a (dyn Fn(&str) + Sync),
+}
+
+impl Robot<'_> {
+    /// Takes goals one at a time, forever.
+    async fn serve(self) {
+        let name = &self.me.name;
+        let mut draws = self.faults.draws(name);
+        loop {
+            let handle = match self.server.receive_new_goal().await {
+                Ok(handle) => handle,
+                Err(e) => {
+                    (self.log)(&format!("{name}: cannot read a goal: {e:?}"));
+                    continue;
+                }
+            };
+            let Some(goal) = self.server.get_new_goal(handle.clone()) else {
+                continue;
+            };
+            let said = format!("{name} step {} {}", goal.step, goal.action);
+            if self.faults.refuses(name) {
+                let _ = self.server.reject_goal(handle).await;
+                (self.log)(&format!("{said} -> refused (--refuse)"));
+                continue;
+            }
+            let executing = match self.server.accept_goal(handle).await {
+                Ok(accepted) => self.server.start_executing_goal(accepted).await,
+                Err(e) => Err(e),
+            };
+            let Ok(executing) = executing else {
+                (self.log)(&format!("{said} -> cannot accept the goal"));
+                continue;
+            };
+            (self.log)(&format!("{said} -> accepted"));
+            if self.faults.is_silent(name) {
+                (self.log)(&format!("{said} -> no answer, ever (--silent)"));
+                continue;
+            }
+            let fails = draws.fails();
+            let (end, result) = self.work(&executing, &goal, fails).await;
+            (self.log)(&format!(
+                "{said} -> {}: {}",
+                match end {
+                    GoalEndStatus::Succeeded => "succeeded",
+                    GoalEndStatus::Aborted => "failed",
+                    GoalEndStatus::Canceled => "cancelled",
+                },
+                result.message
+            ));
+            let sent = timeout(
+                RESULT_WAIT,
+                self.server.send_result_response(executing, end, result),
+            )
+            .await;
+            if !matches!(sent, Ok(Ok(()))) {
+                (self.log)(&format!("{said} -> the result could not be delivered"));
+            }
+        }
+    }
+
+    async fn feedback(&self, goal: &Executing, stage: &str, progress: f32) {
+        let feedback = Feedback {
+            stage: stage.to_owned(),
+            progress,
+        };
+        let _ = self.server.publish_feedback(goal.clone(), feedback).await;
+    }
+
+    /// Works on `goal`: the delay (feedback all along, cancellable), then the action in
+    /// the world (or an injected failure when `fails`).
+    async fn work(
+        &self,
+        handle: &Executing,
+        goal: &Goal,
+        fails: bool,
+    ) -> (GoalEndStatus, ExecuteResult) {
+        let me = &self.me.label;
+        let action = &goal.action;
+        self.feedback(handle, wire::STAGE_STARTED, 0.0).await;
+        let delay = self.faults.delay;
+        let start = Instant::now();
+        let mut tick = interval(FEEDBACK_EVERY);
+        let mut progress = 0.0;
+        while start.elapsed() < delay {
+            tokio::select! {
+                _ = tick.tick() => {
+                    progress = (start.elapsed().as_secs_f32() / delay.as_secs_f32()).min(1.0);
+                    self.feedback(handle, wire::STAGE_WORKING, progress).await;
+                }
+                () = sleep_until(start + delay) => {}
+                cancel = self.server.receive_cancel_request() => {
+                    let Ok(cancel) = cancel else { continue };
+                    let mine = cancel.contains_goal(&handle.goal_id());
+                    let goals = mine.then(|| handle.goal_id());
+                    let _ = self.server.respond_to_cancel_requests(&cancel, goals.into_iter()).await;
+                    if mine {
+                        let message = format!("{me} stopped before {action}: cancelled");
+                        return (GoalEndStatus::Canceled, self.result(false, "cancelled", message));
+                    }
+                }
+            }
+        }
+        if fails {
+            let message = format!(
+                "{me} could not carry out {action}: an injected failure (--fail-rate {}, --seed {})",
+                self.faults.fail_rate, self.faults.seed
+            );
+            return (GoalEndStatus::Aborted, self.result(false, "robot", message));
+        }
+        let done = self.act(handle, action, progress).await;
+        match done {
+            Ok(message) => {
+                self.feedback(handle, wire::STAGE_FINISHED, 1.0).await;
+                (GoalEndStatus::Succeeded, self.result(true, "", message))
+            }
+            Err(why) => (
+                GoalEndStatus::Aborted,
+                self.result(false, why.reason.name(), why.message),
+            ),
+        }
+    }
+
+    /// Carries the action out on a blocking thread (physics takes a while), with
+    /// feedback meanwhile; too late to cancel now, so cancel requests are refused.
+    async fn act(
+        &self,
+        handle: &Executing,
+        action: &str,
+        progress: f32,
+    ) -> Result<String, Infeasible> {
+        let world = Arc::clone(self.world);
+        let (robot, action) = (self.me.id, action.to_owned());
+        let job = tokio::task::spawn_blocking(move || {
+            let mut world = world.lock().unwrap_or_else(PoisonError::into_inner);
+            world.act(robot, &action)
+        });
+        tokio::pin!(job);
+        let mut tick = interval(FEEDBACK_EVERY);
+        loop {
+            tokio::select! {
+                done = &mut job => {
+                    return done.unwrap_or_else(|e| Err(Infeasible {
+                        reason: Reason::Robot,
+                        message: format!("the robot's controller failed: {e}"),
+                    }));
+                }
+                _ = tick.tick() => self.feedback(handle, wire::STAGE_WORKING, progress).await,
+                cancel = self.server.receive_cancel_request() => {
+                    if let Ok(cancel) = cancel {
+                        let none = std::iter::empty();
+                        let _ = self.server.respond_to_cancel_requests(&cancel, none).await;
+                    }
+                }
+            }
+        }
+    }
+
+    /// A result with what the robot observes now.
+    fn result(&self, success: bool, reason: &str, message: String) -> ExecuteResult {
+        let world = self.world.lock().unwrap_or_else(PoisonError::into_inner);
+        ExecuteResult {
+            success,
+            reason: reason.to_owned(),
+            message,
+            relations: relations::observed(self.task, world.state(), self.me.node),
+        }
+    }
+}

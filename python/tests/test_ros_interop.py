@@ -1,0 +1,184 @@
+"""Robots over ROS 2 from Python, and seen by an independent DDS implementation.
+
+`coherent robots serve`, `coherent run --robots ros2`, a `coherent.Env(robots="ros2")`
+and an Eclipse Cyclone DDS participant (`ros_listener.py`, PyPI `cyclonedds`) run as
+separate processes in a network namespace each test makes (DDS discovery needs
+multicast, which a container's loopback may lack): `unshare --net`, then `ip` for the
+loopback. That needs root; without it the tests fail saying so.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+import coherent
+from conftest import DEMO
+
+LISTENER = Path(__file__).with_name("ros_listener.py")
+ROBOTS = ["robot_arm_6", "quadrotor_11", "robot_dog_13"]
+SETUP = (
+    "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo "
+    "&& echo ready && exec cat >/dev/null"
+)
+LONG = 120
+
+
+class Netns:
+    """A network namespace with multicast on its loopback, held open by a process whose
+    stdin is ours (it ends with the test process)."""
+
+    def __init__(self) -> None:
+        try:
+            self.holder = subprocess.Popen(
+                ["unshare", "--net", "sh", "-c", SETUP],
+                stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+            )  # fmt: skip
+        except FileNotFoundError as e:
+            pytest.fail(f"cannot run `unshare` (util-linux) for a network namespace: {e}")
+        assert self.holder.stdout is not None and self.holder.stderr is not None
+        if self.holder.stdout.readline().strip() != "ready":
+            self.holder.kill()
+            pytest.fail(
+                "cannot make a network namespace with multicast on its loopback, which DDS "
+                "discovery needs: `unshare --net` and `ip` need root (or CAP_SYS_ADMIN and "
+                f"CAP_NET_ADMIN); they said: {self.holder.stderr.read().strip()}"
+            )
+        self.procs: list[subprocess.Popen[str]] = []
+
+    def popen(self, args: list[str], **kwargs: Any) -> subprocess.Popen[str]:
+        """`args` inside the namespace; killed at the end of the test."""
+        enter = ["nsenter", f"--net=/proc/{self.holder.pid}/ns/net", "--"]
+        proc = subprocess.Popen([*enter, *args], text=True, **kwargs)
+        self.procs.append(proc)
+        return proc
+
+    def close(self) -> None:
+        for proc in [*self.procs, self.holder]:
+            proc.kill()
+            proc.wait()
+            for pipe in (proc.stdin, proc.stdout, proc.stderr):
+                if pipe is not None:
+                    pipe.close()
+
+
+@pytest.fixture()
+def netns() -> Iterator[Netns]:
+    ns = Netns()
+    yield ns
+    ns.close()
+
+
+def serve(netns: Netns, coherent_exe: str, *args: str) -> subprocess.Popen[str]:
+    """`coherent robots serve` of the demo task, once its servers are up."""
+    server = netns.popen([coherent_exe, "robots", "serve", str(DEMO), *args], stdout=subprocess.PIPE)
+    assert server.stdout is not None
+    line = server.stdout.readline()
+    assert line.startswith("serving 3 robots of demo-apartment task 0"), line
+    return server
+
+
+def transcript(out: Path) -> list[dict[str, Any]]:
+    (path,) = out.glob("*.jsonl")
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_a_cyclone_dds_reader_decodes_the_robots_feedback_and_status_by_their_ros2_types(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    server = serve(netns, coherent_exe, "--namespace", "/interop", "--delay", "0.25")
+    listener = netns.popen(
+        [sys.executable, str(LISTENER), "/interop", *ROBOTS], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+    )  # fmt: skip
+    assert listener.stdout is not None and listener.stdin is not None
+    assert listener.stdout.readline().strip() == "ready"
+    run = netns.popen(
+        [coherent_exe, "run", str(DEMO), "--robots", "ros2", "--namespace", "/interop", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE,
+    )  # fmt: skip
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    listener.stdin.close()
+    seen = json.loads(listener.stdout.read().splitlines()[-1])
+    rounds = [r for r in transcript(tmp_path) if r["type"] == "round"]
+    assert len(rounds) == 22
+    for robot in ROBOTS:
+        steps = sum(1 for r in rounds if r["robot"]["robot"] == robot)
+        feedback = seen[robot]["feedback"]
+        goals = {f["goal"] for f in feedback}
+        assert len(goals) == steps, f"{robot}: one goal per step it took"
+        for goal in goals:
+            stages = [f["stage"] for f in feedback if f["goal"] == goal]
+            assert stages[0] == "started" and stages[-1] == "finished", stages
+            assert "working" in stages, stages
+        assert all(0.0 <= f["progress"] <= 1.0 for f in feedback)
+        succeeded = {s["goal"] for s in seen[robot]["status"] if s["status"] == 4}
+        assert succeeded == goals, f"{robot}: every goal reported SUCCEEDED on the status topic"
+    server.kill()
+
+
+STEP_BY_HAND = """
+import json, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+env = coherent.Env(task, robots="ros2", namespace=sys.argv[2], robot_timeout=30, server_wait=30)
+plan = coherent.plan(task)["plan"]
+steps = [env.step(s["robot"], s["action"]) for s in plan]
+again = env.step(plan[-1]["robot"], plan[-1]["action"])
+print(json.dumps({"namespace": env.namespace, "steps": steps, "again": again, "goal": env.goal_satisfied()}))
+"""
+
+
+def test_env_over_ros2_steps_the_demo_through_the_robots_servers(netns: Netns, coherent_exe: str) -> None:
+    server = serve(netns, coherent_exe, "--namespace", "/py_env")
+    run = netns.popen([sys.executable, "-c", STEP_BY_HAND, str(DEMO), "py_env"], stdout=subprocess.PIPE)
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    result = json.loads(out.splitlines()[-1])
+    assert result["namespace"] == "/py_env"
+    assert len(result["steps"]) == 22
+    assert all(ok for ok, _, _ in result["steps"]), result["steps"]
+    assert result["steps"][-1][2] is True and result["goal"] is True
+    ok, reason, _ = result["again"]
+    assert not ok and reason, "the rules refuse it before it is sent"
+    server.kill()
+    served, _ = server.communicate(timeout=LONG)
+    assert served.count("-> succeeded") == 22, served
+    assert served.count("-> accepted") == 22, "the refused step never reached a robot"
+
+
+NO_SERVER = """
+import sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+try:
+    coherent.Env(task, robots="ros2", namespace="/nobody", server_wait=0.5)
+except coherent.CoherentError as e:
+    print(e)
+"""
+
+
+def test_env_over_ros2_without_servers_raises_naming_the_robots(netns: Netns) -> None:
+    run = netns.popen([sys.executable, "-c", NO_SERVER, str(DEMO)], stdout=subprocess.PIPE)
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    assert "no ROS 2 action server for robot_arm_6, quadrotor_11, robot_dog_13 under /nobody" in out
+
+
+def test_env_robots_and_namespace_are_checked() -> None:
+    task = coherent.load_tasks(DEMO)[0]
+    with pytest.raises(ValueError, match="local.*ros2"):
+        coherent.Env(task, robots="ros3")  # type: ignore[arg-type]
+    with pytest.raises(ValueError, match="namespace is for robots"):
+        coherent.Env(task, namespace="/lab")
+    with pytest.raises(ValueError, match="not a ROS namespace"):
+        coherent.Env(task, robots="ros2", namespace="/2lab")
+    with pytest.raises(ValueError, match="seconds"):
+        coherent.Env(task, robots="ros2", robot_timeout=-1)
+    assert coherent.Env(task).namespace is None
