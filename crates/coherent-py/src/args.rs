@@ -182,12 +182,18 @@ pub(crate) fn methods(obj: &Bound<'_, PyAny>) -> PyResult<Vec<MethodArg>> {
 }
 
 /// A method argument: a str is a name (a built-in method's, or `MODULE:CLASS`), which
-/// must be text; anything else is a method written in Python (checked when it is made).
+/// must be text; a class or any other callable is a method written in Python.
 fn method_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<MethodArg> {
     if obj.is_instance_of::<PyString>() {
         Ok(MethodArg::Name(text(obj, name)?.to_owned()))
-    } else {
+    } else if obj.is_callable() {
         Ok(MethodArg::Python(obj.clone().unbind()))
+    } else {
+        Err(pyo3::exceptions::PyTypeError::new_err(format!(
+            "{name}: expected a method's name (a str) or a method written in Python (a class \
+             or any callable), not {}",
+            obj.get_type().name()?
+        )))
     }
 }
 
