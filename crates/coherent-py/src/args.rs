@@ -190,8 +190,8 @@ fn method_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<MethodArg> {
         Ok(MethodArg::Python(obj.clone().unbind()))
     } else {
         Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "{name}: expected a method's name (a str) or a method written in Python (a class \
-             or any callable), not {}",
+            "{name}: expected a method's name, or a class (or any callable) of a method \
+             written in Python, not {}",
             obj.get_type().name()?
         )))
     }
