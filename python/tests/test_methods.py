@@ -371,9 +371,15 @@ def test_the_central_example_with_a_real_model(
     # env0 task 2: bread into the plate, milk box into the microwave (GT 5); two steps.
     task = env0_tasks[2]
     out = tmp_path / "r.jsonl"
-    frame = coherent.bench([task], [Small], max_steps=2, out=out)
+    # A price for the model (USD per million tokens): the line's cost is its tokens at it.
+    prices = {"smollm2-135m": {"input": 1.0, "cached_input": 0.5, "output": 2.0}}
+    frame = coherent.bench([task], [Small], max_steps=2, out=out, prices=prices)
     (line,) = frame.to_dict("records")
     assert (line["method"], line["steps"], line["max_steps"]) == ("central", 2, 2)
+    cached = line["cached_tokens"]  # the server's prompt cache: priced at cached_input
+    fresh = line["prompt_tokens"] - cached
+    expected = (fresh * 1.0 + cached * 0.5 + line["completion_tokens"] * 2.0) / 1e6
+    assert line["cost_usd"] > 0 and line["cost_usd"] == pytest.approx(expected)
     assert line["status"] in ("success", "failure")
     assert line["llm_calls"] == 2 and line["prompt_tokens"] > 0 and line["completion_tokens"] > 0
     assert line["uses_model"] and line["backend_kind"] == "openai"
