@@ -10,7 +10,8 @@
 //! - [`backend`]: which backend answers the model's roles (built-in, simulated,
 //!   OpenAI-compatible, replay), with the rules that tie the settings together;
 //! - [`tasks`]: reading task files, the compiled-in benchmark, picking one task;
-//! - [`episode`]: one episode, run or replayed, in a symbolic or physical environment;
+//! - [`episode`]: one episode, run or replayed, in a symbolic or physical environment or
+//!   with robots over ROS 2;
 //! - [`prompts`]: the prompt set and the price table a run is given, checked up front;
 //! - [`bench`]: methods x tasks x seeds into a resumable results file;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
