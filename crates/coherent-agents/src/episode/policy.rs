@@ -103,20 +103,8 @@ impl View {
     }
 }
 
-/// What a method decided for one step.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub struct Choice {
-    /// The robot that acts; `None` for no action this step (the step still counts).
-    pub robot: Option<NodeId>,
-    /// The action, as written: one outside the robot's list is checked like any other
-    /// and refused with the reason.
-    pub action: Option<String>,
-    pub note: String,
-    /// Model use the method reports itself (calls through its own clients).
-    pub prompt_tokens: u64,
-    pub completion_tokens: u64,
-    pub calls: u32,
-}
+/// What a method decided for one step: the very record the transcript keeps of it.
+pub use crate::records::transcript::ExternalDecision as Choice;
 
 /// A step's answer: the choice, or why the method failed (which ends the episode with
 /// status `error`), and the calls it made through the project's client meanwhile.

@@ -20,7 +20,7 @@ use crate::episode::policy::{Act, Executed, Policy, View};
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint;
 use crate::methods::prompt::robot_label;
-use crate::records::transcript::{Decision, ExternalDecision, Outcome, Round};
+use crate::records::transcript::{Decision, Outcome, Round};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
 /// spent, the policy fails, or `cancel` fires. A policy that could not be made fails
@@ -55,14 +55,7 @@ pub async fn run(
         round.calls = act.calls;
         match act.choice {
             Ok(choice) => {
-                round.external = Some(ExternalDecision {
-                    robot: choice.robot,
-                    action: choice.action.clone(),
-                    note: choice.note.clone(),
-                    prompt_tokens: choice.prompt_tokens,
-                    completion_tokens: choice.completion_tokens,
-                    calls: choice.calls,
-                });
+                round.external = Some(choice.clone());
                 let action = choice.action.unwrap_or_default();
                 match choice.robot {
                     Some(robot) => take(env, task, &mut round, robot, &action, choice.note),

@@ -13,7 +13,7 @@ use coherent_core::{Task, native};
 
 use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
-use crate::episode::policy::{Act, Choice, Policy, View};
+use crate::episode::policy::{Act, Policy, View};
 use crate::episode::rounds::Episode;
 use crate::episode::settings::{Budget, External, Method, MethodSpec, Settings};
 use crate::methods::templates::Prompts;
@@ -143,14 +143,7 @@ impl Policy for Recorded {
             },
             Some(round) => Act {
                 choice: match (round.external, round.outcome) {
-                    (Some(e), _) => Ok(Choice {
-                        robot: e.robot,
-                        action: e.action,
-                        note: e.note,
-                        prompt_tokens: e.prompt_tokens,
-                        completion_tokens: e.completion_tokens,
-                        calls: e.calls,
-                    }),
+                    (Some(decision), _) => Ok(decision),
                     (None, Outcome::MethodError { message }) => Err(message),
                     (None, _) => Err(format!(
                         "replay diverged: round {} of the recording holds no decision",

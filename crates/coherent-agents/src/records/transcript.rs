@@ -111,14 +111,17 @@ pub enum Outcome {
 /// What a method written outside the crate decided in one round
 /// ([`crate::episode::policy`]), as it gave it, and the model use it reported itself
 /// (calls through its own clients; those through the project's are in [`Round::calls`]).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+/// A method gives it as its `Choice` ([`crate::episode::Choice`]).
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct ExternalDecision {
-    /// The robot that acts; `None` for no action this step.
+    /// The robot that acts; `None` for no action this step (the step still counts).
     pub robot: Option<NodeId>,
-    /// The action, as written.
+    /// The action, as written: one outside the robot's list is checked like any other
+    /// and refused with the reason.
     pub action: Option<String>,
     /// The method's own words about the step.
     pub note: String,
+    /// Model use the method reports itself (calls through its own clients).
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
     pub calls: u32,
