@@ -236,7 +236,7 @@ fn team_list(task: &Task) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::{check_placeholders, every_placeholder};
+    use crate::methods::prompt::{check_placeholders, demo_task, every_placeholder};
     use coherent_core::SymbolicEnv;
 
     #[test]
@@ -250,13 +250,7 @@ mod tests {
 
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
-        let task = Arc::new(
-            coherent_core::load_tasks(&path)
-                .expect("the demo")
-                .remove(0),
-        );
+        let task = demo_task();
         let env = SymbolicEnv::new(Arc::clone(&task));
         for template in [Template::AssignerSystem, Template::AssignerUser] {
             let assigner = TaskAssigner::new(&task, &every_placeholder(template), 100);

@@ -211,6 +211,7 @@ fn speaker_schema(lines: &[String]) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::methods::prompt::demo_task;
 
     #[test]
     fn every_placeholder_of_the_template_is_filled() {
@@ -234,13 +235,7 @@ mod tests {
 
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
-        let task = Arc::new(
-            coherent_core::load_tasks(&path)
-                .expect("the demo")
-                .remove(0),
-        );
+        let task = demo_task();
         let env = coherent_core::SymbolicEnv::new(Arc::clone(&task));
         let prompts = crate::methods::prompt::every_placeholder(Template::DmrsSpeaker);
         let speaker = task.id(task.robots[0].node);

@@ -81,6 +81,18 @@ pub(crate) fn every_placeholder(
     .expect("its own placeholders check")
 }
 
+/// The demo task (`examples/tasks/demo.json`), for the tests that render prompts.
+#[cfg(test)]
+pub(crate) fn demo_task() -> std::sync::Arc<Task> {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+    std::sync::Arc::new(
+        coherent_core::load_tasks(&path)
+            .expect("the demo")
+            .remove(0),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
