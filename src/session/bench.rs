@@ -7,7 +7,7 @@ use std::sync::Arc;
 use coherent_agents::bench::{
     self, BenchConfig, BenchOutcome, Event, ResultLine, Selection, Subset,
 };
-use coherent_agents::{Cancel, report};
+use coherent_agents::{Cancel, MethodSpec, report};
 use coherent_core::{Error, Task};
 
 /// A subset by name (`all`, `paper40`, `native40`), else a file of `scene task_id` lines.
@@ -56,22 +56,27 @@ pub async fn run(
     if config.methods.is_empty() {
         return Err("no methods to run".into());
     }
-    // Results are keyed by the method's name: one written outside the crate needs its own.
-    let names: Vec<&str> = config.methods.iter().map(|m| m.name()).collect();
-    if let Some(m) = config
-        .methods
-        .iter()
-        .find(|m| m.builtin().is_none() && names.iter().filter(|&&n| n == m.name()).count() > 1)
-    {
-        return Err(format!(
-            "two methods are named {:?}: give each its own name",
-            m.name()
-        ));
-    }
+    distinct_names(&config.methods)?;
     if config.seeds == 0 {
         return Err("seeds must be at least 1".into());
     }
     bench::run(tasks, config, cancel, progress).await
+}
+
+/// Refuses two methods of one name: results are keyed by the method's name, so one
+/// written outside the crate needs its own.
+pub fn distinct_names(methods: &[MethodSpec]) -> Result<(), String> {
+    let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
+    match methods
+        .iter()
+        .find(|m| m.builtin().is_none() && names.iter().filter(|&&n| n == m.name()).count() > 1)
+    {
+        Some(m) => Err(format!(
+            "two methods are named {:?}: give each its own name",
+            m.name()
+        )),
+        None => Ok(()),
+    }
 }
 
 /// How the tables are written.

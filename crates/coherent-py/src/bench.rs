@@ -146,14 +146,8 @@ pub(crate) fn run_bench<'py>(
     if methods.is_empty() {
         return Err(errors::invalid(py, "methods: name at least one method"));
     }
-    for m in methods.iter().filter(|m| m.builtin().is_none()) {
-        if methods.iter().filter(|o| o.name() == m.name()).count() > 1 {
-            return Err(PyValueError::new_err(format!(
-                "methods: two methods are named {:?}: give each its own name (its `name`)",
-                m.name()
-            )));
-        }
-    }
+    session_bench::distinct_names(&methods)
+        .map_err(|e| errors::invalid(py, format!("methods: {e} (its `name`)")))?;
     if seeds == 0 {
         return Err(errors::invalid(py, "seeds must be at least 1"));
     }
