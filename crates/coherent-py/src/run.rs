@@ -20,9 +20,10 @@ use crate::convert::{interruptible, py_repr, to_py};
 use crate::errors::{self, Kind};
 use crate::task::PyTask;
 
-/// How to reach an OpenAI-compatible endpoint. Arguments left out come from the
-/// environment as on the command line (`OPENAI_BASE_URL`, `OPENAI_API_KEY`,
-/// `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and logs.
+/// How to reach an OpenAI-compatible endpoint, or several serving one model (a list of
+/// base URLs). Arguments left out come from the environment as on the command line
+/// (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL`). The key is kept out of
+/// `repr`, transcripts and logs.
 #[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
 pub(crate) struct PyLlm {
     pub config: OpenAiConfig,
@@ -40,7 +41,7 @@ impl PyLlm {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        base_url: Option<String>,
+        base_url: Option<&Bound<'_, PyAny>>,
         model: Option<String>,
         api_key: Option<String>,
         temperature: f32,
@@ -59,7 +60,7 @@ impl PyLlm {
             ))
         })?;
         let endpoint = Endpoint {
-            base_url,
+            base_urls: base_urls(base_url)?,
             api_key: api_key.map(ApiKey::new),
             model,
             temperature,
@@ -85,9 +86,16 @@ impl PyLlm {
         Ok(PyLlm { config })
     }
 
+    /// The base URL; several comma-separated when several serve the model.
     #[getter]
-    fn base_url(&self) -> &str {
-        &self.config.base_url
+    fn base_url(&self) -> String {
+        self.config.base_urls.join(",")
+    }
+
+    /// Every base URL.
+    #[getter]
+    fn base_urls(&self) -> Vec<String> {
+        self.config.base_urls.clone()
     }
 
     #[getter]
@@ -114,7 +122,17 @@ impl PyLlm {
     fn __repr__(&self, py: Python<'_>) -> String {
         format!(
             "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
-            py_repr(py, &self.config.base_url),
+            match self.config.base_urls.as_slice() {
+                [one] => py_repr(py, one),
+                several => format!(
+                    "[{}]",
+                    several
+                        .iter()
+                        .map(|u| py_repr(py, u))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            },
             py_repr(py, &self.config.model),
             if self.has_api_key() {
                 "'[hidden]'"
@@ -124,6 +142,24 @@ impl PyLlm {
             self.config.temperature
         )
     }
+}
+
+/// `base_url=`: a URL, a comma-separated list of them, a list of them, or None (from the
+/// environment).
+fn base_urls(given: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<String>> {
+    let Some(given) = given.filter(|g| !g.is_none()) else {
+        return Ok(Vec::new());
+    };
+    if let Ok(one) = given.cast::<PyString>() {
+        return Ok(vec![one.to_cow()?.into_owned()]);
+    }
+    let several: Vec<String> = given
+        .extract()
+        .map_err(|_| PyTypeError::new_err("base_url: expected a str, a list of str, or None"))?;
+    if several.is_empty() {
+        return Err(PyValueError::new_err("base_url: an empty list"));
+    }
+    Ok(several)
 }
 
 /// An episode as recorded in its transcript: the settings, every round, the summary.

@@ -455,13 +455,15 @@ async fn round(
                 messages: messages.clone(),
                 answer: None,
                 error: None,
+                endpoint: None,
             };
-            let result = tokio::select! {
+            let response = tokio::select! {
                 biased;
                 () = cancel.cancelled() => return Ok(None),
-                r = backend.ask(query) => r,
+                r = backend.respond(query) => r,
             };
-            match result {
+            call.endpoint = response.endpoint;
+            match response.result {
                 Ok(answer) => {
                     // A refusal, a filtered or an empty answer names nothing.
                     let usable = matches!(answer.finish, Finish::Stop | Finish::Length)

@@ -48,6 +48,10 @@ pub struct Call {
     pub messages: Vec<Message>,
     pub answer: Option<Answer>,
     pub error: Option<LlmError>,
+    /// The base URL that answered (the last one tried, when none did), for a backend
+    /// with endpoints; absent otherwise, and in transcripts written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub endpoint: Option<String>,
 }
 
 /// The task assigner's proposal, as read from its answer
