@@ -63,6 +63,7 @@ def test_bench_into_a_dataframe(few: list[coherent.Task], tmp_path: Path) -> Non
         "interrupted": False,
         "skipped_tasks": [],
         "repaired_bytes": 0,
+        "orphaned": [],
     }
     assert frame["success"].all()
     assert (frame["steps"] == frame["gt_steps"]).all()
