@@ -11,6 +11,7 @@ Everything the ``coherent`` command line does, from Python::
     episode = coherent.run(task, method="pefa")       # an episode (the built-in backend here)
     episode = coherent.run(task, llm=coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m"))
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
+    df = coherent.bench(tasks, ["pefa"], backend=llm, executor="ray")   # on a Ray cluster
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step and the
@@ -52,6 +53,7 @@ from ._coherent import (
     validate,
 )
 from .analysis import Report, bench, report, results
+from .executors import RayExecutor
 
 __all__ = [
     "LLM",
@@ -62,6 +64,7 @@ __all__ = [
     "Env",
     "Episode",
     "PhysicsError",
+    "RayExecutor",
     "ReplayMismatchError",
     "Report",
     "Task",

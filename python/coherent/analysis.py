@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 
 from . import _coherent
 from ._coherent import LLM, Episode, Task
+from .executors import RayExecutor, resolve
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -80,6 +81,7 @@ def bench(
     max_states: int = 5_000_000,
     out: PathLike = "results.jsonl",
     progress: bool = False,
+    executor: Literal["local", "ray"] | RayExecutor = "local",
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
@@ -95,25 +97,34 @@ def bench(
     What the run did is in
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
+
+    ``executor``: ``"local"`` runs the episodes here, ``concurrency`` at once;
+    ``"ray"`` (a local Ray cluster, or the one this process joined) or a
+    :class:`~coherent.executors.RayExecutor` runs them on a Ray cluster, ``concurrency``
+    at once across it, with the same results lines; this process alone writes ``out``,
+    so resuming, the report and the tables work alike (``docs/scale.md``).
     """
+    runner = resolve(executor)
     malformed: list[_coherent.TaskFormatError] = []
     if isinstance(tasks, (str, os.PathLike)):
         chosen, malformed = _coherent.read_tasks(tasks)
     else:
         chosen = list(tasks)
-    outcome = _coherent.run_bench(
-        chosen,
-        list(methods),
-        backend=backend,
-        sim_errors=sim_errors,
-        replay_from=replay_from,
-        seeds=seeds,
-        concurrency=concurrency,
-        history=history,
-        max_states=max_states,
-        out=out,
-        progress=progress,
-    )
+    settings: dict[str, Any] = {
+        "backend": backend,
+        "sim_errors": sim_errors,
+        "replay_from": replay_from,
+        "seeds": seeds,
+        "concurrency": concurrency,
+        "history": history,
+        "max_states": max_states,
+        "out": out,
+        "progress": progress,
+    }
+    if runner is None:
+        outcome = _coherent.run_bench(chosen, list(methods), **settings)
+    else:
+        outcome = runner.run(chosen, list(methods), **settings)
     frame = results(out)
     frame.attrs["outcome"] = outcome
     frame.attrs["malformed"] = [str(e) for e in malformed]

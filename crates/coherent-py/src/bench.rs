@@ -11,8 +11,9 @@ use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::bench::{self as session_bench, TableFormat};
 use coherent_agents::Cancel;
 use coherent_agents::bench::{
-    self, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
+    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
 };
+use coherent_agents::episode::Method;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -62,7 +63,7 @@ pub(crate) fn select(
     ))
 }
 
-fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("total", o.total)?;
     d.set_item("skipped", o.skipped)?;
@@ -75,30 +76,8 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
     Ok(d)
 }
 
-/// Runs every method on every task for every seed into the results file `out` (JSON
-/// lines, appended, resumable: finished episodes are skipped), as `coherent bench`
-/// does. Returns what the run did.
-#[pyfunction]
-#[pyo3(signature = (
-    tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
-    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
-    progress = false
-))]
-#[allow(clippy::too_many_arguments)]
-pub(crate) fn run_bench<'py>(
-    py: Python<'py>,
-    tasks: Vec<Bound<'py, PyTask>>,
-    methods: Vec<String>,
-    backend: Option<&Bound<'py, PyAny>>,
-    sim_errors: Option<&Bound<'py, PyAny>>,
-    replay_from: Option<PathBuf>,
-    seeds: u32,
-    concurrency: usize,
-    history: usize,
-    max_states: usize,
-    out: PathBuf,
-    progress: bool,
-) -> PyResult<Bound<'py, PyDict>> {
+/// The methods of a run, checked with its seeds and tasks as `coherent.bench` checks them.
+pub(crate) fn run_methods(methods: &[String], seeds: u32, tasks: usize) -> PyResult<Vec<Method>> {
     let methods = methods
         .iter()
         .map(|m| method_of(m))
@@ -109,9 +88,20 @@ pub(crate) fn run_bench<'py>(
     if seeds == 0 {
         return Err(PyValueError::new_err("seeds must be at least 1"));
     }
-    if tasks.is_empty() {
+    if tasks == 0 {
         return Err(PyValueError::new_err("tasks: no tasks to run"));
     }
+    Ok(methods)
+}
+
+/// The backend `coherent.bench`'s `backend`, `sim_errors` and `replay_from` ask for, and
+/// the temperature the episodes record (an LLM's).
+pub(crate) fn run_backend(
+    py: Python<'_>,
+    backend: Option<&Bound<'_, PyAny>>,
+    sim_errors: Option<&Bound<'_, PyAny>>,
+    replay_from: Option<PathBuf>,
+) -> PyResult<(BackendChoice, Option<f32>)> {
     let (kind, endpoint) = match backend {
         Some(b) if b.is_instance_of::<PyLlm>() => (
             BackendKind::OpenAi,
@@ -150,6 +140,35 @@ pub(crate) fn run_bench<'py>(
         }
         other => errors::coherent(py, other.to_string()),
     })?;
+    Ok((choice, temperature))
+}
+
+/// Runs every method on every task for every seed into the results file `out` (JSON
+/// lines, appended, resumable: finished episodes are skipped), as `coherent bench`
+/// does. Returns what the run did.
+#[pyfunction]
+#[pyo3(signature = (
+    tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
+    concurrency = 4, history = 5, max_states = 5_000_000, out = PathBuf::from("results.jsonl"),
+    progress = false
+))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn run_bench<'py>(
+    py: Python<'py>,
+    tasks: Vec<Bound<'py, PyTask>>,
+    methods: Vec<String>,
+    backend: Option<&Bound<'py, PyAny>>,
+    sim_errors: Option<&Bound<'py, PyAny>>,
+    replay_from: Option<PathBuf>,
+    seeds: u32,
+    concurrency: usize,
+    history: usize,
+    max_states: usize,
+    out: PathBuf,
+    progress: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    let methods = run_methods(&methods, seeds, tasks.len())?;
+    let (choice, temperature) = run_backend(py, backend, sim_errors, replay_from)?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
     let config = BenchConfig {
         methods,

@@ -8,6 +8,7 @@
 
 mod bench;
 mod convert;
+mod distributed;
 mod errors;
 mod run;
 mod scene;
@@ -177,6 +178,8 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<task::PyEnv>()?;
     m.add_class::<run::PyLlm>()?;
     m.add_class::<run::PyEpisode>()?;
+    m.add_class::<distributed::PyLedger>()?;
+    m.add_class::<distributed::PyWorker>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;

@@ -119,6 +119,27 @@ impl PyLlm {
         self.config.seed
     }
 
+    /// The keyword arguments that build this LLM again elsewhere (a Ray worker), all but
+    /// the key, which never leaves this process: there it comes from `OPENAI_API_KEY`;
+    /// `has_api_key` says whether this one has a key.
+    fn _settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.config;
+        let d = PyDict::new(py);
+        d.set_item("base_url", &c.base_urls)?;
+        d.set_item("model", &c.model)?;
+        d.set_item("temperature", c.temperature)?;
+        d.set_item("seed", c.seed)?;
+        d.set_item("format", to_py(py, &c.output)?)?;
+        d.set_item("connect_timeout", c.connect_timeout.as_secs_f64())?;
+        d.set_item("read_timeout", c.read_timeout.as_secs_f64())?;
+        d.set_item("timeout", c.total_timeout.as_secs_f64())?;
+        d.set_item("max_retries", c.backoff.max_retries)?;
+        d.set_item("concurrency", c.concurrency)?;
+        d.set_item("max_response_bytes", c.max_response_bytes)?;
+        d.set_item("has_api_key", self.has_api_key())?;
+        Ok(d)
+    }
+
     fn __repr__(&self, py: Python<'_>) -> String {
         format!(
             "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
