@@ -209,13 +209,13 @@ pub async fn run_one(
     let dir = settings.transcripts.join(format!("seed{}", key.seed));
     let path = transcript_path(&dir, task, method);
     // An episode's future holds `&dyn Environment` across awaits, so it is not `Send`:
-    // it runs to completion on a blocking-pool thread of the same multi-thread runtime
-    // (its model calls, timers and planner searches still use the runtime).
+    // it runs to completion on a thread of its own, driven by the same multi-thread
+    // runtime (its model calls, timers and planner searches still use the runtime).
     let handle = tokio::runtime::Handle::current();
     let episode = {
         let (task, path, cancel) = (Arc::clone(task), path.clone(), cancel.clone());
         let settings = settings_of_episode;
-        tokio::task::spawn_blocking(move || {
+        on_its_own_thread(move || {
             handle.block_on(async move {
                 let mut env = SymbolicEnv::new(Arc::clone(&task));
                 run_episode(
@@ -231,8 +231,7 @@ pub async fn run_one(
                 .await
             })
         })
-        .await
-        .map_err(|e| format!("an episode panicked: {e}"))??
+        .await??
         .0
     };
     // A replay that comes out differently says so in its line's error.
@@ -263,6 +262,35 @@ pub async fn run_one(
         error: mismatch.or(s.error),
         transcript: path.display().to_string(),
     })))
+}
+
+/// Runs `work` on a thread of its own and waits for it without holding a runtime thread:
+/// one thread per episode, so that as many episodes run at once as the run allows, not
+/// as many as tokio's blocking pool holds (512). A panic comes back as an error with its
+/// message.
+async fn on_its_own_thread<T: Send + 'static>(
+    work: impl FnOnce() -> T + Send + 'static,
+) -> Result<T, String> {
+    let (done, result) = tokio::sync::oneshot::channel();
+    std::thread::Builder::new()
+        .name("coherent-episode".into())
+        .spawn(move || {
+            let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(work));
+            let _ = done.send(outcome);
+        })
+        .map_err(|e| format!("cannot start an episode's thread: {e}"))?;
+    match result.await {
+        Ok(Ok(value)) => Ok(value),
+        Ok(Err(panic)) => {
+            let message = panic
+                .downcast_ref::<&str>()
+                .map(|s| (*s).to_owned())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(format!("an episode panicked: {message}"))
+        }
+        Err(_) => Err("an episode's thread ended without a result".into()),
+    }
 }
 
 fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
