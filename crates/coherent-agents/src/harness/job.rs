@@ -77,11 +77,6 @@ impl RunTasks {
         })
     }
 
-    /// The tasks, in the order given.
-    pub fn tasks(&self) -> &[Arc<Task>] {
-        &self.tasks
-    }
-
     /// Every episode of `methods` x the tasks x seed indices `0..seeds`, task by task,
     /// seed by seed, method by method.
     pub fn keys(&self, methods: &[Method], seeds: u32) -> Vec<EpisodeKey> {
