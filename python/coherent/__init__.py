@@ -12,6 +12,7 @@ Everything the ``coherent`` command line does, from Python::
     episode = coherent.run(task, llm=coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m"))
     episode = coherent.run(task, method=MyMethod)     # a method written in Python: MyMethod(task).act(view)
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
+    df = coherent.bench(tasks, ["pefa"], backend=llm, executor="ray")   # on a Ray cluster
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
@@ -66,6 +67,7 @@ from ._coherent import (
     View,
 )
 from .analysis import Report, bench, report, results
+from .executors import RayExecutor
 
 __all__ = [
     "DEFAULT_MAX_STATES",
@@ -81,6 +83,7 @@ __all__ = [
     "MethodError",
     "PhysicsError",
     "PromptError",
+    "RayExecutor",
     "Reply",
     "ReplayMismatchError",
     "Report",

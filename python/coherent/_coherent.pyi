@@ -282,6 +282,10 @@ class _BenchOutcome(TypedDict):
 class LLM:
     """An OpenAI-compatible endpoint (OpenAI, vLLM, Ollama, llama.cpp, LM Studio, ...).
 
+    ``base_url`` may list several servers of the same model (a list, or a comma-separated
+    str as ``OPENAI_BASE_URL`` takes): each request goes to the one with the fewest
+    requests in flight, and one that fails rests while the others carry on; the
+    transcript names the endpoint of each call (``docs/scale.md``).
     Arguments left out come from ``OPENAI_BASE_URL``, ``OPENAI_API_KEY`` and
     ``COHERENT_MODEL``; raises :class:`BackendError` when no endpoint or no model results.
     The key never appears in ``repr``, transcripts or logs, and cannot be read back. A
@@ -290,7 +294,7 @@ class LLM:
 
     def __init__(
         self,
-        base_url: str | None = None,
+        base_url: str | Sequence[str] | None = None,
         model: str | None = None,
         api_key: str | None = None,
         *,
@@ -305,7 +309,10 @@ class LLM:
         max_response_bytes: int = 4194304,
     ) -> None: ...
     @property
-    def base_url(self) -> str: ...
+    def base_url(self) -> str:
+        """The base URL; several comma-separated when several serve the model."""
+    @property
+    def base_urls(self) -> list[str]: ...
     @property
     def model(self) -> str: ...
     @property
@@ -543,6 +550,56 @@ def run_bench(
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""
+
+class _BenchLedger:
+    """The driver's side of a benchmark run on other executors than the local one
+    (``coherent.executors.RayExecutor``): checks the settings, opens and repairs the
+    results file, knows the episodes still to run, writes each result once."""
+
+    def __init__(
+        self,
+        tasks: Sequence[Task],
+        methods: Sequence[str | _MethodFactory],
+        *,
+        seeds: int,
+        out: _PathLike,
+        backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
+        sim_errors: str | Mapping[str, float] | None = None,
+        replay_from: _PathLike | None = None,
+        progress: bool = False,
+        prompts: _PathLike | Mapping[str, str] | None = None,
+        prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None,
+    ) -> None: ...
+    def pending(self) -> list[tuple[str, str, int, int]]:
+        """The episodes to run: ``(method, scene, task_id, seed)``."""
+    def worker_settings(self) -> dict[str, Any]:
+        """``prompts`` (the replaced templates by file name) and ``prices`` (the whole
+        table) as data, for the workers."""
+    def record(self, handed: tuple[str, str | None]) -> bool:
+        """Writes what a worker handed back; False when that line was written already."""
+    def finish(self, *, interrupted: bool, orphans: bool = False) -> _BenchOutcome:
+        """Ends the run: what it did."""
+
+class _BenchWorker:
+    """Runs a run's episodes by key, as a Ray worker does (tasks as native task JSON)."""
+
+    def __init__(
+        self,
+        tasks: Sequence[str],
+        methods: Sequence[str | _MethodFactory],
+        *,
+        backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
+        sim_errors: str | Mapping[str, float] | None = None,
+        replay_from: _PathLike | None = None,
+        history: int = 5,
+        max_states: int = ...,
+        max_steps: int | None = None,
+        out: _PathLike,
+        prompts: Mapping[str, str],
+        prices: Mapping[str, Mapping[str, Any]],
+    ) -> None: ...
+    def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
+        """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
 
 def read_results(path: _PathLike) -> list[dict[str, Any]]:
     """The lines of a results file; a last line cut off mid-write is left out."""

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 from . import _coherent
 from ._coherent import LLM, Episode, Task
 from ._extras import needs
+from .executors import RayExecutor, resolve
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -93,6 +94,7 @@ def bench(
     progress: bool = False,
     prompts: PathLike | Mapping[str, str] | None = None,
     prices: PathLike | Mapping[str, Mapping[str, Any]] | None = None,
+    executor: Literal["local", "ray"] | RayExecutor = "local",
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
@@ -122,30 +124,39 @@ def bench(
     tokens at its model's price (NaN when the model has none). What the run did is in
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
+
+    ``executor``: ``"local"`` runs the episodes here, ``concurrency`` at once;
+    ``"ray"`` (a local Ray cluster, or the one this process joined) or a
+    :class:`~coherent.executors.RayExecutor` runs them on a Ray cluster, ``concurrency``
+    at once across it, with the same results lines; this process alone writes ``out``,
+    so resuming, the report and the tables work alike (``docs/scale.md``).
     """
     # Before the run, not after it.
     pandas = _pandas("coherent.bench's DataFrame")
+    runner = resolve(executor)
     malformed: list[_coherent.TaskFormatError] = []
     if isinstance(tasks, (str, os.PathLike)):
         chosen, malformed = _coherent.read_tasks(tasks)
     else:
         chosen = list(tasks)
-    outcome = _coherent.run_bench(
-        chosen,
-        list(methods),
-        backend=backend,
-        sim_errors=sim_errors,
-        replay_from=replay_from,
-        seeds=seeds,
-        concurrency=concurrency,
-        history=history,
-        max_states=max_states,
-        max_steps=max_steps,
-        out=out,
-        progress=progress,
-        prompts=prompts,
-        prices=prices,
-    )
+    settings: dict[str, Any] = {
+        "backend": backend,
+        "sim_errors": sim_errors,
+        "replay_from": replay_from,
+        "seeds": seeds,
+        "concurrency": concurrency,
+        "history": history,
+        "max_states": max_states,
+        "max_steps": max_steps,
+        "out": out,
+        "progress": progress,
+        "prompts": prompts,
+        "prices": prices,
+    }
+    if runner is None:
+        outcome = _coherent.run_bench(chosen, list(methods), **settings)
+    else:
+        outcome = runner.run(chosen, list(methods), **settings)
     frame = _frame(pandas, _coherent.read_results(out))
     frame.attrs["outcome"] = outcome
     frame.attrs["malformed"] = [str(e) for e in malformed]

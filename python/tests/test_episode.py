@@ -176,6 +176,23 @@ def test_llm_settings_and_secrecy(monkeypatch: pytest.MonkeyPatch) -> None:
         coherent.LLM(base_url="http://127.0.0.1:8080/v1", model="m", format="yaml")  # type: ignore[arg-type]
 
 
+def test_llm_with_several_endpoints(monkeypatch: pytest.MonkeyPatch) -> None:
+    urls = ["http://127.0.0.1:8080/v1", "http://127.0.0.1:8081/v1"]
+    llm = coherent.LLM(base_url=urls, model="m")
+    assert llm.base_urls == urls and llm.base_url == ",".join(urls)
+    assert repr(llm).startswith(f"LLM(base_url={urls!r}, model='m'")
+    assert coherent.LLM(base_url=",".join(urls), model="m").base_urls == urls
+    monkeypatch.setenv("OPENAI_BASE_URL", " , ".join(urls))
+    monkeypatch.setenv("COHERENT_MODEL", "m")
+    assert coherent.LLM().base_urls == urls
+    with pytest.raises(ValueError, match="empty list"):
+        coherent.LLM(base_url=[], model="m")
+    with pytest.raises(TypeError, match="base_url"):
+        coherent.LLM(base_url=8080, model="m")  # type: ignore[arg-type]
+    with pytest.raises(coherent.BackendError, match="not a URL"):
+        coherent.LLM(base_url=[urls[0], "not a url"], model="m")
+
+
 def _closed_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

@@ -141,9 +141,10 @@ def test_all_is_the_public_api() -> None:
     for name in native:
         assert getattr(coherent, name) is getattr(_coherent, name)
     python = set(coherent.__all__) - native
-    assert python == {"Report", "bench", "report", "results"}
-    for name in python:
+    assert python == {"RayExecutor", "Report", "bench", "report", "results"}
+    for name in python - {"RayExecutor"}:
         assert getattr(coherent, name) is getattr(coherent.analysis, name)
+    assert coherent.RayExecutor is coherent.executors.RayExecutor
 
 
 def test_submodules_load_on_first_use() -> None:

@@ -36,10 +36,11 @@ impl From<AnswerFormat> for OutputMode {
 /// hidden aliases there for one release).
 #[derive(Args, Debug)]
 pub(crate) struct LlmArgs {
-    /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1
-    /// [env: OPENAI_BASE_URL]
+    /// OpenAI-compatible endpoint up to the version, e.g. http://127.0.0.1:8080/v1;
+    /// repeat it (or give a comma-separated list) for servers of the same model: each
+    /// request goes to the least busy, one that fails rests [env: OPENAI_BASE_URL]
     #[arg(long)]
-    base_url: Option<String>,
+    base_url: Vec<String>,
     /// API key [env: OPENAI_API_KEY]. Prefer the variable: flags show up in `ps`.
     #[arg(long)]
     api_key: Option<String>,
@@ -79,7 +80,7 @@ impl LlmArgs {
     /// The client's settings, when the flags or the environment configure an endpoint.
     pub fn config(&self) -> Result<Option<OpenAiConfig>, String> {
         Endpoint {
-            base_url: self.base_url.clone(),
+            base_urls: self.base_url.clone(),
             api_key: self.api_key.clone().map(ApiKey::new),
             model: self.model.clone(),
             temperature: self.temperature,

@@ -1,11 +1,18 @@
 //! Benchmarks: the tasks a subset picks, methods x tasks x seeds run concurrently into a
 //! resumable results file (`coherent_agents::bench`), and the paper's tables of it.
+//!
+//! Two executors run the episodes: [`run`], every episode on this machine, and a
+//! distributed one (`coherent.bench(..., executor="ray")`), whose driver keeps the
+//! results file (`coherent_agents::bench::Ledger`) and whose workers each run episodes
+//! through a [`Worker`]. Both run each episode with `coherent_agents::bench::run_one`,
+//! so that they write the same lines.
 
 use std::path::Path;
 use std::sync::Arc;
 
 use coherent_agents::bench::{
-    self, BenchConfig, BenchOutcome, Event, ResultLine, Selection, Subset,
+    self, BenchConfig, BenchOutcome, EpisodeKey, EpisodeResult, EpisodeSettings, Event, ResultLine,
+    RunTasks, Selection, Subset,
 };
 use coherent_agents::{Cancel, MethodSpec, report};
 use coherent_core::{Error, Task};
@@ -76,6 +83,36 @@ pub fn distinct_names(methods: &[MethodSpec]) -> Result<(), String> {
             m.name()
         )),
         None => Ok(()),
+    }
+}
+
+/// Runs benchmark episodes one at a time by their key (method, scene, task id, seed
+/// index) with the settings every episode of the run shares, each writing its
+/// transcript and giving its results line: what a worker of a distributed executor
+/// runs. It keeps one runtime for all its episodes, so that an endpoint's client keeps
+/// its connections; several threads may run episodes at once.
+#[derive(Debug)]
+pub struct Worker {
+    runtime: tokio::runtime::Runtime,
+    tasks: RunTasks,
+    settings: EpisodeSettings,
+}
+
+impl Worker {
+    /// A worker for the episodes of `tasks`.
+    pub fn new(tasks: &[Arc<Task>], settings: EpisodeSettings) -> Result<Worker, String> {
+        Ok(Worker {
+            runtime: super::runtime()?,
+            tasks: RunTasks::new(tasks)?,
+            settings,
+        })
+    }
+
+    /// Runs the episode `key` to its end on the calling thread; `cancel` ends it as
+    /// interrupted.
+    pub fn run(&self, key: &EpisodeKey, cancel: &Cancel) -> Result<EpisodeResult, String> {
+        self.runtime
+            .block_on(bench::run_one(&self.tasks, key, &self.settings, cancel))
     }
 }
 

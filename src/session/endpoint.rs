@@ -1,6 +1,7 @@
 //! The model endpoint: what a front end was told (flags, keyword arguments), completed
 //! from the environment (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL`) and
-//! resolved into the HTTP client's settings.
+//! resolved into the HTTP client's settings. Several base URLs serve one model from
+//! several servers (the client spreads the requests over them).
 
 use std::time::Duration;
 
@@ -34,7 +35,9 @@ impl Default for Patience {
 /// What the front end was told of the endpoint; unset parts come from the environment.
 #[derive(Debug)]
 pub struct Endpoint {
-    pub base_url: Option<String>,
+    /// The servers of the model, up to the version; none given: `OPENAI_BASE_URL`, a
+    /// comma-separated list.
+    pub base_urls: Vec<String>,
     /// Kept as an [`ApiKey`] from the start, so that `Debug` never shows it.
     pub api_key: Option<ApiKey>,
     pub model: Option<String>,
@@ -59,13 +62,25 @@ impl Endpoint {
             .api_key
             .or_else(|| from_env("OPENAI_API_KEY").map(ApiKey::new));
         let model = self.model.or_else(|| from_env("COHERENT_MODEL"));
-        let base_url = match self.base_url.or_else(|| from_env("OPENAI_BASE_URL")) {
-            Some(url) => url,
-            None if key.is_some() && model.is_some() => "https://api.openai.com/v1".to_owned(),
-            None => return Ok(None),
-        };
+        let mut base_urls: Vec<String> = self
+            .base_urls
+            .iter()
+            .flat_map(|list| url_list(list))
+            .collect();
+        if base_urls.is_empty() {
+            base_urls = from_env("OPENAI_BASE_URL").map_or_else(Vec::new, |v| url_list(&v));
+        }
+        if base_urls.is_empty() {
+            if key.is_none() || model.is_none() {
+                return Ok(None);
+            }
+            base_urls.push("https://api.openai.com/v1".to_owned());
+        }
         let model = model.ok_or_else(|| {
-            format!("an endpoint is configured ({base_url}) but no model: pass --model or set COHERENT_MODEL")
+            format!(
+                "an endpoint is configured ({}) but no model: pass --model or set COHERENT_MODEL",
+                base_urls.join(",")
+            )
         })?;
         Ok(Some(OpenAiConfig {
             api_key: key,
@@ -81,11 +96,58 @@ impl Endpoint {
             concurrency: self.requests.max(1),
             output: self.format,
             max_response_bytes: self.max_response_bytes,
-            ..OpenAiConfig::new(base_url, model)
+            base_urls,
+            ..OpenAiConfig::new(String::new(), model)
         }))
     }
 }
 
+/// The base URLs of a comma-separated list (`OPENAI_BASE_URL`, a `--base-url` value),
+/// blanks left out.
+pub fn url_list(list: &str) -> Vec<String> {
+    list.split(',')
+        .map(str::trim)
+        .filter(|u| !u.is_empty())
+        .map(str::to_owned)
+        .collect()
+}
+
 fn seconds(s: f64, what: &str) -> Result<Duration, String> {
     Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn endpoint(base_urls: &[&str]) -> Endpoint {
+        Endpoint {
+            base_urls: base_urls.iter().map(|&u| u.to_owned()).collect(),
+            api_key: None,
+            model: Some("m".into()),
+            temperature: 0.0,
+            seed: None,
+            format: OutputMode::JsonSchema,
+            patience: Patience::default(),
+            requests: 4,
+            max_response_bytes: OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES,
+        }
+    }
+
+    #[test]
+    fn base_urls_are_repeated_or_listed_with_commas() {
+        assert_eq!(
+            url_list(" http://a/v1, ,http://b/v1,"),
+            ["http://a/v1", "http://b/v1"]
+        );
+        let config = endpoint(&["http://a/v1,http://b/v1", "http://c/v1"])
+            .config()
+            .expect("valid")
+            .expect("an endpoint");
+        assert_eq!(
+            config.base_urls,
+            ["http://a/v1", "http://b/v1", "http://c/v1"]
+        );
+        assert_eq!(config.model, "m");
+    }
 }

@@ -28,13 +28,16 @@ pub mod tasks;
 
 use std::future::Future;
 
-/// Runs `future` to completion on a runtime made for it: the one place the engine's
-/// async work (model calls, timers, concurrent episodes) gets a runtime. Multi-threaded,
-/// so that a benchmark's episodes use every core.
+/// Runs `future` to completion on a runtime made for it.
 pub fn block_on<F: Future>(future: F) -> Result<F::Output, String> {
-    let runtime = tokio::runtime::Builder::new_multi_thread()
+    Ok(runtime()?.block_on(future))
+}
+
+/// The one place the engine's async work (model calls, timers, concurrent episodes)
+/// gets a runtime. Multi-threaded, so that a benchmark's episodes use every core.
+pub fn runtime() -> Result<tokio::runtime::Runtime, String> {
+    tokio::runtime::Builder::new_multi_thread()
         .enable_all()
         .build()
-        .map_err(|e| format!("cannot start the async runtime: {e}"))?;
-    Ok(runtime.block_on(future))
+        .map_err(|e| format!("cannot start the async runtime: {e}"))
 }

@@ -143,9 +143,21 @@ pub(crate) fn timeout(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
 // ---------------------------------------------------------------------------------------
 // Text
 
-/// `base_url` of `LLM`.
-pub(crate) fn base_url(obj: &Bound<'_, PyAny>) -> PyResult<Option<String>> {
-    optional(obj, |o| text(o, "base_url").map(str::to_owned))
+/// `base_url` of `LLM`: a URL (or a comma-separated list of them), or a list of them,
+/// for servers of one model.
+pub(crate) fn base_url(obj: &Bound<'_, PyAny>) -> PyResult<Option<Vec<String>>> {
+    optional(obj, |o| {
+        if o.is_instance_of::<PyString>() {
+            return Ok(vec![text(o, "base_url")?.to_owned()]);
+        }
+        let urls = each(o, "base_url", |item, name| {
+            text(item, name).map(str::to_owned)
+        })?;
+        if urls.is_empty() {
+            return Err(errors::argument("base_url", o, "an empty list"));
+        }
+        Ok(urls)
+    })
 }
 
 /// `model` of `LLM`.

@@ -9,10 +9,10 @@ use std::sync::Arc;
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::bench::{self as session_bench, TableFormat};
-use coherent_agents::Cancel;
 use coherent_agents::bench::{
-    self, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
+    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
 };
+use coherent_agents::{Cancel, MethodSpec};
 use coherent_core::planner::Limits;
 use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -92,7 +92,7 @@ pub(crate) fn select(
     ))
 }
 
-fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
+pub(crate) fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("total", o.total)?;
     d.set_item("skipped", o.skipped)?;
@@ -104,6 +104,89 @@ fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, P
     let orphaned: Vec<String> = o.orphaned.iter().map(|p| p.display().to_string()).collect();
     d.set_item("orphaned", orphaned)?;
     Ok(d)
+}
+
+/// The methods of a run, checked with its seeds and tasks as `coherent.bench` checks
+/// them; those written in Python are added to `python` (`tasks`: the run's).
+pub(crate) fn run_methods(
+    py: Python<'_>,
+    methods: &[MethodArg],
+    seeds: u32,
+    tasks: &[Py<PyTask>],
+    python: &mut Methods,
+) -> PyResult<Vec<MethodSpec>> {
+    let methods = methods
+        .iter()
+        .map(|m| m.spec(py, python, tasks))
+        .collect::<PyResult<Vec<_>>>()?;
+    if methods.is_empty() {
+        return Err(errors::invalid(py, "methods: name at least one method"));
+    }
+    session_bench::distinct_names(&methods)
+        .map_err(|e| errors::invalid(py, format!("methods: {e} (its `name`)")))?;
+    if seeds == 0 {
+        return Err(errors::invalid(py, "seeds must be at least 1"));
+    }
+    if tasks.is_empty() {
+        return Err(errors::invalid(py, "tasks: no tasks to run"));
+    }
+    Ok(methods)
+}
+
+/// The backend `coherent.bench`'s `backend`, `sim_errors` and `replay_from` ask for
+/// (`prompts`: whether a prompt set was given, which a replay refuses), and the
+/// temperature the episodes record (an LLM's).
+pub(crate) fn run_backend(
+    py: Python<'_>,
+    backend: Option<&Bound<'_, PyAny>>,
+    sim_errors: Option<&Bound<'_, PyAny>>,
+    replay_from: Option<PathBuf>,
+    prompts: bool,
+) -> PyResult<(BackendChoice, Option<f32>)> {
+    let (kind, endpoint) = match backend {
+        Some(b) if b.is_instance_of::<PyLlm>() => (
+            BackendKind::OpenAi,
+            Some(b.cast::<PyLlm>()?.get().config.clone()),
+        ),
+        None => (BackendKind::Builtin, None),
+        Some(b) => match b.cast::<PyString>().map(convert::utf8) {
+            Ok(Ok("builtin")) => (BackendKind::Builtin, None),
+            Ok(Ok("simulated")) => (BackendKind::Simulated, None),
+            Ok(Ok("replay")) if prompts => {
+                return Err(PyValueError::new_err(
+                    "prompts= and backend=\"replay\" do not go together: a replay renders \
+                     the prompt set its transcripts recorded",
+                ));
+            }
+            Ok(Ok("replay")) => (BackendKind::Replay, None),
+            _ => {
+                let expected = "expected \"builtin\", \"simulated\", \"replay\" or an LLM";
+                return Err(errors::argument("backend", b, expected));
+            }
+        },
+    };
+    let temperature = endpoint.as_ref().map(|c| c.temperature);
+    let choice = BackendRequest {
+        kind,
+        endpoint,
+        sim_errors: crate::run::error_rates(sim_errors)?,
+        replay_from,
+    }
+    .choose()
+    .map_err(|e| match e {
+        BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
+            errors::invalid(py, "sim_errors needs backend=\"simulated\"")
+        }
+        BackendProblem::ReplayNeedsFile => errors::invalid(
+            py,
+            "backend=\"replay\" needs replay_from=, an earlier results file",
+        ),
+        BackendProblem::FileNeedsReplay => {
+            errors::invalid(py, "replay_from needs backend=\"replay\"")
+        }
+        other => errors::coherent(py, other.to_string()),
+    })?;
+    Ok((choice, temperature))
 }
 
 /// Runs every method on every task for every seed into the results file `out` (JSON
@@ -139,64 +222,9 @@ pub(crate) fn run_bench<'py>(
     let prices = price_table(prices)?;
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
     let mut python = Methods::new(py)?;
-    let methods = methods
-        .iter()
-        .map(|m| m.spec(py, &mut python, &objects))
-        .collect::<PyResult<Vec<_>>>()?;
-    if methods.is_empty() {
-        return Err(errors::invalid(py, "methods: name at least one method"));
-    }
-    session_bench::distinct_names(&methods)
-        .map_err(|e| errors::invalid(py, format!("methods: {e} (its `name`)")))?;
-    if seeds == 0 {
-        return Err(errors::invalid(py, "seeds must be at least 1"));
-    }
-    if tasks.is_empty() {
-        return Err(errors::invalid(py, "tasks: no tasks to run"));
-    }
-    let (kind, endpoint) = match backend {
-        Some(b) if b.is_instance_of::<PyLlm>() => (
-            BackendKind::OpenAi,
-            Some(b.cast::<PyLlm>()?.get().config.clone()),
-        ),
-        None => (BackendKind::Builtin, None),
-        Some(b) => match b.cast::<PyString>().map(convert::utf8) {
-            Ok(Ok("builtin")) => (BackendKind::Builtin, None),
-            Ok(Ok("simulated")) => (BackendKind::Simulated, None),
-            Ok(Ok("replay")) if prompts.is_some() => {
-                return Err(PyValueError::new_err(
-                    "prompts= and backend=\"replay\" do not go together: a replay renders \
-                     the prompt set its transcripts recorded",
-                ));
-            }
-            Ok(Ok("replay")) => (BackendKind::Replay, None),
-            _ => {
-                let expected = "expected \"builtin\", \"simulated\", \"replay\" or an LLM";
-                return Err(errors::argument("backend", b, expected));
-            }
-        },
-    };
-    let temperature = endpoint.as_ref().map(|c| c.temperature);
-    let choice = BackendRequest {
-        kind,
-        endpoint,
-        sim_errors: crate::run::error_rates(sim_errors)?,
-        replay_from,
-    }
-    .choose()
-    .map_err(|e| match e {
-        BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
-            errors::invalid(py, "sim_errors needs backend=\"simulated\"")
-        }
-        BackendProblem::ReplayNeedsFile => errors::invalid(
-            py,
-            "backend=\"replay\" needs replay_from=, an earlier results file",
-        ),
-        BackendProblem::FileNeedsReplay => {
-            errors::invalid(py, "replay_from needs backend=\"replay\"")
-        }
-        other => errors::coherent(py, other.to_string()),
-    })?;
+    let methods = run_methods(py, &methods, seeds, &objects, &mut python)?;
+    let (choice, temperature) =
+        run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
     let config = BenchConfig {
         methods,

@@ -9,6 +9,7 @@
 mod args;
 mod bench;
 mod convert;
+mod distributed;
 mod errors;
 mod llm;
 mod method;
@@ -222,6 +223,8 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<method::PyView>()?;
     m.add_class::<method::PyDecision>()?;
     m.add_class::<run::PyEpisode>()?;
+    m.add_class::<distributed::PyLedger>()?;
+    m.add_class::<distributed::PyWorker>()?;
     m.add_function(wrap_pyfunction!(load_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;

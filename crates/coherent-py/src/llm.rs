@@ -17,7 +17,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::args;
-use crate::convert::{json_at, py_repr};
+use crate::convert::{json_at, py_repr, to_py};
 use crate::errors;
 use crate::method::{Recorder, helpers};
 
@@ -41,20 +41,24 @@ async fn ask(
     call: Call,
     recorder: Option<Py<Recorder>>,
 ) -> Result<Answer, LlmError> {
-    let result = client.chat(&chat).await;
+    let response = client.chat(&chat).await;
+    let result = response.result;
     if let Some(recorder) = recorder {
         recorder.get().push(Call {
             answer: result.as_ref().ok().cloned(),
             error: result.as_ref().err().cloned(),
+            endpoint: response.endpoint,
             ..call
         });
     }
     result
 }
 
-/// How to reach an OpenAI-compatible endpoint. Arguments left out come from the
-/// environment as on the command line (`OPENAI_BASE_URL`, `OPENAI_API_KEY`,
-/// `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and logs.
+/// How to reach an OpenAI-compatible endpoint, or several serving one model (a list of
+/// base URLs: each request goes to the least busy, one that fails rests). Arguments left
+/// out come from the environment as on the command line (`OPENAI_BASE_URL`,
+/// `OPENAI_API_KEY`, `COHERENT_MODEL`). The key is kept out of `repr`, transcripts and
+/// logs.
 #[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
 pub(crate) struct PyLlm {
     pub config: OpenAiConfig,
@@ -75,7 +79,7 @@ impl PyLlm {
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        #[pyo3(from_py_with = args::base_url)] base_url: Option<String>,
+        #[pyo3(from_py_with = args::base_url)] base_url: Option<Vec<String>>,
         #[pyo3(from_py_with = args::model)] model: Option<String>,
         #[pyo3(from_py_with = args::api_key)] api_key: Option<String>,
         #[pyo3(from_py_with = args::temperature)] temperature: f32,
@@ -97,7 +101,7 @@ impl PyLlm {
             )
         })?;
         let endpoint = Endpoint {
-            base_url,
+            base_urls: base_url.unwrap_or_default(),
             api_key: api_key.map(ApiKey::new),
             model,
             temperature,
@@ -216,9 +220,16 @@ impl PyLlm {
         Ok(future)
     }
 
+    /// The base URL; several comma-separated when several serve the model.
     #[getter]
-    fn base_url(&self) -> &str {
-        &self.config.base_url
+    fn base_url(&self) -> String {
+        self.config.base_urls.join(",")
+    }
+
+    /// Every base URL.
+    #[getter]
+    fn base_urls(&self) -> Vec<String> {
+        self.config.base_urls.clone()
     }
 
     #[getter]
@@ -242,10 +253,42 @@ impl PyLlm {
         self.config.seed
     }
 
+    /// The keyword arguments that build this LLM again elsewhere (a Ray worker), all but
+    /// the key, which never leaves this process: there it comes from `OPENAI_API_KEY`;
+    /// `has_api_key` says whether this one has a key.
+    fn _settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let c = &self.config;
+        let d = PyDict::new(py);
+        d.set_item("base_url", &c.base_urls)?;
+        d.set_item("model", &c.model)?;
+        d.set_item("temperature", c.temperature)?;
+        d.set_item("seed", c.seed)?;
+        d.set_item("format", to_py(py, &c.output)?)?;
+        d.set_item("connect_timeout", c.connect_timeout.as_secs_f64())?;
+        d.set_item("read_timeout", c.read_timeout.as_secs_f64())?;
+        d.set_item("timeout", c.total_timeout.as_secs_f64())?;
+        d.set_item("max_retries", c.backoff.max_retries)?;
+        d.set_item("concurrency", c.concurrency)?;
+        d.set_item("max_response_bytes", c.max_response_bytes)?;
+        d.set_item("has_api_key", self.has_api_key())?;
+        Ok(d)
+    }
+
     fn __repr__(&self, py: Python<'_>) -> String {
+        let base_url = match self.config.base_urls.as_slice() {
+            [one] => py_repr(py, one),
+            several => format!(
+                "[{}]",
+                several
+                    .iter()
+                    .map(|u| py_repr(py, u))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        };
         format!(
             "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
-            py_repr(py, &self.config.base_url),
+            base_url,
             py_repr(py, &self.config.model),
             if self.has_api_key() {
                 "'[hidden]'"
@@ -288,6 +331,7 @@ impl PyLlm {
             answer: None,
             error: None,
             client: Some(coherent_agents::Backend::info(self.client.as_ref())),
+            endpoint: None,
         };
         let chat = Chat {
             messages,

@@ -216,8 +216,28 @@ pub struct BackendInfo {
     pub base_url: Option<String>,
 }
 
+/// What a backend gave for one query, and which of its endpoints gave it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Response {
+    pub result: Result<Answer, LlmError>,
+    /// The base URL that answered (the last one tried, when none did), for backends with
+    /// endpoints; the transcript records it with the call.
+    pub endpoint: Option<String>,
+}
+
 /// Anything that can play the assigner and executor roles.
 pub trait Backend: Send + Sync {
     fn info(&self) -> BackendInfo;
     fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>>;
+
+    /// [`Backend::ask`], naming the endpoint that answered; backends without endpoints
+    /// name none.
+    fn respond(&self, query: Query) -> BoxFuture<'_, Response> {
+        Box::pin(async move {
+            Response {
+                result: self.ask(query).await,
+                endpoint: None,
+            }
+        })
+    }
 }

@@ -1,6 +1,7 @@
 //! A client for any OpenAI-compatible chat completions endpoint (OpenAI, vLLM, Ollama,
 //! llama.cpp's server, LM Studio, OpenRouter...): timeouts, retries with backoff,
-//! a concurrency limit, token accounting, and structured outputs with fallbacks.
+//! a concurrency limit, token accounting, and structured outputs with fallbacks. Several
+//! endpoints serving one model share the requests (`endpoints.rs`).
 
 use std::fmt;
 use std::sync::Mutex;
@@ -14,9 +15,10 @@ use tokio::sync::Semaphore;
 
 use coherent_core::text::cut;
 
+use crate::backends::endpoints::{Endpoints, Lease};
 use crate::backends::llm::{
     Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, MAX_ANSWER_BYTES,
-    Message, OutputMode, Query, Usage,
+    Message, OutputMode, Query, Response, Usage,
 };
 use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
@@ -105,8 +107,10 @@ impl fmt::Debug for ApiKey {
 /// Settings of the HTTP backend.
 #[derive(Clone, Debug)]
 pub struct OpenAiConfig {
-    /// Up to and including the version, e.g. `https://api.openai.com/v1`.
-    pub base_url: String,
+    /// Up to and including the version, e.g. `https://api.openai.com/v1`; several when
+    /// replicas serve the model: each request goes to the one with the fewest requests in
+    /// flight, and one that fails rests while the others carry on.
+    pub base_urls: Vec<String>,
     pub api_key: Option<ApiKey>,
     pub model: String,
     pub temperature: f32,
@@ -117,7 +121,8 @@ pub struct OpenAiConfig {
     /// Longest one attempt may take in all.
     pub total_timeout: Duration,
     pub backoff: Backoff,
-    /// Requests in flight at once, across all episodes sharing the client.
+    /// Requests in flight at once, across all episodes sharing the client and all its
+    /// endpoints.
     pub concurrency: usize,
     /// The answer format to ask for first; a server that refuses it gets the next one.
     pub output: OutputMode,
@@ -135,7 +140,7 @@ impl OpenAiConfig {
 impl OpenAiConfig {
     pub fn new(base_url: impl Into<String>, model: impl Into<String>) -> OpenAiConfig {
         OpenAiConfig {
-            base_url: base_url.into(),
+            base_urls: vec![base_url.into()],
             api_key: None,
             model: model.into(),
             temperature: 0.0,
@@ -177,7 +182,7 @@ impl Chat {
 pub struct OpenAiClient {
     http: reqwest::Client,
     config: OpenAiConfig,
-    url: String,
+    endpoints: Endpoints,
     limit: Semaphore,
     /// The answer format currently asked for (an [`OutputMode`] index); it only ever
     /// moves down, once a server has refused the one above.
@@ -199,12 +204,19 @@ impl OpenAiClient {
                 "no model name: pass --model or set COHERENT_MODEL",
             ));
         }
-        let url = format!("{}/chat/completions", config.base_url.trim_end_matches('/'));
-        if reqwest::Url::parse(&url).is_err() {
-            return Err(LlmError::new(
-                LlmErrorKind::Config,
-                format!("base URL {:?} is not a URL", config.base_url),
-            ));
+        if config.base_urls.is_empty() {
+            return Err(LlmError::new(LlmErrorKind::Config, "no base URL"));
+        }
+        let mut targets = Vec::new();
+        for base in &config.base_urls {
+            let url = format!("{}/chat/completions", base.trim_end_matches('/'));
+            if reqwest::Url::parse(&url).is_err() {
+                return Err(LlmError::new(
+                    LlmErrorKind::Config,
+                    format!("base URL {base:?} is not a URL"),
+                ));
+            }
+            targets.push((url, shown_url(base, config.api_key.as_ref())));
         }
         let http = reqwest::Client::builder()
             .connect_timeout(config.connect_timeout)
@@ -218,7 +230,7 @@ impl OpenAiClient {
         let first = MODES.iter().position(|&m| m == config.output).unwrap_or(0);
         Ok(OpenAiClient {
             http,
-            url,
+            endpoints: Endpoints::new(targets, config.backoff),
             limit: Semaphore::new(config.concurrency.max(1)),
             mode: AtomicU8::new(first as u8),
             jitter: Mutex::new(Rng::new(seed)),
@@ -258,12 +270,14 @@ impl OpenAiClient {
         body
     }
 
-    /// One HTTP exchange: the status, `Retry-After` if any, and the whole body.
+    /// One HTTP exchange with the endpoint at `url`: the status, `Retry-After` if any,
+    /// and the whole body.
     async fn exchange(
         &self,
+        url: &str,
         body: &Value,
     ) -> Result<(StatusCode, Option<Duration>, Vec<u8>), LlmError> {
-        let mut request = self.http.post(&self.url).json(body);
+        let mut request = self.http.post(url).json(body);
         if let Some(key) = &self.config.api_key {
             request = request.bearer_auth(&key.0);
         }
@@ -315,16 +329,23 @@ impl OpenAiClient {
         LlmError::new(kind, self.scrub(&message))
     }
 
-    /// Sends one chat request: retried with backoff (and `Retry-After`) on 408, 429, 5xx,
-    /// connection errors and timeouts; with a schema, in the answer format the server
-    /// takes (a refusal moves the client to the next one for good), without one as free
-    /// text. The answer has its tokens, latency and attempts; the key is in no text.
-    pub async fn chat(&self, q: &Chat) -> Result<Answer, LlmError> {
-        let _permit = self
-            .limit
-            .acquire()
-            .await
-            .map_err(|e| LlmError::new(LlmErrorKind::Config, e.to_string()))?;
+    /// Sends one chat request to the endpoint with the fewest requests in flight: tried
+    /// again after 408, 429, 5xx, no connection and timeouts (at once on another endpoint
+    /// when one is ready, else after the backoff's pause, honouring `Retry-After`); with a
+    /// schema, in the answer format the server takes (a refusal moves the client to the
+    /// next one for good), without one as free text. The answer has its tokens, latency
+    /// and attempts, the response names the endpoint of the last attempt; the key is in
+    /// no text.
+    pub async fn chat(&self, q: &Chat) -> Response {
+        let _permit = match self.limit.acquire().await {
+            Ok(permit) => permit,
+            Err(e) => {
+                return Response {
+                    result: Err(LlmError::new(LlmErrorKind::Config, e.to_string())),
+                    endpoint: None,
+                };
+            }
+        };
         let start = Instant::now();
         let mut attempts = 0;
         let mut retries = 0;
@@ -334,46 +355,76 @@ impl OpenAiClient {
                 None => OutputMode::Text,
             };
             attempts += 1;
-            let failure = match self.exchange(&self.body(q, mode)).await {
-                Ok((status, _, bytes)) if status.is_success() => {
-                    let mut answer = parse_completion(&bytes).map_err(|message| LlmError {
-                        kind: LlmErrorKind::Malformed,
-                        message: self.scrub(&message),
-                        attempts,
-                    })?;
-                    // What the loop parses is what the transcript keeps, so that a replay
-                    // reads the same text: both are cut at the limit of an answer.
-                    answer.text = self.scrub(&cut(&answer.text, MAX_ANSWER_BYTES));
+            let lease = self.endpoints.pick();
+            let endpoint = Some(lease.shown().to_owned());
+            let (mut error, retry_after) = match self.attempt(&lease, q, mode).await {
+                Attempt::Answered(mut answer) => {
                     answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
                     answer.attempts = attempts;
                     answer.mode = mode;
-                    return Ok(answer);
+                    let result = Ok(answer);
+                    return Response { result, endpoint };
                 }
-                Ok((status, retry_after, bytes)) => {
-                    let text = String::from_utf8_lossy(&bytes);
-                    if refuses_format(status, &text) && self.downgrade(mode) {
-                        continue;
-                    }
-                    let excerpt: String = text.chars().take(400).collect();
-                    (
-                        LlmError::new(
-                            LlmErrorKind::Status(status.as_u16()),
-                            self.scrub(excerpt.trim()),
-                        ),
-                        retry_after,
-                    )
-                }
-                Err(e) => (e, None),
+                Attempt::Downgraded => continue,
+                Attempt::Failed(error, retry_after) => (error, retry_after),
             };
-            let (mut error, retry_after) = failure;
             error.attempts = attempts;
             if !error.retryable() || retries >= self.config.backoff.max_retries {
-                return Err(error);
+                let result = Err(error);
+                return Response { result, endpoint };
             }
-            let unit = self.jitter.lock().map_or(0.5, |mut j| j.unit());
-            tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
+            let wait = !lease.another_ready();
+            drop(lease);
+            if wait {
+                let unit = self.jitter.lock().map_or(0.5, |mut j| j.unit());
+                tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
+            }
             retries += 1;
         }
+    }
+
+    /// One attempt at the endpoint `lease` holds, which hears how it went: a failure
+    /// worth a retry rests it, any other response counts as an answer.
+    async fn attempt(&self, lease: &Lease<'_>, q: &Chat, mode: OutputMode) -> Attempt {
+        let (status, retry_after, bytes) =
+            match self.exchange(lease.url(), &self.body(q, mode)).await {
+                Ok(exchanged) => exchanged,
+                Err(e) => {
+                    if e.retryable() {
+                        lease.failed(None);
+                    }
+                    return Attempt::Failed(e, None);
+                }
+            };
+        if status.is_success() {
+            lease.answered();
+            return match parse_completion(&bytes) {
+                Ok(mut answer) => {
+                    // What the loop parses is what the transcript keeps, so that a replay
+                    // reads the same text: both are cut at the limit of an answer.
+                    answer.text = self.scrub(&cut(&answer.text, MAX_ANSWER_BYTES));
+                    Attempt::Answered(answer)
+                }
+                Err(message) => Attempt::Failed(
+                    LlmError::new(LlmErrorKind::Malformed, self.scrub(&message)),
+                    None,
+                ),
+            };
+        }
+        let text = String::from_utf8_lossy(&bytes);
+        let error = LlmError::new(
+            LlmErrorKind::Status(status.as_u16()),
+            self.scrub(text.chars().take(400).collect::<String>().trim()),
+        );
+        if error.retryable() {
+            lease.failed(retry_after);
+        } else {
+            lease.answered();
+        }
+        if refuses_format(status, &text) && self.downgrade(mode) {
+            return Attempt::Downgraded;
+        }
+        Attempt::Failed(error, retry_after)
     }
 
     /// Asks for the next, looser answer format from now on; false when there is none.
@@ -391,6 +442,29 @@ impl OpenAiClient {
         );
         true
     }
+}
+
+/// How one attempt went.
+enum Attempt {
+    Answered(Answer),
+    /// The server refused the answer format; the next one is asked for from now on.
+    Downgraded,
+    /// No answer, and maybe the server's `Retry-After`.
+    Failed(LlmError, Option<Duration>),
+}
+
+/// The base URL as transcripts and logs show it: without a user or password, and
+/// scrubbed of the key.
+fn shown_url(base: &str, key: Option<&ApiKey>) -> String {
+    let shown = match reqwest::Url::parse(base) {
+        Ok(mut url) if !url.username().is_empty() || url.password().is_some() => {
+            let _ = url.set_username("");
+            let _ = url.set_password(None);
+            url.as_str().to_owned()
+        }
+        _ => base.to_owned(),
+    };
+    key.map_or_else(|| shown.clone(), |k| k.scrub(&shown))
 }
 
 /// A 400 or 422 whose body names the answer format: the server does not support it.
@@ -474,11 +548,15 @@ impl Backend for OpenAiClient {
         BackendInfo {
             kind: "openai".into(),
             model: self.config.model.clone(),
-            base_url: Some(self.config.base_url.clone()),
+            base_url: Some(self.endpoints.shown().join(",")),
         }
     }
 
     fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
+        Box::pin(async move { self.chat(&Chat::of(query)).await.result })
+    }
+
+    fn respond(&self, query: Query) -> BoxFuture<'_, Response> {
         Box::pin(async move { self.chat(&Chat::of(query)).await })
     }
 }
@@ -579,6 +657,20 @@ mod tests {
         assert_eq!(body["response_format"]["json_schema"]["name"], "answer");
         let body = client.body(&chat, OutputMode::JsonObject);
         assert_eq!(body["response_format"]["type"], "json_object");
+    }
+
+    #[test]
+    fn endpoints_are_shown_without_credentials() {
+        let key = ApiKey::new("sk-in-the-url-123");
+        assert_eq!(
+            shown_url("http://user:pw@10.0.0.2:8000/v1", None),
+            "http://10.0.0.2:8000/v1"
+        );
+        assert_eq!(
+            shown_url("http://127.0.0.1:8000/v1?k=sk-in-the-url-123", Some(&key)),
+            "http://127.0.0.1:8000/v1?k=[api key]"
+        );
+        assert_eq!(shown_url("http://h/v1", None), "http://h/v1");
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! The replay backend: answers every call with the answer recorded in a transcript, with
 //! no network, after checking that the call is the one recorded (same role, robot and
-//! prompt). Run with the transcript's settings, an episode replays step for step.
+//! prompt). Run with the transcript's settings, an episode replays step for step, down
+//! to the endpoint each call names.
 
 use std::collections::VecDeque;
 use std::sync::{Mutex, PoisonError};
 
 use crate::backends::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query,
+    Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query, Response,
 };
 use crate::records::transcript::{Call, Transcript};
 
@@ -29,15 +30,44 @@ impl ReplayBackend {
         }
     }
 
-    fn next(&self, q: &Query) -> Result<Answer, LlmError> {
-        let (step, call) = self
+    /// The recorded call's answer (or error) and the endpoint it names.
+    fn next(&self, q: &Query) -> Response {
+        let Some((step, call)) = self
             .calls
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .pop_front()
-            .ok_or_else(|| {
-                LlmError::new(LlmErrorKind::Replay, "the transcript has no more calls")
-            })?;
+        else {
+            return Response {
+                result: Err(LlmError::new(
+                    LlmErrorKind::Replay,
+                    "the transcript has no more calls",
+                )),
+                endpoint: None,
+            };
+        };
+        if let Err(e) = Self::same_call(step, &call, q) {
+            return Response {
+                result: Err(e),
+                endpoint: None,
+            };
+        }
+        let result = match (call.answer, call.error) {
+            (Some(answer), _) => Ok(answer),
+            (None, Some(error)) => Err(error),
+            (None, None) => Err(LlmError::new(
+                LlmErrorKind::Replay,
+                format!("round {step}: the answer (none recorded) differs from the recorded call"),
+            )),
+        };
+        Response {
+            result,
+            endpoint: call.endpoint,
+        }
+    }
+
+    /// Whether `q` is the call recorded in round `step`.
+    fn same_call(step: u32, call: &Call, q: &Query) -> Result<(), LlmError> {
         let diverged = |what: &str| {
             LlmError::new(
                 LlmErrorKind::Replay,
@@ -53,11 +83,7 @@ impl ReplayBackend {
         if call.messages != q.messages {
             return Err(diverged("prompt"));
         }
-        match (call.answer, call.error) {
-            (Some(answer), _) => Ok(answer),
-            (None, Some(error)) => Err(error),
-            (None, None) => Err(diverged("answer (none recorded)")),
-        }
+        Ok(())
     }
 }
 
@@ -71,6 +97,10 @@ impl Backend for ReplayBackend {
     }
 
     fn ask(&self, query: Query) -> BoxFuture<'_, Result<Answer, LlmError>> {
+        Box::pin(async move { self.next(&query).result })
+    }
+
+    fn respond(&self, query: Query) -> BoxFuture<'_, Response> {
         Box::pin(async move { self.next(&query) })
     }
 }

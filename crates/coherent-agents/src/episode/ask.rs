@@ -76,13 +76,15 @@ pub(crate) async fn ask(
         answer: None,
         error: None,
         client: None,
+        endpoint: None,
     };
-    let result = tokio::select! {
+    let response = tokio::select! {
         biased;
         () = cancel.cancelled() => return None,
-        r = backend.ask(query) => r,
+        r = backend.respond(query) => r,
     };
-    let reply = match result {
+    call.endpoint = response.endpoint;
+    let reply = match response.result {
         Ok(answer) => {
             let reply = match &answer.finish {
                 Finish::Refusal(words) => Err(format!("the model refused: {words}")),

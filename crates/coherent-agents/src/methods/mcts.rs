@@ -462,13 +462,15 @@ async fn round(
                 answer: None,
                 error: None,
                 client: None,
+                endpoint: None,
             };
-            let result = tokio::select! {
+            let response = tokio::select! {
                 biased;
                 () = cancel.cancelled() => return Ok(None),
-                r = backend.ask(query) => r,
+                r = backend.respond(query) => r,
             };
-            match result {
+            call.endpoint = response.endpoint;
+            match response.result {
                 Ok(answer) => {
                     // A refusal, a filtered or an empty answer names nothing.
                     let usable = matches!(answer.finish, Finish::Stop | Finish::Length)

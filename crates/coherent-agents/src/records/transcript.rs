@@ -58,10 +58,14 @@ pub struct Call {
     pub messages: Vec<Message>,
     pub answer: Option<Answer>,
     pub error: Option<LlmError>,
-    /// The endpoint a method written outside the crate called through the project's
-    /// client; absent for the episode's own backend.
+    /// The client a method written outside the crate called through (the project's
+    /// `LLM`); absent for the episode's own backend.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub client: Option<BackendInfo>,
+    /// The base URL that answered (the last one tried, when none did), for a backend
+    /// with endpoints; absent otherwise, and in transcripts written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub endpoint: Option<String>,
 }
 
 /// The task assigner's proposal, as read from its answer

@@ -1,0 +1,156 @@
+//! The driver's side of a benchmark run, whatever executes the episodes: the results
+//! file read back and repaired, the episodes still to run, and each result written as
+//! it comes, once. Only the driver writes the results file; executors hand it results.
+
+use std::collections::HashSet;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use crate::episode::settings::MethodSpec;
+use crate::harness::job::{EpisodeResult, RunTasks};
+use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results, repair};
+
+/// What a run did.
+#[derive(Debug, Default)]
+pub struct BenchOutcome {
+    /// Episodes in the plan (methods x tasks x seeds).
+    pub total: usize,
+    /// Already finished in the results file before this run.
+    pub skipped: usize,
+    /// Lines written by this run (any status).
+    pub written: usize,
+    /// Episodes this run did not finish for good: interrupted, backend errors, or never
+    /// started because of Ctrl-C.
+    pub unfinished: usize,
+    /// Whether Ctrl-C (the `cancel` handle) stopped the run.
+    pub interrupted: bool,
+    /// Tasks that could not be run and why (no ground truth and no plan to size a budget).
+    pub skipped_tasks: Vec<String>,
+    /// Lines dropped from a cut-off last line.
+    pub repaired_bytes: u64,
+    /// Transcripts that no results line points to (episodes killed mid-run), renamed to
+    /// `*.jsonl.unfinished` before this run; their episodes run again.
+    pub orphaned: Vec<PathBuf>,
+}
+
+/// A run's results file, open for appending.
+#[derive(Debug)]
+pub struct Ledger {
+    out: PathBuf,
+    file: File,
+    /// Episodes with a final line: in the file before the run, or written by it.
+    done: HashSet<EpisodeKey>,
+    /// Episodes this run has written a line for (of any status).
+    written: HashSet<EpisodeKey>,
+    outcome: BenchOutcome,
+}
+
+impl Ledger {
+    /// Opens the results file `out` (and its folder) for appending: a last line cut off
+    /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
+    /// episodes with a final line are known to be done.
+    pub fn open(out: &Path) -> Result<Ledger, String> {
+        let mut outcome = BenchOutcome::default();
+        let mut done = HashSet::new();
+        if out.exists() {
+            let file = read_results(out)?;
+            outcome.repaired_bytes = file.truncated_bytes;
+            repair(out, &file)?;
+            done.extend(
+                file.lines
+                    .iter()
+                    .filter(|l| l.is_final())
+                    .map(ResultLine::key),
+            );
+            outcome.orphaned = mark_orphans(out, &file.lines)?;
+        } else if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
+        let file = OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(out)
+            .map_err(|e| format!("{}: {e}", out.display()))?;
+        Ok(Ledger {
+            out: out.to_owned(),
+            file,
+            done,
+            written: HashSet::new(),
+            outcome,
+        })
+    }
+
+    /// The episodes of `methods` x `tasks` x seed indices `0..seeds` that have no final
+    /// line yet, in the order they are to start; the others count as skipped.
+    pub fn plan(
+        &mut self,
+        tasks: &RunTasks,
+        methods: &[MethodSpec],
+        seeds: u32,
+    ) -> Vec<EpisodeKey> {
+        let all = tasks.keys(methods, seeds);
+        self.outcome.total += all.len();
+        let pending: Vec<EpisodeKey> = all.into_iter().filter(|k| !self.done.contains(k)).collect();
+        self.outcome.skipped = self.outcome.total - pending.len();
+        pending
+    }
+
+    /// Records what came of one episode: a line is appended and flushed, unless this
+    /// run already wrote that episode's line (a result delivered twice is written
+    /// once). Returns the line written, if one was.
+    pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, String> {
+        let line = match result {
+            EpisodeResult::Line(line) => *line,
+            EpisodeResult::NotStarted => {
+                self.outcome.unfinished += 1;
+                return Ok(None);
+            }
+            EpisodeResult::TaskSkipped(why) => {
+                self.outcome.unfinished += 1;
+                if !self.outcome.skipped_tasks.contains(&why) {
+                    self.outcome.skipped_tasks.push(why);
+                }
+                return Ok(None);
+            }
+        };
+        if !self.written.insert(line.key()) {
+            return Ok(None);
+        }
+        let mut text = serde_json::to_string(&line)
+            .map_err(|e| format!("cannot encode a results line: {e}"))?;
+        text.push('\n');
+        self.file
+            .write_all(text.as_bytes())
+            .and_then(|()| self.file.flush())
+            .map_err(|e| format!("{}: {e}", self.out.display()))?;
+        self.outcome.written += 1;
+        if line.is_final() {
+            self.done.insert(line.key());
+        } else {
+            self.outcome.unfinished += 1;
+        }
+        Ok(Some(line))
+    }
+
+    /// Renames to `*.jsonl.unfinished` the transcripts no line of the results file
+    /// points to, as resuming does: a worker that died mid-episode left them, and its
+    /// episodes ran again elsewhere. They are added to the outcome's `orphaned`.
+    pub fn mark_orphans(&mut self) -> Result<(), String> {
+        let lines = read_results(&self.out)?.lines;
+        let marked = mark_orphans(&self.out, &lines)?;
+        self.outcome.orphaned.extend(marked);
+        Ok(())
+    }
+
+    /// What the run did so far.
+    pub fn outcome(&self) -> &BenchOutcome {
+        &self.outcome
+    }
+
+    /// What the run did; `interrupted` when it was stopped from outside.
+    pub fn finish(mut self, interrupted: bool) -> BenchOutcome {
+        self.outcome.interrupted = interrupted;
+        self.outcome
+    }
+}

@@ -1,0 +1,276 @@
+//! The two halves of a benchmark run that other executors than the local one drive
+//! (`coherent.executors.RayExecutor`): the driver's `_BenchLedger` (the results file,
+//! the episodes still to run, each result written once) and a worker's `_BenchWorker`
+//! (one episode at a time by its key, through the session layer's `Worker`, as the
+//! local executor runs them).
+
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use coherent::session::bench::Worker;
+use coherent_agents::bench::{
+    EpisodeKey, EpisodeResult, EpisodeSettings, Event, Ledger, Progress, ResultLine, RunTasks,
+    transcripts_dir,
+};
+use coherent_agents::{Cancel, PriceTable};
+use coherent_core::native;
+use coherent_core::planner::Limits;
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+
+use crate::convert::to_py;
+
+use crate::bench::{outcome_dict, run_backend, run_methods};
+use crate::method::{MethodArg, Methods};
+use crate::prompts::{price_table, prompt_set};
+use crate::task::PyTask;
+use crate::{args, errors};
+
+/// An episode's key as Python holds it: `(method, scene, task_id, seed)`.
+type Key = (String, String, i64, u32);
+
+/// What a worker hands the driver: `("line", <results line as JSON>)`,
+/// `("skipped", <why the task cannot run>)` or `("not_started", None)`.
+type Handed = (String, Option<String>);
+
+fn key_of((method, scene, task_id, seed): Key) -> EpisodeKey {
+    EpisodeKey {
+        method,
+        scene,
+        task_id,
+        seed,
+    }
+}
+
+/// The driver's side of a run: checks the run's settings as `coherent.bench` does (the
+/// backend's too, though the workers build their own), opens (and repairs) the results
+/// file `out`, knows the episodes still to run, writes each result handed to it, once.
+#[pyclass(name = "_BenchLedger", module = "coherent._coherent")]
+pub(crate) struct PyLedger {
+    ledger: Option<Ledger>,
+    pending: Vec<EpisodeKey>,
+    progress: Option<Progress>,
+    /// The prompt set's replaced templates, by file name.
+    prompts: BTreeMap<String, String>,
+    /// The whole price table, the built-in one with what `prices` added.
+    prices: PriceTable,
+}
+
+impl PyLedger {
+    fn ledger(&mut self) -> PyResult<&mut Ledger> {
+        self.ledger
+            .as_mut()
+            .ok_or_else(|| PyValueError::new_err("the run is finished"))
+    }
+}
+
+#[pymethods]
+impl PyLedger {
+    #[new]
+    #[pyo3(signature = (
+        tasks, methods, *, seeds, out, backend = None, sim_errors = None, replay_from = None,
+        progress = false, prompts = None, prices = None
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        tasks: Vec<Bound<'_, PyTask>>,
+        #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
+        #[pyo3(from_py_with = args::seeds)] seeds: u32,
+        #[pyo3(from_py_with = args::out)] out: PathBuf,
+        backend: Option<&Bound<'_, PyAny>>,
+        sim_errors: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
+        progress: bool,
+        prompts: Option<&Bound<'_, PyAny>>,
+        prices: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<PyLedger> {
+        let prompt_set = prompt_set(prompts)?;
+        let prices = price_table(prices)?;
+        // The methods written in Python are only named here; the workers run them.
+        let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
+        let mut python = Methods::new(py)?;
+        let methods = run_methods(py, &methods, seeds, &objects, &mut python);
+        python.close(py)?;
+        let methods = methods?;
+        run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
+        let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
+        let tasks = RunTasks::new(&tasks).map_err(PyValueError::new_err)?;
+        let mut ledger = Ledger::open(&out).map_err(|e| errors::coherent(py, e))?;
+        let pending = ledger.plan(&tasks, &methods, seeds);
+        let mut progress = progress.then(|| Progress::new(false));
+        if let Some(p) = progress.as_mut() {
+            let start = Event::Start {
+                to_run: pending.len(),
+                skipped: ledger.outcome().skipped,
+            };
+            show(p.line(&start));
+        }
+        Ok(PyLedger {
+            ledger: Some(ledger),
+            pending,
+            progress,
+            prompts: prompt_set.record().replaced,
+            prices,
+        })
+    }
+
+    /// The prompt set and the price table as data for the workers' `prompts` and
+    /// `prices` (a folder or price file named on this machine may not exist on theirs).
+    fn worker_settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let d = PyDict::new(py);
+        d.set_item("prompts", &self.prompts)?;
+        d.set_item("prices", to_py(py, &self.prices)?)?;
+        Ok(d)
+    }
+
+    /// The episodes to run, in order: `(method, scene, task_id, seed)`.
+    fn pending(&self) -> Vec<Key> {
+        self.pending
+            .iter()
+            .map(|k| (k.method.clone(), k.scene.clone(), k.task_id, k.seed))
+            .collect()
+    }
+
+    /// Records what a worker handed back for one episode; returns whether a line was
+    /// written (not when this run already wrote that episode's line).
+    fn record(&mut self, py: Python<'_>, handed: Handed) -> PyResult<bool> {
+        let result = match handed {
+            (kind, Some(json)) if kind == "line" => {
+                let line: ResultLine = serde_json::from_str(&json)
+                    .map_err(|e| PyValueError::new_err(format!("a results line: {e}")))?;
+                EpisodeResult::Line(Box::new(line))
+            }
+            (kind, Some(why)) if kind == "skipped" => EpisodeResult::TaskSkipped(why),
+            (kind, None) if kind == "not_started" => EpisodeResult::NotStarted,
+            (kind, _) => {
+                return Err(PyValueError::new_err(format!(
+                    "an episode's result of kind {kind:?}"
+                )));
+            }
+        };
+        let written = self
+            .ledger()?
+            .record(result)
+            .map_err(|e| errors::coherent(py, e))?;
+        if let (Some(line), Some(p)) = (&written, self.progress.as_mut()) {
+            show(p.line(&Event::Finished(line)));
+        }
+        Ok(written.is_some())
+    }
+
+    /// Ends the run and says what it did, as `coherent.bench`'s outcome; `interrupted`
+    /// when it was stopped from outside. With `orphans`, the transcripts no results line
+    /// points to (left by workers that died mid-episode) are renamed
+    /// `*.jsonl.unfinished` first, as resuming would.
+    #[pyo3(signature = (*, interrupted, orphans = false))]
+    fn finish<'py>(
+        &mut self,
+        py: Python<'py>,
+        interrupted: bool,
+        orphans: bool,
+    ) -> PyResult<Bound<'py, PyDict>> {
+        let mut ledger = self
+            .ledger
+            .take()
+            .ok_or_else(|| PyValueError::new_err("the run is finished"))?;
+        if orphans {
+            ledger.mark_orphans().map_err(|e| errors::coherent(py, e))?;
+        }
+        outcome_dict(py, &ledger.finish(interrupted))
+    }
+}
+
+fn show(text: Option<String>) {
+    if let Some(text) = text {
+        let _ = std::io::stderr().write_all(text.as_bytes());
+    }
+}
+
+/// Runs the episodes of a run one at a time by their key, as a Ray worker does: the
+/// tasks come as native task JSON, the settings as `coherent.bench` takes them, the
+/// transcripts go beside the results file `out` as they would locally.
+#[pyclass(name = "_BenchWorker", module = "coherent._coherent", frozen)]
+pub(crate) struct PyWorker {
+    worker: Worker,
+    /// The event loop of the methods written in Python, for as long as the worker runs.
+    _python: Methods,
+}
+
+#[pymethods]
+impl PyWorker {
+    #[new]
+    #[pyo3(signature = (
+        tasks, methods, *, backend = None, sim_errors = None, replay_from = None, history = 5,
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, out, prompts, prices
+    ))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        tasks: Vec<String>,
+        #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
+        backend: Option<&Bound<'_, PyAny>>,
+        sim_errors: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
+        #[pyo3(from_py_with = args::history)] history: usize,
+        #[pyo3(from_py_with = args::max_states)] max_states: usize,
+        #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
+        #[pyo3(from_py_with = args::out)] out: PathBuf,
+        prompts: &Bound<'_, PyDict>,
+        prices: &Bound<'_, PyDict>,
+    ) -> PyResult<PyWorker> {
+        let mut read = Vec::new();
+        for (i, text) in tasks.iter().enumerate() {
+            let value: serde_json::Value = serde_json::from_str(text)
+                .map_err(|e| PyValueError::new_err(format!("task {i}: {e}")))?;
+            let task = native::read(&format!("task {i}"), &value)
+                .map_err(|e| errors::coherent(py, e.to_string()))?;
+            read.push(Arc::new(task));
+        }
+        let objects = read
+            .iter()
+            .map(|t| Py::new(py, PyTask::shared(Arc::clone(t))))
+            .collect::<PyResult<Vec<_>>>()?;
+        let mut python = Methods::new(py)?;
+        let methods = run_methods(py, &methods, 1, &objects, &mut python)?;
+        // The driver refused a prompt set with a replay.
+        let (backend, temperature) = run_backend(py, backend, sim_errors, replay_from, false)?;
+        let settings = EpisodeSettings {
+            methods,
+            backend,
+            history,
+            temperature,
+            max_states,
+            max_steps,
+            prompts: prompt_set(Some(prompts.as_any()))?,
+            prices: price_table(Some(prices.as_any()))?,
+            transcripts: transcripts_dir(&out),
+        };
+        let worker = Worker::new(&read, settings).map_err(|e| errors::coherent(py, e))?;
+        Ok(PyWorker {
+            worker,
+            _python: python,
+        })
+    }
+
+    /// Runs the episode `(method, scene, task_id, seed)` with the GIL released (other
+    /// threads may run theirs meanwhile); returns what the driver records.
+    fn run(&self, py: Python<'_>, key: Key) -> PyResult<Handed> {
+        let key = key_of(key);
+        let result = py
+            .detach(|| self.worker.run(&key, &Cancel::default()))
+            .map_err(|e| errors::coherent(py, e))?;
+        Ok(match result {
+            EpisodeResult::Line(line) => {
+                let json = serde_json::to_string(&line)
+                    .map_err(|e| errors::coherent(py, format!("a results line: {e}")))?;
+                ("line".to_owned(), Some(json))
+            }
+            EpisodeResult::TaskSkipped(why) => ("skipped".to_owned(), Some(why)),
+            EpisodeResult::NotStarted => ("not_started".to_owned(), None),
+        })
+    }
+}
