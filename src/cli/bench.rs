@@ -6,7 +6,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 use coherent_agents::Cancel;
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, Event, Progress, Subset};
+use coherent_agents::bench::{
+    self, BackendChoice, BenchConfig, EpisodeSettings, Event, Progress, Subset,
+};
 use coherent_core::planner::Limits;
 use coherent_core::text::{shown, shown_lines};
 
@@ -193,26 +195,29 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         return Err("no tasks to run".into());
     }
     let config = BenchConfig {
-        methods,
+        episodes: EpisodeSettings {
+            methods,
+            history: args.history,
+            temperature: matches!(backend, BackendChoice::OpenAi(_))
+                .then_some(args.llm.temperature),
+            max_states: args.max_states,
+            max_steps: args.max_steps,
+            backend,
+            prompts: prompt_set,
+            prices,
+        },
         seeds: args.seeds,
         concurrency: args.concurrency.max(1),
-        history: args.history,
-        temperature: matches!(backend, BackendChoice::OpenAi(_)).then_some(args.llm.temperature),
-        max_states: args.max_states,
-        max_steps: args.max_steps,
         out: out.clone(),
-        backend,
-        prompts: prompt_set,
-        prices,
     };
-    let info = config.backend.info();
+    let info = config.episodes.backend.info();
     println!(
         "backend: {} ({}){}",
         info.kind,
         info.model,
         info.base_url.map_or(String::new(), |u| format!(" at {u}"))
     );
-    if let Some(line) = prompts::describe(&config.prompts) {
+    if let Some(line) = prompts::describe(&config.episodes.prompts) {
         println!("{line}");
     }
     let cancel = Cancel::default();

@@ -7,7 +7,7 @@
 //! through a [`Worker`]. Both run each episode with `coherent_agents::bench::run_one`,
 //! so that they write the same lines.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use coherent_agents::bench::{
@@ -60,10 +60,10 @@ pub async fn run(
     if tasks.is_empty() {
         return Err("no tasks to run".into());
     }
-    if config.methods.is_empty() {
+    if config.episodes.methods.is_empty() {
         return Err("no methods to run".into());
     }
-    distinct_names(&config.methods)?;
+    distinct_names(&config.episodes.methods)?;
     if config.seeds == 0 {
         return Err("seeds must be at least 1".into());
     }
@@ -96,23 +96,35 @@ pub struct Worker {
     runtime: tokio::runtime::Runtime,
     tasks: RunTasks,
     settings: EpisodeSettings,
+    transcripts: PathBuf,
 }
 
 impl Worker {
-    /// A worker for the episodes of `tasks`.
-    pub fn new(tasks: &[Arc<Task>], settings: EpisodeSettings) -> Result<Worker, String> {
+    /// A worker for the episodes of `tasks`, writing their transcripts where those of
+    /// the results file `out` go (`coherent_agents::bench::transcripts_dir`).
+    pub fn new(
+        tasks: &[Arc<Task>],
+        settings: EpisodeSettings,
+        out: &Path,
+    ) -> Result<Worker, String> {
         Ok(Worker {
             runtime: super::runtime()?,
             tasks: RunTasks::new(tasks)?,
             settings,
+            transcripts: bench::transcripts_dir(out),
         })
     }
 
     /// Runs the episode `key` to its end on the calling thread; `cancel` ends it as
     /// interrupted.
     pub fn run(&self, key: &EpisodeKey, cancel: &Cancel) -> Result<EpisodeResult, String> {
-        self.runtime
-            .block_on(bench::run_one(&self.tasks, key, &self.settings, cancel))
+        self.runtime.block_on(bench::run_one(
+            &self.tasks,
+            key,
+            &self.settings,
+            &self.transcripts,
+            cancel,
+        ))
     }
 }
 

@@ -4,14 +4,15 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, ResultLine, Subset};
+use coherent_agents::bench::{
+    self, BackendChoice, BenchConfig, EpisodeSettings, ResultLine, Subset,
+};
 use coherent_agents::episode::{Method, MethodSpec};
 use coherent_agents::llm::BackendInfo;
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
-use coherent_agents::{Cancel, ErrorRates, PriceTable, Prompts};
+use coherent_agents::{Cancel, ErrorRates, PriceTable};
 use coherent_core::Task;
-use coherent_core::planner::Limits;
 
 mod common;
 
@@ -24,17 +25,13 @@ fn scratch(name: &str) -> PathBuf {
 
 fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchConfig {
     BenchConfig {
-        methods: methods.into_iter().map(MethodSpec::from).collect(),
+        episodes: EpisodeSettings::new(
+            methods.into_iter().map(MethodSpec::from).collect(),
+            backend,
+        ),
         seeds: 1,
         concurrency: 2,
-        backend,
-        history: 5,
-        temperature: None,
-        max_states: Limits::DEFAULT_MAX_STATES,
-        max_steps: None,
         out,
-        prompts: Prompts::builtin(),
-        prices: PriceTable::builtin(),
     }
 }
 

@@ -11,18 +11,21 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, ResultLine, Subset};
+use coherent_agents::bench::{
+    self, BackendChoice, BenchConfig, EpisodeSettings, ResultLine, Subset,
+};
 use coherent_agents::episode::Method;
 use coherent_agents::retry::Backoff;
 use coherent_agents::transcript;
-use coherent_agents::{ApiKey, Cancel, OpenAiClient, OpenAiConfig, PriceTable, Prompts};
+use coherent_agents::{ApiKey, Cancel, OpenAiClient, OpenAiConfig};
 use coherent_core::Task;
-use coherent_core::planner::Limits;
 use serde_json::{Value, json};
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 
 mod common;
+
+use common::http::{Request, read_request};
 
 const KEY: &str = "sk-endpoints-0123456789-SECRET";
 
@@ -61,7 +64,11 @@ async fn stub(delay: Duration, fail_from: usize) -> Arc<Stub> {
 
 /// Serves requests on one kept-alive connection until the client closes it.
 async fn connection(mut socket: TcpStream, stub: Arc<Stub>) {
-    while let Some((authorization, body)) = read_request(&mut socket).await {
+    while let Some(Request {
+        authorization,
+        body,
+    }) = read_request(&mut socket).await
+    {
         if authorization.as_deref() == Some(&format!("Bearer {KEY}")) {
             stub.with_key.fetch_add(1, Ordering::SeqCst);
         }
@@ -76,41 +83,6 @@ async fn connection(mut socket: TcpStream, stub: Arc<Stub>) {
             return;
         }
     }
-}
-
-/// One HTTP/1.1 request: its `Authorization` header and its JSON body.
-async fn read_request(socket: &mut TcpStream) -> Option<(Option<String>, Value)> {
-    let mut buf = Vec::new();
-    let mut chunk = [0u8; 8192];
-    let head_end = loop {
-        if let Some(i) = buf.windows(4).position(|w| w == b"\r\n\r\n") {
-            break i + 4;
-        }
-        let n = socket.read(&mut chunk).await.ok()?;
-        if n == 0 {
-            return None;
-        }
-        buf.extend_from_slice(&chunk[..n]);
-    };
-    let head = String::from_utf8_lossy(&buf[..head_end]).into_owned();
-    let header = |name: &str| {
-        head.lines().find_map(|line| {
-            let (k, v) = line.split_once(':')?;
-            k.trim()
-                .eq_ignore_ascii_case(name)
-                .then(|| v.trim().to_owned())
-        })
-    };
-    let length: usize = header("content-length")?.parse().ok()?;
-    while buf.len() < head_end + length {
-        let n = socket.read(&mut chunk).await.ok()?;
-        if n == 0 {
-            return None;
-        }
-        buf.extend_from_slice(&chunk[..n]);
-    }
-    let body = serde_json::from_slice(&buf[head_end..head_end + length]).ok()?;
-    Some((header("authorization"), body))
 }
 
 fn http(status: u16, body: &str) -> String {
@@ -178,17 +150,13 @@ async fn bench_over(urls: &[String], seeds: u32, out: &Path) -> Vec<ResultLine> 
     };
     let client = Arc::new(OpenAiClient::new(config).expect("a client"));
     let config = BenchConfig {
-        methods: vec![Method::Pefa.into()],
+        episodes: EpisodeSettings {
+            temperature: Some(0.0),
+            ..EpisodeSettings::new(vec![Method::Pefa.into()], BackendChoice::OpenAi(client))
+        },
         seeds,
         concurrency: 6,
-        backend: BackendChoice::OpenAi(client),
-        history: 5,
-        temperature: Some(0.0),
-        max_states: Limits::DEFAULT_MAX_STATES,
-        max_steps: None,
         out: out.join("results.jsonl"),
-        prompts: Prompts::builtin(),
-        prices: PriceTable::builtin(),
     };
     let outcome = bench::run(&tasks(), &config, &Cancel::default(), &mut |_| {})
         .await

@@ -9,7 +9,7 @@ use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use coherent_agents::bench::{self, BackendChoice, BenchConfig, Subset};
+use coherent_agents::bench::{self, BackendChoice, BenchConfig, EpisodeSettings, Subset};
 use coherent_agents::episode::{
     self, Act, Budget, Choice, Executed, External, MakePolicy, Method, MethodSpec, Policy,
     Settings, View,
@@ -17,7 +17,6 @@ use coherent_agents::episode::{
 use coherent_agents::llm::BoxFuture;
 use coherent_agents::transcript::{self, Outcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Replay, report};
-use coherent_agents::{PriceTable, Prompts};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{NodeId, SymbolicEnv, Task};
 
@@ -108,17 +107,10 @@ fn scripted(
 
 fn config(out: PathBuf, methods: Vec<MethodSpec>, concurrency: usize) -> BenchConfig {
     BenchConfig {
-        methods,
+        episodes: EpisodeSettings::new(methods, BackendChoice::Builtin),
         seeds: 1,
         concurrency,
-        backend: BackendChoice::Builtin,
-        history: 5,
-        temperature: None,
-        max_states: Limits::DEFAULT_MAX_STATES,
-        max_steps: None,
         out,
-        prompts: Prompts::builtin(),
-        prices: PriceTable::builtin(),
     }
 }
 

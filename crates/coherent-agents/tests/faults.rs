@@ -15,8 +15,12 @@ use coherent_agents::transcript::{self, Outcome, Status};
 use coherent_agents::{ApiKey, Cancel, Episode, OpenAiClient, OpenAiConfig};
 use coherent_core::{SymbolicEnv, Task, load_tasks};
 use serde_json::{Value, json};
-use tokio::io::{AsyncReadExt, AsyncWriteExt};
+use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
+
+mod common;
+
+use common::http::{Request, read_request};
 
 const KEY: &str = "sk-test-0123456789-SECRET";
 
@@ -33,16 +37,9 @@ enum Fault {
     Content(String, &'static str),
 }
 
-/// A request as the server saw it.
-#[derive(Clone, Debug)]
-struct Seen {
-    authorization: Option<String>,
-    body: Value,
-}
-
 struct Server {
     url: String,
-    seen: Arc<Mutex<Vec<Seen>>>,
+    seen: Arc<Mutex<Vec<Request>>>,
 }
 
 /// Serves `script`, one fault per request in order, then good answers.
@@ -66,7 +63,7 @@ async fn serve(script: Vec<Fault>) -> Server {
 
 type Script = Arc<Mutex<std::vec::IntoIter<Fault>>>;
 
-async fn connection(mut socket: TcpStream, script: Script, log: Arc<Mutex<Vec<Seen>>>) {
+async fn connection(mut socket: TcpStream, script: Script, log: Arc<Mutex<Vec<Request>>>) {
     loop {
         let Some(seen) = read_request(&mut socket).await else {
             return;
@@ -88,43 +85,6 @@ async fn connection(mut socket: TcpStream, script: Script, log: Arc<Mutex<Vec<Se
             return;
         }
     }
-}
-
-/// Reads one HTTP/1.1 request (headers, then `Content-Length` bytes of body).
-async fn read_request(socket: &mut TcpStream) -> Option<Seen> {
-    let mut buf = Vec::new();
-    let mut chunk = [0u8; 4096];
-    let head_end = loop {
-        if let Some(i) = buf.windows(4).position(|w| w == b"\r\n\r\n") {
-            break i + 4;
-        }
-        let n = socket.read(&mut chunk).await.ok()?;
-        if n == 0 {
-            return None;
-        }
-        buf.extend_from_slice(&chunk[..n]);
-    };
-    let head = String::from_utf8_lossy(&buf[..head_end]).to_string();
-    let header = |name: &str| {
-        head.lines().find_map(|l| {
-            let (k, v) = l.split_once(':')?;
-            k.trim()
-                .eq_ignore_ascii_case(name)
-                .then(|| v.trim().to_owned())
-        })
-    };
-    let length: usize = header("content-length")?.parse().ok()?;
-    while buf.len() < head_end + length {
-        let n = socket.read(&mut chunk).await.ok()?;
-        if n == 0 {
-            return None;
-        }
-        buf.extend_from_slice(&chunk[..n]);
-    }
-    Some(Seen {
-        authorization: header("authorization"),
-        body: serde_json::from_slice(&buf[head_end..head_end + length]).ok()?,
-    })
 }
 
 fn http(status: u16, headers: &[(&str, String)], body: &str) -> String {

@@ -10,7 +10,8 @@ use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::bench::{self as session_bench, TableFormat};
 use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, BenchOutcome, Event, Progress, ResultLine, Subset,
+    self, BackendChoice, BenchConfig, BenchOutcome, EpisodeSettings, Event, Progress, ResultLine,
+    Subset,
 };
 use coherent_agents::{Cancel, MethodSpec};
 use coherent_core::planner::Limits;
@@ -227,17 +228,19 @@ pub(crate) fn run_bench<'py>(
         run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
     let config = BenchConfig {
-        methods,
+        episodes: EpisodeSettings {
+            methods,
+            backend: choice,
+            history,
+            temperature,
+            max_states,
+            max_steps,
+            prompts: prompt_set,
+            prices,
+        },
         seeds,
         concurrency: concurrency.max(1),
-        backend: choice,
-        history,
-        temperature,
-        max_states,
-        max_steps,
         out,
-        prompts: prompt_set,
-        prices,
     };
     let cancel = Cancel::default();
     let stop = cancel.clone();

@@ -12,7 +12,6 @@ use std::sync::Arc;
 use coherent::session::bench::Worker;
 use coherent_agents::bench::{
     EpisodeKey, EpisodeResult, EpisodeSettings, Event, Ledger, Progress, ResultLine, RunTasks,
-    transcripts_dir,
 };
 use coherent_agents::{Cancel, PriceTable};
 use coherent_core::native;
@@ -247,9 +246,8 @@ impl PyWorker {
             max_steps,
             prompts: prompt_set(Some(prompts.as_any()))?,
             prices: price_table(Some(prices.as_any()))?,
-            transcripts: transcripts_dir(&out),
         };
-        let worker = Worker::new(&read, settings).map_err(|e| errors::coherent(py, e))?;
+        let worker = Worker::new(&read, settings, &out).map_err(|e| errors::coherent(py, e))?;
         Ok(PyWorker {
             worker,
             _python: python,

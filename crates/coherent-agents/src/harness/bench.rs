@@ -21,9 +21,6 @@ use tokio::sync::Semaphore;
 use tokio::task::JoinSet;
 
 use crate::episode::cancel::Cancel;
-use crate::episode::settings::MethodSpec;
-use crate::harness::prices::PriceTable;
-use crate::methods::templates::Prompts;
 
 pub use crate::harness::choice::{BackendChoice, Recorded};
 pub use crate::harness::job::{EpisodeResult, EpisodeSettings, RunTasks, episode_seed, run_one};
@@ -34,48 +31,18 @@ pub use crate::harness::results::{
 };
 pub use crate::harness::subset::{PAPER40, Selection, Subset, select};
 
-/// What to run.
+/// What to run: the episodes (methods, backend, settings), how many seeds, how many at
+/// once, and where the results go.
 #[derive(Clone, Debug)]
 pub struct BenchConfig {
-    /// Built-in methods and methods written outside the crate, each by its own name.
-    pub methods: Vec<MethodSpec>,
+    /// The methods and what every episode shares.
+    pub episodes: EpisodeSettings,
     /// Seed indices `0..seeds`.
     pub seeds: u32,
     /// Episodes at once.
     pub concurrency: usize,
-    pub backend: BackendChoice,
-    /// Rounds of history (see [`Settings::history`]).
-    pub history: usize,
-    /// Recorded in the episodes' settings for an HTTP backend.
-    pub temperature: Option<f32>,
-    /// Most states one planner search may visit.
-    pub max_states: usize,
-    /// The step budget of every episode; `None` for the paper's 2 x GT.
-    pub max_steps: Option<u32>,
     /// The results file; transcripts go to [`transcripts_dir`] of it.
     pub out: PathBuf,
-    /// The templates the methods' prompts are rendered from (a replay renders the
-    /// recorded ones).
-    pub prompts: Prompts,
-    /// Prices each line's tokens (`cost_usd`).
-    pub prices: PriceTable,
-}
-
-impl BenchConfig {
-    /// What every episode of the run shares.
-    pub fn episode_settings(&self) -> EpisodeSettings {
-        EpisodeSettings {
-            methods: self.methods.clone(),
-            backend: self.backend.clone(),
-            history: self.history,
-            temperature: self.temperature,
-            max_states: self.max_states,
-            max_steps: self.max_steps,
-            prompts: self.prompts.clone(),
-            prices: self.prices.clone(),
-            transcripts: transcripts_dir(&self.out),
-        }
-    }
 }
 
 /// Runs every method on every task for every seed, `config.concurrency` at once, skipping
@@ -90,23 +57,25 @@ pub async fn run(
 ) -> Result<BenchOutcome, String> {
     let tasks = Arc::new(RunTasks::new(tasks)?);
     let mut ledger = Ledger::open(&config.out)?;
-    let keys = ledger.plan(&tasks, &config.methods, config.seeds);
+    let keys = ledger.plan(&tasks, &config.episodes.methods, config.seeds);
     progress(Event::Start {
         to_run: keys.len(),
         skipped: ledger.outcome().skipped,
     });
-    let settings = Arc::new(config.episode_settings());
+    let settings = Arc::new(config.episodes.clone());
+    let transcripts = Arc::new(transcripts_dir(&config.out));
     let permits = Arc::new(Semaphore::new(config.concurrency.max(1)));
     let mut set = JoinSet::new();
     for key in keys {
         let (tasks, settings) = (Arc::clone(&tasks), Arc::clone(&settings));
+        let transcripts = Arc::clone(&transcripts);
         let (permits, cancel) = (Arc::clone(&permits), cancel.clone());
         set.spawn(async move {
             let _permit = tokio::select! {
                 p = permits.acquire() => p.map_err(|e| e.to_string())?,
                 () = cancel.cancelled() => return Ok(EpisodeResult::NotStarted),
             };
-            run_one(&tasks, &key, &settings, &cancel).await
+            run_one(&tasks, &key, &settings, &transcripts, &cancel).await
         });
     }
     let mut first_error = None;

@@ -5,7 +5,7 @@
 //! lines.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits};
@@ -20,12 +20,12 @@ use crate::episode::settings::{Budget, MethodSpec, Settings};
 use crate::harness::choice::BackendChoice;
 use crate::harness::prices::PriceTable;
 use crate::harness::results::{EpisodeKey, ResultLine};
+use crate::harness::subset::same_key_twice;
 use crate::methods::templates::Prompts;
 use crate::records::replay::Replay;
 use crate::records::transcript;
 
-/// What every episode of a run shares: the methods, the backend and the settings, and
-/// where the transcripts go.
+/// What every episode of a run shares: the methods, the backend and the settings.
 #[derive(Clone, Debug)]
 pub struct EpisodeSettings {
     /// The run's methods; an episode's key names its method.
@@ -44,9 +44,23 @@ pub struct EpisodeSettings {
     pub prompts: Prompts,
     /// Prices each line's tokens (`cost_usd`).
     pub prices: PriceTable,
-    /// The transcripts folder ([`crate::harness::results::transcripts_dir`] of the
-    /// results file); each episode's goes to its `seed<N>` subfolder.
-    pub transcripts: PathBuf,
+}
+
+impl EpisodeSettings {
+    /// `methods` answered by `backend`, with the paper's settings: 5 rounds of history,
+    /// the default planner bound, 2 x GT steps, the built-in prompts and prices.
+    pub fn new(methods: Vec<MethodSpec>, backend: BackendChoice) -> EpisodeSettings {
+        EpisodeSettings {
+            methods,
+            backend,
+            history: 5,
+            temperature: None,
+            max_states: Limits::DEFAULT_MAX_STATES,
+            max_steps: None,
+            prompts: Prompts::builtin(),
+            prices: PriceTable::builtin(),
+        }
+    }
 }
 
 /// What the planner says about a task, once per task.
@@ -76,10 +90,7 @@ impl RunTasks {
         for t in tasks {
             let key = (t.meta.scene.clone(), t.meta.task_id);
             if by_key.contains_key(&key) {
-                return Err(format!(
-                    "two tasks with scene {:?} and task_id {}: results could not tell them apart",
-                    key.0, key.1
-                ));
+                return Err(same_key_twice(&key));
             }
             by_key.insert(key, (Arc::clone(t), Arc::new(OnceCell::new())));
         }
@@ -144,13 +155,15 @@ pub fn episode_seed(seed: u32, method: &str, scene: &str, task_id: i64) -> u64 {
     z ^ (z >> 31)
 }
 
-/// Runs the episode `key` of `tasks` with `settings`, writing its transcript, on the
-/// current tokio runtime (multi-threaded: the episode itself runs on its blocking pool).
-/// `cancel` ends it as interrupted, or keeps it from starting.
+/// Runs the episode `key` of `tasks` with `settings`, writing its transcript to the
+/// `seed<N>` subfolder of `transcripts` (the run's [`crate::harness::results::transcripts_dir`]),
+/// on the current tokio runtime (multi-threaded; the episode itself runs on a thread of
+/// its own). `cancel` ends it as interrupted, or keeps it from starting.
 pub async fn run_one(
     tasks: &RunTasks,
     key: &EpisodeKey,
     settings: &EpisodeSettings,
+    transcripts: &Path,
     cancel: &Cancel,
 ) -> Result<EpisodeResult, String> {
     let method = settings
@@ -218,7 +231,7 @@ pub async fn run_one(
             (backend, None, settings_of_episode, budget)
         }
     };
-    let dir = settings.transcripts.join(format!("seed{}", key.seed));
+    let dir = transcripts.join(format!("seed{}", key.seed));
     let path = transcript_path(&dir, task, method.name());
     // An episode's future holds `&dyn Environment` across awaits, so it is not `Send`:
     // it runs to completion on a thread of its own, driven by the same multi-thread

@@ -95,10 +95,7 @@ pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, String> {
     for t in tasks {
         let key = (t.meta.scene.clone(), t.meta.task_id);
         if by_key.contains_key(&key) {
-            return Err(format!(
-                "two tasks with scene {:?} and task_id {}: results could not tell them apart",
-                key.0, key.1
-            ));
+            return Err(same_key_twice(&key));
         }
         order.push(key.clone());
         by_key.insert(key, Arc::new(t));
@@ -125,4 +122,11 @@ pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, String> {
         }
     }
     Ok(selection)
+}
+
+/// Why a run refuses two tasks with the same scene and task id (`key`).
+pub(crate) fn same_key_twice((scene, task_id): &(String, i64)) -> String {
+    format!(
+        "two tasks with scene {scene:?} and task_id {task_id}: results could not tell them apart"
+    )
 }

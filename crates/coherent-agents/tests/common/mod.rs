@@ -1,7 +1,10 @@
-//! The released benchmark for the integration tests, from `COHERENT_ORIGINAL_ENV`
-//! (`.cargo/config.toml`: `../shared/coherent-original/env` beside the checkout).
+//! What the integration tests share: the released benchmark, from `COHERENT_ORIGINAL_ENV`
+//! (`.cargo/config.toml`: `../shared/coherent-original/env` beside the checkout), and
+//! [`http`], the stub model servers' side of HTTP.
 
 #![allow(dead_code)]
+
+pub mod http;
 
 use std::path::PathBuf;
 use std::sync::Arc;
