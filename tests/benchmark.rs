@@ -6,9 +6,12 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use serde_json::Value;
+
+mod common;
+
+use common::{coherent, show};
 
 const SCENES: [&str; 5] = [
     "s1-apartment",
@@ -20,27 +23,6 @@ const SCENES: [&str; 5] = [
 
 fn benchmark_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("benchmark")
-}
-
-fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
-        .args(args)
-        .output()
-        .expect("the coherent binary runs")
-}
-
-fn show(out: &Output) -> String {
-    format!(
-        "status {:?}\n--- stdout (tail)\n{}\n--- stderr\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .rev()
-            .take(20)
-            .collect::<Vec<_>>()
-            .join("\n"),
-        String::from_utf8_lossy(&out.stderr)
-    )
 }
 
 /// `coherent plan <what> --json [extra]`: one object per task, keyed by (scene, id).

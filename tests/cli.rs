@@ -2,9 +2,13 @@
 //! the JSON that `plan --json` prints.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 use serde_json::{Value, json};
+
+mod common;
+
+use common::{coherent, demo, show};
 
 fn env_dir() -> PathBuf {
     PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
@@ -12,13 +16,6 @@ fn env_dir() -> PathBuf {
 
 fn env_file(n: usize) -> PathBuf {
     env_dir().join(format!("env{n}.json"))
-}
-
-fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
-        .args(args)
-        .output()
-        .expect("the coherent binary runs")
 }
 
 fn code(out: &Output) -> i32 {
@@ -33,15 +30,6 @@ fn stdout(out: &Output) -> String {
 
 fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-fn show(out: &Output) -> String {
-    format!(
-        "status {:?}\n--- stdout\n{}--- stderr\n{}",
-        out.status,
-        stdout(out),
-        stderr(out)
-    )
 }
 
 /// A temporary folder, removed when dropped.
@@ -408,10 +396,6 @@ fn help_and_version_exit_0() {
         assert_eq!(code(&out), 0, "{args:?}: {}", show(&out));
         assert!(!stdout(&out).is_empty(), "{args:?}");
     }
-}
-
-fn demo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json")
 }
 
 /// `plan --physics` carries the optimal plan out in Rapier and adds the four documented

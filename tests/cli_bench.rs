@@ -2,40 +2,12 @@
 //! env0, resume, `--report` in every format, our own benchmark's native40 subset, and
 //! the exit status of bad input.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+use std::process::Output;
 
-fn env0() -> PathBuf {
-    Path::new(env!("COHERENT_ORIGINAL_ENV")).join("env0.json")
-}
+mod common;
 
-fn scratch(name: &str) -> PathBuf {
-    let dir =
-        std::env::temp_dir().join(format!("coherent-cli-bench-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
-        .args(args)
-        // No endpoint from the environment may change the backend.
-        .env_remove("OPENAI_BASE_URL")
-        .env_remove("OPENAI_API_KEY")
-        .env_remove("COHERENT_MODEL")
-        .output()
-        .expect("the coherent binary runs")
-}
-
-fn show(out: &Output) -> String {
-    format!(
-        "status {:?}\n--- stdout\n{}--- stderr\n{}",
-        out.status.code(),
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
+use common::{coherent, env0, scratch, show};
 
 /// Asserts that `out` exited 0 and that its stdout says each of `texts`.
 fn says(out: &Output, texts: &[&str]) {

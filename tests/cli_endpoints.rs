@@ -3,13 +3,17 @@
 //! run goes on at the other, the backend line names both, and every call of the
 //! transcript names the endpoint that answered it.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufReader, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::thread;
 
 use serde_json::{Value, json};
+
+mod common;
+
+use common::{answer, demo, read_request};
 
 /// A server on a loopback port answering every request with the first robot, or its
 /// first action.
@@ -43,39 +47,6 @@ fn connection(socket: TcpStream) {
     }
 }
 
-fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
-    let mut length = 0;
-    loop {
-        let mut line = String::new();
-        if reader.read_line(&mut line).ok()? == 0 {
-            return None;
-        }
-        if line == "\r\n" {
-            break;
-        }
-        if let Some((k, v)) = line.split_once(':')
-            && k.eq_ignore_ascii_case("content-length")
-        {
-            length = v.trim().parse().ok()?;
-        }
-    }
-    let mut body = vec![0; length];
-    reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
-}
-
-fn answer(request: &Value) -> String {
-    let schema = &request["response_format"]["json_schema"];
-    let props = &schema["schema"]["properties"];
-    match schema["name"].as_str() {
-        Some("proposal") => {
-            json!({"reasoning": "", "robot": props["robot"]["enum"][0], "subtask": "go"})
-        }
-        _ => json!({"action": props["action"]["enum"][0], "subtask_complete": false, "note": ""}),
-    }
-    .to_string()
-}
-
 /// A loopback URL nobody listens on.
 fn refused() -> String {
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind loopback");
@@ -89,7 +60,7 @@ fn run(name: &str, args: &[&str], env: Option<&str>) -> (Output, PathBuf) {
         std::process::id()
     ));
     let _ = std::fs::remove_dir_all(&out);
-    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json");
+    let demo = demo();
     let mut command = Command::new(env!("CARGO_BIN_EXE_coherent"));
     command
         .arg("run")

@@ -5,7 +5,7 @@
 //! [`MEMORY_BOUND`]), leave a complete transcript, and print nothing a terminal would
 //! act on.
 
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -15,6 +15,10 @@ use std::thread;
 use std::time::{Duration, Instant};
 
 use serde_json::{Value, json};
+
+mod common;
+
+use common::read_request;
 
 /// The most resident memory a run against a hostile server may reach: the engine, the
 /// physics-free world and a few MB of response buffers fit many times over.
@@ -73,29 +77,6 @@ fn connection(socket: TcpStream, behaviour: Behaviour, stop: &AtomicBool) {
             return;
         }
     }
-}
-
-/// One request's JSON body (headers read up to the blank line, then `Content-Length`).
-fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
-    let mut length = 0;
-    loop {
-        let mut line = String::new();
-        if reader.read_line(&mut line).ok()? == 0 {
-            return None;
-        }
-        let line = line.trim_end();
-        if line.is_empty() {
-            break;
-        }
-        if let Some((name, value)) = line.split_once(':')
-            && name.eq_ignore_ascii_case("content-length")
-        {
-            length = value.trim().parse().ok()?;
-        }
-    }
-    let mut body = vec![0; length];
-    reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
 }
 
 fn respond(out: &mut TcpStream, body: &str) -> std::io::Result<()> {

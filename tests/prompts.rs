@@ -6,50 +6,19 @@
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::{Arc, Mutex};
 
 use serde_json::{Value, json};
+
+mod common;
+
+use common::{answer, coherent, demo, scratch, show, utf8};
 
 /// What the stub server answers every call with, in tokens.
 const PROMPT_TOKENS: u64 = 1000;
 const CACHED_TOKENS: u64 = 400;
 const COMPLETION_TOKENS: u64 = 50;
-
-fn demo() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json")
-}
-
-fn coherent(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_coherent"))
-        .args(args)
-        .env_remove("OPENAI_BASE_URL")
-        .env_remove("OPENAI_API_KEY")
-        .env_remove("COHERENT_MODEL")
-        .output()
-        .expect("the coherent binary runs")
-}
-
-fn show(out: &Output) -> String {
-    format!(
-        "status {:?}\n--- stdout\n{}--- stderr\n{}",
-        out.status,
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    )
-}
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("coherent-prompts-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("scratch folder");
-    dir
-}
-
-fn utf8(path: &Path) -> &str {
-    path.to_str().expect("UTF-8 path")
-}
 
 /// A chat-completions server on 127.0.0.1 that records every request body and answers
 /// each role with a valid choice: the first robot, the first action of the list.
@@ -126,25 +95,6 @@ fn serve(socket: TcpStream, log: &Mutex<Vec<Value>>) {
             return;
         }
     }
-}
-
-/// A valid answer to whichever role asks, from the schema it sent.
-fn answer(request: &Value) -> String {
-    let schema = &request["response_format"]["json_schema"];
-    let properties = &schema["schema"]["properties"];
-    match schema["name"].as_str() {
-        Some("proposal") => json!({
-            "reasoning": "go",
-            "robot": properties["robot"]["enum"][0],
-            "subtask": "do the first thing you can",
-        }),
-        _ => json!({
-            "action": properties["action"]["enum"][0],
-            "subtask_complete": false,
-            "note": "",
-        }),
-    }
-    .to_string()
 }
 
 /// The transcript a `--json` run names.

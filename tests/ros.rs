@@ -19,11 +19,9 @@ fn demo() -> String {
     format!("{}/examples/tasks/demo.json", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// The released env0 tasks (`COHERENT_ORIGINAL_ENV`, set in `.cargo/config.toml`).
 fn env0() -> String {
-    format!(
-        "{}/../shared/coherent-original/env/env0.json",
-        env!("CARGO_MANIFEST_DIR")
-    )
+    format!("{}/env0.json", env!("COHERENT_ORIGINAL_ENV"))
 }
 
 /// Sets up the namespace's loopback for DDS, says so, then lives as long as its stdin.

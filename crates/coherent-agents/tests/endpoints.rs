@@ -19,13 +19,12 @@ use coherent_agents::retry::Backoff;
 use coherent_agents::transcript;
 use coherent_agents::{ApiKey, Cancel, OpenAiClient, OpenAiConfig};
 use coherent_core::Task;
-use serde_json::{Value, json};
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 
 mod common;
 
-use common::http::{Request, read_request};
+use common::http::{Request, answer, completion, read_request};
 
 const KEY: &str = "sk-endpoints-0123456789-SECRET";
 
@@ -77,7 +76,7 @@ async fn connection(mut socket: TcpStream, stub: Arc<Stub>) {
         let response = if n >= stub.fail_from {
             http(500, "{\"error\": \"the GPU fell over\"}")
         } else {
-            http(200, &completion(&answer(&body)))
+            http(200, &completion(&answer(&body), "stop"))
         };
         if socket.write_all(response.as_bytes()).await.is_err() {
             return;
@@ -90,28 +89,6 @@ fn http(status: u16, body: &str) -> String {
         "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\n\r\n{body}",
         body.len()
     )
-}
-
-fn completion(content: &str) -> String {
-    json!({
-        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": "stop"}],
-        "usage": {"prompt_tokens": 100, "completion_tokens": 10},
-    })
-    .to_string()
-}
-
-/// A valid answer to whichever role asks: the first robot, its first action.
-fn answer(request: &Value) -> String {
-    let schema = &request["response_format"]["json_schema"]["schema"]["properties"];
-    match request["response_format"]["json_schema"]["name"].as_str() {
-        Some("proposal") => json!({
-            "reasoning": "go",
-            "robot": schema["robot"]["enum"][0],
-            "subtask": "do the first thing you can",
-        }),
-        _ => json!({"action": schema["action"]["enum"][0], "subtask_complete": false, "note": ""}),
-    }
-    .to_string()
 }
 
 fn scratch(name: &str) -> PathBuf {

@@ -14,13 +14,13 @@ use coherent_agents::retry::Backoff;
 use coherent_agents::transcript::{self, Outcome, Status};
 use coherent_agents::{ApiKey, Cancel, Episode, OpenAiClient, OpenAiConfig};
 use coherent_core::{SymbolicEnv, Task, load_tasks};
-use serde_json::{Value, json};
+use serde_json::json;
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 
 mod common;
 
-use common::http::{Request, read_request};
+use common::http::{Request, answer, completion, read_request};
 
 const KEY: &str = "sk-test-0123456789-SECRET";
 
@@ -79,7 +79,7 @@ async fn connection(mut socket: TcpStream, script: Script, log: Arc<Mutex<Vec<Re
             Some(Fault::Close) => return,
             Some(Fault::Reply(status, headers, body)) => http(status, &headers, &body),
             Some(Fault::Content(content, finish)) => http(200, &[], &completion(&content, finish)),
-            None => http(200, &[], &completion(&good_answer(&body), "stop")),
+            None => http(200, &[], &completion(&answer(&body), "stop")),
         };
         if socket.write_all(response.as_bytes()).await.is_err() {
             return;
@@ -98,28 +98,6 @@ fn http(status: u16, headers: &[(&str, String)], body: &str) -> String {
     out.push_str("\r\n");
     out.push_str(body);
     out
-}
-
-fn completion(content: &str, finish: &str) -> String {
-    json!({
-        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": finish}],
-        "usage": {"prompt_tokens": 100, "completion_tokens": 10},
-    })
-    .to_string()
-}
-
-/// A valid answer to whichever role asks: the first robot and its first action.
-fn good_answer(request: &Value) -> String {
-    let schema = &request["response_format"]["json_schema"]["schema"]["properties"];
-    match request["response_format"]["json_schema"]["name"].as_str() {
-        Some("proposal") => json!({
-            "reasoning": "go",
-            "robot": schema["robot"]["enum"][0],
-            "subtask": "do the first thing you can",
-        }),
-        _ => json!({"action": schema["action"]["enum"][0], "subtask_complete": false, "note": ""}),
-    }
-    .to_string()
 }
 
 fn demo() -> Arc<Task> {

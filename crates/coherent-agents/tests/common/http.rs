@@ -1,6 +1,6 @@
 //! The server side of HTTP/1.1 for the stub model servers of the integration tests.
 
-use serde_json::Value;
+use serde_json::{Value, json};
 use tokio::io::AsyncReadExt;
 use tokio::net::TcpStream;
 
@@ -47,4 +47,29 @@ pub async fn read_request(socket: &mut TcpStream) -> Option<Request> {
         authorization: header("authorization"),
         body: serde_json::from_slice(&buf[head_end..head_end + length]).ok()?,
     })
+}
+
+/// A chat completion body with `content` and `finish` as its finish reason, and 100
+/// prompt and 10 completion tokens.
+pub fn completion(content: &str, finish: &str) -> String {
+    json!({
+        "choices": [{"index": 0, "message": {"role": "assistant", "content": content}, "finish_reason": finish}],
+        "usage": {"prompt_tokens": 100, "completion_tokens": 10},
+    })
+    .to_string()
+}
+
+/// A valid answer to whichever role asks, from the schema it sent: the first robot, or
+/// the first action of the list.
+pub fn answer(request: &Value) -> String {
+    let schema = &request["response_format"]["json_schema"]["schema"]["properties"];
+    match request["response_format"]["json_schema"]["name"].as_str() {
+        Some("proposal") => json!({
+            "reasoning": "go",
+            "robot": schema["robot"]["enum"][0],
+            "subtask": "do the first thing you can",
+        }),
+        _ => json!({"action": schema["action"]["enum"][0], "subtask_complete": false, "note": ""}),
+    }
+    .to_string()
 }

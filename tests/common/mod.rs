@@ -1,0 +1,104 @@
+//! What the command-line tests share: the `coherent` binary run with no endpoint from
+//! the environment, its output shown in a failure message, scratch folders, the bundled
+//! and the released tasks, and the server side of a stub model server (one blocking
+//! thread per connection).
+
+#![allow(dead_code)]
+
+use std::io::{BufRead, BufReader, Read};
+use std::net::TcpStream;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+
+/// Runs `coherent ARGS` to its end. No endpoint from the environment may change the
+/// backend: `OPENAI_BASE_URL`, `OPENAI_API_KEY` and `COHERENT_MODEL` are removed.
+pub fn coherent(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args(args)
+        .env_remove("OPENAI_BASE_URL")
+        .env_remove("OPENAI_API_KEY")
+        .env_remove("COHERENT_MODEL")
+        .output()
+        .expect("the coherent binary runs")
+}
+
+/// A run's status, the last 40 lines of its stdout and its stderr, for a failure message.
+pub fn show(out: &Output) -> String {
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let lines: Vec<&str> = stdout.lines().collect();
+    let tail = lines[lines.len().saturating_sub(40)..].join("\n");
+    format!(
+        "status {:?}\n--- stdout (last 40 lines)\n{tail}\n--- stderr\n{}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    )
+}
+
+/// An empty folder of its own for the test `name` (emptied if a crashed run left it).
+pub fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("coherent-test-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("scratch folder");
+    dir
+}
+
+pub fn utf8(path: &Path) -> &str {
+    path.to_str().expect("a UTF-8 path")
+}
+
+/// The bundled demo task.
+pub fn demo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json")
+}
+
+/// The released env0 tasks (`COHERENT_ORIGINAL_ENV`, set in `.cargo/config.toml`).
+pub fn env0() -> PathBuf {
+    Path::new(env!("COHERENT_ORIGINAL_ENV")).join("env0.json")
+}
+
+/// One HTTP/1.1 request's JSON body: the headers up to the blank line, then
+/// `Content-Length` bytes. `None` when the client closed the connection or sent
+/// something else.
+pub fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
+    let mut length = 0;
+    loop {
+        let mut line = String::new();
+        if reader.read_line(&mut line).ok()? == 0 {
+            return None;
+        }
+        let line = line.trim_end();
+        if line.is_empty() {
+            break;
+        }
+        if let Some((name, value)) = line.split_once(':')
+            && name.eq_ignore_ascii_case("content-length")
+        {
+            length = value.trim().parse().ok()?;
+        }
+    }
+    let mut body = vec![0; length];
+    reader.read_exact(&mut body).ok()?;
+    serde_json::from_slice(&body).ok()
+}
+
+/// A valid answer to whichever role asks, from the schema it sent: the first robot, or
+/// the first action of the list.
+pub fn answer(request: &Value) -> String {
+    let format = &request["response_format"]["json_schema"];
+    let properties = &format["schema"]["properties"];
+    match format["name"].as_str() {
+        Some("proposal") => json!({
+            "reasoning": "go",
+            "robot": properties["robot"]["enum"][0],
+            "subtask": "do the first thing you can",
+        }),
+        _ => json!({
+            "action": properties["action"]["enum"][0],
+            "subtask_complete": false,
+            "note": "",
+        }),
+    }
+    .to_string()
+}
