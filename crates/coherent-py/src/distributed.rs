@@ -20,9 +20,8 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::convert::to_py;
-
 use crate::bench::{outcome_dict, run_backend, run_methods};
+use crate::convert::to_py;
 use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_table, prompt_set};
 use crate::task::PyTask;
@@ -97,7 +96,8 @@ impl PyLedger {
         let methods = methods?;
         run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
-        let tasks = RunTasks::new(&tasks).map_err(PyValueError::new_err)?;
+        let tasks =
+            RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
         let mut ledger = Ledger::open(&out).map_err(|e| errors::coherent(py, e))?;
         let pending = ledger.plan(&tasks, &methods, seeds);
         let mut progress = progress.then(|| Progress::new(false));
