@@ -61,14 +61,9 @@ impl Reply {
     }
 }
 
-/// Asks `backend`, records the call, and gives the answer's text unless it is empty,
-/// refused or filtered; `None` when cancelled.
-pub(crate) async fn ask(
-    backend: &dyn Backend,
-    query: Query,
-    cancel: &Cancel,
-    calls: &mut Vec<Call>,
-) -> Option<Result<Reply, Unusable>> {
+/// Asks `backend` and records the exchange: the call with its answer or its error, and
+/// the endpoint that gave it; `None` when cancelled.
+pub(crate) async fn exchange(backend: &dyn Backend, query: Query, cancel: &Cancel) -> Option<Call> {
     let mut call = Call {
         role: query.role,
         robot: query.robot.map(|r| r.0),
@@ -84,32 +79,43 @@ pub(crate) async fn ask(
         r = backend.respond(query) => r,
     };
     call.endpoint = response.endpoint;
-    let reply = match response.result {
-        Ok(answer) => {
-            let reply = match &answer.finish {
-                Finish::Refusal(words) => Err(format!("the model refused: {words}")),
-                Finish::ContentFilter => Err("the answer was withheld by a content filter".into()),
-                _ if answer.text.trim().is_empty() => Err(if answer.finish == Finish::Length {
-                    "the answer was cut off at the token limit before any text".into()
-                } else {
-                    "the answer was empty".into()
-                }),
-                finish => Ok(Reply {
-                    text: answer.text.clone(),
-                    truncated: *finish == Finish::Length,
-                }),
-            };
-            call.answer = Some(answer);
-            reply.map_err(Unusable::Bad)
-        }
-        Err(e) => {
-            call.error = Some(e.clone());
-            if e.ends_episode() {
-                Err(Unusable::Failed(e))
+    match response.result {
+        Ok(answer) => call.answer = Some(answer),
+        Err(e) => call.error = Some(e),
+    }
+    Some(call)
+}
+
+/// Asks `backend`, records the call, and gives the answer's text unless it is empty,
+/// refused or filtered; `None` when cancelled.
+pub(crate) async fn ask(
+    backend: &dyn Backend,
+    query: Query,
+    cancel: &Cancel,
+    calls: &mut Vec<Call>,
+) -> Option<Result<Reply, Unusable>> {
+    let call = exchange(backend, query, cancel).await?;
+    let reply = match (&call.answer, &call.error) {
+        (Some(answer), _) => match &answer.finish {
+            Finish::Refusal(words) => Err(format!("the model refused: {words}")),
+            Finish::ContentFilter => Err("the answer was withheld by a content filter".into()),
+            _ if answer.text.trim().is_empty() => Err(if answer.finish == Finish::Length {
+                "the answer was cut off at the token limit before any text".into()
             } else {
-                Err(Unusable::Bad(e.to_string()))
-            }
+                "the answer was empty".into()
+            }),
+            finish => Ok(Reply {
+                text: answer.text.clone(),
+                truncated: *finish == Finish::Length,
+            }),
         }
+        .map_err(Unusable::Bad),
+        (None, Some(e)) if e.ends_episode() => Err(Unusable::Failed(e.clone())),
+        (None, Some(e)) => Err(Unusable::Bad(e.to_string())),
+        // An exchange records one or the other; a call read back may have neither.
+        (None, None) => Err(Unusable::Bad(
+            "the call has neither an answer nor an error".into(),
+        )),
     };
     calls.push(call);
     Some(reply)

@@ -19,7 +19,6 @@ use crate::episode::cancel::Cancel;
 use crate::episode::policy::{Act, Executed, Policy, View};
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint;
-use crate::methods::prompt::robot_label;
 use crate::records::transcript::{Decision, Outcome, Round};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
@@ -100,18 +99,11 @@ fn take(
             joint::act(env, task, round, robot, action, note);
         }
         Err(e) => {
-            let line = format!("{}: {action}", robot_label(task, robot));
-            round.outcome = Outcome::Infeasible {
+            let outcome = Outcome::Infeasible {
                 reason: "unknown_robot".into(),
                 message: e.to_string(),
             };
-            round.feedback = joint::feedback(&line, &round.outcome);
-            round.decision = Some(Decision {
-                can_do: true,
-                action: Some(line),
-                subtask_complete: true,
-                note,
-            });
+            joint::decided(task, round, robot, action, outcome, note);
         }
     }
 }

@@ -220,8 +220,22 @@ pub(crate) fn act(
     action: &str,
     note: String,
 ) {
+    let outcome = execute(env, round, robot, action);
+    decided(task, round, robot, action, outcome, note);
+}
+
+/// Records `robot`'s `action` as the round's decision, with what came of it (`outcome`)
+/// and the sentence that says so.
+pub(crate) fn decided(
+    task: &Task,
+    round: &mut Round,
+    robot: NodeId,
+    action: &str,
+    outcome: Outcome,
+    note: String,
+) {
     let line = format!("{}: {action}", robot_label(task, robot));
-    round.outcome = execute(env, round, robot, action);
+    round.outcome = outcome;
     round.feedback = feedback(&line, &round.outcome);
     round.decision = Some(Decision {
         can_do: true,

@@ -73,12 +73,13 @@ use std::time::Instant;
 use coherent_core::{Environment, State, Task, rules};
 
 use crate::backends::llm::{Backend, Finish, Query, Role, Situation};
+use crate::episode::ask::exchange;
 use crate::episode::cancel::Cancel;
 use crate::episode::environment::{execute, team_observation};
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint::{self, Executed, JointAction, joint_actions};
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Call, Decision, Outcome, Round};
+use crate::records::transcript::{Decision, Outcome, Round};
 use crate::rng::{Rng, seed_of};
 
 /// Settings of one MCTS episode; the default is the authors' (docs/methods.md).
@@ -455,45 +456,25 @@ async fn round(
                 max_tokens: config.max_tokens,
                 situation: Situation::now(task, env, None),
             };
-            let mut call = Call {
-                role: Role::Assigner,
-                robot: None,
-                messages: messages.clone(),
-                answer: None,
-                error: None,
-                client: None,
-                endpoint: None,
+            let Some(call) = exchange(backend, query, cancel).await else {
+                return Ok(None);
             };
-            let response = tokio::select! {
-                biased;
-                () = cancel.cancelled() => return Ok(None),
-                r = backend.respond(query) => r,
-            };
-            call.endpoint = response.endpoint;
-            match response.result {
-                Ok(answer) => {
-                    // A refusal, a filtered or an empty answer names nothing.
-                    let usable = matches!(answer.finish, Finish::Stop | Finish::Length)
-                        && !answer.text.trim().is_empty();
-                    if usable
-                        && let Some(i) = joint::match_line(&lines, &joint::read_line(&answer.text))
-                    {
-                        counts[i] += 1;
-                    }
-                    call.answer = Some(answer);
-                    round.calls.push(call);
-                }
-                Err(e) => {
-                    call.error = Some(e.clone());
-                    round.calls.push(call);
-                    if e.ends_episode() {
-                        round.outcome = Outcome::BackendError {
-                            message: e.to_string(),
-                        };
-                        round.feedback = format!("The model could not be reached: {e}");
-                        return Ok(Some(close(env, round, start)));
-                    }
-                }
+            // A refusal, a filtered or an empty answer names nothing.
+            if let Some(answer) = &call.answer
+                && matches!(answer.finish, Finish::Stop | Finish::Length)
+                && !answer.text.trim().is_empty()
+                && let Some(i) = joint::match_line(&lines, &joint::read_line(&answer.text))
+            {
+                counts[i] += 1;
+            }
+            let ended = call.error.as_ref().filter(|e| e.ends_episode()).cloned();
+            round.calls.push(call);
+            if let Some(e) = ended {
+                round.outcome = Outcome::BackendError {
+                    message: e.to_string(),
+                };
+                round.feedback = format!("The model could not be reached: {e}");
+                return Ok(Some(close(env, round, start)));
             }
         }
         prior = Some(mix_prior(&counts, config.llm_weight));
