@@ -1,6 +1,6 @@
 //! A method written outside the crate (a Python class, say) as the episode loop sees it:
-//! a [`Policy`] that is asked once per step for one decision, given a [`View`] of where
-//! the episode stands. The loop that asks it is [`crate::methods::external`]; everything
+//! a [`Policy`] that is asked once per step for one decision, given a [`StepView`] of
+//! where the episode stands. The loop that asks it is [`crate::methods::external`]; everything
 //! else (the step budget, the feasibility check, the transcript, the benchmark) is the
 //! same as for the built-in methods.
 
@@ -23,9 +23,10 @@ pub struct RobotView {
     pub actions: Vec<String>,
 }
 
-/// One earlier step: who acted, what, whether it ran, and why not.
+/// One earlier step as a method is shown it: who acted, what, whether it ran, and why
+/// not.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Executed {
+pub struct PastStep {
     /// `None` when the method chose no action.
     pub robot: Option<NodeId>,
     pub action: Option<String>,
@@ -34,9 +35,9 @@ pub struct Executed {
     pub reason: Option<String>,
 }
 
-/// Where an episode stands when a method is asked for a step.
+/// What a method is shown when it is asked for a step: where the episode stands.
 #[derive(Clone, Debug)]
-pub struct View {
+pub struct StepView {
     pub task: Arc<Task>,
     /// The step about to be taken, from 1.
     pub step: u32,
@@ -45,20 +46,20 @@ pub struct View {
     /// The team, in the task's order.
     pub robots: Vec<RobotView>,
     /// Every earlier step, oldest first.
-    pub history: Vec<Executed>,
+    pub history: Vec<PastStep>,
     /// The symbolic state, for the observations' text.
     pub state: State,
 }
 
-impl View {
+impl StepView {
     /// Where `env` stands before step `step` of `max_steps`, after `history`.
     pub fn now(
         env: &(dyn Environment + Send),
         task: &Arc<Task>,
         step: u32,
         max_steps: u32,
-        history: &[Executed],
-    ) -> View {
+        history: &[PastStep],
+    ) -> StepView {
         let robots = task
             .robots
             .iter()
@@ -76,7 +77,7 @@ impl View {
                 }
             })
             .collect();
-        View {
+        StepView {
             task: Arc::clone(task),
             step,
             max_steps,
@@ -117,7 +118,7 @@ pub struct Act {
 /// A method written outside the crate: asked once per step.
 pub trait Policy: Send {
     /// The decision for the step `view` describes (shared, so that a policy may keep it).
-    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act>;
+    fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act>;
 }
 
 /// Makes the policy of one episode, or says why it cannot.

@@ -8,7 +8,7 @@ use std::time::Instant;
 use coherent_core::{Environment, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::records::transcript::{Outcome, Round, Status, Summary};
+use crate::records::transcript::{Round, RoundOutcome, Status, Summary};
 
 /// An episode as it ran.
 #[derive(Clone, Debug, PartialEq)]
@@ -50,11 +50,11 @@ pub(crate) async fn rounds(
         };
         on_round(&round)?;
         match &round.outcome {
-            Outcome::BackendError { message } => {
+            RoundOutcome::BackendError { message } => {
                 status = Status::BackendError;
                 error = Some(message.clone());
             }
-            Outcome::MethodError { message } => {
+            RoundOutcome::MethodError { message } => {
                 status = Status::Error;
                 error = Some(message.clone());
             }
