@@ -395,3 +395,55 @@ fn an_error_does_not_count_and_runs_again_on_resume() {
     let second = run(&tasks, &cfg);
     assert_eq!((second.skipped, second.written), (3, 1));
 }
+
+/// Every action of every episode in Rapier too agrees with the rules: the optimal plan
+/// and PEFA (on the built-in backend) take the same steps to the same ends on the demo
+/// and on env0's tasks of the paper's subset, each transcript saying it ran in physics.
+#[test]
+fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
+    let dir = common::scratch("bench-physics");
+    let mut tasks = bench::choose(&common::demo(), &Subset::All)
+        .expect("the demo reads")
+        .selection
+        .tasks;
+    tasks.extend(paper40_env0());
+    let methods = builtin_methods(&[Method::Optimal, Method::Pefa]);
+    let mut runs = Vec::new();
+    for physics in [false, true] {
+        let out = dir.join(format!("physics-{physics}.jsonl"));
+        let episodes = EpisodesRequest {
+            backend: builtin(),
+            physics,
+            ..EpisodesRequest::new(methods.clone())
+        };
+        let config = BenchConfig {
+            episodes: episodes.prepare().expect("valid settings"),
+            seeds: 1,
+            concurrency: 2,
+            out: out.clone(),
+        };
+        run(&tasks, &config);
+        let mut got = lines(&out);
+        for l in &got {
+            let recorded = episode::recorded(Path::new(&l.transcript)).expect("a transcript");
+            assert_eq!(
+                recorded.transcript.header.physics, physics,
+                "{}",
+                l.transcript
+            );
+        }
+        got = got
+            .into_iter()
+            .map(|l| ResultLine {
+                wall_ms: 0.0,
+                transcript: String::new(),
+                ..l
+            })
+            .collect();
+        got.sort_by_key(ResultLine::key);
+        runs.push(got);
+    }
+    assert_eq!(runs[0].len(), 9 * 2);
+    assert!(runs[1].iter().all(|l| l.success), "{:?}", runs[1]);
+    assert_eq!(runs[0], runs[1]);
+}

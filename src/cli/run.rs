@@ -19,8 +19,7 @@ use crate::session::engine::{
     Budget, Cancel, HISTORY_WINDOW, Limits, MethodSpec, Round, RoundOutcome, Status, Summary, Task,
     shown,
 };
-use crate::session::episode::{Ending, Prepared};
-use crate::session::request::{ReplayRequest, RunRequest};
+use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
 use crate::session::{self, Error, prompts};
 

@@ -1,7 +1,9 @@
-//! The one episode runner, whoever asks for the episode: `coherent run` and
-//! `coherent.run` ([`crate::session::request::RunRequest`]), a replay of a transcript
-//! ([`crate::session::request::ReplayRequest`]), or a benchmark, locally or on a worker
-//! ([`crate::session::bench`]). Each fills an [`EpisodeSpec`] (the task, the settings,
+//! One episode, whoever asks for it, and the one runner of them all. A front end fills a
+//! request, a new episode ([`RunRequest`]: `coherent run`, `coherent.run`) or the replay
+//! of a transcript ([`ReplayRequest`]), and prepares it in one call that does the whole
+//! sequence (the prompt set, the prices, the task, the endpoint and the backend, the
+//! budget, the environment); a benchmark prepares each of its episodes
+//! ([`crate::session::bench`]). Each becomes an [`EpisodeSpec`] (the task, the settings,
 //! the budget, the backend, the robots); [`prepare`] builds its environment, and
 //! [`Prepared::run`] runs it: the transcript written as it goes, a replay compared with
 //! its recording, the model calls priced ([`ModelUse`]), into a [`Ran`].
@@ -9,15 +11,180 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Settings};
+use coherent_agents::episode::{self, Budget, HISTORY_WINDOW, MethodSpec, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::transcript::{self, Round, Status, Transcript};
 use coherent_agents::{BackendInfo, Cancel, Episode, ModelUse, PriceTable, Replay};
-use coherent_core::{Environment, Task};
+use coherent_core::planner::Limits;
+use coherent_core::{Environment, SymbolicEnv, Task, native};
 
-use crate::session::backend::BackendChoice;
+use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::error::Error;
-use crate::session::robots::{Robots, environment};
+use crate::session::prompts::{PriceSource, PromptSource};
+use crate::session::robots::{Robots, ros_error};
+use crate::session::tasks::TaskSource;
+
+/// A new episode.
+#[derive(Debug)]
+pub struct RunRequest {
+    pub task: TaskSource,
+    pub method: MethodSpec,
+    /// Who answers the method's questions.
+    pub backend: BackendRequest,
+    pub prompts: PromptSource,
+    pub prices: PriceSource,
+    /// Who carries the actions out.
+    pub robots: Robots,
+    /// Every action in Rapier too.
+    pub physics: bool,
+    /// Overrides the budget of 2 x GT.
+    pub max_steps: Option<u32>,
+    /// Rounds of history the methods see.
+    pub history: usize,
+    /// The episode's seed: the simulated backend's mistakes, MCTS's search, DMRS's
+    /// speaking order (the model's sampling seed is the endpoint's).
+    pub seed: Option<u64>,
+    /// Most states one planner search may visit (the budget without a GT, the built-in
+    /// and simulated backends, the optimal method).
+    pub max_states: usize,
+    /// The folder the transcript goes to.
+    pub out: PathBuf,
+}
+
+impl RunRequest {
+    /// `method` on `task` with the defaults: the backend the environment configures, the
+    /// built-in prompts and prices, local robots, no physics, 2 x GT steps, the history
+    /// window, transcripts into `runs/`.
+    pub fn new(task: TaskSource, method: MethodSpec) -> RunRequest {
+        RunRequest {
+            task,
+            method,
+            backend: BackendRequest::default(),
+            prompts: PromptSource::default(),
+            prices: PriceSource::default(),
+            robots: Robots::Local,
+            physics: false,
+            max_steps: None,
+            history: HISTORY_WINDOW,
+            seed: None,
+            max_states: Limits::DEFAULT_MAX_STATES,
+            out: PathBuf::from("runs"),
+        }
+    }
+
+    /// The episode, ready to run. The prompt set is read first, so that a bad template
+    /// costs nothing; sizing the budget may plan (`cancel` stops it); over ROS 2 the
+    /// robots' servers are awaited.
+    pub fn prepare(self, cancel: &Cancel) -> Result<Prepared, Error> {
+        let prompts = self.prompts.read()?;
+        let prices = self.prices.read()?;
+        let task = self.task.task()?;
+        let choice = self.backend.choose()?;
+        let limits = Limits {
+            cancel: Some(cancel.flag()),
+            ..Limits::max_states(self.max_states)
+        };
+        let budget = Budget::searched(&task, self.max_steps, &limits)?;
+        let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
+        let settings = Settings {
+            method: self.method,
+            history: self.history,
+            temperature: choice.temperature(),
+            seed: self.seed,
+            physics: self.physics,
+            robots: self.robots.record(),
+            prompts,
+        };
+        let spec = EpisodeSpec {
+            task,
+            settings,
+            budget,
+            backend,
+            robots: self.robots,
+            out: self.out,
+            prices,
+            recording: None,
+            choice: Some(choice),
+        };
+        prepare(spec, cancel)
+    }
+}
+
+/// The replay of a recorded episode: its task, settings (the prompt set included) and
+/// budget as recorded, answered from the recording (no network), the robots in this
+/// process.
+#[derive(Debug)]
+pub struct ReplayRequest {
+    /// The transcript.
+    pub transcript: PathBuf,
+    /// When given, the recorded task must be this one.
+    pub task: Option<TaskSource>,
+    /// Prices the recorded tokens.
+    pub prices: PriceSource,
+    /// The folder the replay's transcript goes to.
+    pub out: PathBuf,
+}
+
+impl ReplayRequest {
+    /// The replay, ready to run.
+    pub fn prepare(self) -> Result<Prepared, Error> {
+        let prices = self.prices.read()?;
+        let path = self.transcript;
+        let recorded = transcript::read(&path)?;
+        if let Some(given) = self.task
+            && native::to_value(&*given.task()?) != recorded.header.task
+        {
+            return Err(Error::Invalid(format!(
+                "the task given differs from the one recorded in {}",
+                path.display()
+            )));
+        }
+        let replay = Replay::prepare(&recorded, &path)?;
+        let spec = EpisodeSpec {
+            task: Arc::clone(&replay.task),
+            settings: replay.settings.clone(),
+            budget: replay.budget,
+            backend: Arc::clone(&replay.backend) as Arc<dyn Backend>,
+            robots: Robots::Local,
+            out: self.out,
+            prices,
+            recording: Some((replay, path)),
+            choice: None,
+        };
+        prepare(spec, &Cancel::default())
+    }
+}
+
+/// The environment an episode runs in: Rapier with `physics`, else the rules alone; over
+/// ROS 2 with [`Robots::Ros2`] (physics is then the servers' business), once every
+/// robot's server is there, with `cancel` cancelling the goal in flight.
+pub fn environment(
+    task: &Arc<Task>,
+    physics: bool,
+    robots: &Robots,
+    cancel: &Cancel,
+) -> Result<Box<dyn Environment + Send + Sync>, Error> {
+    Ok(match robots {
+        Robots::Local if physics => Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?),
+        Robots::Local => Box::new(SymbolicEnv::new(Arc::clone(task))),
+        Robots::Ros2(_) if physics => {
+            return Err(Error::Invalid(
+                "over ROS 2 physics is the robots' business: pass --physics to \
+                 `coherent robots serve` instead"
+                    .into(),
+            ));
+        }
+        Robots::Ros2(options) => Box::new(
+            coherent_ros::Ros2Env::connect(
+                Arc::clone(task),
+                options.clone(),
+                Some(cancel.flag()),
+                crate::session::runtime()?.handle().clone(),
+            )
+            .map_err(ros_error)?,
+        ),
+    })
+}
 
 /// Everything one episode runs with.
 pub struct EpisodeSpec {

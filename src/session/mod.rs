@@ -4,16 +4,15 @@
 //! their arguments into the session's types, call it, and print or convert what comes
 //! back; everything between is here, written once:
 //!
-//! - [`request`]: an episode as a front end asks for it ([`request::RunRequest`],
-//!   [`request::ReplayRequest`]), prepared in one call;
-//! - [`episode`]: the one episode runner under `run`, `replay` and `bench`, in a
-//!   symbolic or physical environment or with robots over ROS 2;
+//! - [`episode`]: an episode as a front end asks for it ([`episode::RunRequest`],
+//!   [`episode::ReplayRequest`]), prepared in one call, and the one episode runner under
+//!   `run`, `replay` and `bench`, in a symbolic or physical environment or with robots
+//!   over ROS 2;
 //! - [`bench`]: methods x tasks x seeds into a resumable results file, locally or
 //!   through a worker of a distributed executor;
-//! - [`backend`] and [`endpoint`]: which backend answers, the model endpoint completed
-//!   from the environment;
-//! - [`robots`]: who carries the actions out, the environment of an episode, the
-//!   reference robot servers over ROS 2;
+//! - [`backend`]: which backend answers, the model endpoint completed from the
+//!   environment;
+//! - [`robots`]: who carries the actions out, the reference robot servers over ROS 2;
 //! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
 //! - [`render`]: the scene from above and the robots' paths;
@@ -26,13 +25,11 @@
 pub mod backend;
 pub mod bench;
 pub mod check;
-pub mod endpoint;
 pub mod engine;
 pub mod episode;
 pub mod error;
 pub mod prompts;
 pub mod render;
-pub mod request;
 pub mod robots;
 pub mod tasks;
 

@@ -1,15 +1,13 @@
 //! Who carries an episode's actions out: this process (the rules, and Rapier with
-//! physics) or robots over ROS 2, one action server per robot; the environment of an
-//! episode either way; and the reference robot servers (`coherent robots serve`).
+//! physics) or robots over ROS 2, one action server per robot; and the reference robot
+//! servers (`coherent robots serve`).
 
 use std::future::Future;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent_agents::Cancel;
 use coherent_agents::transcript::RobotsRecord;
-use coherent_core::{Environment, SymbolicEnv, Task};
 use coherent_ros::{Faults, ServeOptions};
 
 use crate::session::error::Error;
@@ -51,37 +49,6 @@ impl Robots {
             },
         }
     }
-}
-
-/// The environment an episode runs in: Rapier with `physics`, else the rules alone; over
-/// ROS 2 with [`Robots::Ros2`] (physics is then the servers' business), once every
-/// robot's server is there, with `cancel` cancelling the goal in flight.
-pub fn environment(
-    task: &Arc<Task>,
-    physics: bool,
-    robots: &Robots,
-    cancel: &Cancel,
-) -> Result<Box<dyn Environment + Send + Sync>, Error> {
-    Ok(match robots {
-        Robots::Local if physics => Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?),
-        Robots::Local => Box::new(SymbolicEnv::new(Arc::clone(task))),
-        Robots::Ros2(_) if physics => {
-            return Err(Error::Invalid(
-                "over ROS 2 physics is the robots' business: pass --physics to \
-                 `coherent robots serve` instead"
-                    .into(),
-            ));
-        }
-        Robots::Ros2(options) => Box::new(
-            coherent_ros::Ros2Env::connect(
-                Arc::clone(task),
-                options.clone(),
-                Some(cancel.flag()),
-                crate::session::runtime()?.handle().clone(),
-            )
-            .map_err(ros_error)?,
-        ),
-    })
 }
 
 /// A `coherent-ros` error as the session's: a setting that cannot be used, a world

@@ -8,12 +8,11 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
-use coherent::session;
-use coherent::session::endpoint;
 use coherent::session::engine::{
     Answer, ApiKey, Backend, Backoff, Call, Chat, Finish, LlmError, Message, OpenAiClient,
     OpenAiConfig, OutputMode, Role,
 };
+use coherent::session::{self, backend};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -115,7 +114,7 @@ impl PyLlm {
             output: format,
             max_response_bytes,
         };
-        let config = endpoint::complete(given)
+        let config = backend::complete(given)
             .map_err(|e| errors::session_err(py, e))?
             .ok_or_else(|| {
                 errors::backend(

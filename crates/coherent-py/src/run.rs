@@ -1,5 +1,5 @@
 //! Episodes: `run`, `replay`, `load_episode` and the `Episode` they give. The episode is
-//! the session's (`coherent::session::request` and `::episode`), as for `coherent run`:
+//! the session's (`coherent::session::episode`), as for `coherent run`:
 //! this file converts the arguments and the results.
 
 use std::path::{Path, PathBuf};
@@ -7,8 +7,7 @@ use std::sync::Arc;
 
 use coherent::session::backend::{BackendRequest, EndpointSource};
 use coherent::session::engine::{Cancel, ErrorRates, Limits, PriceTable, Summary, Transcript};
-use coherent::session::episode::{self, Prepared, Ran};
-use coherent::session::request::{ReplayRequest, RunRequest};
+use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
 use coherent::session::tasks::TaskSource;
 use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;

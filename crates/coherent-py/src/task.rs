@@ -8,7 +8,8 @@ use coherent::session::engine::{
     Cancel, DEFAULT_NAMESPACE, Environment, Limits, NodeId, RawGraph, Task, TaskError, feasibility,
     native, original,
 };
-use coherent::session::robots::{Robots, environment};
+use coherent::session::episode::environment;
+use coherent::session::robots::Robots;
 use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
