@@ -40,7 +40,9 @@ class _Stub(BaseHTTPRequestHandler):
         if schema["name"] == "proposal":
             content = {"reasoning": "go", "robot": props["robot"]["enum"][0], "subtask": "the first thing"}
         else:
-            content = {"action": props["action"]["enum"][0], "subtask_complete": False, "note": ""}
+            # A dialogue's speaker may have no action of its own yet: an empty list.
+            actions = props["action"]["enum"]
+            content = {"action": actions[0] if actions else "none", "subtask_complete": False, "note": ""}
         body = json.dumps(
             {
                 "choices": [{"message": {"role": "assistant", "content": json.dumps(content)}, "finish_reason": "stop"}],
@@ -162,7 +164,8 @@ class _AsksTheModel:
         pass
 
     def act(self, view: coherent.View) -> tuple[int, str]:
-        self.llm.chat("Which robot?", max_tokens=10)
+        schema = {"type": "object", "properties": {"action": {"type": "string", "enum": ["go"]}}}
+        self.llm.chat("Which robot?", schema, max_tokens=10)
         return _first_action(view)
 
 

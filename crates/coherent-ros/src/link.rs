@@ -137,7 +137,7 @@ impl Link {
         silence: Duration,
         cancel: Option<&AtomicBool>,
     ) -> Exchange {
-        self.block(exchange(&self.clients[robot], goal, silence, cancel))
+        self.block(follow_goal(&self.clients[robot], goal, silence, cancel))
     }
 
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that
@@ -189,7 +189,9 @@ async fn raised(flag: Option<&AtomicBool>) {
     }
 }
 
-async fn exchange(
+/// Sends `goal` to `client`'s robot and follows it to its end: its feedback, its result,
+/// a refusal, `silence` without a word, or `cancel` raised (the goal is then cancelled).
+async fn follow_goal(
     client: &Client,
     goal: Goal,
     silence: Duration,
