@@ -1,8 +1,8 @@
 //! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
 //! that the same setting has the same flag, its defaults those of the endpoint settings,
-//! [`OpenAiConfig::default`]), `--prompts` and `--prices`, `--sim-errors`, the method
-//! names (and `MODULE:CLASS`, a method written in Python, which the Python package
-//! loads).
+//! [`OpenAiConfig::default`]), `--prompts` and `--prices`, the robots' flags
+//! (`--robots ros2` and its namespace and waits), `--sim-errors`, the method names (and
+//! `MODULE:CLASS`, a method written in Python, which the Python package loads).
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -12,9 +12,11 @@ use clap::{Args, ValueEnum};
 use crate::session::Error;
 use crate::session::backend::EndpointSource;
 use crate::session::engine::{
-    ApiKey, Backoff, ErrorRates, External, Method, MethodSpec, OpenAiConfig, OutputMode,
+    ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, External, Method, MethodSpec, OpenAiConfig,
+    OutputMode,
 };
 use crate::session::prompts::{PriceSource, PromptSource};
+use crate::session::robots::Robots;
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -142,6 +144,44 @@ impl PromptPriceArgs {
                  its transcript recorded"
             ))),
             None => Ok(()),
+        }
+    }
+}
+
+/// Who carries the actions out.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum RobotsKind {
+    /// This process: the rules, or Rapier too with --physics.
+    Local,
+    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
+    Ros2,
+}
+
+/// The flags of `coherent run` and `coherent bench` for robots over ROS 2.
+#[derive(Args)]
+pub(crate) struct RobotFlags {
+    /// Who carries the actions out: `local` (this process), or `ros2` (one ROS 2 action
+    /// server per robot at /<namespace>/<robot>/execute).
+    #[arg(long, value_enum, default_value = "local")]
+    robots: RobotsKind,
+    /// With --robots ros2: the namespace of the robots' actions.
+    #[arg(long, default_value = DEFAULT_NAMESPACE)]
+    namespace: String,
+    /// With --robots ros2: seconds a robot may stay silent during a step (no answer, no
+    /// feedback, no result) before the step fails and the episode stops (exit 5).
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    robot_timeout: f64,
+    /// With --robots ros2: seconds to wait for every robot's server before the first
+    /// step; exit 2 naming the robots without one.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    server_wait: f64,
+}
+
+impl RobotFlags {
+    pub(crate) fn robots(&self) -> Result<Robots, Error> {
+        match self.robots {
+            RobotsKind::Local => Ok(Robots::Local),
+            RobotsKind::Ros2 => Robots::ros2(&self.namespace, self.robot_timeout, self.server_wait),
         }
     }
 }

@@ -6,8 +6,9 @@ use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
 
-use super::args::{LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors};
-use super::robots::RobotFlags;
+use super::args::{
+    LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec, sim_errors,
+};
 use super::status;
 use crate::session::backend::{BackendName, BackendRequest};
 use crate::session::bench::{

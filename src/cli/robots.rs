@@ -1,14 +1,13 @@
-//! `coherent robots serve`: the reference robot servers of a task over ROS 2, and the
-//! flags with which `coherent run` and `coherent bench` send their actions to robots over
-//! ROS 2.
+//! `coherent robots serve`: the reference robot servers of a task over ROS 2 (the flags
+//! with which `run` and `bench` send their actions to robots are in `args.rs`).
 
 use std::path::PathBuf;
 
-use clap::{Args, Subcommand, ValueEnum};
+use clap::{Args, Subcommand};
 
 use crate::session::Error;
 use crate::session::engine::DEFAULT_NAMESPACE;
-use crate::session::robots::{self, Robots, ServeRequest};
+use crate::session::robots::{self, ServeRequest};
 
 #[derive(Args)]
 pub(crate) struct RobotsArgs {
@@ -56,44 +55,6 @@ struct ServeArgs {
     /// Fault: a robot (ROS name) whose server is not started; repeatable.
     #[arg(long = "absent", value_name = "ROBOT")]
     absent: Vec<String>,
-}
-
-/// Who carries the actions out.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum RobotsKind {
-    /// This process: the rules, or Rapier too with --physics.
-    Local,
-    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
-    Ros2,
-}
-
-/// The flags of `coherent run` and `coherent bench` for robots over ROS 2.
-#[derive(Args)]
-pub(crate) struct RobotFlags {
-    /// Who carries the actions out: `local` (this process), or `ros2` (one ROS 2 action
-    /// server per robot at /<namespace>/<robot>/execute).
-    #[arg(long, value_enum, default_value = "local")]
-    robots: RobotsKind,
-    /// With --robots ros2: the namespace of the robots' actions.
-    #[arg(long, default_value = DEFAULT_NAMESPACE)]
-    namespace: String,
-    /// With --robots ros2: seconds a robot may stay silent during a step (no answer, no
-    /// feedback, no result) before the step fails and the episode stops (exit 5).
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
-    robot_timeout: f64,
-    /// With --robots ros2: seconds to wait for every robot's server before the first
-    /// step; exit 2 naming the robots without one.
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
-    server_wait: f64,
-}
-
-impl RobotFlags {
-    pub(crate) fn robots(&self) -> Result<Robots, Error> {
-        match self.robots {
-            RobotsKind::Local => Ok(Robots::Local),
-            RobotsKind::Ros2 => Robots::ros2(&self.namespace, self.robot_timeout, self.server_wait),
-        }
-    }
 }
 
 pub(crate) fn robots(args: RobotsArgs) -> Result<u8, Error> {

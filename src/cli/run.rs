@@ -10,9 +10,9 @@ use clap::Args;
 use serde_json::json;
 
 use super::args::{
-    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors,
+    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
+    sim_errors,
 };
-use super::robots::RobotFlags;
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{

@@ -4,27 +4,25 @@
 //!   ([`External`]) beside them ([`MethodSpec`]) and the settings a transcript records
 //!   ([`Settings`]).
 //! - [`budget`]: the step budget ([`Budget`]), the paper's 2 x GT rule.
-//! - [`history`]: the history window ([`HISTORY_WINDOW`]) and what a method keeps of its
-//!   earlier rounds ([`History`]).
 //! - [`policy`]: what a method written outside the crate answers each step
 //!   ([`Policy`]) and what it is shown ([`StepView`]).
 //! - [`rounds`]: the round loop and its result ([`Episode`]): one round per step until
-//!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires.
+//!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires;
+//!   and the history window ([`HISTORY_WINDOW`]), what a method keeps of its earlier
+//!   rounds ([`History`]).
 //! - `ask`: asking a backend one question and recording the call.
 //! - `environment`: observing the whole team and executing one action.
 //! - [`cancel`]: stopping an episode from outside.
 //! - [`run`](mod@run): the front door above the methods: writes the transcript and
 //!   runs the method the settings name.
 //!
-//! Every method of [`crate::methods`] is built on `rounds`, `ask`, `environment`,
-//! `history` and `cancel` (`methods::external` on `policy` too); only [`run()`] looks at
-//! the methods.
+//! Every method of [`crate::methods`] is built on `rounds`, `ask`, `environment` and
+//! `cancel` (`methods::external` on `policy` too); only [`run()`] looks at the methods.
 
 pub(crate) mod ask;
 pub mod budget;
 pub mod cancel;
 pub(crate) mod environment;
-pub mod history;
 pub mod policy;
 pub mod rounds;
 pub mod run;
@@ -35,8 +33,7 @@ pub mod settings;
 pub use crate::records::replay::{recorded_settings, recorded_task};
 pub use budget::Budget;
 pub use cancel::Cancel;
-pub use history::{HISTORY_WINDOW, History};
 pub use policy::{Act, Choice, MakePolicy, PastStep, Policy, RobotView, StepView};
-pub use rounds::Episode;
+pub use rounds::{Episode, HISTORY_WINDOW, History};
 pub use run::{run, transcript_path};
 pub use settings::{External, Method, MethodSpec, Settings};

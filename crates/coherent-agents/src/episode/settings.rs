@@ -6,8 +6,8 @@ use std::sync::Arc;
 
 use coherent_core::Task;
 
-use crate::episode::history::HISTORY_WINDOW;
 use crate::episode::policy::{MakePolicy, Policy};
+use crate::episode::rounds::HISTORY_WINDOW;
 use crate::error::Error;
 use crate::methods::templates::Prompts;
 use crate::records::transcript::RobotsRecord;

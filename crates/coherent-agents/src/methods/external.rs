@@ -16,9 +16,8 @@ use std::time::Instant;
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::history::History;
 use crate::episode::policy::{Act, PastStep, Policy, StepView};
-use crate::episode::rounds::{Episode, rounds};
+use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::{decision, feedback};
 use crate::records::transcript::{Round, RoundOutcome};
 
