@@ -11,8 +11,8 @@ use coherent::session::backend::{BackendName, BackendRequest};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
     Act, BenchOutcome, BoxFuture, Cancel, Choice, ErrorRates, Event, External, MakePolicy, Method,
-    MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task, Transcript,
-    read_results, transcripts_dir,
+    MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task,
+    Transcript, read_results, transcripts_dir,
 };
 use coherent::session::episode;
 use coherent_agents::BackendKind;
@@ -294,10 +294,10 @@ impl Policy for FollowPlan {
     }
 }
 
-fn follow_plan(task: &Arc<Task>) -> Result<Box<dyn Policy>, String> {
+fn follow_plan(task: &Arc<Task>) -> Result<Box<dyn Policy>, MethodFailure> {
     let plan = planner::search(task, &task.robots, &task.goal, &Limits::default())
         .plan
-        .ok_or("no plan")?;
+        .ok_or(MethodFailure::from("no plan"))?;
     let plan = plan
         .iter()
         .map(|s| (task.id(s.robot), s.action.render(task)))
@@ -360,12 +360,14 @@ fn an_error_does_not_count_and_runs_again_on_resume() {
         .map(|scene| common::released_task(scene, 1))
         .collect();
     // The policy fails on env1's task only.
-    let make: Arc<MakePolicy> = Arc::new(|task: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
-        if task.meta.scene == "env1" {
-            return Err("RuntimeError: env1 is not for me".into());
-        }
-        follow_plan(task)
-    });
+    let make: Arc<MakePolicy> = Arc::new(
+        |task: &Arc<Task>| -> Result<Box<dyn Policy>, MethodFailure> {
+            if task.meta.scene == "env1" {
+                return Err("RuntimeError: env1 is not for me".into());
+            }
+            follow_plan(task)
+        },
+    );
     let methods = vec![Method::Pefa.into(), external("picky", make)];
     let cfg = config(&out, methods, builtin(), 1, 2);
     let first = run(&tasks, &cfg);

@@ -20,7 +20,8 @@ pub use coherent_agents::transcript::{Round, RoundOutcome, Status, Summary, Tran
 // Which method runs: a built-in one, or one written outside the crates (Python), with
 // what it is shown each step and what it answers.
 pub use coherent_agents::episode::{
-    Act, Choice, External, MakePolicy, Method, MethodSpec, Policy, RobotView, StepView,
+    Act, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, Policy, RobotView,
+    StepView,
 };
 
 // Reaching a model: the endpoint settings, the client that methods written in Python

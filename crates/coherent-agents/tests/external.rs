@@ -9,8 +9,8 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use coherent_agents::episode::{
-    self, Act, Budget, Choice, External, MakePolicy, MethodSpec, PastStep, Policy, Settings,
-    StepView,
+    self, Act, Budget, Choice, External, MakePolicy, MethodFailure, MethodSpec, PastStep, Policy,
+    Settings, StepView,
 };
 use coherent_agents::llm::BoxFuture;
 use coherent_agents::transcript::{self, RoundOutcome, Status};
@@ -29,7 +29,7 @@ fn scratch(name: &str) -> PathBuf {
 
 /// Answers from a script, one entry per step, and keeps every view it was shown.
 struct Scripted {
-    script: VecDeque<Result<Choice, String>>,
+    script: VecDeque<Result<Choice, MethodFailure>>,
     views: Arc<Mutex<Vec<Arc<StepView>>>>,
 }
 
@@ -51,20 +51,22 @@ impl Policy for Scripted {
 
 fn scripted(
     name: &str,
-    script: Vec<Result<Choice, String>>,
+    script: Vec<Result<Choice, MethodFailure>>,
     views: &Arc<Mutex<Vec<Arc<StepView>>>>,
 ) -> External {
     let views = Arc::clone(views);
-    let make: Arc<MakePolicy> = Arc::new(move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
-        Ok(Box::new(Scripted {
-            script: script.clone().into(),
-            views: Arc::clone(&views),
-        }))
-    });
+    let make: Arc<MakePolicy> = Arc::new(
+        move |_: &Arc<Task>| -> Result<Box<dyn Policy>, MethodFailure> {
+            Ok(Box::new(Scripted {
+                script: script.clone().into(),
+                views: Arc::clone(&views),
+            }))
+        },
+    );
     External::new(name, make).expect("a valid name")
 }
 
-fn choice(robot: Option<i64>, action: &str) -> Result<Choice, String> {
+fn choice(robot: Option<i64>, action: &str) -> Result<Choice, MethodFailure> {
     Ok(Choice {
         robot: robot.map(NodeId),
         action: Some(action.to_owned()),

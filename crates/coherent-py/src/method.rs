@@ -10,8 +10,8 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent::session::Error;
 use coherent::session::engine::{
-    Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodSpec, NodeId, Policy,
-    RobotView, StepView, Task,
+    Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
+    Policy, RobotView, StepView, Task,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -357,14 +357,14 @@ impl Methods {
                             method: Arc::clone(&maker),
                         }) as Box<dyn Policy>)
                     }
-                    Ok(object) => Err(format!(
+                    Ok(object) => Err(MethodFailure(format!(
                         "TypeError: {} has no act(view) method",
                         object
                             .bind(py)
                             .repr()
                             .map_or("the method".into(), |r| r.to_string())
-                    )),
-                    Err(e) => Err(maker.failed(py, e)),
+                    ))),
+                    Err(e) => Err(MethodFailure(maker.failed(py, e))),
                 }
             })
         });
@@ -449,7 +449,10 @@ impl Policy for PythonPolicy {
                 Err(e) => Err(Python::attach(|py| self.method.failed(py, e))),
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
-            Act { choice, calls }
+            Act {
+                choice: choice.map_err(MethodFailure),
+                calls,
+            }
         })
     }
 }

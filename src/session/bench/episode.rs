@@ -9,7 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use coherent_agents::bench::{EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
-use coherent_agents::episode::{Budget, Settings};
+use coherent_agents::episode::{Budget, NoPlan, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::{BackendInfo, BackendKind, Cancel, MethodSpec, Replay, transcript};
 use coherent_core::Task;
@@ -26,7 +26,7 @@ use crate::session::error::Error;
 #[derive(Clone, Debug)]
 struct TaskInfo {
     task_type: Option<String>,
-    optimal: Result<u32, String>,
+    optimal: Result<u32, NoPlan>,
 }
 
 /// What the planner says about a task, once the first of its episodes has asked.
@@ -310,9 +310,11 @@ fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
         task_type: analysis.task_type.map(|t| t.name().to_owned()),
         optimal: match &analysis.plan {
             Some(plan) => Ok(u32::try_from(plan.len()).unwrap_or(u32::MAX)),
-            None => Err(analysis
-                .reason
-                .unwrap_or_else(|| "the search stopped".to_owned())),
+            None => Err(NoPlan(
+                analysis
+                    .reason
+                    .unwrap_or_else(|| "the search stopped".to_owned()),
+            )),
         },
     }
 }

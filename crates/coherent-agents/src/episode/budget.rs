@@ -7,6 +7,10 @@ use coherent_core::planner::{self, Limits};
 
 use crate::error::Error;
 
+/// Why the planner has no optimum to size a budget from, in the search's words.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct NoPlan(pub String);
+
 /// A step budget and where it came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Budget {
@@ -30,7 +34,7 @@ impl Budget {
     pub fn of(
         task: &Task,
         max_steps: Option<u32>,
-        optimum: impl FnOnce() -> Result<u32, String>,
+        optimum: impl FnOnce() -> Result<u32, NoPlan>,
     ) -> Result<Budget, Error> {
         if let Some(n) = max_steps {
             return Ok(Budget::Given(n));
@@ -42,7 +46,7 @@ impl Budget {
         }
         match optimum() {
             Ok(n) => Ok(Budget::TwiceOptimum(n.max(1).saturating_mul(2))),
-            Err(why) => Err(Error::NoBudget(format!(
+            Err(NoPlan(why)) => Err(Error::NoBudget(format!(
                 "the task has no ground truth and the planner finds no plan to size a budget \
                  from ({why}): pass a step budget (--max-steps, max_steps=)"
             ))),
@@ -55,8 +59,8 @@ impl Budget {
             let search = planner::search(task, &task.robots, &task.goal, limits);
             match search.plan {
                 Some(plan) => Ok(u32::try_from(plan.len()).unwrap_or(u32::MAX)),
-                None if search.truncated => Err("the search stopped".into()),
-                None => Err("no plan reaches the goal".into()),
+                None if search.truncated => Err(NoPlan("the search stopped".into())),
+                None => Err(NoPlan("no plan reaches the goal".into())),
             }
         })
     }

@@ -31,9 +31,9 @@ pub mod settings;
 // For callers that set up a replay piece by piece; `records::replay::Replay` does it in
 // one call.
 pub use crate::records::replay::{recorded_settings, recorded_task};
-pub use budget::Budget;
+pub use budget::{Budget, NoPlan};
 pub use cancel::Cancel;
-pub use policy::{Act, Choice, MakePolicy, PastStep, Policy, RobotView, StepView};
+pub use policy::{Act, Choice, MakePolicy, MethodFailure, PastStep, Policy, RobotView, StepView};
 pub use rounds::{Episode, HISTORY_WINDOW, History};
 pub use run::{run, transcript_path};
 pub use settings::{External, Method, MethodSpec, Settings};

@@ -107,11 +107,35 @@ impl StepView {
 /// What a method decided for one step: the very record the transcript keeps of it.
 pub use crate::records::transcript::ExternalDecision as Choice;
 
-/// A step's answer: the choice, or why the method failed (which ends the episode with
-/// status `error`), and the calls it made through the project's client meanwhile.
+/// Why a method written outside the crate could not be made or could not decide a step,
+/// in its own words (a Python method's traceback, say), which the transcript keeps as
+/// they are; the episode ends there with status `error`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MethodFailure(pub String);
+
+impl From<String> for MethodFailure {
+    fn from(words: String) -> MethodFailure {
+        MethodFailure(words)
+    }
+}
+
+impl From<&str> for MethodFailure {
+    fn from(words: &str) -> MethodFailure {
+        MethodFailure(words.to_owned())
+    }
+}
+
+impl std::fmt::Display for MethodFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// A step's answer: the choice, or why the method failed, and the calls it made through
+/// the project's client meanwhile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Act {
-    pub choice: Result<Choice, String>,
+    pub choice: Result<Choice, MethodFailure>,
     pub calls: Vec<Call>,
 }
 
@@ -122,4 +146,4 @@ pub trait Policy: Send {
 }
 
 /// Makes the policy of one episode, or says why it cannot.
-pub type MakePolicy = dyn Fn(&Arc<Task>) -> Result<Box<dyn Policy>, String> + Send + Sync;
+pub type MakePolicy = dyn Fn(&Arc<Task>) -> Result<Box<dyn Policy>, MethodFailure> + Send + Sync;

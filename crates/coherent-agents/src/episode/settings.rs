@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use coherent_core::Task;
 
-use crate::episode::policy::{MakePolicy, Policy};
+use crate::episode::policy::{MakePolicy, MethodFailure, Policy};
 use crate::episode::rounds::HISTORY_WINDOW;
 use crate::error::Error;
 use crate::methods::templates::Prompts;
@@ -103,7 +103,7 @@ impl External {
     }
 
     /// The policy of one episode of `task`, or why there is none.
-    pub fn make(&self, task: &Arc<Task>) -> Result<Box<dyn Policy>, String> {
+    pub fn make(&self, task: &Arc<Task>) -> Result<Box<dyn Policy>, MethodFailure> {
         (self.make)(task)
     }
 }

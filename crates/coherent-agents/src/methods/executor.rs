@@ -17,6 +17,7 @@ use coherent_core::{Environment, NodeId, RobotKind, Task, describe};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
+use crate::error::Error;
 use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
 use crate::methods::prompt::fill;
 use crate::methods::templates::{Prompts, Template};
@@ -50,9 +51,9 @@ impl RobotExecutor {
         robot: NodeId,
         prompts: &Prompts,
         max_tokens: u32,
-    ) -> Result<RobotExecutor, String> {
+    ) -> Result<RobotExecutor, Error> {
         let Ok(r) = task.robot_by_id(robot) else {
-            return Err(format!("robot {robot} is not in the team"));
+            return Err(Error::Invalid(format!("robot {robot} is not in the team")));
         };
         Ok(RobotExecutor {
             task: Arc::clone(task),

@@ -16,7 +16,7 @@ use std::time::Instant;
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::policy::{Act, PastStep, Policy, StepView};
+use crate::episode::policy::{Act, MethodFailure, PastStep, Policy, StepView};
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::{decision, feedback};
 use crate::records::transcript::{Round, RoundOutcome};
@@ -27,7 +27,7 @@ use crate::records::transcript::{Round, RoundOutcome};
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
-    made: Result<Box<dyn Policy>, String>,
+    made: Result<Box<dyn Policy>, MethodFailure>,
     max_steps: u32,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
@@ -67,7 +67,7 @@ pub async fn run(
                     None => decision::no_action(&mut round, choice.note),
                 }
             }
-            Err(message) => {
+            Err(MethodFailure(message)) => {
                 round.outcome = RoundOutcome::MethodError { message };
                 round.feedback = feedback::joint("", &round.outcome);
             }

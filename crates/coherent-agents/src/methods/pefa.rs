@@ -101,7 +101,10 @@ async fn round(
     let executor = match RobotExecutor::of(task, robot, &config.prompts, config.executor_max_tokens)
     {
         Ok(executor) => executor,
-        Err(why) => return Some(finish(env, round, RoundOutcome::NoProposal { why }, start)),
+        Err(e) => {
+            let why = e.to_string();
+            return Some(finish(env, round, RoundOutcome::NoProposal { why }, start));
+        }
     };
     round.actions = executor.actions(env);
     let query = executor.query(env, &proposal.subtask, &round.actions);

@@ -14,7 +14,7 @@ use coherent_core::{Task, native};
 use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
 use crate::episode::budget::Budget;
-use crate::episode::policy::{Act, Policy, StepView};
+use crate::episode::policy::{Act, MethodFailure, Policy, StepView};
 use crate::episode::rounds::Episode;
 use crate::episode::settings::{External, Method, MethodSpec, Settings};
 use crate::error::Error;
@@ -65,7 +65,7 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
     let name = &t.header.method;
     let method = if t.header.external {
         let rounds: Arc<[Round]> = t.rounds.clone().into();
-        let make = move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
+        let make = move |_: &Arc<Task>| -> Result<Box<dyn Policy>, MethodFailure> {
             Ok(Box::new(RecordedDecisions {
                 rounds: rounds.iter().cloned().collect(),
             }))
@@ -144,20 +144,20 @@ impl Policy for RecordedDecisions {
     fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         let act = match self.rounds.pop_front() {
             None => Act {
-                choice: Err(format!(
+                choice: Err(MethodFailure(format!(
                     "replay diverged: step {} is not in the recording",
                     view.step
-                )),
+                ))),
                 calls: Vec::new(),
             },
             Some(round) => Act {
                 choice: match (round.external, round.outcome) {
                     (Some(decision), _) => Ok(decision),
-                    (None, RoundOutcome::MethodError { message }) => Err(message),
-                    (None, _) => Err(format!(
+                    (None, RoundOutcome::MethodError { message }) => Err(MethodFailure(message)),
+                    (None, _) => Err(MethodFailure(format!(
                         "replay diverged: round {} of the recording holds no decision",
                         round.step
-                    )),
+                    ))),
                 },
                 calls: round.calls,
             },
