@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 import coherent
+from conftest import DEMO
 
 
 @pytest.fixture(scope="module")
@@ -104,7 +105,18 @@ def test_bench_simulated_seeds(few: list[coherent.Task], tmp_path: Path) -> None
     assert frame["episode_seed"].nunique() == 6
 
 
-def test_bench_refuses_an_unknown_method_no_methods_no_seeds_and_an_unknown_backend(few: list[coherent.Task], tmp_path: Path) -> None:
+def test_bench_in_physics_runs_every_action_in_rapier_too(tmp_path: Path) -> None:
+    demo = coherent.load_tasks(DEMO)[0]
+    frame = coherent.bench([demo], ["optimal", "pefa"], physics=True, out=tmp_path / "r.jsonl")
+    assert list(frame["success"]) == [True, True]
+    assert list(frame["steps"]) == [22, 22]
+    for path in frame["transcript"]:
+        episode = coherent.load_episode(path)
+        assert episode.header["physics"] is True
+        assert episode.header["robots"] == {"kind": "local"}
+
+
+def test_bench_refuses_unusable_methods_seeds_backends_and_task_lists(few: list[coherent.Task], tmp_path: Path) -> None:
     out = tmp_path / "r.jsonl"
     with pytest.raises(ValueError, match="unknown method"):
         coherent.bench(few, ["pefa", "nope"], out=out)
