@@ -194,6 +194,20 @@ fn robot_arg(obj: &Bound<'_, PyAny>) -> PyResult<RobotArg> {
     }
 }
 
+/// A `TypeError` of argument `name` says which argument it is, as PyO3 says it for the
+/// arguments it converts itself (`step`'s take one of two shapes, so it converts them by
+/// hand); other errors pass as they are.
+fn named<T>(py: Python<'_>, name: &str, converted: PyResult<T>) -> PyResult<T> {
+    converted.map_err(|e| {
+        if !e.is_instance_of::<PyTypeError>(py) {
+            return e;
+        }
+        let named = PyTypeError::new_err(format!("argument '{name}': {}", e.value(py)));
+        named.set_cause(py, Some(e));
+        named
+    })
+}
+
 /// The node id of a robot argument; an int too large for a node id is an
 /// `UnknownRobotError` as any other id that is not a robot is (the others are left to
 /// the environment, which names its robots).
@@ -354,8 +368,8 @@ impl PyEnv {
         let Some(action) = action else {
             return self.step_joint(py, robot);
         };
-        let robot = node_id(py, self.env.task(), robot_arg(robot)?)?;
-        let action = action_text(action)?;
+        let robot = node_id(py, self.env.task(), named(py, "robot", robot_arg(robot))?)?;
+        let action = named(py, "action", action_text(action))?;
         let outcome = if self.acts_elsewhere() {
             let env = &mut self.env;
             py.detach(|| env.step(robot, &action))
@@ -431,8 +445,8 @@ impl PyEnv {
         };
         let mut step = Vec::with_capacity(pairs.len());
         for (robot, action) in &pairs {
-            let robot = node_id(py, self.env.task(), robot_arg(robot)?)?;
-            step.push((robot, action_text(action)?));
+            let robot = node_id(py, self.env.task(), named(py, "actions", robot_arg(robot))?)?;
+            step.push((robot, named(py, "actions", action_text(action))?));
         }
         let step: Vec<(NodeId, &str)> = step.iter().map(|(r, a)| (*r, a.as_str())).collect();
         let outcome = if self.acts_elsewhere() {
