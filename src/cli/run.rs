@@ -10,8 +10,7 @@ use clap::Args;
 use coherent_agents::Cancel;
 use coherent_agents::episode::{Budget, MethodSpec, Settings};
 use coherent_agents::llm::BackendInfo;
-use coherent_agents::transcript::{Outcome, Round, Status, Summary};
-use coherent_core::Task;
+use coherent_agents::transcript::{Round, Status, Summary};
 use coherent_core::planner::Limits;
 use coherent_core::text::shown;
 
@@ -198,7 +197,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     };
     let task = Arc::clone(&prepared.task);
     let max = prepared.budget.steps();
-    let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
+    let mut progress = |r: &Round| lines.say(&session::lines::step(&task, r, max));
     let result = prepared.run(&cancel, &mut progress).await;
     ctrl_c.abort();
     let ran = result.map_err(|e| e.to_string())?;
@@ -294,46 +293,6 @@ fn backend_line(info: &BackendInfo, replay: Option<&Path>) -> String {
               or pass --base-url, --model and --api-key)"
             .to_owned(),
     }
-}
-
-fn step_line(task: &Task, r: &Round, max: u32) -> String {
-    let robot = r
-        .proposal
-        .as_ref()
-        .and_then(|p| task.idx(p.robot))
-        .map_or("-".to_owned(), |i| {
-            shown(&task.node(i).label()).into_owned()
-        });
-    let action = r
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.as_deref())
-        .map_or("-".to_owned(), |a| shown(a).into_owned());
-    // The subtask in quotes, unless it is the action itself (the built-in backend's).
-    let subtask = r
-        .proposal
-        .as_ref()
-        .filter(|p| shown(&p.subtask) != action)
-        .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
-    let outcome = match &r.outcome {
-        Outcome::Executed if r.done => "ok, goal reached".to_owned(),
-        Outcome::Executed => "ok".to_owned(),
-        Outcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
-        Outcome::Declined => "declined".to_owned(),
-        Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
-        Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
-        Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
-        // The last line of the error (a Python traceback ends with the exception).
-        Outcome::MethodError { message } => format!(
-            "the method failed: {}",
-            shown(message.trim_end().lines().last().unwrap_or(""))
-        ),
-    };
-    let width = max.to_string().len();
-    format!(
-        "step {:>width$}/{max}  {robot}  {subtask}{action}  -> {outcome}",
-        r.step
-    )
 }
 
 fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {

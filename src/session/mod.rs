@@ -15,13 +15,15 @@
 //! - [`prompts`]: the prompt set and the price table a run is given, checked up front;
 //! - [`bench`]: methods x tasks x seeds into a resumable results file;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
-//! - [`render`]: the scene from above and the robots' paths.
+//! - [`render`]: the scene from above and the robots' paths;
+//! - [`lines`]: the line `coherent run` prints for each step.
 
 pub mod backend;
 pub mod bench;
 pub mod check;
 pub mod endpoint;
 pub mod episode;
+pub mod lines;
 pub mod prompts;
 pub mod render;
 pub mod tasks;
