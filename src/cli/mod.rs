@@ -1,5 +1,5 @@
 //! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
-//! `prompts`. One implementation serves the `coherent` binary and the console script
+//! `view`, `prompts`. One implementation serves the `coherent` binary and the console script
 //! that `pip install` puts on the PATH (which also loads methods written in Python,
 //! [`LoadMethod`]).
 
@@ -9,6 +9,7 @@ mod prompts;
 mod render;
 mod robots;
 mod run;
+mod view;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -45,6 +46,10 @@ enum Command {
     /// written in Python raised, 5 when a robot
     /// over ROS 2 stops answering, 130 on Ctrl-C.
     Run(Box<run::RunArgs>),
+    /// Show an episode (its transcript), two side by side, or a benchmark's results as
+    /// pages in the browser; `--serve` follows a results file as it grows. Exit 2 on an
+    /// error.
+    View(view::ViewArgs),
     /// Robots over ROS 2: `serve` starts a task's reference robot servers.
     Robots(robots::RobotsArgs),
     /// Run methods x tasks x seeds concurrently into a resumable results file, then print
@@ -136,6 +141,12 @@ where
         }
         Command::Run(args) => {
             return run::run(*args, load).unwrap_or_else(|e| {
+                error(&e);
+                2
+            });
+        }
+        Command::View(args) => {
+            return view::view(&args).unwrap_or_else(|e| {
                 error(&e);
                 2
             });

@@ -16,7 +16,8 @@
 //! - [`bench`]: methods x tasks x seeds into a resumable results file;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
 //! - [`render`]: the scene from above and the robots' paths;
-//! - [`lines`]: the line `coherent run` prints for each step.
+//! - [`lines`]: the line `coherent run` prints for each step;
+//! - [`view`]: episodes and results as pages in the browser.
 
 pub mod backend;
 pub mod bench;
@@ -27,6 +28,7 @@ pub mod lines;
 pub mod prompts;
 pub mod render;
 pub mod tasks;
+pub mod view;
 
 use std::future::Future;
 

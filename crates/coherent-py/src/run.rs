@@ -9,6 +9,7 @@ use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::episode::{
     self as session_episode, EpisodeSpec, Failure, Prepared, Ran, Robots,
 };
+use coherent::session::view;
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::llm::Usage;
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
@@ -33,7 +34,7 @@ pub(crate) struct PyEpisode {
     summary: Summary,
     path: PathBuf,
     pub task: Py<PyTask>,
-    cost_usd: Option<f64>,
+    pub cost_usd: Option<f64>,
 }
 
 impl PyEpisode {
@@ -90,6 +91,19 @@ impl PyEpisode {
 
 #[pymethods]
 impl PyEpisode {
+    /// The episode's page (`coherent.view`) in a frame, as a notebook shows it inline.
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        let shown = view::Shown {
+            task: &self.task.get().task,
+            transcript: &self.transcript,
+            cost_usd: self.cost_usd,
+        };
+        let html = py
+            .detach(|| view::episode_html(&shown))
+            .map_err(|e| errors::coherent(py, e))?;
+        Ok(view::page::framed(&html))
+    }
+
     /// The task the episode ran (for a loaded transcript, as recorded in it).
     #[getter]
     fn task(&self, py: Python<'_>) -> Py<PyTask> {
