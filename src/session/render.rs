@@ -3,9 +3,9 @@
 
 use std::sync::Arc;
 
-use coherent_agents::transcript::{Outcome, Round, Transcript};
+use coherent_agents::transcript::Transcript;
 use coherent_core::planner::{self, Limits};
-use coherent_core::{Environment, NodeId, Task};
+use coherent_core::{Environment, Task};
 use coherent_sim::{PhysicalEnv, layout, render};
 
 /// A robot's track, `[x, y, z]` points, as `coherent_sim` records it.
@@ -45,21 +45,13 @@ pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, String> {
     })
 }
 
-/// The robot and the action a recorded round carried out, if it carried one out.
-pub fn executed(round: &Round) -> Option<(NodeId, &str)> {
-    match (&round.outcome, &round.proposal, &round.decision) {
-        (Outcome::Executed, Some(p), Some(d)) => d.action.as_deref().map(|a| (p.robot, a)),
-        _ => None,
-    }
-}
-
 /// The robots' paths when the transcript's executed actions are carried out in physics.
 pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, String> {
     let mut env =
         PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
     let mut warning = None;
     for round in &t.rounds {
-        let Some((robot, action)) = executed(round) else {
+        let Some((robot, action)) = round.executed(task) else {
             continue;
         };
         let outcome = env.step(robot, action).map_err(|e| e.to_string())?;

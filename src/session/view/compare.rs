@@ -2,6 +2,7 @@
 //! which their decisions differ.
 
 use coherent_agents::transcript::{Round, Transcript};
+use coherent_core::Task;
 use serde::Serialize;
 
 use super::episode::EpisodeView;
@@ -17,35 +18,23 @@ pub struct Episodes {
     pub first_difference: Option<u32>,
 }
 
-/// What a round decided: which robot acts, and which action (none when it declined or
-/// no usable decision came).
-fn decided(r: &Round) -> (Option<i64>, Option<&str>) {
-    let robot = r
-        .proposal
-        .as_ref()
-        .map(|p| p.robot.0)
-        .or_else(|| r.external.as_ref().and_then(|e| e.robot).map(|id| id.0));
-    let action = r
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.as_deref())
-        .or_else(|| r.external.as_ref().and_then(|e| e.action.as_deref()));
-    (robot, action)
-}
-
-/// The step of the first round where `a` and `b` decide differently; when one ends
-/// earlier and they agree until then, the first round only the other has.
-pub fn first_difference(a: &Transcript, b: &Transcript) -> Option<u32> {
-    let common = a.rounds.len().min(b.rounds.len());
+/// The step of the first round where `a` and `b` (episodes of `task_a` and `task_b`)
+/// decide differently: another robot, or another action ([`Round::chosen`]); when one
+/// ends earlier and they agree until then, the first round only the other has.
+pub fn first_difference(
+    (task_a, a): (&Task, &Transcript),
+    (task_b, b): (&Task, &Transcript),
+) -> Option<u32> {
     for (ra, rb) in a.rounds.iter().zip(&b.rounds) {
-        if decided(ra) != decided(rb) {
+        if ra.chosen(task_a) != rb.chosen(task_b) {
             return Some(ra.step);
         }
     }
+    let common = a.rounds.len().min(b.rounds.len());
     let longer = if a.rounds.len() > b.rounds.len() {
         a
     } else {
         b
     };
-    longer.rounds.get(common).map(|r| r.step)
+    longer.rounds.get(common).map(|r: &Round| r.step)
 }

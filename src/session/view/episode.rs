@@ -265,14 +265,9 @@ fn step(task: &Task, r: &Round, max_steps: u32) -> Step {
     }
 }
 
-/// The round's robot: the one proposed, else the one a method written outside the
-/// crate chose.
+/// The round's robot and what it did.
 fn entry(task: &Task, r: &Round) -> Entry {
-    let robot = r
-        .proposal
-        .as_ref()
-        .map(|p| p.robot)
-        .or_else(|| r.external.as_ref().and_then(|e| e.robot));
+    let (robot, _) = r.chosen(task);
     let name = robot.map_or("-".to_owned(), |id| match task.idx(id) {
         Some(n) => shown(&task.node(n).label()).into_owned(),
         None => format!("unknown robot {}", id.0),

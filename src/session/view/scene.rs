@@ -22,8 +22,6 @@ use coherent_sim::render::{Stage, robot_colour};
 use coherent_sim::{PhysicalEnv, layout};
 use serde::Serialize;
 
-use crate::session::render::executed;
-
 /// A robot as the page names and draws it.
 #[derive(Debug, Serialize)]
 pub struct RobotMark {
@@ -102,7 +100,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
         Err(e) => {
             let mut moments = vec![moment(task, rules.state(), 0, None, None)];
             for round in &t.rounds {
-                if let Some((robot, action)) = executed(round) {
+                if let Some((robot, action)) = round.executed(task) {
                     let _ = rules.step(robot, action);
                 }
                 moments.push(moment(task, rules.state(), 0, None, None));
@@ -130,7 +128,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
     let mut moments = vec![moment(task, rules.state(), first, Some(&drawn), None)];
     for round in &t.rounds {
         let mut sim_seconds = None;
-        if let Some((robot, action)) = executed(round) {
+        if let Some((robot, action)) = round.executed(task) {
             let _ = rules.step(robot, action);
             if let Ok(env) = &mut physics {
                 let stopped = match env.step_physical(robot, action) {

@@ -290,6 +290,7 @@ function episodePage(data) {
   keys();
   const k = fromHash();
   go(k === null ? 0 : k);
+  drawn();
 }
 
 episodePage(readData());

@@ -110,26 +110,68 @@ function figures(report) {
       el('div', { class: 'figure' }, scatter('sr-steps', 'Success rate against steps', 'average steps (' + t.columns[avg] + ')', bySteps, (v) => String(v)))));
 }
 
+// One episode's row, built directly: a results file may have thousands.
+function episodeRow(e, i) {
+  const tr = document.createElement('tr');
+  tr.dataset.line = i;
+  tr.dataset.method = e.method;
+  tr.dataset.scene = e.scene;
+  tr.dataset.task = e.task_id;
+  tr.dataset.seed = e.seed;
+  const cell = (content, cls) => {
+    const td = document.createElement('td');
+    if (cls) td.className = cls;
+    if (typeof content === 'string') td.textContent = content;
+    else td.append(content);
+    tr.append(td);
+    return td;
+  };
+  cell(e.method);
+  cell(e.scene);
+  cell(String(e.task_id), 'num');
+  cell(e.task_type || '-');
+  cell(String(e.seed), 'num');
+  const result = cell(badge(e.status));
+  if (e.error) result.title = e.error;
+  cell(String(e.steps), 'num');
+  cell(e.gt_steps === null ? '-' : String(e.gt_steps), 'num');
+  cell(String(e.max_steps), 'num');
+  cell(String(e.llm_calls), 'num');
+  cell(thousands(e.tokens), 'num');
+  cell(usd(e.cost_usd), 'num');
+  cell(e.link ? el('a', { href: e.link, class: 'episode-link' }, 'open') : '-');
+  return tr;
+}
+
+// The episodes' table; its rows go in a few hundred at a time after the first, so that
+// the tables above show at once.
 function episodeTable(episodes) {
   const head = el('tr', {}, ...['method', 'scene', 'task', 'type', 'seed', 'result', 'steps', 'GT', 'budget', 'LLM calls', 'tokens', 'cost', 'page']
     .map((h) => el('th', {}, h)));
-  const rows = episodes.map((e, i) => el('tr', { 'data-line': i, 'data-method': e.method, 'data-scene': e.scene, 'data-task': e.task_id, 'data-seed': e.seed },
-    el('td', {}, e.method), el('td', {}, e.scene), el('td', { class: 'num' }, String(e.task_id)), el('td', {}, e.task_type || '-'),
-    el('td', { class: 'num' }, String(e.seed)), el('td', { title: e.error || null }, badge(e.status)),
-    el('td', { class: 'num' }, String(e.steps)), el('td', { class: 'num' }, e.gt_steps === null ? '-' : String(e.gt_steps)),
-    el('td', { class: 'num' }, String(e.max_steps)), el('td', { class: 'num' }, String(e.llm_calls)),
-    el('td', { class: 'num' }, thousands(e.tokens)), el('td', { class: 'num' }, usd(e.cost_usd)),
-    el('td', {}, e.link ? el('a', { href: e.link, class: 'episode-link' }, 'open') : '-')));
+  const body = el('tbody', {});
   const input = el('input', { type: 'search', placeholder: 'filter: method, scene, task, result', 'aria-label': 'filter the episodes' });
-  input.addEventListener('input', () => {
+  const keep = (tr) => {
     const words = input.value.toLowerCase().split(/\s+/).filter(Boolean);
-    for (const tr of rows) {
-      const text = tr.textContent.toLowerCase();
-      tr.hidden = !words.every((w) => text.includes(w));
+    const text = tr.textContent.toLowerCase();
+    tr.hidden = !words.every((w) => text.includes(w));
+  };
+  input.addEventListener('input', () => { for (const tr of body.children) keep(tr); });
+  const CHUNK = 400;
+  const fill = (from) => {
+    const end = Math.min(from + CHUNK, episodes.length);
+    const part = document.createDocumentFragment();
+    for (let i = from; i < end; i++) {
+      const tr = episodeRow(episodes[i], i);
+      if (input.value) keep(tr);
+      part.append(tr);
     }
-  });
+    body.append(part);
+    if (end < episodes.length) setTimeout(() => fill(end), 0);
+    else drawn();
+  };
+  fill(0);
   return el('section', {}, el('h2', {}, 'Episodes (' + episodes.length + ')'), el('div', { class: 'filter' }, input),
-    el('table', { class: 'episodes', id: 'episodes' }, el('thead', {}, head), el('tbody', {}, ...rows)));
+    el('table', { class: 'episodes', id: 'episodes' }, el('thead', {}, head), body));
 }
 
 function resultsPage(data) {
@@ -137,8 +179,9 @@ function resultsPage(data) {
   const app = document.getElementById('app');
   const backends = r.backends.length ? r.backends.join('; ') : 'none (no method here asks a model)';
   app.replaceChildren(
-    el('section', { class: 'card' }, el('h1', {}, data.file),
+    el('section', { class: 'card' }, el('h1', {}, data.file.split('/').pop()),
       facts([
+        ['results file', data.file, 'file'],
         ['episodes', String(data.episodes.length), 'episodes'],
         ['backend', backends, 'backend'],
         ['seeds', String(r.seeds.length) + (r.seeds.length > 1 ? ' (each cell: the mean over seeds ± the half-width of a 95% interval)' : ''), 'seeds'],
