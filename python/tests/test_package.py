@@ -21,7 +21,8 @@ TREE = ast.parse(STUB.read_text())
 # Native functions that the package wraps rather than re-exports (`coherent.bench`,
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks"}
+# `coherent.view` wraps the pages of `coherent view`.
+WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks", "view_page", "results_page", "framed_page"}
 
 
 def _public(name: str) -> bool:
@@ -141,9 +142,10 @@ def test_all_is_the_public_api() -> None:
     for name in native:
         assert getattr(coherent, name) is getattr(_coherent, name)
     python = set(coherent.__all__) - native
-    assert python == {"RayExecutor", "Report", "bench", "report", "results"}
-    for name in python - {"RayExecutor"}:
+    assert python == {"Page", "RayExecutor", "Report", "bench", "report", "results", "view"}
+    for name in python - {"Page", "RayExecutor", "view"}:
         assert getattr(coherent, name) is getattr(coherent.analysis, name)
+    assert coherent.view is coherent._view.view and coherent.Page is coherent._view.Page
     assert coherent.RayExecutor is coherent.executors.RayExecutor
 
 
