@@ -22,14 +22,9 @@ fn embedded(page: &Path) -> Value {
 
 /// `coherent run` on the demo: its step lines and its transcript.
 fn run_demo(dir: &Path, extra: &[&str]) -> (Vec<String>, String) {
-    let mut args = vec![
-        "run",
-        utf8(&demo()).to_owned(),
-        "--out".into(),
-        utf8(dir).into(),
-    ];
-    args.extend(extra.iter().map(|s| (*s).to_owned()));
-    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let demo = demo();
+    let mut args = vec!["run", utf8(&demo), "--out", utf8(dir)];
+    args.extend(extra);
     let out = coherent(&args);
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     let steps = stdout

@@ -44,13 +44,13 @@ fn of_episode(e: &PyEpisode) -> Given {
 
 /// An `Episode`, or the path of a transcript or a results file.
 enum Source {
-    Episode(Given),
+    Episode(Box<Given>),
     Path(PathBuf),
 }
 
 fn source(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Source> {
     if let Ok(e) = obj.cast::<PyEpisode>() {
-        return Ok(Source::Episode(of_episode(e.get())));
+        return Ok(Source::Episode(Box::new(of_episode(e.get()))));
     }
     match convert::path(obj, name) {
         Ok(path) => Ok(Source::Path(path)),
@@ -75,7 +75,7 @@ pub(crate) fn view_page(
     py.detach(move || -> Result<String, String> {
         let episode = |s: Source| -> Result<Given, String> {
             match s {
-                Source::Episode(g) => Ok(g),
+                Source::Episode(g) => Ok(*g),
                 Source::Path(path) => match view::holds(&path)? {
                     Holds::Transcript => {
                         let (task, transcript) = view::read_episode(&path)?;

@@ -23,6 +23,10 @@ const WORKERS: usize = 4;
 /// The most bytes of a request's head read.
 const MAX_HEAD: u64 = 8 << 10;
 
+/// A results file as read: its lines, each one's page (when its transcript is at hand),
+/// and the file's length.
+type Lines = (Vec<ResultLine>, Vec<Option<String>>, u64);
+
 /// A server bound on loopback for one results file.
 #[derive(Debug)]
 pub struct Server {
@@ -123,7 +127,7 @@ impl Server {
 
     /// The lines so far (none before the file exists), each with its page's name, and
     /// the file's length as read.
-    fn lines(&self) -> Result<(Vec<ResultLine>, Vec<Option<String>>, u64), String> {
+    fn lines(&self) -> Result<Lines, String> {
         if !self.results.exists() {
             return Ok((Vec::new(), Vec::new(), 0));
         }

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use coherent_core::State;
 
-use super::frame::{Frame, MARGIN, esc};
+use super::frame::{Frame, MARGIN, Paths, esc};
 use super::labels::Labels;
 use super::{items, legend, plan, robots};
 
