@@ -66,6 +66,8 @@ def test_the_results_page_has_the_analysis_numbers_and_links_each_episode(
     w = watch(browser)
     w.open((site / "index.html").as_uri())
     page = w.page
+    if SCREENSHOTS:
+        page.screenshot(path=str(Path(SCREENSHOTS) / "view-results.png"), full_page=False)
     report = coherent.report(coherent.results(results))
     for name, table in (("table1", report.table1), ("table2", report.table2)):
         shown = cells(page, name)
@@ -107,8 +109,6 @@ def test_the_results_page_has_the_analysis_numbers_and_links_each_episode(
         page.wait_for_selector("#episodes")
     # The figures are drawn by the page: a point per method.
     assert sorted(page.eval_on_selector_all("#sr-steps circle", "cs => cs.map(c => c.dataset.method)")) == sorted(METHODS)
-    if SCREENSHOTS:
-        page.screenshot(path=str(Path(SCREENSHOTS) / "view-results.png"), full_page=False)
     w.assert_quiet()
 
 
