@@ -221,6 +221,9 @@ def hostile_transcript(source: Path, out: Path) -> tuple[Path, list[str]]:
     header["task_name"] = HOSTILE[0]
     header["task"]["name"] = HOSTILE[0]
     header["task"]["instruction"] = HOSTILE[1] + " " + header["task"]["instruction"]
+    # A name in the scene's picture too: the sofa, which no action names.
+    sofa = next(n for n in header["task"]["graph"]["nodes"] if n["id"] == 14)
+    sofa["class_name"] = HOSTILE[0]
     long = ("<i>" + "y" * 56 + "</i>\n") * 1024  # 64 KiB
     texts = [*HOSTILE, long]
     calls = [c for r in records if r.get("type") == "round" for c in r["calls"] if c["answer"]]
@@ -268,6 +271,8 @@ def test_a_hostile_transcript_runs_nothing_and_shows_its_text_as_written(coheren
     assert page.query_selector_all("img") == []
     assert page.text_content(".header h1").startswith("demo-apartment task 0 · " + HOSTILE[0])
     assert page.text_content(".header .instruction").startswith(HOSTILE[1])
+    labels = page.eval_on_selector_all(".scene svg text", "ts => ts.map(t => t.textContent)")
+    assert any(label.startswith(f"{HOSTILE[0]} 14") for label in labels)  # then its height
     answers: list[str] = []
     for k in range(1, len(rounds(transcript)) + 1):
         page.keyboard.press("ArrowRight")
