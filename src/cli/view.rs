@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::session::engine::shown;
 use clap::Args;
-use coherent_core::text::shown;
 
 use crate::session::view::{self, Holds, Shown, serve};
 

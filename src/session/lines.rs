@@ -1,7 +1,7 @@
 //! The lines an episode is told in: `coherent run` prints them as the rounds end, and
 //! `coherent view` shows the same lines for a recorded episode.
 
-use coherent_agents::transcript::{Outcome, Round};
+use coherent_agents::transcript::{Round, RoundOutcome};
 use coherent_core::Task;
 use coherent_core::text::shown;
 
@@ -28,15 +28,15 @@ pub fn step(task: &Task, r: &Round, max: u32) -> String {
         .filter(|p| shown(&p.subtask) != action)
         .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
     let outcome = match &r.outcome {
-        Outcome::Executed if r.done => "ok, goal reached".to_owned(),
-        Outcome::Executed => "ok".to_owned(),
-        Outcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
-        Outcome::Declined => "declined".to_owned(),
-        Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
-        Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
-        Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
+        RoundOutcome::Executed if r.done => "ok, goal reached".to_owned(),
+        RoundOutcome::Executed => "ok".to_owned(),
+        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
+        RoundOutcome::Declined => "declined".to_owned(),
+        RoundOutcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
+        RoundOutcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
+        RoundOutcome::BackendError { message } => format!("backend failed: {}", shown(message)),
         // The last line of the error (a Python traceback ends with the exception).
-        Outcome::MethodError { message } => format!(
+        RoundOutcome::MethodError { message } => format!(
             "the method failed: {}",
             shown(message.trim_end().lines().last().unwrap_or(""))
         ),

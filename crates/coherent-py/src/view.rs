@@ -5,9 +5,8 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
+use coherent::session::engine::{Task, Transcript, read_results};
 use coherent::session::view::{self, Holds, Shown, page};
-use coherent_agents::transcript::Transcript;
-use coherent_core::Task;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::PyList;
@@ -94,7 +93,7 @@ pub(crate) fn view_page(
         };
         match (first, second) {
             (Source::Path(path), None) if view::holds(&path)? == Holds::Results => {
-                let lines = coherent_agents::bench::read_results(&path)?.lines;
+                let lines = read_results(&path).map_err(|e| e.to_string())?.lines;
                 view::results_html(&path, &lines, &[], None)
             }
             (a, None) => view::episode_html(&episode(a)?.shown()),
@@ -104,7 +103,7 @@ pub(crate) fn view_page(
             }
         }
     })
-    .map_err(|e| errors::coherent(py, e))
+    .map_err(|e| errors::error(py, errors::Kind::Coherent, e, None))
 }
 
 /// The index page of results lines (dicts, as `coherent.results` reads them), titled
@@ -113,7 +112,8 @@ pub(crate) fn view_page(
 pub(crate) fn results_page(lines: &Bound<'_, PyList>, name: &str) -> PyResult<String> {
     let py = lines.py();
     let lines = result_lines(lines)?;
-    view::results_html(&PathBuf::from(name), &lines, &[], None).map_err(|e| errors::coherent(py, e))
+    view::results_html(&PathBuf::from(name), &lines, &[], None)
+        .map_err(|e| errors::error(py, errors::Kind::Coherent, e, None))
 }
 
 /// A page in a sandboxed frame of its own, as a notebook shows it inline.

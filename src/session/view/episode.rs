@@ -9,10 +9,10 @@
 
 use std::sync::Arc;
 
-use coherent_agents::Method;
-use coherent_agents::PriceTable;
-use coherent_agents::llm::{Answer, BackendInfo, Finish, Role, Usage};
-use coherent_agents::transcript::{Call, Outcome, Round, Status, Transcript};
+use coherent_agents::BackendKind;
+use coherent_agents::llm::{Answer, BackendInfo, Finish, Role};
+use coherent_agents::transcript::{Call, Round, RoundOutcome as Outcome, Status, Transcript};
+use coherent_agents::{ModelUse, PriceTable};
 use coherent_core::text::{shown, shown_lines};
 use coherent_core::{NodeId, Task};
 use serde::Serialize;
@@ -211,17 +211,11 @@ pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) 
     }
 }
 
-/// What the model calls of a recorded episode cost at the built-in prices (a method
-/// not built in is taken to ask a model), as `coherent.load_episode` prices it.
+/// What the model calls of a recorded episode cost at the built-in prices, by the rule
+/// they cost when it ran (`coherent.load_episode` prices it so).
 fn recorded_cost(t: &Transcript) -> Option<f64> {
-    let s = t.summary.as_ref()?;
-    let uses_model = Method::from_name(&t.header.method).is_none_or(Method::uses_model);
-    let usage = Usage {
-        prompt_tokens: s.prompt_tokens,
-        completion_tokens: s.completion_tokens,
-        cached_tokens: s.cached_tokens,
-    };
-    PriceTable::builtin().episode_cost(&t.header.backend.model, uses_model, &usage)
+    let summary = t.summary.as_ref()?;
+    ModelUse::of(&t.header, &t.rounds, summary).cost(&PriceTable::builtin())
 }
 
 fn status_name(s: Status) -> &'static str {
@@ -237,11 +231,12 @@ fn status_name(s: Status) -> &'static str {
 /// The backend in words.
 fn backend(b: &BackendInfo) -> String {
     let model = shown(&b.model);
-    match (b.kind.as_str(), &b.base_url) {
-        ("builtin", _) => "built-in (the optimal planner plays every role)".to_owned(),
-        ("simulated", _) => format!("simulated: {model}"),
-        (kind, Some(url)) => format!("{} {model} at {}", shown(kind), shown(url)),
-        (kind, None) => format!("{} {model}", shown(kind)),
+    match (b.kind, &b.base_url) {
+        (BackendKind::Builtin, _) => "built-in (the optimal planner plays every role)".to_owned(),
+        (BackendKind::Simulated, _) => format!("simulated: {model}"),
+        (BackendKind::None, _) => "none (the method asks no model)".to_owned(),
+        (kind, Some(url)) => format!("{} {model} at {}", kind.name(), shown(url)),
+        (kind, None) => format!("{} {model}", kind.name()),
     }
 }
 

@@ -23,8 +23,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use coherent_agents::bench::{ResultLine, read_results};
-use coherent_agents::episode::recorded_task;
-use coherent_agents::transcript::{self, Transcript};
+use coherent_agents::transcript::Transcript;
 use coherent_core::Task;
 use coherent_core::text::shown;
 
@@ -77,9 +76,8 @@ pub fn holds(path: &Path) -> Result<Holds, String> {
 
 /// A recorded episode read from `path`: its task and transcript.
 pub fn read_episode(path: &Path) -> Result<(Arc<Task>, Transcript), String> {
-    let t = transcript::read(path)?;
-    let task = recorded_task(&t, path)?;
-    Ok((Arc::new(task), t))
+    let recorded = super::episode::recorded(path).map_err(|e| e.to_string())?;
+    Ok((recorded.task, recorded.transcript))
 }
 
 /// The page of one episode.
@@ -184,7 +182,7 @@ pub struct Site {
 /// Writes the index of the results file `results` to `dir/index.html` and each
 /// episode's page under `dir/episodes/`, `threads` pages at once.
 pub fn results_site(results: &Path, dir: &Path, threads: usize) -> Result<Site, String> {
-    let lines = read_results(results)?.lines;
+    let lines = read_results(results).map_err(|e| e.to_string())?.lines;
     let written: Vec<std::sync::Mutex<Option<Result<(), String>>>> =
         lines.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let next = AtomicUsize::new(0);

@@ -131,7 +131,7 @@ impl Server {
         if !self.results.exists() {
             return Ok((Vec::new(), Vec::new(), 0));
         }
-        let file = read_results(&self.results)?;
+        let file = read_results(&self.results).map_err(|e| e.to_string())?;
         let version = file.good_len + file.truncated_bytes;
         let lines = file.lines;
         let links = lines
