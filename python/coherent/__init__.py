@@ -27,10 +27,10 @@ matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasi
 ``pip install 'coherent[gym]'``.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import Any
+# The imports the package needs for itself are bound to underscored names, so that the
+# namespace holds the API (`__all__`), the submodules and nothing else.
+import importlib as _importlib
+from typing import Any as _Any
 
 from ._coherent import (
     DEFAULT_MAX_STATES,
@@ -118,12 +118,19 @@ __all__ = [
     "View",
 ]
 
-# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the
-# extra `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
-_SUBMODULES = ("analysis", "benchmark", "gym", "plot")
+# The public submodules. `analysis` and `executors` are imported above; the others load on
+# first use: `coherent.plot` imports matplotlib (slow to import; the extra
+# `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
+_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "plot")
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _Any:
     if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    # What `dir(coherent)` and completion show: the API and the submodules, not the
+    # private modules (`_coherent`, `_methods`, ...) that importing the package loads.
+    return sorted([*__all__, *_SUBMODULES])
