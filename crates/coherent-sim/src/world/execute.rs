@@ -1,13 +1,111 @@
-//! One action physically: the robot's kind and the verb pick the motion.
+//! Actions physically: the robot's kind and the verb pick the motion; one action runs
+//! alone, or several robots' actions (a joint step) run in the same simulation steps,
+//! watched for robots that touch each other.
 
 use coherent_core::{Action, Idx, NodeKind, RobotKind, Verb};
 use rapier3d::prelude::*;
 
+use super::motion::{Motion, Stage};
 use super::{FailureKind, PhysicsError, World, fail};
+
+/// Why a run of motions stopped: the motion that failed (by index), or robots that
+/// touched each other.
+enum Stop {
+    Motion(usize, PhysicsError),
+    Contact(PhysicsError),
+}
 
 impl World {
     /// Executes `a` by `robot` physically, without asking the rules.
     pub fn execute(&mut self, robot: Idx, a: Action) -> Result<(), PhysicsError> {
+        let motion = self.start(robot, a)?;
+        match self.run(&mut [motion]) {
+            Ok(_) => Ok(()),
+            Err(Stop::Motion(_, e) | Stop::Contact(e)) => Err(e),
+        }
+    }
+
+    /// Executes the actions of a joint step (at most one per robot) physically, without
+    /// asking the rules, all at once: each simulation step advances every robot's motion
+    /// that is not over, until all are. Robots of the step that touch each other, or
+    /// touch what another of them handles, fail it. Every failure names the robot and
+    /// action (both, for a contact) and when it happened. Returns each action's
+    /// simulated seconds from the step's start, in the order given; the step took the
+    /// longest of them.
+    pub fn execute_joint(&mut self, actions: &[(Idx, Action)]) -> Result<Vec<f64>, PhysicsError> {
+        for (i, &(r, _)) in actions.iter().enumerate() {
+            if actions[..i].iter().any(|&(other, _)| other == r) {
+                return fail(
+                    FailureKind::Layout,
+                    format!("{} has two actions in one joint step", self.label(r)),
+                );
+            }
+        }
+        let t0 = self.sim_time;
+        let mut motions = Vec::new();
+        for &(r, a) in actions {
+            let m = self.start(r, a).map_err(|e| self.blame(r, a, t0, e))?;
+            motions.push(m);
+        }
+        match self.run(&mut motions) {
+            Ok(seconds) => Ok(seconds),
+            Err(Stop::Contact(e)) => Err(e),
+            Err(Stop::Motion(i, e)) => {
+                let (r, a) = actions[i];
+                Err(self.blame(r, a, t0, e))
+            }
+        }
+    }
+
+    /// `e` with the robot, its action and when it happened in front.
+    fn blame(&self, robot: Idx, a: Action, t0: f64, e: PhysicsError) -> PhysicsError {
+        PhysicsError {
+            kind: e.kind,
+            message: format!(
+                "{} {}, {:.2} s into the joint step ({:.2} s simulated): {}",
+                self.label(robot),
+                a.render(&self.task),
+                self.sim_time - t0,
+                self.sim_time,
+                e.message
+            ),
+        }
+    }
+
+    /// Runs `motions` together until all are over; each one's simulated seconds. With
+    /// more than one, after every step their robots must not touch each other.
+    fn run(&mut self, motions: &mut [Motion]) -> Result<Vec<f64>, Stop> {
+        let t0 = self.sim_time;
+        let mut ended: Vec<Option<f64>> = vec![None; motions.len()];
+        loop {
+            let mut stepping = false;
+            for (i, m) in motions.iter_mut().enumerate() {
+                if ended[i].is_some() {
+                    continue;
+                }
+                if self.prepare(m).map_err(|e| Stop::Motion(i, e))? {
+                    stepping = true;
+                } else {
+                    ended[i] = Some(self.sim_time - t0);
+                }
+            }
+            if !stepping {
+                return Ok(ended.into_iter().map(|t| t.unwrap_or(0.0)).collect());
+            }
+            self.step();
+            for (i, m) in motions.iter_mut().enumerate() {
+                if ended[i].is_none() {
+                    self.after_step(m).map_err(|e| Stop::Motion(i, e))?;
+                }
+            }
+            if motions.len() > 1 {
+                self.check_contacts(motions, t0).map_err(Stop::Contact)?;
+            }
+        }
+    }
+
+    /// The motion of `a` by `robot`, its way planned from where everything is now.
+    fn start(&mut self, robot: Idx, a: Action) -> Result<Motion, PhysicsError> {
         let Some(kind) = self.task.robot(robot).map(|r| r.kind) else {
             return fail(
                 FailureKind::Layout,
@@ -15,51 +113,56 @@ impl World {
             );
         };
         let x = a.object;
-        match (kind, a.verb) {
-            (RobotKind::Quadrotor, Verb::TakeoffFrom) => self.quad_takeoff(),
-            (RobotKind::Quadrotor, Verb::LandOn) => self.quad_land(x),
-            (RobotKind::Quadrotor, Verb::MoveTowards) => {
-                if self.task.node(x).kind == NodeKind::Room {
-                    let Some((lo, hi)) = self.room_rect(x) else {
-                        return fail(
-                            FailureKind::Layout,
-                            format!("{} has no footprint", self.label(x)),
-                        );
-                    };
-                    let floor = self.task.floor_of(x);
-                    let level = self.room_level(x);
-                    let mid = Vector::new((lo[0] + hi[0]) / 2.0, level, (lo[1] + hi[1]) / 2.0);
-                    let spot = match floor {
-                        Some(f) => self.landing_spot(f, mid).unwrap_or(mid),
-                        None => mid,
-                    };
-                    let cruise = self.layout.specs.cruise_altitude;
-                    self.quad_fly_to(spot, level + cruise)
-                } else {
-                    let p = self.quad_pos().unwrap_or(Vector::ZERO);
-                    let spot = self.landing_spot(x, p)?;
-                    let y = self.top_height(x) + 0.7;
-                    self.quad_fly_to(spot, y)
-                }
-            }
+        let stages = match (kind, a.verb) {
+            (RobotKind::Quadrotor, Verb::TakeoffFrom) => self.quad_takeoff()?,
+            (RobotKind::Quadrotor, Verb::LandOn) => self.quad_land(x)?,
+            (RobotKind::Quadrotor, Verb::MoveTowards) => self.quad_towards(x)?,
             (RobotKind::RobotDog, Verb::MoveTowards) => {
                 if self.task.node(x).kind == NodeKind::Room {
-                    self.dog_to_room(x)
+                    self.dog_to_room(x)?
                 } else {
                     let (p, face) = self.service_point(x)?;
-                    self.walk(p, face)
+                    self.walk(p, face)?
                 }
             }
-            (_, Verb::Open) => self.drive_hinge(robot, x, true),
-            (_, Verb::Close) => self.drive_hinge(robot, x, false),
-            (_, Verb::Grab) => self.grasp(robot, x),
+            (_, Verb::Open) => self.drive_hinge(robot, x, true)?,
+            (_, Verb::Close) => self.drive_hinge(robot, x, false)?,
+            (_, Verb::Grab) => self.grasp(robot, x)?,
             (_, Verb::PutOn) | (_, Verb::PutInto) => {
                 let Some(t) = a.target else {
                     return fail(FailureKind::Layout, "put without a target".into());
                 };
-                self.release(robot, x, t, a.verb == Verb::PutInto)
+                self.release(robot, x, t, a.verb == Verb::PutInto)?
             }
-            (k, v) => fail(FailureKind::Layout, format!("a {k} cannot [{v}]")),
+            (k, v) => return fail(FailureKind::Layout, format!("a {k} cannot [{v}]")),
+        };
+        Ok(Motion::new(robot, a, stages))
+    }
+
+    /// The quadrotor's flight to a room (over the middle of its floor, or a free spot
+    /// there, at cruise altitude) or to hover 0.7 m over a free spot on a surface.
+    fn quad_towards(&self, x: Idx) -> Result<Vec<Stage>, PhysicsError> {
+        if self.task.node(x).kind == NodeKind::Room {
+            let Some((lo, hi)) = self.room_rect(x) else {
+                return fail(
+                    FailureKind::Layout,
+                    format!("{} has no footprint", self.label(x)),
+                );
+            };
+            let floor = self.task.floor_of(x);
+            let level = self.room_level(x);
+            let mid = Vector::new((lo[0] + hi[0]) / 2.0, level, (lo[1] + hi[1]) / 2.0);
+            let spot = match floor {
+                Some(f) => self.landing_spot(f, mid).unwrap_or(mid),
+                None => mid,
+            };
+            let cruise = self.layout.specs.cruise_altitude;
+            self.quad_fly_to(spot, level + cruise)
+        } else {
+            let p = self.quad_pos().unwrap_or(Vector::ZERO);
+            let spot = self.landing_spot(x, p)?;
+            let y = self.top_height(x) + 0.7;
+            self.quad_fly_to(spot, y)
         }
     }
 }
