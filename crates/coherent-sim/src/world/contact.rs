@@ -1,12 +1,12 @@
-//! Robots acting at once must keep apart: after every simulation step of a joint step,
-//! what each acting robot brings (its body, its arm's links, what its hand holds, and
+//! Robots moving at once must keep apart: after every simulation step of a joint step,
+//! what each moving robot brings (its body, its arm's links, what its hand holds, and
 //! the thing its action handles: the object it grabs, the door or lid it turns) must
-//! not touch what another acting robot brings. The arms' links and held things collide
+//! not touch what another moving robot brings. The arms' links and held things collide
 //! with nothing in the simulation (the arms have no motion planning around obstacles),
 //! so the test is geometric; where the simulation has a contact of its own between
 //! the two (a walking robot's body against the quadrotor), its impulse is reported too.
-//! Robots that are not in the step stand still, as between sequential steps, and are not
-//! watched.
+//! A robot that is not moving (not in the step, its action over, or waiting for its way
+//! to clear) stands still, as between sequential steps, and is not watched.
 
 use coherent_core::{Idx, Verb};
 use rapier3d::parry::query;
@@ -57,7 +57,7 @@ impl World {
 
     /// No two of `motions`' robots touch (see the file's note); `t0` is when the joint
     /// step started.
-    pub(super) fn check_contacts(&self, motions: &[Motion], t0: f64) -> Result<(), PhysicsError> {
+    pub(super) fn check_contacts(&self, motions: &[&Motion], t0: f64) -> Result<(), PhysicsError> {
         let parts: Vec<Vec<ColliderHandle>> = motions.iter().map(|m| self.parts(m)).collect();
         for i in 0..motions.len() {
             for j in i + 1..motions.len() {
@@ -67,7 +67,7 @@ impl World {
                             continue;
                         }
                         if let Some(touch) = self.touch(a, b) {
-                            let (mi, mj) = (&motions[i], &motions[j]);
+                            let (mi, mj) = (motions[i], motions[j]);
                             return fail(
                                 FailureKind::Collision,
                                 format!(

@@ -8,18 +8,28 @@ use rapier3d::prelude::*;
 use super::motion::{Motion, Stage};
 use super::{FailureKind, PhysicsError, World, fail};
 
-/// Why a run of motions stopped: the motion that failed (by index), or robots that
+/// Why a run of actions stopped: the action that failed (by index), or robots that
 /// touched each other.
 enum Stop {
     Motion(usize, PhysicsError),
     Contact(PhysicsError),
 }
 
+/// An action of a joint step: waiting for its way or spot to clear (why it cannot start
+/// yet), moving, or over (its simulated seconds from the step's start).
+enum Slot {
+    Waiting(PhysicsError),
+    Moving(Motion),
+    Over(f64),
+}
+
+/// How often (in simulation steps, half a second) a waiting action plans again.
+const RETRY_STEPS: usize = 30;
+
 impl World {
     /// Executes `a` by `robot` physically, without asking the rules.
     pub fn execute(&mut self, robot: Idx, a: Action) -> Result<(), PhysicsError> {
-        let motion = self.start(robot, a)?;
-        match self.run(&mut [motion]) {
+        match self.run(&[(robot, a)]) {
             Ok(_) => Ok(()),
             Err(Stop::Motion(_, e) | Stop::Contact(e)) => Err(e),
         }
@@ -27,11 +37,14 @@ impl World {
 
     /// Executes the actions of a joint step (at most one per robot) physically, without
     /// asking the rules, all at once: each simulation step advances every robot's motion
-    /// that is not over, until all are. Robots of the step that touch each other, or
-    /// touch what another of them handles, fail it. Every failure names the robot and
-    /// action (both, for a contact) and when it happened. Returns each action's
-    /// simulated seconds from the step's start, in the order given; the step took the
-    /// longest of them.
+    /// that is not over, until all are. Each motion plans its way from where everything
+    /// is when it starts; one whose way or spot another robot of the step still blocks
+    /// waits, planning again every half second, until it can start (and fails if
+    /// nothing moves any more). Robots moving at once that touch each other, or what
+    /// another of them handles, fail the step. Every failure names the robot and action
+    /// (both, for a contact) and when it happened. Returns each action's simulated
+    /// seconds from the step's start, in the order given; the step took the longest of
+    /// them.
     pub fn execute_joint(&mut self, actions: &[(Idx, Action)]) -> Result<Vec<f64>, PhysicsError> {
         for (i, &(r, _)) in actions.iter().enumerate() {
             if actions[..i].iter().any(|&(other, _)| other == r) {
@@ -42,12 +55,7 @@ impl World {
             }
         }
         let t0 = self.sim_time;
-        let mut motions = Vec::new();
-        for &(r, a) in actions {
-            let m = self.start(r, a).map_err(|e| self.blame(r, a, t0, e))?;
-            motions.push(m);
-        }
-        match self.run(&mut motions) {
+        match self.run(actions) {
             Ok(seconds) => Ok(seconds),
             Err(Stop::Contact(e)) => Err(e),
             Err(Stop::Motion(i, e)) => {
@@ -72,34 +80,78 @@ impl World {
         }
     }
 
-    /// Runs `motions` together until all are over; each one's simulated seconds. With
-    /// more than one, after every step their robots must not touch each other.
-    fn run(&mut self, motions: &mut [Motion]) -> Result<Vec<f64>, Stop> {
+    /// Runs `actions` together until all are over; each one's simulated seconds. One
+    /// action alone is its motion, step by step, and nothing else.
+    fn run(&mut self, actions: &[(Idx, Action)]) -> Result<Vec<f64>, Stop> {
         let t0 = self.sim_time;
-        let mut ended: Vec<Option<f64>> = vec![None; motions.len()];
+        let mut slots = Vec::with_capacity(actions.len());
+        for (i, &(r, a)) in actions.iter().enumerate() {
+            slots.push(match self.start(r, a) {
+                Ok(m) => Slot::Moving(m),
+                // Another robot of the step may be in the way, and about to leave.
+                Err(e) if e.kind == FailureKind::Blocked && actions.len() > 1 => Slot::Waiting(e),
+                Err(e) => return Err(Stop::Motion(i, e)),
+            });
+        }
+        let mut taken = 0usize;
         loop {
             let mut stepping = false;
-            for (i, m) in motions.iter_mut().enumerate() {
-                if ended[i].is_some() {
+            for (i, slot) in slots.iter_mut().enumerate() {
+                if let Slot::Moving(m) = slot {
+                    if self.prepare(m).map_err(|e| Stop::Motion(i, e))? {
+                        stepping = true;
+                    } else {
+                        *slot = Slot::Over(self.sim_time - t0);
+                    }
+                }
+            }
+            for (i, slot) in slots.iter_mut().enumerate() {
+                let retry = taken > 0 && (!stepping || taken.is_multiple_of(RETRY_STEPS));
+                if !(retry && matches!(slot, Slot::Waiting(_))) {
                     continue;
                 }
-                if self.prepare(m).map_err(|e| Stop::Motion(i, e))? {
-                    stepping = true;
-                } else {
-                    ended[i] = Some(self.sim_time - t0);
-                }
+                let (r, a) = actions[i];
+                *slot = match self.start(r, a) {
+                    Ok(mut m) => {
+                        if self.prepare(&mut m).map_err(|e| Stop::Motion(i, e))? {
+                            stepping = true;
+                            Slot::Moving(m)
+                        } else {
+                            Slot::Over(self.sim_time - t0)
+                        }
+                    }
+                    Err(e) if e.kind == FailureKind::Blocked => Slot::Waiting(e),
+                    Err(e) => return Err(Stop::Motion(i, e)),
+                };
             }
             if !stepping {
-                return Ok(ended.into_iter().map(|t| t.unwrap_or(0.0)).collect());
+                // Nothing moves any more: an action still waiting will never start.
+                return slots
+                    .into_iter()
+                    .enumerate()
+                    .map(|(i, slot)| match slot {
+                        Slot::Waiting(e) => Err(Stop::Motion(i, e)),
+                        Slot::Over(t) => Ok(t),
+                        Slot::Moving(_) => Ok(self.sim_time - t0),
+                    })
+                    .collect();
             }
             self.step();
-            for (i, m) in motions.iter_mut().enumerate() {
-                if ended[i].is_none() {
+            taken += 1;
+            for (i, slot) in slots.iter_mut().enumerate() {
+                if let Slot::Moving(m) = slot {
                     self.after_step(m).map_err(|e| Stop::Motion(i, e))?;
                 }
             }
-            if motions.len() > 1 {
-                self.check_contacts(motions, t0).map_err(Stop::Contact)?;
+            let moving: Vec<&Motion> = slots
+                .iter()
+                .filter_map(|s| match s {
+                    Slot::Moving(m) => Some(m),
+                    _ => None,
+                })
+                .collect();
+            if moving.len() > 1 {
+                self.check_contacts(&moving, t0).map_err(Stop::Contact)?;
             }
         }
     }
