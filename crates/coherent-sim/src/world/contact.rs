@@ -7,6 +7,12 @@
 //! the two (a walking robot's body against the quadrotor), its impulse is reported too.
 //! A robot that is not moving (not in the step, its action over, or waiting for its way
 //! to clear) stands still, as between sequential steps, and is not watched.
+//!
+//! Before that comes to pass, robots give way by their order in the step: one that comes
+//! within [`CLEARANCE`] of a robot earlier in the step holds where it is (see
+//! `World::hold`) until that one has moved away or its action is over. The first robot
+//! never holds, so robots never wait on each other in a circle; a robot that runs into
+//! one holding still fails the step.
 
 use coherent_core::{Idx, Verb};
 use rapier3d::parry::query;
@@ -15,9 +21,21 @@ use rapier3d::prelude::*;
 use super::motion::Motion;
 use super::{FailureKind, PhysicsError, World, fail};
 
+/// How close (m) what a robot brings may come to what a robot earlier in the step brings
+/// before it holds.
+pub(super) const CLEARANCE: f32 = 0.1;
+
+/// What one moving robot brings into the step now: each collider with its bounding
+/// box, and the box around them all.
+pub(super) struct Brought<'m> {
+    motion: &'m Motion,
+    parts: Vec<(ColliderHandle, Aabb)>,
+    aabb: Option<Aabb>,
+}
+
 impl World {
-    /// The colliders of what the robot of `m` brings into the step now.
-    fn parts(&self, m: &Motion) -> Vec<ColliderHandle> {
+    /// What the robot of `m` brings into the step now.
+    pub(super) fn brought<'m>(&self, m: &'m Motion) -> Brought<'m> {
         let r = m.robot;
         let mut bodies: Vec<RigidBodyHandle> = self.body[r.get()].into_iter().collect();
         for a in self.arms.iter().filter(|a| a.robot == r) {
@@ -41,10 +59,35 @@ impl World {
                 unique.push(b);
             }
         }
-        unique
+        let parts: Vec<(ColliderHandle, Aabb)> = unique
             .iter()
             .flat_map(|&b| self.pw.bodies[b].colliders().iter().copied())
-            .collect()
+            .map(|c| (c, self.pw.colliders[c].compute_aabb()))
+            .collect();
+        let aabb = parts.iter().map(|(_, a)| *a).reduce(|a, b| a.merged(&b));
+        Brought {
+            motion: m,
+            parts,
+            aabb,
+        }
+    }
+
+    /// Whether what `a` and `b` bring are within [`CLEARANCE`] of each other.
+    pub(super) fn near(&self, a: &Brought<'_>, b: &Brought<'_>) -> bool {
+        let close = |x: &Aabb, y: &Aabb| x.loosened(CLEARANCE).intersects(y);
+        let (Some(ba), Some(bb)) = (&a.aabb, &b.aabb) else {
+            return false;
+        };
+        close(ba, bb)
+            && a.parts.iter().any(|(x, xa)| {
+                b.parts.iter().any(|(y, ya)| {
+                    let (cx, cy) = (&self.pw.colliders[*x], &self.pw.colliders[*y]);
+                    x != y
+                        && close(xa, ya)
+                        && query::distance(cx.position(), cx.shape(), cy.position(), cy.shape())
+                            .is_ok_and(|d| d.distance <= CLEARANCE)
+                })
+            })
     }
 
     /// What collider `c`, brought by `robot`, is, for a message.
@@ -55,31 +98,40 @@ impl World {
         }
     }
 
-    /// No two of `motions`' robots touch (see the file's note); `t0` is when the joint
+    /// No two of the moving robots touch (see the file's note); `t0` is when the joint
     /// step started.
-    pub(super) fn check_contacts(&self, motions: &[&Motion], t0: f64) -> Result<(), PhysicsError> {
-        let parts: Vec<Vec<ColliderHandle>> = motions.iter().map(|m| self.parts(m)).collect();
-        for i in 0..motions.len() {
-            for j in i + 1..motions.len() {
-                for &a in &parts[i] {
-                    for &b in &parts[j] {
-                        if a == b {
+    pub(super) fn check_contacts(
+        &self,
+        moving: &[Brought<'_>],
+        t0: f64,
+    ) -> Result<(), PhysicsError> {
+        for (i, a) in moving.iter().enumerate() {
+            for b in &moving[i + 1..] {
+                let (Some(ba), Some(bb)) = (&a.aabb, &b.aabb) else {
+                    continue;
+                };
+                if !ba.intersects(bb) {
+                    continue;
+                }
+                for (x, xa) in &a.parts {
+                    for (y, ya) in &b.parts {
+                        if x == y || !xa.intersects(ya) {
                             continue;
                         }
-                        if let Some(touch) = self.touch(a, b) {
-                            let (mi, mj) = (motions[i], motions[j]);
+                        if let Some(touch) = self.touch(*x, *y) {
+                            let (ma, mb) = (a.motion, b.motion);
                             return fail(
                                 FailureKind::Collision,
                                 format!(
                                     "{} {} and {} {} collided {:.2} s into the joint step ({:.2} s simulated): {} touched {} {touch}",
-                                    self.label(mi.robot),
-                                    mi.action.render(&self.task),
-                                    self.label(mj.robot),
-                                    mj.action.render(&self.task),
+                                    self.label(ma.robot),
+                                    ma.action.render(&self.task),
+                                    self.label(mb.robot),
+                                    mb.action.render(&self.task),
                                     self.sim_time - t0,
                                     self.sim_time,
-                                    self.part_name(mi.robot, a),
-                                    self.part_name(mj.robot, b),
+                                    self.part_name(ma.robot, *x),
+                                    self.part_name(mb.robot, *y),
                                 ),
                             );
                         }
@@ -90,13 +142,10 @@ impl World {
         Ok(())
     }
 
-    /// Where and how deep colliders `a` and `b` touch (with the simulation's contact
-    /// impulse between them, when it has one), or `None`.
+    /// Where and how deep colliders `a` and `b` (whose boxes meet) touch, with the
+    /// simulation's contact impulse between them when it has one, or `None`.
     fn touch(&self, a: ColliderHandle, b: ColliderHandle) -> Option<String> {
         let (ca, cb) = (&self.pw.colliders[a], &self.pw.colliders[b]);
-        if !ca.compute_aabb().intersects(&cb.compute_aabb()) {
-            return None;
-        }
         let pair = self
             .pw
             .narrow_phase

@@ -5,6 +5,7 @@
 use coherent_core::{Action, Idx, NodeKind, RobotKind, Verb};
 use rapier3d::prelude::*;
 
+use super::contact::Brought;
 use super::motion::{Motion, Stage};
 use super::{FailureKind, PhysicsError, World, fail};
 
@@ -21,6 +22,14 @@ enum Slot {
     Waiting(PhysicsError),
     Moving(Motion),
     Over(f64),
+}
+
+/// The motion of a moving action.
+fn moving(s: &Slot) -> Option<&Motion> {
+    match s {
+        Slot::Moving(m) => Some(m),
+        _ => None,
+    }
 }
 
 /// How often (in simulation steps, half a second) a waiting action plans again.
@@ -40,8 +49,10 @@ impl World {
     /// that is not over, until all are. Each motion plans its way from where everything
     /// is when it starts; one whose way or spot another robot of the step still blocks
     /// waits, planning again every half second, until it can start (and fails if
-    /// nothing moves any more). Robots moving at once that touch each other, or what
-    /// another of them handles, fail the step. Every failure names the robot and action
+    /// nothing moves any more). A robot that comes close to one earlier in the step
+    /// holds where it is until that one has moved away or is done (`contact.rs`).
+    /// Robots moving at once that touch each other, or what another of them handles,
+    /// fail the step. Every failure names the robot and action
     /// (both, for a contact) and when it happened. Returns each action's simulated
     /// seconds from the step's start, in the order given; the step took the longest of
     /// them.
@@ -95,10 +106,18 @@ impl World {
         }
         let mut taken = 0usize;
         loop {
+            let holding = if slots.iter().filter_map(moving).count() > 1 {
+                self.holding(&slots)
+            } else {
+                vec![false; slots.len()]
+            };
             let mut stepping = false;
             for (i, slot) in slots.iter_mut().enumerate() {
                 if let Slot::Moving(m) = slot {
-                    if self.prepare(m).map_err(|e| Stop::Motion(i, e))? {
+                    if holding[i] {
+                        self.hold(m);
+                        stepping = true;
+                    } else if self.prepare(m).map_err(|e| Stop::Motion(i, e))? {
                         stepping = true;
                     } else {
                         *slot = Slot::Over(self.sim_time - t0);
@@ -139,21 +158,40 @@ impl World {
             self.step();
             taken += 1;
             for (i, slot) in slots.iter_mut().enumerate() {
-                if let Slot::Moving(m) = slot {
+                if let Slot::Moving(m) = slot
+                    && !holding[i]
+                {
                     self.after_step(m).map_err(|e| Stop::Motion(i, e))?;
                 }
             }
-            let moving: Vec<&Motion> = slots
-                .iter()
-                .filter_map(|s| match s {
-                    Slot::Moving(m) => Some(m),
-                    _ => None,
-                })
-                .collect();
-            if moving.len() > 1 {
-                self.check_contacts(&moving, t0).map_err(Stop::Contact)?;
+            if slots.iter().filter_map(moving).count() > 1 {
+                let brought: Vec<Brought<'_>> = slots
+                    .iter()
+                    .filter_map(moving)
+                    .map(|m| self.brought(m))
+                    .collect();
+                self.check_contacts(&brought, t0).map_err(Stop::Contact)?;
             }
         }
+    }
+
+    /// Which actions hold this step: those whose robot is near one moving earlier in the
+    /// step.
+    fn holding(&self, slots: &[Slot]) -> Vec<bool> {
+        let brought: Vec<Option<Brought<'_>>> = slots
+            .iter()
+            .map(|s| moving(s).map(|m| self.brought(m)))
+            .collect();
+        (0..slots.len())
+            .map(|i| {
+                brought[i].as_ref().is_some_and(|b| {
+                    brought[..i]
+                        .iter()
+                        .flatten()
+                        .any(|earlier| self.near(earlier, b))
+                })
+            })
+            .collect()
     }
 
     /// The motion of `a` by `robot`, its way planned from where everything is now.

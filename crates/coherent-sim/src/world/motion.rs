@@ -284,6 +284,15 @@ impl World {
         Ok(false)
     }
 
+    /// Keeps `m`'s robot where it is for the next simulation step instead of advancing
+    /// its motion: the quadrotor holds its set point (at rest), the others stay as they
+    /// are (kinematic bodies and arm joints stay where they were last put).
+    pub(super) fn hold(&mut self, m: &Motion) {
+        if let Some(Stage::Fly(_) | Stage::Hover(_) | Stage::Descend(_)) = m.stages.front() {
+            self.quad_target.1 = Vector::ZERO;
+        }
+    }
+
     /// What `m`'s current stage checks once the simulation step it asked for is done.
     pub(super) fn after_step(&mut self, m: &mut Motion) -> Result<(), PhysicsError> {
         match m.stages.front_mut() {
