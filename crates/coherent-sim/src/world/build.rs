@@ -689,7 +689,6 @@ impl World {
             robot,
             root,
             joints,
-            links: [yaw, upper, fore, hand],
             hand,
             q: [0.0; 4],
             limits: [(-PI, PI), (-1.6, 1.6), (0.0, 2.6)],

@@ -49,10 +49,10 @@ impl World {
     /// that is not over, until all are. Each motion plans its way from where everything
     /// is when it starts; one whose way or spot another robot of the step still blocks
     /// waits, planning again every half second, until it can start (and fails if
-    /// nothing moves any more). A robot that comes close to one earlier in the step
-    /// holds where it is until that one has moved away or is done (`contact.rs`).
-    /// Robots moving at once that touch each other, or what another of them handles,
-    /// fail the step. Every failure names the robot and action
+    /// nothing moves any more). A moving robot that comes close to one earlier in the
+    /// step that moves too holds where it is until that one has moved away or is done
+    /// (`contact.rs`). Robots of the step that touch each other, or what another of them
+    /// handles, fail it. Every failure names the robot and action
     /// (both, for a contact) and when it happened. Returns each action's simulated
     /// seconds from the step's start, in the order given; the step took the longest of
     /// them.
@@ -164,12 +164,9 @@ impl World {
                     self.after_step(m).map_err(|e| Stop::Motion(i, e))?;
                 }
             }
-            if slots.iter().filter_map(moving).count() > 1 {
-                let brought: Vec<Brought<'_>> = slots
-                    .iter()
-                    .filter_map(moving)
-                    .map(|m| self.brought(m))
-                    .collect();
+            if actions.len() > 1 {
+                let brought: Vec<Brought> =
+                    actions.iter().map(|&(r, a)| self.brought(r, a)).collect();
                 self.check_contacts(&brought, t0).map_err(Stop::Contact)?;
             }
         }
@@ -178,9 +175,9 @@ impl World {
     /// Which actions hold this step: those whose robot is near one moving earlier in the
     /// step.
     fn holding(&self, slots: &[Slot]) -> Vec<bool> {
-        let brought: Vec<Option<Brought<'_>>> = slots
+        let brought: Vec<Option<Brought>> = slots
             .iter()
-            .map(|s| moving(s).map(|m| self.brought(m)))
+            .map(|s| moving(s).map(|m| self.brought(m.robot, m.action)))
             .collect();
         (0..slots.len())
             .map(|i| {

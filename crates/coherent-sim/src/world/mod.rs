@@ -152,8 +152,6 @@ struct Arm {
     robot: Idx,
     root: RigidBodyHandle,
     joints: [MultibodyJointHandle; 4],
-    /// The links' bodies from the root out: yaw, upper arm, forearm, hand.
-    links: [RigidBodyHandle; 4],
     hand: RigidBodyHandle,
     q: [f32; 4],
     limits: [(f32, f32); 3],
