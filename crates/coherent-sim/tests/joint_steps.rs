@@ -1,7 +1,9 @@
 //! Joint steps in Rapier: several robots' actions at once in the one world. Hand-picked
 //! steps on the demo task and env0 agree with the rules after every step and take as
 //! long as their slowest action, not the sum; robots of one step that run into each
-//! other fail with the numbers; refused steps move nothing; two runs are bit-identical.
+//! other fail with the numbers; a robot gives way to one earlier in the step, and waits
+//! for a way another still blocks; refused steps move nothing; two runs are
+//! bit-identical.
 
 use std::sync::Arc;
 
@@ -58,13 +60,17 @@ const DEMO: &[Joint] = &[
     &[(13, "[puton] <mug>(7) on <coffee table>(10)")],
 ];
 
-fn refs(step: Joint) -> Vec<(NodeId, &'static str)> {
+fn refs<'a>(step: &[(i64, &'a str)]) -> Vec<(NodeId, &'a str)> {
     step.iter().map(|&(r, a)| (NodeId(r), a)).collect()
 }
 
 /// Plays `steps` as joint steps, checking each against the rules' own joint step: the
 /// same state after it, and the step as long as its slowest action.
-fn play(env: &mut PhysicalEnv, rules: &mut SymbolicEnv, steps: &[Joint]) -> Vec<JointReport> {
+fn play(
+    env: &mut PhysicalEnv,
+    rules: &mut SymbolicEnv,
+    steps: &[&[(i64, &str)]],
+) -> Vec<JointReport> {
     let mut reports = Vec::new();
     for (i, &step) in steps.iter().enumerate() {
         let report = match env.step_joint_physical(&refs(step)) {
@@ -237,6 +243,75 @@ fn robots_sent_to_the_same_spot_at_once_fail_with_who_where_and_when() {
     let mut rules = SymbolicEnv::new(task.clone());
     play(&mut env, &mut rules, BEFORE_COLLISION);
     play(&mut env, &mut rules, &[&COLLIDING[1..], &COLLIDING[..1]]);
+}
+
+/// Simulated seconds of each action of `step`, played after `before` (one action at a
+/// time when `step` has one).
+fn seconds(task: &Arc<Task>, before: &[Joint], step: &[(i64, &str)]) -> Vec<f64> {
+    let mut env = PhysicalEnv::new(task.clone()).expect("the world builds");
+    let mut rules = SymbolicEnv::new(task.clone());
+    play(&mut env, &mut rules, before);
+    play(&mut env, &mut rules, &[step]).remove(0).action_seconds
+}
+
+/// env0 task 18: the dog has just put the napkin into the basket of the quadrotor landed
+/// beside it.
+const BESIDE_THE_BASKET: &[Joint] = &[
+    &[(23, "[movetowards] <dinner napkin>(41)")],
+    &[(23, "[grab] <dinner napkin>(41)")],
+    &[(23, "[movetowards] <basket>(25)")],
+    &[(23, "[putinto] <dinner napkin>(41) into <basket>(25)")],
+];
+
+#[test]
+fn a_robot_close_to_one_earlier_in_the_step_holds_until_the_way_is_clear() {
+    let task = common::task("env0", 18);
+    let walk = (23, "[movetowards] <toy car>(46)");
+    let takeoff = (22, "[takeoff_from] <childroom floor>(3)");
+    let alone_walk = seconds(&task, BESIDE_THE_BASKET, &[walk])[0];
+    let alone_takeoff = seconds(&task, BESIDE_THE_BASKET, &[takeoff])[0];
+    // The dog first: it walks off as alone while the quadrotor holds until the dog is
+    // clear of its basket; the other way round, the dog holds for the quadrotor.
+    let dog_first = seconds(&task, BESIDE_THE_BASKET, &[walk, takeoff]);
+    let quad_first = seconds(&task, BESIDE_THE_BASKET, &[takeoff, walk]);
+    eprintln!(
+        "alone: walk {alone_walk:.2} s, take-off {alone_takeoff:.2} s; dog first {dog_first:?}, quadrotor first {quad_first:?}"
+    );
+    assert_eq!(dog_first[0], alone_walk);
+    assert!(dog_first[1] > alone_takeoff + 0.05, "{dog_first:?}");
+    assert_eq!(quad_first[0], alone_takeoff);
+    assert!(quad_first[1] > alone_walk + 0.05, "{quad_first:?}");
+}
+
+/// s1-apartment task 12 (our benchmark): the quadrotor hovers just after taking off in
+/// the living room, in front of the door the dog is sent to.
+const HOVERING_BY_THE_DOOR: &[Joint] = &[&[
+    (25, "[grab] <bread>(28)"),
+    (45, "[takeoff_from] <kitchen floor>(1)"),
+    (47, "[movetowards] <kitchen>(0)"),
+]];
+
+#[test]
+fn a_robot_whose_way_another_of_the_step_blocks_waits_until_it_is_clear() {
+    let task = common::native_task("s1-apartment", 12);
+    let to_the_door = (47, "[movetowards] <door>(10)");
+    // Alone, the dog finds no free spot beside the door: the quadrotor is in the way.
+    let mut env = PhysicalEnv::new(task.clone()).expect("the world builds");
+    let mut rules = SymbolicEnv::new(task.clone());
+    play(&mut env, &mut rules, HOVERING_BY_THE_DOOR);
+    let err = env
+        .step_physical(NodeId(to_the_door.0), to_the_door.1)
+        .expect_err("blocked");
+    assert_eq!(err.kind, FailureKind::Blocked, "{err}");
+    assert!(err.message.contains("no free spot beside"), "{err}");
+    // With the quadrotor flying off in the same step, the dog waits and then goes.
+    let at_once = seconds(
+        &task,
+        HOVERING_BY_THE_DOOR,
+        &[(45, "[movetowards] <kitchen island>(11)"), to_the_door],
+    );
+    eprintln!("at once: {at_once:?}");
+    assert!(at_once[1] >= 0.5, "{at_once:?}");
 }
 
 #[test]

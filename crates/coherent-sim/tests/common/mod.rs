@@ -54,3 +54,13 @@ pub fn demo() -> Task {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
     load_tasks(&path).expect("the demo task loads").remove(0)
 }
+
+/// Task `id` of scene `scene` of our own benchmark (compiled in).
+pub fn native_task(scene: &str, id: i64) -> Arc<Task> {
+    coherent_core::benchmark::tasks()
+        .expect("the benchmark loads")
+        .into_iter()
+        .find(|t| t.meta.scene == scene && t.meta.task_id == id)
+        .map(Arc::new)
+        .expect("task exists")
+}
