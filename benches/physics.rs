@@ -186,6 +186,9 @@ const FOUR_ROBOTS: [(i64, &str); 4] = [
     (23, "[movetowards] <fridge>(14)"),
 ];
 
+/// Plays actions on a world; their simulated seconds.
+type Play = fn(&mut PhysicalEnv) -> Result<f64, String>;
+
 /// The four actions as one joint step; its simulated seconds.
 fn at_once(env: &mut PhysicalEnv) -> Result<f64, String> {
     let step: Vec<(NodeId, &str)> = FOUR_ROBOTS.iter().map(|&(r, a)| (NodeId(r), a)).collect();
@@ -218,8 +221,7 @@ fn joint(c: &mut Criterion) {
         .measurement_time(Duration::from_secs(2));
     let task = Arc::new(common::task(0, 9));
     let fresh = || PhysicalEnv::new(task.clone()).expect("the world builds");
-    let cases: [(&str, fn(&mut PhysicalEnv) -> Result<f64, String>); 2] =
-        [("four_robots", at_once), ("four_robots_in_turn", in_turn)];
+    let cases: [(&str, Play); 2] = [("four_robots", at_once), ("four_robots_in_turn", in_turn)];
     for (name, run) in cases {
         let sim = run(&mut fresh()).expect("the actions play");
         eprintln!("physics/joint/{name}: env0 task 9, {sim:.2} s simulated");
