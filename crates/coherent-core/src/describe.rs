@@ -95,10 +95,10 @@ pub struct Layers {
     /// place with their properties (and the states no action changes), and the
     /// relations between such things.
     pub scene: String,
-    /// The states actions change (doors and containers opened or closed, a quadrotor
-    /// landed or flying), the things seen that move (the robots that walk or fly, a
-    /// basket, what can be grabbed) with their properties and states, and every other
-    /// relation.
+    /// What actions change: first the things' (the states of doors and containers that
+    /// open and close, the things seen that move with their properties and states, and
+    /// their relations), then each robot's, in team order (its states, and the
+    /// relations of the robot and of its basket), as robots change most often.
     pub state: String,
 }
 
@@ -107,8 +107,16 @@ pub struct Layers {
 /// joins or what it is in the scene, its state in the state), and no other.
 pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers {
     let (nodes, edges) = merged(observations);
+    // The robot whose part of the state holds `n`'s changing facts: the robot itself,
+    // or the quadrotor whose basket it is.
+    let owner = |n: Idx| {
+        task.robots
+            .iter()
+            .position(|r| r.node == n || task.basket_of(r.node) == Some(n))
+    };
     let mut scene = rooms_line(task);
-    let mut state = String::from("Things that move, and states that change:\n");
+    let mut things = String::from("Things that move, and states that change:\n");
+    let mut robots = vec![String::new(); task.robots.len()];
     scene.push_str("Doors:\n");
     for &door in nodes
         .iter()
@@ -117,12 +125,7 @@ pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers 
         let _ = write!(scene, "- {}", joins(task, door));
         let states = task.vocab.state_names(s.states(door));
         if states_change(task, s, door) {
-            let _ = writeln!(
-                state,
-                "- {}: {}",
-                task.node(door).label(),
-                states.join(", ")
-            );
+            item(&mut things, &task.node(door).label(), states);
             scene.push('\n');
         } else if states.is_empty() {
             scene.push('\n');
@@ -136,20 +139,24 @@ pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers 
         if matches!(node.kind, NodeKind::Room | NodeKind::Door) {
             continue;
         }
+        let changing = match owner(n) {
+            Some(r) => &mut robots[r],
+            None => &mut things,
+        };
         let properties = task
             .vocab
             .property_names(PropSet(task.properties(s, n).0 & USEFUL.0));
         let states = task.vocab.state_names(s.states(n));
         if moves(task, n) {
             item(
-                &mut state,
+                changing,
                 &node.label(),
                 properties.into_iter().chain(states),
             );
         } else if states_change(task, s, n) {
             item(&mut scene, &node.label(), properties);
             if !states.is_empty() {
-                item(&mut state, &node.label(), states);
+                item(changing, &node.label(), states);
             }
         } else {
             item(
@@ -160,19 +167,23 @@ pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers 
         }
     }
     scene.push_str("Where they stand:\n");
-    state.push_str("Relations now:\n");
+    things.push_str("Their relations now:\n");
     for e in edges {
-        relation(
-            if fixed(task, e) {
-                &mut scene
-            } else {
-                &mut state
-            },
-            task,
-            e,
-        );
+        if fixed(task, e) {
+            relation(&mut scene, task, e);
+        } else {
+            match owner(e.from()) {
+                Some(r) => relation(&mut robots[r], task, e),
+                None => relation(&mut things, task, e),
+            }
+        }
     }
-    Layers { scene, state }
+    things.push_str("The robots now:\n");
+    things.extend(robots);
+    Layers {
+        scene,
+        state: things,
+    }
 }
 
 /// `<door>(8) joins <bedroom>(0) and <livingroom>(4)`.

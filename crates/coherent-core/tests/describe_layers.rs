@@ -66,7 +66,8 @@ fn new_facts(layers: &Layers) -> BTreeSet<Fact> {
                     "Things that stay in place:",
                     "Where they stand:",
                     "Things that move, and states that change:",
-                    "Relations now:"
+                    "Their relations now:",
+                    "The robots now:"
                 ]
                 .contains(&line),
                 "{line:?}"
