@@ -430,18 +430,12 @@ fn the_cached_share_and_the_cost_of_cached_tokens_come_from_the_lines() {
     let lines: Vec<ResultLine> = [(10, 600), (30, 2700)]
         .into_iter()
         .map(|(calls, cached)| {
-            let mut l: ResultLine = serde_json::from_str(&line(
-                "pefa",
-                "env0",
-                i64::from(calls),
-                Some("mono"),
-                5,
-                0,
-                Status::Success,
-                5,
+            let mut l = Hand {
+                task_id: i64::from(calls),
                 calls,
-            ))
-            .expect("a line");
+                ..Hand::default()
+            }
+            .line();
             l.backend.model = "m".into();
             l.cached_tokens = cached;
             l.priced(&prices)
