@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import os
 import platform
 import statistics
 import tempfile
@@ -113,7 +114,16 @@ def llama(args: argparse.Namespace) -> None:
         scene, tid = spec.split(":")
         tasks.extend(t for t in coherent.read_tasks(folder / f"{scene}.json")[0] if t.task_id == int(tid))
     server, cache_ram = start_llama(args.threads)
-    llm = coherent.LLM(base_url=f"{server.listening_address}/v1", model="smollm2-135m", api_key="none")
+    # A loaded machine answers slowly: generous timeouts, so that no call is cut short.
+    llm = coherent.LLM(
+        base_url=f"{server.listening_address}/v1",
+        model="smollm2-135m",
+        api_key="none",
+        seed=0,
+        read_timeout=1800.0,
+        timeout=3600.0,
+    )
+    load_before = os.getloadavg()
     # (role, layout) -> prompt tokens, cached tokens, latencies (from round 2 on)
     prompt: dict[tuple[str, str], int] = defaultdict(int)
     cached: dict[tuple[str, str], int] = defaultdict(int)
@@ -145,7 +155,8 @@ def llama(args: argparse.Namespace) -> None:
         f"\nPEFA, SmolLM2-135M-Instruct Q4_1 on llama.cpp (xllamacpp, {args.threads} threads, "
         f"prompt cache on, cache_ram {cache_ram} MiB, one slot), {len(tasks)} tasks, at most "
         f"{args.max_steps} rounds; {platform.processor() or platform.machine()}, "
-        f"{time.strftime('%Y-%m-%d')}\n"
+        f"{os.cpu_count()} cores, load average {load_before[0]:.1f} before and "
+        f"{os.getloadavg()[0]:.1f} after, {time.time() - started:.0f} s; {time.strftime('%Y-%m-%d')}\n"
     )
     print("| role | layout | calls | prompt tokens | cached | median latency per call | spread (quartiles) |")
     print("|---|---|---|---|---|---|---|")
@@ -171,7 +182,7 @@ def main() -> None:
     m.add_argument("--tasks", required=True, help="the folder of the released env*.json files")
     m.add_argument("--task", action="append", required=True, help="SCENE:ID, e.g. env0:2 (repeat)")
     m.add_argument("--max-steps", type=int, default=6)
-    m.add_argument("--threads", type=int, default=2)
+    m.add_argument("--threads", type=int, default=1, help="1, as the tests: on a loaded machine more threads wait on each other")
     args = parser.parse_args()
     builtin(args) if args.what == "builtin" else llama(args)
 
