@@ -1,6 +1,7 @@
 """The optional dependencies, installed by the package's extras (pyproject.toml): planning,
 stepping and running need none of them; DataFrames, tables and figures need
-``coherent[analysis]``, the Gymnasium environment ``coherent[gym]``."""
+``coherent[analysis]``, the Gymnasium environment ``coherent[gym]``, the PettingZoo
+environment ``coherent[marl]``."""
 
 from __future__ import annotations
 
@@ -12,11 +13,12 @@ from typing import Literal
 _PACKAGES = {
     "analysis": ("pandas", "matplotlib", "numpy"),
     "gym": ("gymnasium", "numpy"),
+    "marl": ("pettingzoo", "gymnasium", "numpy"),
 }
 
 
 @contextmanager
-def needs(what: str, extra: Literal["analysis", "gym"]) -> Iterator[None]:
+def needs(what: str, extra: Literal["analysis", "gym", "marl"]) -> Iterator[None]:
     """Turns the import error of a package that ``extra`` brings, raised in the block, into
     one that says which extra to install for ``what``; any other import error passes."""
     try:
