@@ -8,39 +8,10 @@ use std::cell::OnceCell;
 use smallvec::SmallVec;
 
 use crate::action::{Action, Verb};
+pub use crate::graph::NodeSet;
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
 use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
-
-/// A set of node indices; up to 256 nodes without a heap allocation (the search builds
-/// several per expanded state).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct NodeSet(SmallVec<[u64; 4]>);
-
-impl NodeSet {
-    pub fn new(n: usize) -> NodeSet {
-        NodeSet(smallvec::smallvec![0; n.div_ceil(64)])
-    }
-    pub fn contains(&self, n: Idx) -> bool {
-        self.0[n.get() / 64] >> (n.get() % 64) & 1 == 1
-    }
-    /// Inserts `n`; returns whether it was new.
-    pub fn insert(&mut self, n: Idx) -> bool {
-        let new = !self.contains(n);
-        self.0[n.get() / 64] |= 1 << (n.get() % 64);
-        new
-    }
-    pub fn remove(&mut self, n: Idx) {
-        self.0[n.get() / 64] &= !(1 << (n.get() % 64));
-    }
-    pub fn iter(&self) -> impl Iterator<Item = Idx> + '_ {
-        self.0.iter().enumerate().flat_map(|(w, &word)| {
-            (0..64)
-                .filter(move |b| word >> b & 1 == 1)
-                .map(move |b| Idx((w * 64 + b) as u16))
-        })
-    }
-}
 
 /// What one robot observes: the visible nodes and every edge between two of them.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -63,60 +34,81 @@ pub fn room_of(task: &Task, s: &State, n: Idx) -> Option<Idx> {
 /// state for the views of all its robots, which then also share what each room shows.
 #[derive(Clone)]
 pub(crate) struct Contents {
-    /// `edges[start[p]..start[p + 1]]` are the location edges pointing at node `p`.
-    start: Vec<u32>,
-    edges: Vec<Edge>,
+    /// `start` (`n + 2` words), then the location edges by target:
+    /// `edges[start[p]..start[p + 1]]` point at node `p`. One block, as the search
+    /// builds one of these per state it expands.
+    data: Vec<u32>,
+    /// Where the edges begin in `data`: `n + 2`.
+    edges_at: usize,
     /// What a robot in each room of `Task::rooms` sees, besides itself and what it
     /// holds; found when a robot there first looks.
     sights: Vec<OnceCell<NodeSet>>,
+    /// Every node `INSIDE` a container, not a room, that is neither `OPEN` nor
+    /// `OPEN_FOREVER`: hidden from view wherever it is.
+    hidden: NodeSet,
 }
 
 impl Contents {
     pub fn new(task: &Task, s: &State) -> Contents {
         let n = task.nodes.len();
+        let locations = || s.edges().iter().filter(|e| e.rel().is_location());
         // Counting sort by target: count, prefix sums, then place in edge order.
-        let mut start = vec![0u32; n + 2];
-        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
-            start[e.to().get() + 2] += 1;
+        let mut data = Vec::with_capacity(n + 2 + s.edges().len());
+        data.resize(n + 2, 0u32);
+        for e in locations() {
+            data[e.to().get() + 2] += 1;
         }
-        for p in 2..start.len() {
-            start[p] += start[p - 1];
+        for p in 2..n + 2 {
+            data[p] += data[p - 1];
         }
-        let mut edges = vec![Edge::new(Idx(0), Relation::On, Idx(0)); start[n + 1] as usize];
-        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
+        let total = data[n + 1] as usize;
+        data.resize(n + 2 + total, 0);
+        let (start, edges) = data.split_at_mut(n + 2);
+        let mut hidden = NodeSet::new(n);
+        for e in locations() {
             let at = &mut start[e.to().get() + 1];
-            edges[*at as usize] = *e;
+            edges[*at as usize] = e.bits();
             *at += 1;
+            if e.rel() == Relation::Inside
+                && !task.room_set().contains(e.to())
+                && !s.states(e.to()).is_open()
+            {
+                hidden.insert(e.from());
+            }
         }
-        start.pop();
+        // `start[p]` now holds where `p`'s edges begin, `start[n]` where they end.
         Contents {
-            start,
-            edges,
+            data,
+            edges_at: n + 2,
             sights: vec![OnceCell::new(); task.rooms().len()],
+            hidden,
         }
     }
 
     /// The location edges pointing at `p`, in edge order.
     pub fn of(&self, p: Idx) -> &[Edge] {
-        &self.edges[self.start[p.get()] as usize..self.start[p.get() + 1] as usize]
+        let (lo, hi) = (self.data[p.get()] as usize, self.data[p.get() + 1] as usize);
+        bytemuck::cast_slice(&self.data[self.edges_at + lo..self.edges_at + hi])
     }
 }
 
 /// The visible set of docs/semantics.md, "Observations".
 pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
-    visible_with(task, s, robot, &Contents::new(task, s))
+    let room = room_of(task, s, robot);
+    visible_with(task, s, robot, room, &Contents::new(task, s))
 }
 
-fn visible_with(task: &Task, s: &State, robot: Idx, contents: &Contents) -> NodeSet {
-    let mut v = match room_of(task, s, robot).and_then(|room| sight(task, s, room, contents)) {
+/// [`visible`] for a robot in `room` (its [`room_of`]).
+fn visible_with(
+    task: &Task,
+    s: &State,
+    robot: Idx,
+    room: Option<Idx>,
+    contents: &Contents,
+) -> NodeSet {
+    let mut v = match room.and_then(|room| sight(task, s, room, contents)) {
         Some(sight) => sight.clone(),
-        None => {
-            let mut v = NodeSet::new(task.nodes.len());
-            for &r in task.rooms() {
-                v.insert(r);
-            }
-            v
-        }
+        None => task.room_set().clone(),
     };
     v.insert(robot);
     for h in s.targets(robot, Relation::Hold) {
@@ -133,30 +125,29 @@ fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Optio
         let mut v = NodeSet::new(task.nodes.len());
         // Everything INSIDE the room, then whatever is ON or INSIDE something seen, at
         // any depth: the least set closed under location edges, found by a walk down.
+        let words = v.words_mut();
+        let mut insert = |n: Idx| {
+            let (w, bit) = (n.get() / 64, 1u64 << (n.get() % 64));
+            let new = words[w] & bit == 0;
+            words[w] |= bit;
+            new
+        };
         let mut todo: SmallVec<[Idx; 64]> = SmallVec::new();
         for e in contents.of(room) {
-            if e.rel() == Relation::Inside && v.insert(e.from()) {
+            if e.rel() == Relation::Inside && insert(e.from()) {
                 todo.push(e.from());
             }
         }
         while let Some(p) = todo.pop() {
             for e in contents.of(p) {
-                if v.insert(e.from()) {
+                if insert(e.from()) {
                     todo.push(e.from());
                 }
             }
         }
         // Only a thing's direct container is checked: what stands ON a hidden thing
         // stays visible, as in the original.
-        for e in s.edges() {
-            if e.rel() == Relation::Inside
-                && v.contains(e.from())
-                && task.node(e.to()).kind != NodeKind::Room
-                && !s.states(e.to()).is_open()
-            {
-                v.remove(e.from());
-            }
-        }
+        v.remove_all(&contents.hidden);
         v.insert(room);
         for &(door, r) in task.doors() {
             if r == room {
@@ -176,9 +167,7 @@ fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Optio
                 }
             }
         }
-        for &r in task.rooms() {
-            v.insert(r);
-        }
+        v.insert_all(task.room_set());
         v
     }))
 }
@@ -221,7 +210,8 @@ impl<'a> View<'a> {
         robot: Robot,
         contents: Cow<'a, Contents>,
     ) -> View<'a> {
-        let visible = visible_with(task, s, robot.node, &contents);
+        let room = room_of(task, s, robot.node);
+        let visible = visible_with(task, s, robot.node, room, &contents);
         let holding = s
             .targets(robot.node, Relation::Hold)
             .find(|&h| visible.contains(h));
@@ -230,7 +220,7 @@ impl<'a> View<'a> {
             s,
             robot,
             contents,
-            room: room_of(task, s, robot.node),
+            room,
             visible,
             holding,
         }
@@ -288,25 +278,12 @@ impl<'a> View<'a> {
             .map(|(room, _)| room)
     }
 
-    /// What the robot dog may move towards (`unreached` of docs/semantics.md, "Actions").
-    pub fn unreached(&self, n: Idx) -> bool {
-        self.sees(n)
-            && Some(n) != self.holding
-            && !self.close_to(n)
-            && !matches!(
-                self.kind(n),
-                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
-            )
-            && !self.has(n, PropSet::HIGH_HEIGHT)
-            && !self.has(n, PropSet::ON_HIGH_SURFACE)
-    }
-
     /// What a fixed arm reaches: things on its surface, then three levels of things
     /// ON/INSIDE those, then the direct children of surfaces and containers among them.
     /// Each level is in node order, as one pass over the sorted edges finds it.
     pub fn arm_reach(&self) -> Vec<Idx> {
         let mut set = NodeSet::new(self.task.nodes.len());
-        let mut reach = Vec::new();
+        let mut reach = Vec::with_capacity(16);
         let Some(surface) = self.own(Relation::On) else {
             return reach;
         };
@@ -346,6 +323,7 @@ impl<'a> View<'a> {
         grow(&mut reach, &mut set, 0, &holder);
         reach
     }
+
 }
 
 /// Every action `robot` may take in state `s`, without duplicates.
@@ -366,7 +344,8 @@ pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>
 impl View<'_> {
     /// The robot's action list, from this view.
     pub fn actions(&self) -> Vec<Action> {
-        let mut out = Vec::new();
+        // Room for a long list at once: growing it step by step cost more than the rest.
+        let mut out = Vec::with_capacity(32);
         match self.robot.kind {
             RobotKind::Quadrotor => quadrotor_actions(self, &mut out),
             RobotKind::RobotDog => dog_actions(self, &mut out),
@@ -390,11 +369,10 @@ fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
     if me.contains(StateSet::FLYING) {
         if let Some(above) = v.above() {
             out.push(Action::new(Verb::LandOn, above));
-            for n in v.visible.iter() {
-                if n != above && v.has(n, PropSet::LANDABLE) {
-                    out.push(Action::new(Verb::MoveTowards, n));
-                }
-            }
+            let mut landables = v.visible.clone();
+            landables.keep_only(v.task.landable_set());
+            landables.remove(above);
+            out.extend(landables.iter().map(|n| Action::new(Verb::MoveTowards, n)));
         }
         out.extend(
             v.open_next_rooms()
@@ -436,14 +414,25 @@ fn hand_actions(v: &View<'_>, r: Idx, doors_too: bool, out: &mut Vec<Action>) {
 }
 
 fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
+    let mut close = NodeSet::new(v.task.nodes.len());
     for r in v.reachable() {
+        close.insert(r);
         hand_actions(v, r, true, out);
     }
-    for n in v.visible.iter() {
-        if v.unreached(n) {
-            out.push(Action::new(Verb::MoveTowards, n));
-        }
+    // What it may walk up to (`View::unreached`), as set operations: what it sees, less
+    // what it is close to, holds, can never approach, or is on a high surface.
+    let mut unreached = v.visible.clone();
+    unreached.remove_all(&close);
+    unreached.remove_all(v.task.never_approached());
+    unreached.remove_words32(v.s.high_words());
+    if let Some(h) = v.holding {
+        unreached.remove(h);
     }
+    out.extend(
+        unreached
+            .iter()
+            .map(|n| Action::new(Verb::MoveTowards, n)),
+    );
     out.extend(
         v.open_next_rooms()
             .map(|room| Action::new(Verb::MoveTowards, room)),

@@ -6,7 +6,7 @@ use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, Site, ensure, quoted};
-use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, RobotKind, State};
+use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, NodeSet, RobotKind, State};
 use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
 /// A node as written in a task file (the original format's field names).
@@ -157,6 +157,13 @@ pub struct Task {
     /// Each quadrotor's basket (target of its `WITH` edge), if it has one.
     baskets: FxHashMap<Idx, Idx>,
     rooms: Vec<Idx>,
+    /// The rooms, as a set: every robot sees them all.
+    room_set: NodeSet,
+    /// The `LANDABLE` nodes.
+    landable_set: NodeSet,
+    /// What a robot dog never walks up to whatever the state: rooms, robots, floors and
+    /// `HIGH_HEIGHT` things (`unreached` of docs/semantics.md, "Actions").
+    never_approached: NodeSet,
 }
 
 impl Task {
@@ -292,6 +299,23 @@ impl Task {
                 _ => {}
             }
         }
+        let mut room_set = NodeSet::new(nodes.len());
+        let mut never_approached = NodeSet::new(nodes.len());
+        let mut landable_set = NodeSet::new(nodes.len());
+        for (i, n) in nodes.iter().enumerate() {
+            let i = Idx(i as u16);
+            if n.kind == NodeKind::Room {
+                room_set.insert(i);
+            }
+            if n.properties.contains(PropSet::LANDABLE) {
+                landable_set.insert(i);
+            }
+            if matches!(n.kind, NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor)
+                || n.properties.contains(PropSet::HIGH_HEIGHT)
+            {
+                never_approached.insert(i);
+            }
+        }
         Ok(Task {
             meta,
             nodes,
@@ -305,6 +329,9 @@ impl Task {
             floors,
             baskets,
             rooms,
+            room_set,
+            landable_set,
+            never_approached,
         })
     }
 
@@ -357,6 +384,21 @@ impl Task {
 
     pub fn rooms(&self) -> &[Idx] {
         &self.rooms
+    }
+
+    /// [`Task::rooms`] as a set.
+    pub(crate) fn room_set(&self) -> &NodeSet {
+        &self.room_set
+    }
+
+    /// The `LANDABLE` nodes, as a set.
+    pub(crate) fn landable_set(&self) -> &NodeSet {
+        &self.landable_set
+    }
+
+    /// What a robot dog never walks up to: rooms, robots, floors, `HIGH_HEIGHT` things.
+    pub(crate) fn never_approached(&self) -> &NodeSet {
+        &self.never_approached
     }
 
     pub fn floor_of(&self, room: Idx) -> Option<Idx> {
