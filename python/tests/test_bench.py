@@ -15,6 +15,7 @@ import pandas as pd
 import pytest
 
 import coherent
+from conftest import DEMO
 
 
 @pytest.fixture(scope="module")
@@ -102,6 +103,17 @@ def test_bench_simulated_seeds(few: list[coherent.Task], tmp_path: Path) -> None
     assert sorted(frame["seed"].unique()) == [0, 1]
     assert set(frame["backend_kind"]) == {"simulated"}
     assert frame["episode_seed"].nunique() == 6
+
+
+def test_bench_in_physics_runs_every_action_in_rapier_too(tmp_path: Path) -> None:
+    demo = coherent.load_tasks(DEMO)[0]
+    frame = coherent.bench([demo], ["optimal", "pefa"], physics=True, out=tmp_path / "r.jsonl")
+    assert list(frame["success"]) == [True, True]
+    assert list(frame["steps"]) == [22, 22]
+    for path in frame["transcript"]:
+        episode = coherent.load_episode(path)
+        assert episode.header["physics"] is True
+        assert episode.header["robots"] == {"kind": "local"}
 
 
 def test_bench_errors(few: list[coherent.Task], tmp_path: Path) -> None:

@@ -185,6 +185,8 @@ def test_exception_tree() -> None:
         coherent.ReplayMismatchError,
         coherent.PromptError,
         coherent.MethodError,
+        coherent.RobotError,
+        coherent.DataFileError,
     )
     for exc in errors:
         assert issubclass(exc, coherent.CoherentError)
@@ -192,7 +194,9 @@ def test_exception_tree() -> None:
     assert issubclass(coherent.TaskFormatError, ValueError)
     assert issubclass(coherent.ActionParseError, ValueError)
     assert issubclass(coherent.PromptError, ValueError)
+    assert issubclass(coherent.DataFileError, ValueError)
     assert not issubclass(coherent.UnknownRobotError, ValueError)
+    assert not issubclass(coherent.RobotError, ValueError)
 
 
 def test_classes_live_in_the_native_module() -> None:

@@ -1,5 +1,5 @@
 //! Methods written in Python: a class (or any callable) `M` becomes a method of the
-//! engine (`coherent_agents::episode::External`): `M(task)` once per episode, then
+//! engine (an `External` method of the session's engine): `M(task)` once per episode, then
 //! `act(view)` once per step, given a `View` and answering a `Decision` or a
 //! `(robot, action)` tuple. A plain `act` runs on the episode's thread with the GIL held
 //! for the call only; a coroutine that `act` returns runs on the run's event loop
@@ -8,12 +8,11 @@
 
 use std::sync::{Arc, Mutex, PoisonError};
 
-use coherent_agents::episode::{
-    Act, Choice, External, MakePolicy, Method, MethodSpec, Policy, RobotView, View,
+use coherent::session::Error;
+use coherent::session::engine::{
+    Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
+    Policy, RobotView, StepView, Task,
 };
-use coherent_agents::llm::BoxFuture;
-use coherent_agents::transcript::Call;
-use coherent_core::{NodeId, Task};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -56,11 +55,11 @@ impl Recorder {
 /// What a method is shown at each step.
 #[pyclass(name = "View", module = "coherent._coherent", frozen)]
 pub(crate) struct PyView {
-    view: Arc<View>,
+    view: Arc<StepView>,
     task: Py<PyTask>,
 }
 
-fn robot_of(view: &View, robot: i64) -> PyResult<&RobotView> {
+fn robot_of(view: &StepView, robot: i64) -> PyResult<&RobotView> {
     view.robot(NodeId(robot)).ok_or_else(|| {
         let ids: Vec<String> = view.robots.iter().map(|r| r.id.0.to_string()).collect();
         PyValueError::new_err(format!(
@@ -358,18 +357,19 @@ impl Methods {
                             method: Arc::clone(&maker),
                         }) as Box<dyn Policy>)
                     }
-                    Ok(object) => Err(format!(
+                    Ok(object) => Err(MethodFailure(format!(
                         "TypeError: {} has no act(view) method",
                         object
                             .bind(py)
                             .repr()
                             .map_or("the method".into(), |r| r.to_string())
-                    )),
-                    Err(e) => Err(maker.failed(py, e)),
+                    ))),
+                    Err(e) => Err(MethodFailure(maker.failed(py, e))),
                 }
             })
         });
-        let external = External::new(&name, make).map_err(PyValueError::new_err)?;
+        let external =
+            External::new(&name, make).map_err(|e| errors::session_err(py, Error::from(e)))?;
         self.methods.push(shared);
         Ok(external)
     }
@@ -394,7 +394,12 @@ enum Started {
 
 impl PythonPolicy {
     /// Calls `act(view)` with the step's recorder current; a coroutine goes to the loop.
-    fn start(&self, py: Python<'_>, view: Arc<View>, recorder: &Py<Recorder>) -> PyResult<Started> {
+    fn start(
+        &self,
+        py: Python<'_>,
+        view: Arc<StepView>,
+        recorder: &Py<Recorder>,
+    ) -> PyResult<Started> {
         let task = self.method.task_object(py, &view.task)?;
         let view = Py::new(py, PyView { view, task })?;
         let step = helpers(py)?.getattr("_step")?;
@@ -420,7 +425,7 @@ impl PythonPolicy {
 }
 
 impl Policy for PythonPolicy {
-    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+    fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         Box::pin(async move {
             let calls = Arc::new(Mutex::new(Vec::new()));
             let started = Python::attach(|py| {
@@ -444,7 +449,10 @@ impl Policy for PythonPolicy {
                 Err(e) => Err(Python::attach(|py| self.method.failed(py, e))),
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
-            Act { choice, calls }
+            Act {
+                choice: choice.map_err(MethodFailure),
+                calls,
+            }
         })
     }
 }

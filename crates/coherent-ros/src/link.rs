@@ -1,7 +1,8 @@
-//! The bridge's side of DDS: one node with one action client per robot, a small runtime
-//! of its own that spins the node, and one goal's exchange (send it, follow its feedback,
-//! take its result; cancel it on Ctrl-C or when the robot falls silent) as a blocking
-//! call that works inside an async runtime as well as outside one.
+//! The bridge's side of DDS: one node with one action client per robot, spun on the
+//! runtime the caller hands in (the session's, the one place a runtime is built), and
+//! one goal's exchange (send it, follow its feedback, take its result; cancel it on
+//! Ctrl-C or when the robot falls silent) as a blocking call that works inside an async
+//! runtime as well as outside one.
 
 use std::future::Future;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -11,9 +12,11 @@ use futures::StreamExt;
 use ros2_client::action::{ActionClient, GoalId, GoalStatusEnum};
 use ros2_client::builtin_interfaces::Time;
 use ros2_client::{Node, NodeName, NodeOptions, ServiceMapping};
-use tokio::runtime::Runtime;
+use tokio::runtime::Handle;
+use tokio::task::JoinHandle;
 use tokio::time::{Instant, sleep, sleep_until, timeout};
 
+use crate::error::Error;
 use crate::wire::{self, ExecuteResult, Feedback, Goal};
 
 type Client = ActionClient<Goal, ExecuteResult, Feedback>;
@@ -24,41 +27,6 @@ const RECHECK: Duration = Duration::from_millis(100);
 const CANCEL_POLL: Duration = Duration::from_millis(20);
 /// How long a cancelled goal waits for the robot's acknowledgement, then its result.
 const CANCEL_WAIT: Duration = Duration::from_secs(2);
-
-/// Why the bridge could not start.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ConnectError {
-    /// These robots had no action server within the time given.
-    Missing {
-        robots: Vec<String>,
-        namespace: String,
-        waited: Duration,
-    },
-    /// DDS could not be set up.
-    Dds(String),
-}
-
-impl std::fmt::Display for ConnectError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ConnectError::Missing {
-                robots,
-                namespace,
-                waited,
-            } => write!(
-                f,
-                "no ROS 2 action server for {} under {namespace} within {:.1} s (start the \
-                 robots' servers, e.g. `coherent robots serve TASK --namespace {namespace}`, \
-                 or wait longer with --server-wait)",
-                robots.join(", "),
-                waited.as_secs_f64()
-            ),
-            ConnectError::Dds(why) => write!(f, "ROS 2: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for ConnectError {}
 
 /// How one goal ended, seen from the bridge.
 #[derive(Debug)]
@@ -83,7 +51,8 @@ pub(crate) enum Exchange {
 pub(crate) struct Link {
     clients: Vec<Client>,
     node: Node,
-    runtime: Option<Runtime>,
+    runtime: Handle,
+    spinner: JoinHandle<()>,
 }
 
 impl std::fmt::Debug for Link {
@@ -96,34 +65,29 @@ impl std::fmt::Debug for Link {
 }
 
 impl Link {
-    /// Joins DDS, makes an action client for each of `robots` under `namespace`, and
-    /// waits up to `wait` for every robot's server to appear.
+    /// Joins DDS, makes an action client for each of `robots` under `namespace`, spins
+    /// the node on `runtime`, and waits up to `wait` for every robot's server to appear.
     pub(crate) fn connect(
         namespace: &str,
         robots: &[String],
         wait: Duration,
-    ) -> Result<Link, ConnectError> {
-        let context = wire::context().map_err(ConnectError::Dds)?;
+        runtime: Handle,
+    ) -> Result<Link, Error> {
+        let context = wire::context().map_err(Error::Dds)?;
         let name = NodeName::new(namespace, "coherent_bridge")
-            .map_err(|e| ConnectError::Dds(format!("node name: {e:?}")))?;
+            .map_err(|e| Error::Dds(format!("node name: {e:?}")))?;
         let mut node = context
             .new_node(name, NodeOptions::new().enable_rosout(false))
-            .map_err(|e| ConnectError::Dds(format!("cannot make a node: {e:?}")))?;
-        let runtime = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .thread_name("coherent-ros")
-            .enable_time()
-            .build()
-            .map_err(|e| ConnectError::Dds(format!("cannot start a runtime: {e}")))?;
+            .map_err(|e| Error::Dds(format!("cannot make a node: {e:?}")))?;
         let spinner = node
             .spinner()
-            .map_err(|e| ConnectError::Dds(format!("cannot spin the node: {e:?}")))?;
-        runtime.spawn(async move {
+            .map_err(|e| Error::Dds(format!("cannot spin the node: {e:?}")))?;
+        let spinner = runtime.spawn(async move {
             let _ = spinner.spin().await;
         });
         let mut clients = Vec::with_capacity(robots.len());
         for robot in robots {
-            let action = wire::ros_action_name(namespace, robot).map_err(ConnectError::Dds)?;
+            let action = wire::ros_action_name(namespace, robot).map_err(Error::Dds)?;
             let client = node
                 .create_action_client(
                     ServiceMapping::Enhanced,
@@ -131,13 +95,14 @@ impl Link {
                     &wire::action_type(),
                     wire::client_qos(),
                 )
-                .map_err(|e| ConnectError::Dds(format!("action client {robot}: {e:?}")))?;
+                .map_err(|e| Error::Dds(format!("action client {robot}: {e:?}")))?;
             clients.push(client);
         }
         let link = Link {
             clients,
             node,
-            runtime: Some(runtime),
+            runtime,
+            spinner,
         };
         let found = link.block(async {
             let each = link
@@ -155,7 +120,7 @@ impl Link {
         if missing.is_empty() {
             Ok(link)
         } else {
-            Err(ConnectError::Missing {
+            Err(Error::Missing {
                 robots: missing,
                 namespace: namespace.to_owned(),
                 waited: wait,
@@ -172,17 +137,13 @@ impl Link {
         silence: Duration,
         cancel: Option<&AtomicBool>,
     ) -> Exchange {
-        self.block(exchange(&self.clients[robot], goal, silence, cancel))
+        self.block(follow_goal(&self.clients[robot], goal, silence, cancel))
     }
 
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that
-    /// the caller may be inside another runtime (an episode's) or in none.
+    /// the caller may be inside a runtime (an episode's) or in none.
     fn block<T: Send>(&self, future: impl Future<Output = T> + Send) -> T {
-        let handle = self
-            .runtime
-            .as_ref()
-            .expect("the runtime lives as long as the link")
-            .handle();
+        let handle = &self.runtime;
         std::thread::scope(|s| {
             s.spawn(|| handle.block_on(future))
                 .join()
@@ -192,12 +153,10 @@ impl Link {
 }
 
 impl Drop for Link {
-    /// Stops the spinner and the runtime without waiting (allowed inside a runtime).
+    /// Stops the spinner without waiting (allowed inside a runtime).
     fn drop(&mut self) {
         self.node.stop_spinner();
-        if let Some(runtime) = self.runtime.take() {
-            runtime.shutdown_background();
-        }
+        self.spinner.abort();
     }
 }
 
@@ -230,7 +189,9 @@ async fn raised(flag: Option<&AtomicBool>) {
     }
 }
 
-async fn exchange(
+/// Sends `goal` to `client`'s robot and follows it to its end: its feedback, its result,
+/// a refusal, `silence` without a word, or `cancel` raised (the goal is then cancelled).
+async fn follow_goal(
     client: &Client,
     goal: Goal,
     silence: Duration,

@@ -6,10 +6,44 @@ use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_core::Task;
 
 use crate::episode::settings::MethodSpec;
-use crate::harness::job::{EpisodeResult, RunTasks};
+use crate::error::Error;
 use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results, repair};
+
+/// What came of one episode, as an executor hands it to the driver.
+#[derive(Debug)]
+pub enum EpisodeResult {
+    /// It ran (to any end): its results line, its transcript written.
+    Line(Box<ResultLine>),
+    /// Cancelled before it started.
+    NotStarted,
+    /// Its task cannot run, and why (no ground truth and no plan to size a budget, or no
+    /// recording to replay).
+    TaskSkipped(String),
+}
+
+/// Every episode of `methods` x `tasks` x seed indices `0..seeds`, task by task, seed by
+/// seed, method by method: the order a run starts them in.
+pub fn episode_keys(tasks: &[Arc<Task>], methods: &[MethodSpec], seeds: u32) -> Vec<EpisodeKey> {
+    let mut keys = Vec::new();
+    for task in tasks {
+        for seed in 0..seeds {
+            for method in methods {
+                keys.push(EpisodeKey {
+                    method: method.name().to_owned(),
+                    scene: task.meta.scene.clone(),
+                    task_id: task.meta.task_id,
+                    seed,
+                });
+            }
+        }
+    }
+    keys
+}
 
 /// What a run did.
 #[derive(Debug, Default)]
@@ -50,7 +84,7 @@ impl Ledger {
     /// Opens the results file `out` (and its folder) for appending: a last line cut off
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
     /// episodes with a final line are known to be done.
-    pub fn open(out: &Path) -> Result<Ledger, String> {
+    pub fn open(out: &Path) -> Result<Ledger, Error> {
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
         if out.exists() {
@@ -65,13 +99,13 @@ impl Ledger {
             );
             outcome.orphaned = mark_orphans(out, &file.lines)?;
         } else if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, &e))?;
         }
         let file = OpenOptions::new()
             .create(true)
             .append(true)
             .open(out)
-            .map_err(|e| format!("{}: {e}", out.display()))?;
+            .map_err(|e| Error::io(out, &e))?;
         Ok(Ledger {
             out: out.to_owned(),
             file,
@@ -82,14 +116,15 @@ impl Ledger {
     }
 
     /// The episodes of `methods` x `tasks` x seed indices `0..seeds` that have no final
-    /// line yet, in the order they are to start; the others count as skipped.
+    /// line yet, in the order they are to start ([`episode_keys`]); the others count as
+    /// skipped.
     pub fn plan(
         &mut self,
-        tasks: &RunTasks,
+        tasks: &[Arc<Task>],
         methods: &[MethodSpec],
         seeds: u32,
     ) -> Vec<EpisodeKey> {
-        let all = tasks.keys(methods, seeds);
+        let all = episode_keys(tasks, methods, seeds);
         self.outcome.total += all.len();
         let pending: Vec<EpisodeKey> = all.into_iter().filter(|k| !self.done.contains(k)).collect();
         self.outcome.skipped = self.outcome.total - pending.len();
@@ -99,7 +134,7 @@ impl Ledger {
     /// Records what came of one episode: a line is appended and flushed, unless this
     /// run already wrote that episode's line (a result delivered twice is written
     /// once). Returns the line written, if one was.
-    pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, String> {
+    pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, Error> {
         let line = match result {
             EpisodeResult::Line(line) => *line,
             EpisodeResult::NotStarted => {
@@ -117,13 +152,15 @@ impl Ledger {
         if !self.written.insert(line.key()) {
             return Ok(None);
         }
-        let mut text = serde_json::to_string(&line)
-            .map_err(|e| format!("cannot encode a results line: {e}"))?;
+        let mut text = serde_json::to_string(&line).map_err(|e| Error::Io {
+            file: self.out.display().to_string(),
+            message: format!("cannot encode a results line: {e}"),
+        })?;
         text.push('\n');
         self.file
             .write_all(text.as_bytes())
             .and_then(|()| self.file.flush())
-            .map_err(|e| format!("{}: {e}", self.out.display()))?;
+            .map_err(|e| Error::io(&self.out, &e))?;
         self.outcome.written += 1;
         if line.is_final() {
             self.done.insert(line.key());
@@ -136,7 +173,7 @@ impl Ledger {
     /// Renames to `*.jsonl.unfinished` the transcripts no line of the results file
     /// points to, as resuming does: a worker that died mid-episode left them, and its
     /// episodes ran again elsewhere. They are added to the outcome's `orphaned`.
-    pub fn mark_orphans(&mut self) -> Result<(), String> {
+    pub fn mark_orphans(&mut self) -> Result<(), Error> {
         let lines = read_results(&self.out)?.lines;
         let marked = mark_orphans(&self.out, &lines)?;
         self.outcome.orphaned.extend(marked);

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
+use crate::error::Error;
 use crate::harness::prices::PriceTable;
 use crate::records::transcript::Status;
 
@@ -107,11 +108,11 @@ pub struct ResultsFile {
 /// Reads a results file. A last line without its newline that does not parse is a write
 /// cut short (reported in `truncated_bytes`); any other bad line is an error naming the
 /// file, the line and the JSON path.
-pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
+pub fn read_results(path: &Path) -> Result<ResultsFile, Error> {
     let mut text = Vec::new();
     File::open(path)
         .and_then(|mut f| f.read_to_end(&mut text))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+        .map_err(|e| Error::io(path, &e))?;
     let mut out = ResultsFile::default();
     let mut start = 0;
     let mut number = 0;
@@ -140,9 +141,7 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
             Err(_) if !complete => {
                 out.truncated_bytes = (end - start) as u64;
             }
-            Err(e) => {
-                return Err(format!("{}: line {number}: {e}", path.display()));
-            }
+            Err(e) => return Err(Error::at_line(path, number, e)),
         }
         start = end;
     }
@@ -198,8 +197,8 @@ fn missing_or_bad_field(value: &serde_json::Value) -> String {
 
 /// Cuts a results file back to its well-formed part and ends it with a newline, so
 /// that appended lines start on their own line.
-pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
-    let io = |e: io::Error| format!("{}: {e}", path.display());
+pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), Error> {
+    let io = |e: io::Error| Error::io(path, &e);
     let mut f = OpenOptions::new()
         .read(true)
         .write(true)
@@ -221,7 +220,7 @@ pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
 /// Renames to `*.jsonl.unfinished` every transcript under [`transcripts_dir`] of `out`
 /// that none of `lines` points to: an episode killed mid-run (or between its last round
 /// and its results line) left it, and the episode runs again. Returns the new names.
-pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, String> {
+pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, Error> {
     let dir = transcripts_dir(out);
     if !dir.is_dir() {
         return Ok(Vec::new());
@@ -231,7 +230,7 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, St
         .iter()
         .filter_map(|l| Path::new(&l.transcript).canonicalize().ok())
         .collect();
-    let io = |p: &Path, e: io::Error| format!("{}: {e}", p.display());
+    let io = |p: &Path, e: io::Error| Error::io(p, &e);
     let mut marked = Vec::new();
     let mut folders = vec![dir];
     while let Some(folder) = folders.pop() {

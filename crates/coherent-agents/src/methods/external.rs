@@ -1,5 +1,5 @@
 //! A method written outside the crate ([`crate::episode::policy`]): each step its
-//! [`Policy`] gets a [`View`] and answers one robot and one action, or none; the action
+//! [`Policy`] gets a [`StepView`] and answers one robot and one action, or none; the action
 //! is checked and run through the same [`Environment`] as every method's, the round is
 //! recorded with the method's decision, note and model calls, and the episode goes on
 //! under the same budget.
@@ -16,10 +16,10 @@ use std::time::Instant;
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::policy::{Act, Executed, Policy, View};
-use crate::episode::rounds::{Episode, rounds};
-use crate::methods::joint;
-use crate::records::transcript::{Decision, Outcome, Round};
+use crate::episode::policy::{Act, MethodFailure, PastStep, Policy, StepView};
+use crate::episode::rounds::{Episode, History, rounds};
+use crate::methods::{decision, feedback};
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
 /// spent, the policy fails, or `cancel` fires. A policy that could not be made fails
@@ -27,18 +27,24 @@ use crate::records::transcript::{Decision, Outcome, Round};
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
-    made: Result<Box<dyn Policy>, String>,
+    made: Result<Box<dyn Policy>, MethodFailure>,
     max_steps: u32,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
     let mut policy = made;
-    let mut history: Vec<Executed> = Vec::new();
+    let mut history = History::whole();
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
         let start = Instant::now();
         let act = match &mut policy {
             Ok(policy) => {
-                let view = Arc::new(View::now(env, task, step, max_steps, &history));
+                let view = Arc::new(StepView::now(
+                    env,
+                    task,
+                    step,
+                    max_steps,
+                    &history.entries(),
+                ));
                 tokio::select! {
                     biased;
                     () = cancel.cancelled() => return Ok(None),
@@ -58,24 +64,15 @@ pub async fn run(
                 let action = choice.action.unwrap_or_default();
                 match choice.robot {
                     Some(robot) => take(env, task, &mut round, robot, &action, choice.note),
-                    None => {
-                        round.decision = Some(Decision {
-                            can_do: false,
-                            action: None,
-                            subtask_complete: false,
-                            note: choice.note,
-                        });
-                        round.outcome = Outcome::Declined;
-                        round.feedback = joint::feedback("", &round.outcome);
-                    }
+                    None => decision::no_action(&mut round, choice.note),
                 }
             }
-            Err(message) => {
-                round.outcome = Outcome::MethodError { message };
-                round.feedback = joint::feedback("", &round.outcome);
+            Err(MethodFailure(message)) => {
+                round.outcome = RoundOutcome::MethodError { message };
+                round.feedback = feedback::joint("", &round.outcome);
             }
         }
-        history.push(executed(&round));
+        history.push(past_step(&round));
         round.done = env.goal_satisfied();
         round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(round))
@@ -96,31 +93,33 @@ fn take(
     match task.robot_by_id(robot) {
         Ok(_) => {
             round.actions = env.actions(robot).unwrap_or_default();
-            joint::act(env, task, round, robot, action, note);
+            decision::act(env, task, round, robot, action, note);
         }
         Err(e) => {
-            let outcome = Outcome::Infeasible {
+            let outcome = RoundOutcome::Infeasible {
                 reason: "unknown_robot".into(),
                 message: e.to_string(),
             };
-            joint::decided(task, round, robot, action, outcome, note);
+            decision::decided(task, round, robot, action, outcome, note);
         }
     }
 }
 
 /// The round as the next steps' views show it.
-fn executed(round: &Round) -> Executed {
+fn past_step(round: &Round) -> PastStep {
     let chosen = round.external.as_ref();
     let (ok, reason) = match &round.outcome {
-        Outcome::Executed => (true, None),
-        Outcome::Infeasible { message, .. } => (false, Some(message.clone())),
-        Outcome::Declined => (false, Some("no action was chosen".to_owned())),
-        Outcome::NoProposal { why } | Outcome::NoDecision { why } => (false, Some(why.clone())),
-        Outcome::BackendError { message } | Outcome::MethodError { message } => {
+        RoundOutcome::Executed => (true, None),
+        RoundOutcome::Infeasible { message, .. } => (false, Some(message.clone())),
+        RoundOutcome::Declined => (false, Some("no action was chosen".to_owned())),
+        RoundOutcome::NoProposal { why } | RoundOutcome::NoDecision { why } => {
+            (false, Some(why.clone()))
+        }
+        RoundOutcome::BackendError { message } | RoundOutcome::MethodError { message } => {
             (false, Some(message.clone()))
         }
     };
-    Executed {
+    PastStep {
         robot: chosen.and_then(|c| c.robot),
         action: chosen.and_then(|c| c.action.clone()),
         ok,

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use coherent_core::NodeId;
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
+use crate::error::Error;
 use crate::methods::templates::PromptRecord;
 
 pub const FORMAT: &str = "coherent-transcript";
@@ -35,6 +36,9 @@ pub struct Header {
     pub gt_steps: Option<u32>,
     /// Whether every action was also carried out in physics.
     pub physics: bool,
+    /// Who carried the actions out (local in transcripts written before it was kept).
+    #[serde(default)]
+    pub robots: RobotsRecord,
     pub backend: BackendInfo,
     pub temperature: Option<f32>,
     pub seed: Option<u64>,
@@ -68,6 +72,18 @@ pub struct Call {
     pub endpoint: Option<String>,
 }
 
+/// Who carried an episode's actions out: this process (the rules, and Rapier with
+/// `physics`), or one ROS 2 action server per robot under a namespace.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RobotsRecord {
+    #[default]
+    Local,
+    Ros2 {
+        namespace: String,
+    },
+}
+
 /// The task assigner's proposal, as read from its answer
 /// ([`crate::methods::assigner::TaskAssigner::parse`]).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -91,10 +107,10 @@ pub struct Decision {
     pub note: String,
 }
 
-/// What came of one round.
+/// What came of one round (of the step it is): whether its action ran, and if not, why.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Outcome {
+pub enum RoundOutcome {
     /// The action ran.
     Executed,
     /// The action was checked and refused (core's feasibility reason; physics when on).
@@ -140,7 +156,7 @@ pub struct Round {
     /// The executor's action list at that moment.
     pub actions: Vec<String>,
     pub decision: Option<Decision>,
-    pub outcome: Outcome,
+    pub outcome: RoundOutcome,
     /// What the assigner is told about this round from the next round on.
     pub feedback: String,
     /// Whether the goal holds after this round.
@@ -165,7 +181,7 @@ impl Round {
             proposal: None,
             actions: Vec::new(),
             decision: None,
-            outcome: Outcome::Declined,
+            outcome: RoundOutcome::Declined,
             feedback: String::new(),
             done: false,
             wall_ms: 0.0,
@@ -256,36 +272,38 @@ pub struct Transcript {
 }
 
 /// Reads a transcript; errors name the file and the line.
-pub fn read(path: &Path) -> Result<Transcript, String> {
-    let file = File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read(path: &Path) -> Result<Transcript, Error> {
+    let file = File::open(path).map_err(|e| Error::io(path, &e))?;
     let mut header = None;
     let mut rounds = Vec::new();
     let mut summary = None;
     for (i, line) in BufReader::new(file).lines().enumerate() {
-        let at = || format!("{}: line {}", path.display(), i + 1);
-        let line = line.map_err(|e| format!("{}: {e}", at()))?;
+        let at = |message: String| Error::at_line(path, i + 1, message);
+        let line = line.map_err(|e| at(e.to_string()))?;
         if line.trim().is_empty() {
             continue;
         }
-        let record: Record = serde_json::from_str(&line).map_err(|e| format!("{}: {e}", at()))?;
+        let record: Record = serde_json::from_str(&line).map_err(|e| at(e.to_string()))?;
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {
-                    return Err(format!(
-                        "{}: format {:?} version {} (this is {FORMAT} version {VERSION})",
-                        at(),
-                        h.format,
-                        h.version
-                    ));
+                    return Err(at(format!(
+                        "format {:?} version {} (this is {FORMAT} version {VERSION})",
+                        h.format, h.version
+                    )));
                 }
                 header = Some(*h);
             }
             Record::Round(r) if header.is_some() && summary.is_none() => rounds.push(*r),
             Record::Summary(s) if header.is_some() && summary.is_none() => summary = Some(s),
-            _ => return Err(format!("{}: a line out of order", at())),
+            _ => return Err(at("a line out of order".into())),
         }
     }
-    let header = header.ok_or_else(|| format!("{}: no header line", path.display()))?;
+    let header = header.ok_or_else(|| Error::Format {
+        file: path.display().to_string(),
+        line: None,
+        message: "no header line".into(),
+    })?;
     Ok(Transcript {
         header,
         rounds,
