@@ -347,9 +347,11 @@ impl State {
 
     /// Sources of `rel` edges pointing at `n`.
     pub fn sources(&self, rel: Relation, n: Idx) -> impl Iterator<Item = Idx> + '_ {
+        // A pass over every edge: compare the relation and target bits at once.
+        let key = Edge::new(Idx(0), rel, n).0;
         self.edges()
             .iter()
-            .filter(move |e| e.rel() == rel && e.to() == n)
+            .filter(move |e| e.0 & 0x1_ffff == key)
             .map(|e| e.from())
     }
 

@@ -15,7 +15,6 @@
 //! possible ([`schedule`]), and looks only for shorter plans; when it stops at a limit
 //! it still has that plan, and the frontier's `f` is a lower bound.
 
-use std::borrow::Cow;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
@@ -311,7 +310,7 @@ impl<'a> Search<'a> {
             .robots
             .iter()
             .map(|&robot| {
-                let view = View::with(self.task, &s, robot, Cow::Borrowed(&contents));
+                let view = View::with(self.task, &s, robot, &contents);
                 view.actions()
                     .into_iter()
                     .filter(|a| self.useful.allows(self.task, a))

@@ -2,7 +2,6 @@
 //! actions it may take, and how one action changes the state. Imported original tasks
 //! run under these rules exactly, quirks included (see `docs/semantics-notes.md`).
 
-use std::borrow::Cow;
 use std::cell::OnceCell;
 
 use smallvec::SmallVec;
@@ -32,7 +31,6 @@ pub fn room_of(task: &Task, s: &State, n: Idx) -> Option<Idx> {
 /// or in each node. Visibility and the arm's reach walk down these lists instead of
 /// passing over every edge once per level; the planner builds them once per expanded
 /// state for the views of all its robots, which then also share what each room shows.
-#[derive(Clone)]
 pub(crate) struct Contents {
     /// `start` (`n + 2` words), then the location edges by target:
     /// `edges[start[p]..start[p + 1]]` point at node `p`. One block, as the search
@@ -42,7 +40,7 @@ pub(crate) struct Contents {
     edges_at: usize,
     /// What a robot in each room of `Task::rooms` sees, besides itself and what it
     /// holds; found when a robot there first looks.
-    sights: Vec<OnceCell<NodeSet>>,
+    sights: SmallVec<[OnceCell<NodeSet>; 8]>,
     /// Every node `INSIDE` a container, not a room, that is neither `OPEN` nor
     /// `OPEN_FOREVER`: hidden from view wherever it is.
     hidden: NodeSet,
@@ -80,7 +78,7 @@ impl Contents {
         Contents {
             data,
             edges_at: n + 2,
-            sights: vec![OnceCell::new(); task.rooms().len()],
+            sights: (0..task.rooms().len()).map(|_| OnceCell::new()).collect(),
             hidden,
         }
     }
@@ -94,27 +92,35 @@ impl Contents {
 
 /// The visible set of docs/semantics.md, "Observations".
 pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
-    let room = room_of(task, s, robot);
-    visible_with(task, s, robot, room, &Contents::new(task, s))
+    look(task, s, robot, &Contents::new(task, s)).1
 }
 
-/// [`visible`] for a robot in `room` (its [`room_of`]).
-fn visible_with(
+/// What `robot` sees from where it is: its room ([`room_of`]), its visible set, and what
+/// it holds (its first `HOLD` target, which it always sees).
+fn look(
     task: &Task,
     s: &State,
     robot: Idx,
-    room: Option<Idx>,
     contents: &Contents,
-) -> NodeSet {
+) -> (Option<Idx>, NodeSet, Option<Idx>) {
+    // The robot's own edges, found once: a few, sorted by relation and target.
+    let mine = s.out(robot);
+    let room = mine
+        .iter()
+        .filter(|e| e.rel() == Relation::Inside)
+        .map(|e| e.to())
+        .find(|&t| task.room_set().contains(t));
     let mut v = match room.and_then(|room| sight(task, s, room, contents)) {
         Some(sight) => sight.clone(),
         None => task.room_set().clone(),
     };
     v.insert(robot);
-    for h in s.targets(robot, Relation::Hold) {
-        v.insert(h);
+    let mut holding = None;
+    for e in mine.iter().filter(|e| e.rel() == Relation::Hold) {
+        v.insert(e.to());
+        holding.get_or_insert(e.to());
     }
-    v
+    (room, v, holding)
 }
 
 /// What any robot in `room` sees (the rooms included), computed once per state; none
@@ -192,29 +198,22 @@ pub(crate) struct View<'a> {
     pub task: &'a Task,
     pub s: &'a State,
     pub robot: Robot,
-    pub contents: Cow<'a, Contents>,
+    pub contents: &'a Contents,
     pub visible: NodeSet,
     pub room: Option<Idx>,
     pub holding: Option<Idx>,
 }
 
 impl<'a> View<'a> {
-    pub fn new(task: &'a Task, s: &'a State, robot: Robot) -> View<'a> {
-        View::with(task, s, robot, Cow::Owned(Contents::new(task, s)))
-    }
 
     /// The view with the state's [`Contents`] built already.
     pub fn with(
         task: &'a Task,
         s: &'a State,
         robot: Robot,
-        contents: Cow<'a, Contents>,
+        contents: &'a Contents,
     ) -> View<'a> {
-        let room = room_of(task, s, robot.node);
-        let visible = visible_with(task, s, robot.node, room, &contents);
-        let holding = s
-            .targets(robot.node, Relation::Hold)
-            .find(|&h| visible.contains(h));
+        let (room, visible, holding) = look(task, s, robot.node, contents);
         View {
             task,
             s,
@@ -328,7 +327,7 @@ impl<'a> View<'a> {
 
 /// Every action `robot` may take in state `s`, without duplicates.
 pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
-    View::new(task, s, robot).actions()
+    View::with(task, s, robot, &Contents::new(task, s)).actions()
 }
 
 /// The action lists of several robots in state `s`, in the order of `robots`: what one
@@ -337,7 +336,7 @@ pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>
     let contents = Contents::new(task, s);
     robots
         .iter()
-        .map(|&robot| View::with(task, s, robot, Cow::Borrowed(&contents)).actions())
+        .map(|&robot| View::with(task, s, robot, &contents).actions())
         .collect()
 }
 
@@ -349,17 +348,20 @@ impl View<'_> {
         match self.robot.kind {
             RobotKind::Quadrotor => quadrotor_actions(self, &mut out),
             RobotKind::RobotDog => dog_actions(self, &mut out),
-            RobotKind::RobotArm => arm_actions(self, &mut out),
-        }
-        // Lists are short: a quadratic pass in place beats hashing.
-        let mut kept = 0;
-        for i in 0..out.len() {
-            if !out[..kept].contains(&out[i]) {
-                out[kept] = out[i];
-                kept += 1;
+            RobotKind::RobotArm => {
+                arm_actions(self, &mut out);
+                // The put on its own surface may come again from what it reaches. Lists
+                // are short: a quadratic pass in place beats hashing.
+                let mut kept = 0;
+                for i in 0..out.len() {
+                    if !out[..kept].contains(&out[i]) {
+                        out[kept] = out[i];
+                        kept += 1;
+                    }
+                }
+                out.truncate(kept);
             }
         }
-        out.truncate(kept);
         out
     }
 }
@@ -374,10 +376,7 @@ fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
             landables.remove(above);
             out.extend(landables.iter().map(|n| Action::new(Verb::MoveTowards, n)));
         }
-        out.extend(
-            v.open_next_rooms()
-                .map(|room| Action::new(Verb::MoveTowards, room)),
-        );
+        room_moves(v, out);
     }
     if me.contains(StateSet::LAND)
         && let Some(surface) = v.own(Relation::On)
@@ -433,10 +432,18 @@ fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
             .iter()
             .map(|n| Action::new(Verb::MoveTowards, n)),
     );
-    out.extend(
-        v.open_next_rooms()
-            .map(|room| Action::new(Verb::MoveTowards, room)),
-    );
+    room_moves(v, out);
+}
+
+/// `movetowards` each room an open door leads to, once: two doors may lead to one room
+/// (the other moves of a list name distinct nodes, none a room for the dog).
+fn room_moves(v: &View<'_>, out: &mut Vec<Action>) {
+    for room in v.open_next_rooms() {
+        let a = Action::new(Verb::MoveTowards, room);
+        if !out.contains(&a) {
+            out.push(a);
+        }
+    }
 }
 
 fn arm_actions(v: &View<'_>, out: &mut Vec<Action>) {
@@ -476,7 +483,7 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
                 s.retain(|e| {
                     !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
                 });
-                set_basket_high(s, b, true);
+                mark_high(s, b, &inside, true);
             }
         }
         (RobotKind::Quadrotor, Verb::MoveTowards) => {
@@ -570,9 +577,14 @@ fn dog_approach(task: &Task, s: &mut State, me: Idx, x: Idx) {
 }
 
 fn set_basket_high(s: &mut State, basket: Idx, on: bool) {
-    s.set_on_high_surface(basket, on);
     let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, basket).collect();
-    for y in inside {
+    mark_high(s, basket, &inside, on);
+}
+
+/// Sets or clears `ON_HIGH_SURFACE` on `basket` and on what is `inside` it.
+fn mark_high(s: &mut State, basket: Idx, inside: &[Idx], on: bool) {
+    s.set_on_high_surface(basket, on);
+    for &y in inside {
         s.set_on_high_surface(y, on);
     }
 }

@@ -155,12 +155,15 @@ pub struct Task {
     /// Each room's floor (a `Floor` node `INSIDE` it), if it has one.
     floors: FxHashMap<Idx, Idx>,
     /// Each quadrotor's basket (target of its `WITH` edge), if it has one.
-    baskets: FxHashMap<Idx, Idx>,
+    /// `(quadrotor, basket)`: a list, as a team has one or two quadrotors and the rules
+    /// look a basket up for every robot in view.
+    baskets: Vec<(Idx, Idx)>,
     rooms: Vec<Idx>,
     /// The rooms, as a set: every robot sees them all.
     room_set: NodeSet,
     /// The `LANDABLE` nodes.
     landable_set: NodeSet,
+
     /// What a robot dog never walks up to whatever the state: rooms, robots, floors and
     /// `HIGH_HEIGHT` things (`unreached` of docs/semantics.md, "Actions").
     never_approached: NodeSet,
@@ -283,7 +286,7 @@ impl Task {
             .collect();
         let mut doors = Vec::new();
         let mut floors = FxHashMap::default();
-        let mut baskets = FxHashMap::default();
+        let mut baskets: Vec<(Idx, Idx)> = Vec::new();
         for e in &init_edges {
             match e.rel() {
                 Relation::LeadingTo => doors.push((e.from(), e.to())),
@@ -294,29 +297,14 @@ impl Task {
                     floors.entry(e.to()).or_insert(e.from());
                 }
                 Relation::With => {
-                    baskets.entry(e.from()).or_insert(e.to());
+                    if !baskets.iter().any(|(q, _)| *q == e.from()) {
+                        baskets.push((e.from(), e.to()));
+                    }
                 }
                 _ => {}
             }
         }
-        let mut room_set = NodeSet::new(nodes.len());
-        let mut never_approached = NodeSet::new(nodes.len());
-        let mut landable_set = NodeSet::new(nodes.len());
-        for (i, n) in nodes.iter().enumerate() {
-            let i = Idx(i as u16);
-            if n.kind == NodeKind::Room {
-                room_set.insert(i);
-            }
-            if n.properties.contains(PropSet::LANDABLE) {
-                landable_set.insert(i);
-            }
-            if matches!(n.kind, NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor)
-                || n.properties.contains(PropSet::HIGH_HEIGHT)
-            {
-                never_approached.insert(i);
-            }
-        }
-        Ok(Task {
+        let mut task = Task {
             meta,
             nodes,
             vocab,
@@ -329,10 +317,37 @@ impl Task {
             floors,
             baskets,
             rooms,
-            room_set,
-            landable_set,
-            never_approached,
-        })
+            room_set: NodeSet::new(0),
+            landable_set: NodeSet::new(0),
+            never_approached: NodeSet::new(0),
+        };
+        task.find_node_sets();
+        Ok(task)
+    }
+
+    /// The task with the node sets the rules use ([`Task::room_set`],
+    /// [`Task::landable_set`], [`Task::never_approached`]) found from its nodes; again
+    /// after their properties change (the geometric rules derive heights).
+    pub(crate) fn find_node_sets(&mut self) {
+        let n = self.nodes.len();
+        let (mut rooms, mut landable, mut never) = (NodeSet::new(n), NodeSet::new(n), NodeSet::new(n));
+        for (i, node) in self.nodes.iter().enumerate() {
+            let i = Idx(i as u16);
+            if node.kind == NodeKind::Room {
+                rooms.insert(i);
+            }
+            if node.properties.contains(PropSet::LANDABLE) {
+                landable.insert(i);
+            }
+            if matches!(node.kind, NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor)
+                || node.properties.contains(PropSet::HIGH_HEIGHT)
+            {
+                never.insert(i);
+            }
+        }
+        self.room_set = rooms;
+        self.landable_set = landable;
+        self.never_approached = never;
     }
 
     /// Every node's index, in file order.
@@ -406,7 +421,10 @@ impl Task {
     }
 
     pub fn basket_of(&self, quadrotor: Idx) -> Option<Idx> {
-        self.baskets.get(&quadrotor).copied()
+        self.baskets
+            .iter()
+            .find(|(q, _)| *q == quadrotor)
+            .map(|(_, b)| *b)
     }
 
     /// Whether `n` has property `p` in state `s` (`ON_HIGH_SURFACE` is dynamic).
