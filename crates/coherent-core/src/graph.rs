@@ -114,14 +114,29 @@ pub struct NodeSet(SmallVec<[u64; 4]>);
 
 impl Clone for NodeSet {
     fn clone(&self) -> NodeSet {
-        // One copy of the words, not a push per word.
-        NodeSet(SmallVec::from_slice(&self.0))
+        // The words copied in place when they fit inline, not a push per word.
+        let words = self.0.as_slice();
+        if words.len() <= INLINE_WORDS {
+            let mut buf = [0u64; INLINE_WORDS];
+            buf[..words.len()].copy_from_slice(words);
+            NodeSet(SmallVec::from_buf_and_len(buf, words.len()))
+        } else {
+            NodeSet(SmallVec::from_slice(words))
+        }
     }
 }
 
+/// Words a [`NodeSet`] keeps without a heap allocation (256 nodes).
+const INLINE_WORDS: usize = 4;
+
 impl NodeSet {
     pub fn new(n: usize) -> NodeSet {
-        NodeSet(smallvec::smallvec![0; n.div_ceil(64)])
+        let words = n.div_ceil(64);
+        if words <= INLINE_WORDS {
+            NodeSet(SmallVec::from_buf_and_len([0; INLINE_WORDS], words))
+        } else {
+            NodeSet(smallvec::smallvec![0; words])
+        }
     }
     pub fn contains(&self, n: Idx) -> bool {
         self.0[n.get() / 64] >> (n.get() % 64) & 1 == 1

@@ -44,6 +44,8 @@ pub(crate) struct Contents {
     /// Every node `INSIDE` a container, not a room, that is neither `OPEN` nor
     /// `OPEN_FOREVER`: hidden from view wherever it is.
     hidden: NodeSet,
+    /// `(robot, room)` for each robot's `INSIDE` edge to a room.
+    robot_rooms: SmallVec<[(Idx, Idx); 4]>,
 }
 
 impl Contents {
@@ -63,21 +65,26 @@ impl Contents {
         data.resize(n + 2 + total, 0);
         let (start, edges) = data.split_at_mut(n + 2);
         let mut hidden = NodeSet::new(n);
+        let mut robot_rooms = SmallVec::new();
         for e in locations() {
             let at = &mut start[e.to().get() + 1];
             edges[*at as usize] = e.bits();
             *at += 1;
-            if e.rel() == Relation::Inside
-                && !task.room_set().contains(e.to())
-                && !s.states(e.to()).is_open()
-            {
-                hidden.insert(e.from());
+            if e.rel() == Relation::Inside {
+                if !task.room_set().contains(e.to()) {
+                    if !s.states(e.to()).is_open() {
+                        hidden.insert(e.from());
+                    }
+                } else if task.robot_set().contains(e.from()) {
+                    robot_rooms.push((e.from(), e.to()));
+                }
             }
         }
         // `start[p]` now holds where `p`'s edges begin, `start[n]` where they end.
         Contents {
             data,
             edges_at: n + 2,
+            robot_rooms,
             sights: (0..task.rooms().len()).map(|_| OnceCell::new()).collect(),
             hidden,
         }
@@ -110,7 +117,7 @@ fn look(
         .filter(|e| e.rel() == Relation::Inside)
         .map(|e| e.to())
         .find(|&t| task.room_set().contains(t));
-    let mut v = match room.and_then(|room| sight(task, s, room, contents)) {
+    let mut v = match room.and_then(|room| sight(task, room, contents)) {
         Some(sight) => sight.clone(),
         None => task.room_set().clone(),
     };
@@ -125,7 +132,7 @@ fn look(
 
 /// What any robot in `room` sees (the rooms included), computed once per state; none
 /// when `room` is not one of the task's rooms.
-fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Option<&'c NodeSet> {
+fn sight<'c>(task: &Task, room: Idx, contents: &'c Contents) -> Option<&'c NodeSet> {
     let at = task.rooms().iter().position(|&r| r == room)?;
     Some(contents.sights[at].get_or_init(|| {
         let mut v = NodeSet::new(task.nodes.len());
@@ -138,16 +145,29 @@ fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Optio
             words[w] |= bit;
             new
         };
-        let mut todo: SmallVec<[Idx; 64]> = SmallVec::new();
+        // Each node enters the stack once, so it never holds more than the nodes.
+        let n = task.nodes.len();
+        let mut inline = [Idx(0); 256];
+        let mut heap = Vec::new();
+        let stack: &mut [Idx] = if n <= inline.len() {
+            &mut inline[..n]
+        } else {
+            heap.resize(n, Idx(0));
+            &mut heap
+        };
+        let mut top = 0;
         for e in contents.of(room) {
             if e.rel() == Relation::Inside && insert(e.from()) {
-                todo.push(e.from());
+                stack[top] = e.from();
+                top += 1;
             }
         }
-        while let Some(p) = todo.pop() {
-            for e in contents.of(p) {
+        while top > 0 {
+            top -= 1;
+            for e in contents.of(stack[top]) {
                 if insert(e.from()) {
-                    todo.push(e.from());
+                    stack[top] = e.from();
+                    top += 1;
                 }
             }
         }
@@ -160,15 +180,13 @@ fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Optio
                 v.insert(door);
             }
         }
-        for r in &task.robots {
-            if s.has(Edge::new(r.node, Relation::Inside, room)) {
-                v.insert(r.node);
-                if let Some(basket) = task.basket_of(r.node) {
-                    v.insert(basket);
-                    for e in contents.of(basket) {
-                        if e.rel() == Relation::Inside {
-                            v.insert(e.from());
-                        }
+        for &(robot, _) in contents.robot_rooms.iter().filter(|(_, r)| *r == room) {
+            v.insert(robot);
+            if let Some(basket) = task.basket_of(robot) {
+                v.insert(basket);
+                for e in contents.of(basket) {
+                    if e.rel() == Relation::Inside {
+                        v.insert(e.from());
                     }
                 }
             }
@@ -331,30 +349,113 @@ pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
 }
 
 /// The action lists of several robots in state `s`, in the order of `robots`: what one
-/// planning round asks of the rules. The state's [`Contents`] is built once for all.
-pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>> {
+/// planning round asks of the rules. The state's [`Contents`] is built once for all, and
+/// the lists share one block.
+pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> TeamActions {
     let contents = Contents::new(task, s);
-    robots
-        .iter()
-        .map(|&robot| View::with(task, s, robot, &contents).actions())
-        .collect()
+    let mut lists = TeamActions {
+        actions: Vec::with_capacity(32 * robots.len()),
+        ends: SmallVec::with_capacity(robots.len()),
+    };
+    for &robot in robots {
+        View::with(task, s, robot, &contents).actions_into(&mut lists.actions);
+        lists.ends.push(lists.actions.len() as u32);
+    }
+    lists
 }
+
+/// Every robot's action list in one state ([`team_actions`]), one after the other in one
+/// vector; robot `i`'s list is [`TeamActions::get`]`(i)`, and iterating gives the lists
+/// in order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TeamActions {
+    actions: Vec<Action>,
+    /// Where each robot's list ends in `actions`.
+    ends: SmallVec<[u32; 4]>,
+}
+
+impl TeamActions {
+    /// Robot `i`'s list.
+    pub fn get(&self, i: usize) -> &[Action] {
+        let start = if i == 0 { 0 } else { self.ends[i - 1] as usize };
+        &self.actions[start..self.ends[i] as usize]
+    }
+
+    /// How many robots' lists there are.
+    pub fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ends.is_empty()
+    }
+
+    /// The lists, in the robots' order.
+    pub fn iter(&self) -> Lists<'_> {
+        Lists {
+            lists: self,
+            next: 0,
+        }
+    }
+}
+
+impl<'a> IntoIterator for &'a TeamActions {
+    type Item = &'a [Action];
+    type IntoIter = Lists<'a>;
+
+    fn into_iter(self) -> Lists<'a> {
+        self.iter()
+    }
+}
+
+/// The lists of a [`TeamActions`], in the robots' order.
+#[derive(Clone, Debug)]
+pub struct Lists<'a> {
+    lists: &'a TeamActions,
+    next: usize,
+}
+
+impl<'a> Iterator for Lists<'a> {
+    type Item = &'a [Action];
+
+    fn next(&mut self) -> Option<&'a [Action]> {
+        (self.next < self.lists.len()).then(|| {
+            self.next += 1;
+            self.lists.get(self.next - 1)
+        })
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.lists.len() - self.next;
+        (left, Some(left))
+    }
+}
+
+impl ExactSizeIterator for Lists<'_> {}
 
 impl View<'_> {
     /// The robot's action list, from this view.
     pub fn actions(&self) -> Vec<Action> {
         // Room for a long list at once: growing it step by step cost more than the rest.
         let mut out = Vec::with_capacity(32);
+        self.actions_into(&mut out);
+        out
+    }
+
+    /// Appends the robot's action list to `all`.
+    pub fn actions_into(&self, all: &mut Vec<Action>) {
+        let start = all.len();
+        let out = all;
         match self.robot.kind {
-            RobotKind::Quadrotor => quadrotor_actions(self, &mut out),
-            RobotKind::RobotDog => dog_actions(self, &mut out),
+            RobotKind::Quadrotor => quadrotor_actions(self, out, start),
+            RobotKind::RobotDog => dog_actions(self, out, start),
             RobotKind::RobotArm => {
-                arm_actions(self, &mut out);
+                arm_actions(self, out);
                 // The put on its own surface may come again from what it reaches. Lists
                 // are short: a quadratic pass in place beats hashing.
-                let mut kept = 0;
-                for i in 0..out.len() {
-                    if !out[..kept].contains(&out[i]) {
+                let mut kept = start;
+                for i in start..out.len() {
+                    if !out[start..kept].contains(&out[i]) {
                         out[kept] = out[i];
                         kept += 1;
                     }
@@ -362,11 +463,11 @@ impl View<'_> {
                 out.truncate(kept);
             }
         }
-        out
     }
 }
 
-fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
+/// The quadrotor's list, appended to `out` (its own list begins at `start`).
+fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
     let me = v.states(v.robot.node);
     if me.contains(StateSet::FLYING) {
         if let Some(above) = v.above() {
@@ -376,7 +477,7 @@ fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
             landables.remove(above);
             out.extend(landables.iter().map(|n| Action::new(Verb::MoveTowards, n)));
         }
-        room_moves(v, out);
+        room_moves(v, out, start);
     }
     if me.contains(StateSet::LAND)
         && let Some(surface) = v.own(Relation::On)
@@ -412,7 +513,7 @@ fn hand_actions(v: &View<'_>, r: Idx, doors_too: bool, out: &mut Vec<Action>) {
     }
 }
 
-fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
+fn dog_actions(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
     let mut close = NodeSet::new(v.task.nodes.len());
     for r in v.reachable() {
         close.insert(r);
@@ -432,15 +533,15 @@ fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
             .iter()
             .map(|n| Action::new(Verb::MoveTowards, n)),
     );
-    room_moves(v, out);
+    room_moves(v, out, start);
 }
 
 /// `movetowards` each room an open door leads to, once: two doors may lead to one room
 /// (the other moves of a list name distinct nodes, none a room for the dog).
-fn room_moves(v: &View<'_>, out: &mut Vec<Action>) {
+fn room_moves(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
     for room in v.open_next_rooms() {
         let a = Action::new(Verb::MoveTowards, room);
-        if !out.contains(&a) {
+        if !out[start..].contains(&a) {
             out.push(a);
         }
     }

@@ -163,6 +163,8 @@ pub struct Task {
     room_set: NodeSet,
     /// The `LANDABLE` nodes.
     landable_set: NodeSet,
+    /// The robots.
+    robot_set: NodeSet,
 
     /// What a robot dog never walks up to whatever the state: rooms, robots, floors and
     /// `HIGH_HEIGHT` things (`unreached` of docs/semantics.md, "Actions").
@@ -319,18 +321,24 @@ impl Task {
             rooms,
             room_set: NodeSet::new(0),
             landable_set: NodeSet::new(0),
+            robot_set: NodeSet::new(0),
             never_approached: NodeSet::new(0),
         };
         task.find_node_sets();
         Ok(task)
     }
 
-    /// The task with the node sets the rules use ([`Task::room_set`],
-    /// [`Task::landable_set`], [`Task::never_approached`]) found from its nodes; again
-    /// after their properties change (the geometric rules derive heights).
+    /// Finds the node sets the rules use ([`Task::room_set`], [`Task::robot_set`],
+    /// [`Task::landable_set`], [`Task::never_approached`]) from the nodes; again after
+    /// their properties change (the geometric rules derive heights).
     pub(crate) fn find_node_sets(&mut self) {
         let n = self.nodes.len();
-        let (mut rooms, mut landable, mut never) = (NodeSet::new(n), NodeSet::new(n), NodeSet::new(n));
+        let (mut rooms, mut landable, mut never) =
+            (NodeSet::new(n), NodeSet::new(n), NodeSet::new(n));
+        let mut robots = NodeSet::new(n);
+        for r in &self.robots {
+            robots.insert(r.node);
+        }
         for (i, node) in self.nodes.iter().enumerate() {
             let i = Idx(i as u16);
             if node.kind == NodeKind::Room {
@@ -348,6 +356,7 @@ impl Task {
         self.room_set = rooms;
         self.landable_set = landable;
         self.never_approached = never;
+        self.robot_set = robots;
     }
 
     /// Every node's index, in file order.
@@ -404,6 +413,11 @@ impl Task {
     /// [`Task::rooms`] as a set.
     pub(crate) fn room_set(&self) -> &NodeSet {
         &self.room_set
+    }
+
+    /// The robots, as a set.
+    pub(crate) fn robot_set(&self) -> &NodeSet {
+        &self.robot_set
     }
 
     /// The `LANDABLE` nodes, as a set.

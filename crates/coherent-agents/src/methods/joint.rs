@@ -27,13 +27,14 @@ impl JointAction {
 /// Every action of every robot in `s`: robots in team order, each robot's actions in
 /// [`rules::actions`] order.
 pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
+    let lists = rules::team_actions(task, s, &task.robots);
     task.robots
         .iter()
-        .zip(rules::team_actions(task, s, &task.robots))
+        .zip(&lists)
         .flat_map(|(&robot, actions)| {
             actions
-                .into_iter()
-                .map(move |action| JointAction { robot, action })
+                .iter()
+                .map(move |&action| JointAction { robot, action })
         })
         .collect()
 }
