@@ -223,14 +223,8 @@ pub(crate) struct View<'a> {
 }
 
 impl<'a> View<'a> {
-
     /// The view with the state's [`Contents`] built already.
-    pub fn with(
-        task: &'a Task,
-        s: &'a State,
-        robot: Robot,
-        contents: &'a Contents,
-    ) -> View<'a> {
+    pub fn with(task: &'a Task, s: &'a State, robot: Robot, contents: &'a Contents) -> View<'a> {
         let (room, visible, holding) = look(task, s, robot.node, contents);
         View {
             task,
@@ -340,7 +334,6 @@ impl<'a> View<'a> {
         grow(&mut reach, &mut set, 0, &holder);
         reach
     }
-
 }
 
 /// Every action `robot` may take in state `s`, without duplicates.
@@ -528,11 +521,7 @@ fn dog_actions(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
     if let Some(h) = v.holding {
         unreached.remove(h);
     }
-    out.extend(
-        unreached
-            .iter()
-            .map(|n| Action::new(Verb::MoveTowards, n)),
-    );
+    out.extend(unreached.iter().map(|n| Action::new(Verb::MoveTowards, n)));
     room_moves(v, out, start);
 }
 

@@ -171,6 +171,30 @@ pub struct Task {
     never_approached: NodeSet,
 }
 
+/// What the rules look up from the initial edges: the doors (`LEADING_TO`), each room's
+/// floor (the first `Floor` `INSIDE` it) and each quadrotor's basket (its first `WITH`).
+type Links = (Vec<(Idx, Idx)>, FxHashMap<Idx, Idx>, Vec<(Idx, Idx)>);
+
+fn links(nodes: &[Node], edges: &[Edge]) -> Links {
+    let (mut doors, mut floors, mut baskets) = (Vec::new(), FxHashMap::default(), Vec::new());
+    let kind = |n: Idx| nodes[n.get()].kind;
+    for e in edges {
+        match e.rel() {
+            Relation::LeadingTo => doors.push((e.from(), e.to())),
+            Relation::Inside
+                if kind(e.from()) == NodeKind::Floor && kind(e.to()) == NodeKind::Room =>
+            {
+                floors.entry(e.to()).or_insert(e.from());
+            }
+            Relation::With if !baskets.iter().any(|&(q, _)| q == e.from()) => {
+                baskets.push((e.from(), e.to()));
+            }
+            _ => {}
+        }
+    }
+    (doors, floors, baskets)
+}
+
 impl Task {
     /// Builds a task from a graph as written in a file; `site` is where the graph was read.
     pub(crate) fn build(
@@ -286,26 +310,7 @@ impl Task {
             .map(|i| Idx(i as u16))
             .filter(|&i| nodes[i.get()].kind == NodeKind::Room)
             .collect();
-        let mut doors = Vec::new();
-        let mut floors = FxHashMap::default();
-        let mut baskets: Vec<(Idx, Idx)> = Vec::new();
-        for e in &init_edges {
-            match e.rel() {
-                Relation::LeadingTo => doors.push((e.from(), e.to())),
-                Relation::Inside
-                    if nodes[e.from().get()].kind == NodeKind::Floor
-                        && nodes[e.to().get()].kind == NodeKind::Room =>
-                {
-                    floors.entry(e.to()).or_insert(e.from());
-                }
-                Relation::With => {
-                    if !baskets.iter().any(|(q, _)| *q == e.from()) {
-                        baskets.push((e.from(), e.to()));
-                    }
-                }
-                _ => {}
-            }
-        }
+        let (doors, floors, baskets) = links(&nodes, &init_edges);
         let mut task = Task {
             meta,
             nodes,
@@ -347,8 +352,10 @@ impl Task {
             if node.properties.contains(PropSet::LANDABLE) {
                 landable.insert(i);
             }
-            if matches!(node.kind, NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor)
-                || node.properties.contains(PropSet::HIGH_HEIGHT)
+            if matches!(
+                node.kind,
+                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
+            ) || node.properties.contains(PropSet::HIGH_HEIGHT)
             {
                 never.insert(i);
             }
