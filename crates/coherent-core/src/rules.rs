@@ -401,6 +401,20 @@ impl<'a> IntoIterator for &'a TeamActions {
     }
 }
 
+/// The lists as vectors of their own, for callers that keep or consume them (the same
+/// iteration as the `Vec<Vec<Action>>` this function returned before).
+impl IntoIterator for TeamActions {
+    type Item = Vec<Action>;
+    type IntoIter = std::vec::IntoIter<Vec<Action>>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+            .map(<[Action]>::to_vec)
+            .collect::<Vec<_>>()
+            .into_iter()
+    }
+}
+
 /// The lists of a [`TeamActions`], in the robots' order.
 #[derive(Clone, Debug)]
 pub struct Lists<'a> {

@@ -27,14 +27,13 @@ impl JointAction {
 /// Every action of every robot in `s`: robots in team order, each robot's actions in
 /// [`rules::actions`] order.
 pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
-    let lists = rules::team_actions(task, s, &task.robots);
     task.robots
         .iter()
-        .zip(&lists)
+        .zip(rules::team_actions(task, s, &task.robots))
         .flat_map(|(&robot, actions)| {
             actions
-                .iter()
-                .map(move |&action| JointAction { robot, action })
+                .into_iter()
+                .map(move |action| JointAction { robot, action })
         })
         .collect()
 }
