@@ -131,7 +131,9 @@ pub fn schedule(
             steps.extend(rest.drain(..).map(|st| vec![st]));
             break;
         }
-        let step: JointStep = chosen.iter().map(|&j| rest[j]).collect();
+        let mut step: JointStep = chosen.iter().map(|&j| rest[j]).collect();
+        // In team order, as the search gives its steps (the order is free: they commute).
+        step.sort_by_key(|st| task.robots.iter().position(|r| r.node == st.robot));
         for st in &step {
             if let Some(&robot) = task.robot(st.robot) {
                 rules::apply(task, &mut s, robot, st.action);
