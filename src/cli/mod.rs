@@ -17,7 +17,9 @@ use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
 
-use crate::session::engine::{Analysis, Limits, Task, TaskError, shown, shown_lines};
+use crate::session::engine::{
+    Analysis, Limits, Makespan, Stop, Task, TaskError, shown, shown_lines,
+};
 use crate::session::{Error, check, tasks};
 
 pub use args::LoadMethod;
@@ -102,6 +104,11 @@ enum Command {
         /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
         #[arg(long)]
         physics: bool,
+        /// Also find the fewest joint steps, robots acting at once (adds makespan,
+        /// makespan_proven, makespan_lower, makespan_stop, parallel_plan,
+        /// makespan_states_expanded, makespan_ms).
+        #[arg(long)]
+        parallel: bool,
     },
 }
 
@@ -150,11 +157,12 @@ where
             max_states,
             max_memory,
             physics,
+            parallel,
         } => plan(
             &file,
             &tasks,
             json,
-            physics,
+            check::PlanOptions { physics, parallel },
             &limits(max_states, max_memory),
         ),
     };
@@ -239,7 +247,7 @@ fn plan(
     file: &Path,
     only: &[i64],
     as_json: bool,
-    physics: bool,
+    options: check::PlanOptions,
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
@@ -261,13 +269,20 @@ fn plan(
     let mut total_ms = 0.0;
     let mut physics_failed = false;
     for t in &tasks {
-        let planned = check::plan(t, limits, physics);
+        let planned = check::plan(t, limits, options);
         total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
+        total_ms += planned
+            .makespan
+            .as_ref()
+            .map_or(0.0, |m| m.elapsed.as_secs_f64() * 1e3);
         physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
         let line = if as_json {
             planned.to_json(t).to_string()
         } else {
             let mut text = plan_text(t, &planned.analysis);
+            if let Some(m) = &planned.makespan {
+                text.push_str(&parallel_text(t, m, limits));
+            }
             if let Some(r) = &planned.physics {
                 text.push_str(&match &r.physics_error {
                     None => format!(
@@ -294,6 +309,57 @@ fn plan(
     } else {
         0
     })
+}
+
+/// The fewest joint steps, one line each: `  step 1  22 [takeoff_from] ... | 23 ...`.
+fn parallel_text(t: &Task, m: &Makespan, limits: &Limits) -> String {
+    let Some(plan) = &m.plan else {
+        return match m.stop {
+            None => "\n  parallel: no plan".to_owned(),
+            Some(stop) => format!(
+                "\n  parallel: no plan found before {}",
+                stopped_at(stop, limits)
+            ),
+        };
+    };
+    // Stopped early, the plan is an upper bound (at worst the sequential optimum
+    // scheduled by its dependencies) and the open frontier a lower one.
+    let verdict = match m.stop {
+        None => "the fewest".to_owned(),
+        Some(stop) => format!(
+            "not proven the fewest: at least {}; the search stopped at {}",
+            m.lower,
+            stopped_at(stop, limits)
+        ),
+    };
+    let steps: Vec<String> = plan
+        .iter()
+        .enumerate()
+        .map(|(k, step)| {
+            let parts: Vec<String> = step
+                .iter()
+                .map(|s| format!("{} {}", t.id(s.robot), shown(&s.action.render(t))))
+                .collect();
+            format!("  {:>4}  {}", k + 1, parts.join("  |  "))
+        })
+        .collect();
+    format!(
+        "\n  parallel: {} joint steps ({verdict}), {} states, {:.1} ms\n{}",
+        plan.len(),
+        m.states_expanded,
+        m.elapsed.as_secs_f64() * 1e3,
+        steps.join("\n")
+    )
+}
+
+/// The limit a search met, in words.
+fn stopped_at(stop: Stop, limits: &Limits) -> String {
+    match stop {
+        Stop::States => format!("the limit of {} states", limits.max_states),
+        Stop::Memory => format!("the memory limit of {} MiB", limits.max_memory >> 20),
+        Stop::Cancelled => "a cancel".to_owned(),
+        Stop::Depth => "the deepest cost it counts".to_owned(),
+    }
 }
 
 fn plan_text(t: &Task, a: &Analysis) -> String {
