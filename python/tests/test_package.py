@@ -21,7 +21,7 @@ TREE = ast.parse(STUB.read_text())
 # Native functions that the package wraps rather than re-exports (`coherent.bench`,
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks"}
+WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "price_lines", "benchmark_tasks"}
 
 
 def _public(name: str) -> bool:

@@ -78,9 +78,10 @@ enum Command {
     /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
     /// input.
     Plan {
-        /// An original env file, a native task file or a folder of them; `native`: the
+        /// Original env files, native task files or folders of them; `native`: the
         /// project's own benchmark, compiled in.
-        file: PathBuf,
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// Only these task ids (repeatable).
         #[arg(long = "task")]
         tasks: Vec<i64>,
@@ -138,14 +139,14 @@ where
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
-            file,
+            files,
             tasks,
             json,
             max_states,
             max_memory,
             physics,
         } => plan(
-            &file,
+            &files,
             &tasks,
             json,
             physics,
@@ -230,23 +231,25 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
 }
 
 fn plan(
-    file: &Path,
+    files: &[PathBuf],
     only: &[i64],
     as_json: bool,
     physics: bool,
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
-    let mut tasks = read_all(&[file.to_owned()], &mut malformed, &mut empty);
+    let mut tasks = read_all(files, &mut malformed, &mut empty);
     if !only.is_empty() {
+        let known = tasks::id_list(tasks.iter().map(|t| t.meta.task_id));
         tasks.retain(|t| only.contains(&t.meta.task_id));
         if let Some(missing) = only
             .iter()
             .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
         {
+            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             return Err(Error::Task(TaskError::Io {
-                file: file.display().to_string(),
-                message: format!("no task with task_id {missing}"),
+                file: names.join(", "),
+                message: format!("no task with task_id {missing}; its task ids: {known}"),
             }));
         }
     }

@@ -32,6 +32,7 @@ pub mod prompts;
 pub mod render;
 pub mod robots;
 pub mod tasks;
+pub mod waiting;
 
 use std::future::Future;
 use std::sync::OnceLock;

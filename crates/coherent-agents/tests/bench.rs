@@ -99,6 +99,7 @@ fn line(
         uses_model: true,
         error: None,
         transcript: "t.jsonl".into(),
+        settings: None,
     };
     if method == "mcts" {
         l.uses_model = false;
@@ -128,7 +129,7 @@ fn report_numbers_match_a_hand_computation() {
     .concat();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
 
     assert_eq!(r.seeds, [0, 1]);
@@ -368,7 +369,7 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
     std::fs::write(&path, text).expect("write");
     let back = bench::read_results(&path).expect("reads").lines;
     assert_eq!(back, priced, "cost_usd round-trips through the file");
-    let r = report::build(&back);
+    let r = report::build(&back).expect("one run's lines");
     let row = |m: &str| r.costs.iter().find(|c| c.method == m).expect("a row");
     // pefa: 40 calls x 200 tokens-worth = 0.008 USD over 2 tasks, 1 success.
     let pefa = row("pefa");
