@@ -22,8 +22,8 @@ environment. The engine is Rust (``coherent._coherent``); errors derive from
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
 ``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
-matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasium,
-``pip install 'coherent[gym]'``.
+matplotlib, ``pip install '.[analysis]'``; ``coherent.gym`` needs gymnasium,
+``pip install '.[gym]'``.
 """
 
 from __future__ import annotations
@@ -115,7 +115,7 @@ __all__ = [
 ]
 
 # Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the
-# extra `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
+# extra `analysis`), `coherent.gym` gymnasium (the extra `gym`).
 _SUBMODULES = ("analysis", "benchmark", "gym", "plot")
 
 

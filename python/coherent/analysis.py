@@ -1,5 +1,5 @@
 """Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps
-(``pip install 'coherent[analysis]'`` brings pandas).
+(``pip install '.[analysis]'`` brings pandas).
 
 The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
 as ``coherent bench``); this module only shapes them into DataFrames.
