@@ -102,6 +102,12 @@ class Loop:
         loop.close()
 
 
+async def _when_awaited(begin: Callable[[], Any]) -> Any:
+    """Awaits the future ``begin()`` makes on the loop that awaits this coroutine: what
+    ``LLM.achat`` returns when no loop runs yet (``asyncio.run(llm.achat(...))``)."""
+    return await begin()
+
+
 def _settle(future: asyncio.Future[Any], ok: bool, value: Any) -> None:
     """Ends an awaited model call (``LLM.achat``) unless it was cancelled meanwhile."""
     if future.done():

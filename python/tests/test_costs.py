@@ -6,6 +6,7 @@ are known exactly."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 import subprocess
@@ -373,6 +374,14 @@ def test_a_python_method_s_calls_cost_the_same_from_every_entry_point(
     )  # fmt: skip
     assert cli.returncode == 0, cli.stderr
     assert json.loads(cli.stdout)["cost_usd"] == pytest.approx(episode.cost_usd, rel=1e-12)
+    # The summary line shows the cached tokens beside the cost, so that it adds up by hand.
+    lines = subprocess.run(
+        [coherent_exe, "run", str(env0_path), "--task", str(task0.task_id), "--method", "asks.py:AsksTheStub",
+         "--max-steps", "2", "--prices", "prices.json", "--out", "cli"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=300,
+    )  # fmt: skip
+    assert lines.returncode in (0, 1), lines.stderr
+    assert f"tokens {2 * PROMPT} prompt ({2 * CACHED} cached) + {2 * COMPLETION} completion | cost ${2 * PER_CALL:.6f}" in lines.stdout
     frame = coherent.bench([task0], [method], max_steps=2, out=tmp_path / "r.jsonl", prices=PRICES)
     assert list(frame["cost_usd"]) == [pytest.approx(episode.cost_usd, rel=1e-12)]
 
@@ -401,3 +410,17 @@ def test_finished_results_are_priced_anew_from_their_tokens(
     assert cli.returncode == 0, cli.stderr
     (pefa,) = [c for c in json.loads(cli.stdout)["costs"] if c["method"] == "pefa"]
     assert pefa["cost_per_task"] == pytest.approx(report.costs.loc["pefa", "cost_per_task"], rel=1e-12)
+
+
+def test_achat_runs_outside_a_running_loop_too(stub: tuple[coherent.LLM, list[dict[str, Any]]]) -> None:
+    # asyncio.run(llm.achat(...)): the call starts on the loop that awaits it.
+    llm, seen = stub
+    schema = {"type": "object", "properties": {"action": {"type": "string", "enum": ["go"]}}}
+    reply = asyncio.run(llm.achat("Which action?", schema, max_tokens=10))
+    assert json.loads(reply.text)["action"] == "go" and reply.prompt_tokens == PROMPT
+    assert len(seen) == 1
+
+    async def twice() -> list[coherent.Reply]:
+        return await asyncio.gather(llm.achat("A?", schema), llm.achat("B?", schema))
+
+    assert [json.loads(r.text)["action"] for r in asyncio.run(twice())] == ["go", "go"]

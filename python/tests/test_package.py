@@ -158,7 +158,7 @@ def test_submodules_load_on_first_use() -> None:
 
 
 def test_version() -> None:
-    assert coherent.__version__ == importlib.metadata.version("coherent")
+    assert coherent.__version__ == importlib.metadata.version("coherent-robots")
 
 
 def test_methods_are_the_cli_methods() -> None:

@@ -165,7 +165,8 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
             error(py, Kind::Argument, message, None)
         }
         Error::Physics(_) => error(py, Kind::Physics, message, None),
-        Error::Robots(_) => error(py, Kind::Robot, message, None),
+        // Python's words: the wait is the argument `server_wait=`.
+        Error::Robots(e) => error(py, Kind::Robot, e.with_wait_named("server_wait="), None),
         Error::Interrupted => PyKeyboardInterrupt::new_err(message),
         Error::Internal(_) => error(py, Kind::Coherent, message, None),
     }
