@@ -128,3 +128,29 @@ fn a_transcript_cut_before_its_summary_replays_as_unfinished() {
         show(&replay)
     );
 }
+
+#[test]
+fn plan_in_physics_over_many_tasks_tells_how_far_it_is() {
+    let tasks = env0();
+    let run = coherent(&["plan", utf8(&tasks), "--physics", "--json"]);
+    let n = stdout(&run).lines().count();
+    assert!(n > 10, "{}", show(&run));
+    // Not a terminal: a line before every tenth of the tasks, with the time left.
+    let told: Vec<String> = stderr(&run)
+        .lines()
+        .filter(|l| l.starts_with("planning in physics: "))
+        .map(str::to_owned)
+        .collect();
+    assert_eq!(
+        told.first().map(String::as_str),
+        Some(format!("planning in physics: 0/{n} tasks, -, - left").as_str()),
+        "{}",
+        show(&run)
+    );
+    assert!(told.len() >= 5, "{}", show(&run));
+    assert!(
+        told[1].contains(" s/task, ") && told[1].ends_with(" left"),
+        "{}",
+        show(&run)
+    );
+}

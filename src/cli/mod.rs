@@ -11,12 +11,13 @@ mod robots;
 mod run;
 mod status;
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 
-use crate::session::engine::{Analysis, Limits, Task, TaskError, shown, shown_lines};
+use crate::session::engine::{Analysis, Limits, Task, TaskError, clock, shown, shown_lines};
 use crate::session::{Error, check, tasks};
 
 pub use args::LoadMethod;
@@ -257,7 +258,11 @@ fn plan(
     let mut out = stdout.lock();
     let mut total_ms = 0.0;
     let mut physics_failed = false;
-    for t in &tasks {
+    let (start, terminal) = (Instant::now(), std::io::stderr().is_terminal());
+    for (done, t) in tasks.iter().enumerate() {
+        if physics && tasks.len() > 1 {
+            tell_planned(done, tasks.len(), start, terminal);
+        }
         let planned = check::plan(t, limits, physics);
         total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
         physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
@@ -281,6 +286,9 @@ fn plan(
             return Ok(0);
         }
     }
+    if physics && tasks.len() > 1 && terminal {
+        eprint!("\r\x1b[2K");
+    }
     if !as_json {
         let _ = writeln!(out, "{} tasks planned in {:.1} ms", tasks.len(), total_ms);
     }
@@ -291,6 +299,30 @@ fn plan(
     } else {
         0
     })
+}
+
+/// Says on stderr how far `plan --physics` is through its tasks (each is planned, then
+/// run in Rapier: a second or so each), with the rate and the time left: on a terminal
+/// one line redrawn before each task, in a log a line before every tenth of them.
+fn tell_planned(done: usize, total: usize, start: Instant, terminal: bool) {
+    let tenth = total.div_ceil(10);
+    if !terminal && !done.is_multiple_of(tenth) {
+        return;
+    }
+    let elapsed = start.elapsed();
+    let (rate, left) = match done {
+        0 => ("-".to_owned(), "-".to_owned()),
+        _ => (
+            format!("{:.1} s/task", elapsed.as_secs_f64() / done as f64),
+            clock(elapsed.mul_f64((total - done) as f64 / done as f64)),
+        ),
+    };
+    let text = format!("planning in physics: {done}/{total} tasks, {rate}, {left} left");
+    if terminal {
+        eprint!("\r\x1b[2K{text}");
+    } else {
+        eprintln!("{text}");
+    }
 }
 
 fn plan_text(t: &Task, a: &Analysis) -> String {

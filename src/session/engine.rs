@@ -37,6 +37,7 @@ pub use coherent_agents::{ErrorRates, PriceTable, PromptError, Prompts};
 
 // Benchmarks: the results file, its lines and the driver's ledger, the subsets, the
 // progress lines, the paper's tables.
+pub use coherent_agents::bench::progress::clock;
 pub use coherent_agents::bench::run_settings::field as setting_field;
 pub use coherent_agents::bench::{
     BenchOutcome, Difference, EpisodeKey, EpisodeResult, Event, Group, Ledger, Progress,
