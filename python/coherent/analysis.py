@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Literal, Union
 
-from . import _coherent
+from . import _coherent, _view
 from ._coherent import LLM, Episode, Task
 from ._extras import needs
 from .executors import RayExecutor, resolve
@@ -68,7 +68,9 @@ def results(path: PathLike, *, prices: Prices | None = None) -> pd.DataFrame:
     that record none). With ``prices`` (a price file or a dict, as :func:`bench` takes),
     each ``cost_usd`` is the line's recorded tokens at those prices."""
     pandas = _pandas("coherent.results's DataFrame")
-    return _frame(pandas, _coherent.read_results(path, prices=prices))
+    frame = _frame(pandas, _coherent.read_results(path, prices=prices))
+    frame.attrs["path"] = os.fspath(path)
+    return frame
 
 
 def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
@@ -81,6 +83,8 @@ def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
         for name in _SETTINGS_FIELDS:
             row[f"settings_{name}"] = settings.get(name)
         rows.append(row)
+    # `df.coherent` shows the results page in Jupyter (coherent.view).
+    _view.register(pandas)
     frame = pandas.DataFrame(rows)
     if not frame.empty:
         frame = frame.astype({f"settings_{name}": "Int64" for name in _SETTINGS_INTS})
@@ -159,7 +163,7 @@ def bench(
     settings raises :class:`~coherent.ArgumentError` naming each one before anything
     runs. Without ``out`` the name comes from the settings,
     ``results-<backend>-<8 hex digits>.jsonl`` in the current folder (in
-    ``df.attrs["out"]``): other settings, another file.
+    ``df.attrs["path"]``): other settings, another file.
 
     ``methods`` are built-in methods' names (:data:`METHODS`) and methods written in
     Python: a class (or any callable) ``M``, made once per episode as ``M(task)``, whose
@@ -238,8 +242,8 @@ def bench(
         outcome = runner.run(chosen, list(methods), **settings)
     frame = _frame(pandas, _coherent.read_results(outcome["out"], prices=prices))
     frame.attrs["outcome"] = outcome
-    frame.attrs["out"] = outcome["out"]
-    frame.attrs["malformed"] = [str(e) for e in malformed]
+        frame.attrs["malformed"] = [str(e) for e in malformed]
+    frame.attrs["path"] = outcome["out"]
     return frame
 
 

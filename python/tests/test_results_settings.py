@@ -65,7 +65,7 @@ def test_resuming_with_other_settings_raises_naming_each_argument(few: list[cohe
     again = coherent.bench(few, ["pefa", "optimal", Tuned], out=out)
     outcome = again.attrs["outcome"]
     assert (outcome["total"], outcome["skipped"], outcome["finished"], outcome["unfinished"]) == (9, 6, 3, 0)
-    assert again.attrs["out"] == str(out)
+    assert again.attrs["path"] == str(out)
 
 
 def test_without_out_the_file_is_named_by_its_settings(
@@ -73,13 +73,13 @@ def test_without_out_the_file_is_named_by_its_settings(
 ) -> None:
     monkeypatch.chdir(tmp_path)
     built_in = coherent.bench(few, ["optimal"])
-    name = built_in.attrs["out"]
+    name = built_in.attrs["path"]
     assert name.startswith("results-builtin-") and name.endswith(".jsonl") and len(name) == len("results-builtin-") + 14
     assert (tmp_path / name).exists()
     # The same call resumes its own file; other settings write another.
     assert coherent.bench(few, ["optimal"]).attrs["outcome"]["skipped"] == 3
     simulated = coherent.bench(few, ["optimal"], backend="simulated", sim_errors="all=0.3")
-    assert simulated.attrs["out"].startswith("results-simulated-") and simulated.attrs["out"] != name
+    assert simulated.attrs["path"].startswith("results-simulated-") and simulated.attrs["path"] != name
     assert simulated.attrs["outcome"]["skipped"] == 0
 
 
