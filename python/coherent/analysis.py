@@ -242,7 +242,7 @@ def bench(
         outcome = runner.run(chosen, list(methods), **settings)
     frame = _frame(pandas, _coherent.read_results(outcome["out"], prices=prices))
     frame.attrs["outcome"] = outcome
-        frame.attrs["malformed"] = [str(e) for e in malformed]
+    frame.attrs["malformed"] = [str(e) for e in malformed]
     frame.attrs["path"] = outcome["out"]
     return frame
 
