@@ -161,7 +161,10 @@ fn a_report_of_a_file_of_two_runs_gives_each_its_own_tables() {
     let csv = stdout(&csv);
     assert_eq!(csv.matches("table,method,column").count(), 1, "{csv}");
     assert!(
-        csv.lines().next().expect("header").ends_with(",settings"),
+        csv.lines()
+            .next()
+            .expect("header")
+            .ends_with(",settings,cached_share"),
         "{csv}"
     );
     let json = coherent(&["bench", "--report", utf8(&mixed), "--format", "json"]);
