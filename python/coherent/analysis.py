@@ -47,8 +47,8 @@ _SETTINGS_FIELDS = (
     "coherent",
     "method",
 )
-# The settings columns that hold ints, kept ints (pandas's nullable Int64) where some
-# lines record no settings.
+# The settings columns that hold ints, none negative, kept ints (pandas's nullable
+# UInt64, which holds a u64 seed whole) where some lines record no settings.
 _SETTINGS_INTS = ("model_seed", "seeds", "history", "max_steps", "max_states")
 
 
@@ -87,7 +87,7 @@ def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
     _view.register(pandas)
     frame = pandas.DataFrame(rows)
     if not frame.empty:
-        frame = frame.astype({f"settings_{name}": "Int64" for name in _SETTINGS_INTS})
+        frame = frame.astype({f"settings_{name}": "UInt64" for name in _SETTINGS_INTS})
     return frame
 
 

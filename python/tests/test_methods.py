@@ -194,7 +194,8 @@ def test_an_exception_ends_that_episode_only(
     told = capsys.readouterr().err
     assert "6 episodes: 5 already finished in the results file, 1 to run" in told
     assert "fails env0 task 1 seed 0: error: ValueError: boom at step 2 (test_methods.py, line " in told
-    assert f"; traceback in {line['transcript']}" in told
+    # The traceback of this run's episode: its own transcript, beside the first one's.
+    assert f"; traceback in {Path(line['transcript']).parent}/env0-task1-fails-" in told
     assert again.attrs["outcome"]["skipped"] == 5 and again.attrs["outcome"]["written"] == 1
     # coherent.run raises, with the method's exception as the cause and the episode.
     with pytest.raises(coherent.MethodError, match="ValueError: boom at step 2") as info:

@@ -58,7 +58,7 @@ def test_resuming_with_other_settings_raises_naming_each_argument(few: list[cohe
 
     coherent.bench(few, [Tuned], out=out)
     Tuned.settings = {"depth": 3}
-    with pytest.raises(coherent.ArgumentError, match=r'method of tuned: \{"depth":2\} in the file, \{"depth":3\} now'):
+    with pytest.raises(coherent.ArgumentError, match=r'own settings \(its `settings`\) of tuned: \{"depth":2\} in the file, \{"depth":3\} now'):
         coherent.bench(few, [Tuned], out=out)
     # The same settings resume as before, and another method joins the same file.
     Tuned.settings = {"depth": 2}
@@ -93,7 +93,7 @@ def test_a_report_of_two_runs_refuses_and_one_run_says_its_settings(few: list[co
         coherent.report(both)
     message = str(raised.value)
     assert "2 runs" in message and "backend" in message and "sim_errors" in message, message
-    assert "df[df.settings_backend == 'builtin']" in message, message
+    assert 'coherent.report(df[df.settings_backend == "builtin"])' in message, message
     one = coherent.report(both[both.settings_backend == "builtin"])
     assert one.settings is not None and one.settings["backend"] == "builtin"
     assert "Settings: backend builtin, sim_errors none, seeds 1" in one.markdown()
