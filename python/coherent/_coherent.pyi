@@ -7,7 +7,7 @@ import asyncio
 import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Literal, TypeAlias, TypedDict, overload
+from typing import Any, Literal, NotRequired, TypeAlias, TypedDict, overload
 
 __version__: str
 
@@ -72,6 +72,14 @@ class _PlanResult(TypedDict):
     plan: list[_PlanStep]
     states_expanded: int
     elapsed_ms: float
+    # With parallel=True only: the fewest joint steps (docs/planner.md, "Parallel plans").
+    makespan: NotRequired[int | None]
+    makespan_proven: NotRequired[bool]
+    makespan_lower: NotRequired[int]
+    makespan_stop: NotRequired[Literal["states", "memory", "cancelled", "depth"] | None]
+    parallel_plan: NotRequired[list[list[_PlanStep]] | None]
+    makespan_states_expanded: NotRequired[int]
+    makespan_ms: NotRequired[float]
 
 class _Mention(TypedDict):
     name: str
@@ -272,9 +280,11 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
 def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
     """The project's own benchmark, compiled in: every task, or its 40-task subset."""
 
-def plan(task: Task, max_states: int = ...) -> _PlanResult:
-    """Plans ``task`` optimally (one line of ``coherent plan --json``). Ctrl-C interrupts
-    it and stops the search."""
+def plan(task: Task, max_states: int = ..., parallel: bool = False) -> _PlanResult:
+    """Plans ``task`` optimally (one line of ``coherent plan --json``); with ``parallel``,
+    also its fewest joint steps, robots acting at once (``coherent plan --parallel
+    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...).
+    Ctrl-C interrupts it and stops the search."""
 
 def validate(task: Task, max_states: int = ...) -> list[str]:
     """Semantic problems of ``task``, in words; empty when it is clean."""

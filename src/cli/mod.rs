@@ -18,7 +18,9 @@ use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 
-use crate::session::engine::{Analysis, Limits, Task, TaskError, clock, shown, shown_lines};
+use crate::session::engine::{
+    Analysis, Limits, Makespan, Stop, Task, TaskError, clock, shown, shown_lines,
+};
 use crate::session::{Error, check, tasks};
 
 pub use args::LoadMethod;
@@ -104,6 +106,11 @@ enum Command {
         /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
         #[arg(long)]
         physics: bool,
+        /// Also find the fewest joint steps, robots acting at once (adds makespan,
+        /// makespan_proven, makespan_lower, makespan_stop, parallel_plan,
+        /// makespan_states_expanded, makespan_ms).
+        #[arg(long)]
+        parallel: bool,
     },
 }
 
@@ -152,11 +159,12 @@ where
             max_states,
             max_memory,
             physics,
+            parallel,
         } => plan(
             &files,
             &tasks,
             json,
-            physics,
+            check::PlanOptions { physics, parallel },
             &limits(max_states, max_memory),
         ),
     };
@@ -241,7 +249,7 @@ fn plan(
     files: &[PathBuf],
     only: &[i64],
     as_json: bool,
-    physics: bool,
+    options: check::PlanOptions,
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
@@ -266,16 +274,23 @@ fn plan(
     let mut physics_failed = false;
     let (start, terminal) = (Instant::now(), std::io::stderr().is_terminal());
     for (done, t) in tasks.iter().enumerate() {
-        if physics && tasks.len() > 1 {
+        if options.physics && tasks.len() > 1 {
             tell_planned(done, tasks.len(), start, terminal);
         }
-        let planned = check::plan(t, limits, physics);
+        let planned = check::plan(t, limits, options);
         total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
+        total_ms += planned
+            .makespan
+            .as_ref()
+            .map_or(0.0, |m| m.elapsed.as_secs_f64() * 1e3);
         physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
         let line = if as_json {
             planned.to_json(t).to_string()
         } else {
             let mut text = plan_text(t, &planned.analysis);
+            if let Some(m) = &planned.makespan {
+                text.push_str(&parallel_text(t, m, limits));
+            }
             if let Some(r) = &planned.physics {
                 text.push_str(&match &r.physics_error {
                     None => format!(
@@ -292,7 +307,7 @@ fn plan(
             return Ok(0);
         }
     }
-    if physics && tasks.len() > 1 && terminal {
+    if options.physics && tasks.len() > 1 && terminal {
         eprint!("\r\x1b[2K");
     }
     if !as_json {
@@ -328,6 +343,57 @@ fn tell_planned(done: usize, total: usize, start: Instant, terminal: bool) {
         eprint!("\r\x1b[2K{text}");
     } else {
         eprintln!("{text}");
+    }
+}
+
+/// The fewest joint steps, one line each: `  step 1  22 [takeoff_from] ... | 23 ...`.
+fn parallel_text(t: &Task, m: &Makespan, limits: &Limits) -> String {
+    let Some(plan) = &m.plan else {
+        return match m.stop {
+            None => "\n  parallel: no plan".to_owned(),
+            Some(stop) => format!(
+                "\n  parallel: no plan found before {}",
+                stopped_at(stop, limits)
+            ),
+        };
+    };
+    // Stopped early, the plan is an upper bound (at worst the sequential optimum
+    // scheduled by its dependencies) and the open frontier a lower one.
+    let verdict = match m.stop {
+        None => "the fewest".to_owned(),
+        Some(stop) => format!(
+            "not proven the fewest: at least {}; the search stopped at {}",
+            m.lower,
+            stopped_at(stop, limits)
+        ),
+    };
+    let steps: Vec<String> = plan
+        .iter()
+        .enumerate()
+        .map(|(k, step)| {
+            let parts: Vec<String> = step
+                .iter()
+                .map(|s| format!("{} {}", t.id(s.robot), shown(&s.action.render(t))))
+                .collect();
+            format!("  {:>4}  {}", k + 1, parts.join("  |  "))
+        })
+        .collect();
+    format!(
+        "\n  parallel: {} joint steps ({verdict}), {} states, {:.1} ms\n{}",
+        plan.len(),
+        m.states_expanded,
+        m.elapsed.as_secs_f64() * 1e3,
+        steps.join("\n")
+    )
+}
+
+/// The limit a search met, in words.
+fn stopped_at(stop: Stop, limits: &Limits) -> String {
+    match stop {
+        Stop::States => format!("the limit of {} states", limits.max_states),
+        Stop::Memory => format!("the memory limit of {} MiB", limits.max_memory >> 20),
+        Stop::Cancelled => "a cancel".to_owned(),
+        Stop::Depth => "the deepest cost it counts".to_owned(),
     }
 }
 

@@ -9,7 +9,8 @@
 pub use coherent_core::action::most_actions;
 pub use coherent_core::action::{Mention, parse as parse_action};
 pub use coherent_core::load::load_tasks;
-pub use coherent_core::planner::{Analysis, Limits};
+pub use coherent_core::makespan::Makespan;
+pub use coherent_core::planner::{Analysis, Limits, Stop};
 pub use coherent_core::task::predicate_holds;
 pub use coherent_core::text::{shown, shown_lines};
 pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
