@@ -23,9 +23,8 @@ environment, ``coherent.marl`` a PettingZoo one with the robots as agents. The e
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
 ``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
-matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasium,
-``pip install 'coherent[gym]'``; ``coherent.marl`` needs pettingzoo, ``pip install
-'coherent[marl]'``.
+matplotlib, ``pip install '.[analysis]'``; ``coherent.gym`` needs gymnasium,
+``pip install '.[gym]'``; ``coherent.marl`` needs pettingzoo, ``pip install '.[marl]'``.
 """
 
 # The imports the package needs for itself are bound to underscored names, so that the
@@ -121,8 +120,8 @@ __all__ = [
 
 # The public submodules. `analysis` and `executors` are imported above; the others load on
 # first use: `coherent.plot` imports matplotlib (slow to import; the extra
-# `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`),
-# `coherent.marl` pettingzoo (the extra `coherent[marl]`).
+# `analysis`), `coherent.gym` gymnasium (the extra `gym`), `coherent.marl` pettingzoo (the
+# extra `marl`).
 _SUBMODULES = ("analysis", "benchmark", "executors", "gym", "marl", "plot")
 
 

@@ -315,15 +315,23 @@ class _Summary(TypedDict):
     error: str | None
 
 class _BenchOutcome(TypedDict):
+    # total = skipped + finished + unfinished
     total: int
     skipped: int
     written: int
+    finished: int
     unfinished: int
+    # Of the unfinished: ended in the method's own error; never started (Ctrl-C) or a
+    # task that cannot run.
+    method_errors: int
+    not_started: int
     interrupted: bool
     skipped_tasks: list[str]
     repaired_bytes: int
     # Transcripts of episodes killed mid-run, renamed *.jsonl.unfinished before the run.
     orphaned: list[str]
+    # The results file (the name the settings give when none was).
+    out: str
 
 class LLM:
     """An OpenAI-compatible endpoint (OpenAI, vLLM, Ollama, llama.cpp, LM Studio, ...).
@@ -597,8 +605,8 @@ def run_bench(
     history: int = 5,
     max_states: int = ...,
     max_steps: int | None = None,
-    out: _PathLike = "results.jsonl",
-    progress: bool = False,
+    out: _PathLike | None = None,
+    progress: Literal["bar", "lines"] | None = None,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
     physics: bool = False,
@@ -621,14 +629,21 @@ class _BenchLedger:
         methods: Sequence[str | _MethodFactory],
         *,
         seeds: int,
-        out: _PathLike,
+        out: _PathLike | None,
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
-        progress: bool = False,
+        history: int = 5,
+        max_states: int = ...,
+        max_steps: int | None = None,
+        physics: bool = False,
+        progress: Literal["bar", "lines"] | None = None,
         prompts: _PathLike | Mapping[str, str] | None = None,
         prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None: ...
+    @property
+    def out(self) -> str:
+        """The results file (the name the settings give when ``out`` was None)."""
     def pending(self) -> list[tuple[str, str, int, int]]:
         """The episodes to run: ``(method, scene, task_id, seed)``."""
     def worker_settings(self) -> dict[str, Any]:
@@ -661,8 +676,12 @@ class _BenchWorker:
     def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
 
-def read_results(path: _PathLike) -> list[dict[str, Any]]:
-    """The lines of a results file; a last line cut off mid-write is left out."""
+def read_results(path: _PathLike, prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """The lines of a results file; a last line cut off mid-write is left out. With
+    ``prices``, each ``cost_usd`` is the line's recorded tokens at those prices."""
+
+def price_lines(lines: list[dict[str, Any]], prices: _PathLike | Mapping[str, Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Results lines with each ``cost_usd`` worked out anew from their tokens at ``prices``."""
 
 def report_tables(lines: list[dict[str, Any]]) -> dict[str, Any]:
     """Tables I and II and the costs of results lines (``coherent bench --format json``)."""

@@ -1,5 +1,5 @@
 """A PettingZoo parallel environment over :class:`coherent.Env`, for multi-agent
-reinforcement learning (``pip install 'coherent[marl]'``)::
+reinforcement learning (``pip install ".[marl]"`` from a checkout)::
 
     from coherent.marl import CoherentParallelEnv
 

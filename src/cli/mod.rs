@@ -12,13 +12,14 @@ mod run;
 mod status;
 mod view;
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 
 use crate::session::engine::{
-    Analysis, Limits, Makespan, Stop, Task, TaskError, shown, shown_lines,
+    Analysis, Limits, Makespan, Stop, Task, TaskError, clock, shown, shown_lines,
 };
 use crate::session::{Error, check, tasks};
 
@@ -85,9 +86,10 @@ enum Command {
     /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
     /// input.
     Plan {
-        /// An original env file, a native task file or a folder of them; `native`: the
+        /// Original env files, native task files or folders of them; `native`: the
         /// project's own benchmark, compiled in.
-        file: PathBuf,
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// Only these task ids (repeatable).
         #[arg(long = "task")]
         tasks: Vec<i64>,
@@ -151,7 +153,7 @@ where
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
-            file,
+            files,
             tasks,
             json,
             max_states,
@@ -159,7 +161,7 @@ where
             physics,
             parallel,
         } => plan(
-            &file,
+            &files,
             &tasks,
             json,
             check::PlanOptions { physics, parallel },
@@ -244,23 +246,25 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
 }
 
 fn plan(
-    file: &Path,
+    files: &[PathBuf],
     only: &[i64],
     as_json: bool,
     options: check::PlanOptions,
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
-    let mut tasks = read_all(&[file.to_owned()], &mut malformed, &mut empty);
+    let mut tasks = read_all(files, &mut malformed, &mut empty);
     if !only.is_empty() {
+        let known = tasks::id_list(tasks.iter().map(|t| t.meta.task_id));
         tasks.retain(|t| only.contains(&t.meta.task_id));
         if let Some(missing) = only
             .iter()
             .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
         {
+            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             return Err(Error::Task(TaskError::Io {
-                file: file.display().to_string(),
-                message: format!("no task with task_id {missing}"),
+                file: names.join(", "),
+                message: format!("no task with task_id {missing}; its task ids: {known}"),
             }));
         }
     }
@@ -268,7 +272,11 @@ fn plan(
     let mut out = stdout.lock();
     let mut total_ms = 0.0;
     let mut physics_failed = false;
-    for t in &tasks {
+    let (start, terminal) = (Instant::now(), std::io::stderr().is_terminal());
+    for (done, t) in tasks.iter().enumerate() {
+        if options.physics && tasks.len() > 1 {
+            tell_planned(done, tasks.len(), start, terminal);
+        }
         let planned = check::plan(t, limits, options);
         total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
         total_ms += planned
@@ -299,6 +307,9 @@ fn plan(
             return Ok(0);
         }
     }
+    if options.physics && tasks.len() > 1 && terminal {
+        eprint!("\r\x1b[2K");
+    }
     if !as_json {
         let _ = writeln!(out, "{} tasks planned in {:.1} ms", tasks.len(), total_ms);
     }
@@ -309,6 +320,30 @@ fn plan(
     } else {
         0
     })
+}
+
+/// Says on stderr how far `plan --physics` is through its tasks (each is planned, then
+/// run in Rapier: a second or so each), with the rate and the time left: on a terminal
+/// one line redrawn before each task, in a log a line before every tenth of them.
+fn tell_planned(done: usize, total: usize, start: Instant, terminal: bool) {
+    let tenth = total.div_ceil(10);
+    if !terminal && !done.is_multiple_of(tenth) {
+        return;
+    }
+    let elapsed = start.elapsed();
+    let (rate, left) = match done {
+        0 => ("-".to_owned(), "-".to_owned()),
+        _ => (
+            format!("{:.1} s/task", elapsed.as_secs_f64() / done as f64),
+            clock(elapsed.mul_f64((total - done) as f64 / done as f64)),
+        ),
+    };
+    let text = format!("planning in physics: {done}/{total} tasks, {rate}, {left} left");
+    if terminal {
+        eprint!("\r\x1b[2K{text}");
+    } else {
+        eprintln!("{text}");
+    }
 }
 
 /// The fewest joint steps, one line each: `  step 1  22 [takeoff_from] ... | 23 ...`.

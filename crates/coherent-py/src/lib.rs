@@ -249,6 +249,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bench::read_results, m)?)?;
     m.add_function(wrap_pyfunction!(bench::report_tables, m)?)?;
     m.add_function(wrap_pyfunction!(bench::report_text, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::price_lines, m)?)?;
     m.add_function(wrap_pyfunction!(scene::scene_layout, m)?)?;
     m.add_function(wrap_pyfunction!(scene::robot_paths, m)?)?;
     m.add_function(wrap_pyfunction!(scene::render_svg, m)?)?;
