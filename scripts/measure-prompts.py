@@ -127,9 +127,12 @@ def llama(args: argparse.Namespace) -> None:
         timeout=3600.0,
     )
     load_before = os.getloadavg()
-    # (role, layout) -> prompt tokens, cached tokens, latencies (from round 2 on)
+    # (role, layout) -> prompt tokens, cached tokens, latencies (from round 2 on); and the
+    # prompt and cached tokens of the calls that have an earlier call of their role and
+    # robot (an executor's round-2 call can be its robot's first).
     prompt: dict[tuple[str, str], int] = defaultdict(int)
     cached: dict[tuple[str, str], int] = defaultdict(int)
+    again: dict[tuple[str, str], list[int]] = defaultdict(lambda: [0, 0, 0])
     latency: dict[tuple[str, str], list[float]] = defaultdict(list)
     started = time.time()
     with tempfile.TemporaryDirectory() as out:
@@ -147,6 +150,10 @@ def llama(args: argparse.Namespace) -> None:
                     prompt[(role, layout)] += int(group["prompt_tokens"].sum())
                     cached[(role, layout)] += int(group["cached_tokens"].sum())
                     latency[(role, layout)].extend(group["latency_ms"].dropna())
+                for role, group in frame[frame["shared_prefix"].notna()].groupby("role"):
+                    again[(role, layout)][0] += len(group)
+                    again[(role, layout)][1] += int(group["prompt_tokens"].sum())
+                    again[(role, layout)][2] += int(group["cached_tokens"].sum())
                 print(
                     f"{task.scene} task {task.task_id} {layout}: {episode.steps} steps, "
                     f"{episode.llm_calls} calls, {episode.prompt_tokens} prompt tokens "
@@ -161,8 +168,11 @@ def llama(args: argparse.Namespace) -> None:
         f"{os.cpu_count()} cores, load average {load_before[0]:.1f} before and "
         f"{os.getloadavg()[0]:.1f} after, {time.time() - started:.0f} s; {time.strftime('%Y-%m-%d')}\n"
     )
-    print("| role | layout | calls | prompt tokens | cached | median latency per call | spread (quartiles) |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| role | layout | calls | prompt tokens | cached | median latency per call | spread (quartiles) "
+        "| calls with an earlier one of their robot | cached |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
     for role in ("assigner", "executor"):
         for layout in LAYOUTS:
             lat = latency[(role, layout)]
@@ -172,7 +182,8 @@ def llama(args: argparse.Namespace) -> None:
             p = prompt[(role, layout)]
             print(
                 f"| {role} | {layout} | {len(lat)} | {p:,} | {cached[(role, layout)] / p:.1%} "
-                f"| {statistics.median(lat) / 1e3:.2f} s | {q[0] / 1e3:.2f} to {q[2] / 1e3:.2f} s |"
+                f"| {statistics.median(lat) / 1e3:.2f} s | {q[0] / 1e3:.2f} to {q[2] / 1e3:.2f} s "
+                f"| {again[(role, layout)][0]} | {again[(role, layout)][2] / max(again[(role, layout)][1], 1):.1%} |"
             )
 
 
