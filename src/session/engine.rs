@@ -6,9 +6,12 @@
 
 // Tasks and the rules: what a front end reads, shows, plans and steps by hand; the task
 // formats and the feasibility check, which Python's `Task` and `Env` give as they are.
+pub use coherent_core::action::most_actions;
 pub use coherent_core::action::{Mention, parse as parse_action};
 pub use coherent_core::load::load_tasks;
-pub use coherent_core::planner::{Analysis, Limits};
+pub use coherent_core::makespan::Makespan;
+pub use coherent_core::planner::{Analysis, Limits, Stop};
+pub use coherent_core::task::predicate_holds;
 pub use coherent_core::text::{shown, shown_lines};
 pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
 pub use coherent_core::{feasibility, native, original};
@@ -37,13 +40,18 @@ pub use coherent_agents::{ErrorRates, PriceTable, PromptError, Prompts};
 
 // Benchmarks: the results file, its lines and the driver's ledger, the subsets, the
 // progress lines, the paper's tables.
+pub use coherent_agents::bench::progress::clock;
+pub use coherent_agents::bench::run_settings::field as setting_field;
 pub use coherent_agents::bench::{
-    BenchOutcome, EpisodeKey, EpisodeResult, Event, Ledger, Progress, ResultLine, Subset,
-    read_results, select, transcripts_dir,
+    BenchOutcome, Difference, EpisodeKey, EpisodeResult, Event, Group, Ledger, Progress,
+    ResultLine, RunSettings, Setting, Style, Subset, read_results, select, transcripts_dir,
+    worth_a_line,
 };
+pub use coherent_agents::report::{Mixed, Report};
 
 // Stopping work from outside (Ctrl-C).
 pub use coherent_agents::Cancel;
 
-// Robots over ROS 2: the namespace their actions live under unless told otherwise.
-pub use coherent_ros::wire::DEFAULT_NAMESPACE;
+// Robots over ROS 2: the namespace their actions live under unless told otherwise, and
+// the names robots go by there (also the agents of `coherent.marl`).
+pub use coherent_ros::wire::{DEFAULT_NAMESPACE, robot_names};
