@@ -5,7 +5,7 @@ figures in docs/prompts.md, "Prompt caching", come from it.
 
     .venv/bin/python scripts/measure-prompts.py builtin --tasks ../shared/coherent-original/env
     .venv/bin/python scripts/measure-prompts.py llama --tasks ../shared/coherent-original/env \\
-        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 2 --slots 5
+        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 4 --slots 5
 
 `builtin`: every method that asks a model, on every solvable task of the folder, with
 the built-in backend (the optimal planner answers; the prompts are rendered and recorded
@@ -16,8 +16,9 @@ robot began (the transcript's `shared_prefix`). Deterministic: the same on any m
 `llama`: PEFA with SmolLM2-135M-Instruct served by llama.cpp's server (`xllamacpp`, its
 prompt cache on, as the tests start it; `--slots 5` gives each role and robot a slot of
 its own), each task run in both layouts one after the other: per role, the prompt
-tokens from the second round on and the share the server reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), and the
-median latency per call. Prints Markdown tables.
+tokens from the second round on and the share the server reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), the
+median latency per call, and the cached share of the calls that have an earlier call of
+their role and robot. Prints Markdown tables.
 """
 
 from __future__ import annotations
@@ -169,7 +170,7 @@ def llama(args: argparse.Namespace) -> None:
         f"{os.getloadavg()[0]:.1f} after, {time.time() - started:.0f} s; {time.strftime('%Y-%m-%d')}\n"
     )
     print(
-        "| role | layout | calls | prompt tokens | cached | median latency per call | spread (quartiles) "
+        "| role | layout | calls from round 2 | prompt tokens | cached | median latency per call | spread (quartiles) "
         "| calls with an earlier one of their robot | cached |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
