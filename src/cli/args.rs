@@ -9,6 +9,7 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use coherent_agents::episode::{External, Method, MethodSpec};
 use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode, PriceTable, Prompts};
+use coherent_core::text::shown;
 
 use crate::session::endpoint::{Endpoint, Patience};
 use crate::session::prompts;
@@ -115,8 +116,15 @@ pub(crate) struct PromptPriceArgs {
 impl PromptPriceArgs {
     /// The prompt set of `--prompts`; an error names the file, the line and the
     /// placeholder.
+    /// A blank template is a warning on stderr.
     pub fn prompt_set(&self) -> Result<Prompts, String> {
-        prompts::prompt_set(self.prompts.as_deref()).map_err(|e| e.to_string())
+        let set = prompts::prompt_set(self.prompts.as_deref()).map_err(|e| e.to_string())?;
+        if let Some(dir) = &self.prompts {
+            for warning in prompts::blank_warnings(dir, &set) {
+                eprintln!("warning: {}", shown(&warning));
+            }
+        }
+        Ok(set)
     }
 
     /// The built-in price table with the entries of `--prices`.

@@ -7,8 +7,10 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 use coherent_agents::Cancel;
 use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, EpisodeSettings, Event, Progress, Subset,
+    self, BackendChoice, BenchConfig, EpisodeSettings, Event, Progress, ReadLimits, Subset,
 };
+use coherent_agents::transcript;
+use coherent_core::files::MIB;
 use coherent_core::planner::Limits;
 use coherent_core::text::{shown, shown_lines};
 
@@ -58,6 +60,13 @@ pub struct BenchArgs {
     /// Results file (JSON lines), appended to; re-running skips finished episodes.
     #[arg(long, required_unless_present = "report")]
     out: Option<PathBuf>,
+    /// The most a results file may hold (--out when resuming, --report, --replay-from),
+    /// in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = bench::DEFAULT_MAX_RESULTS_BYTES / MIB)]
+    max_results_mib: u64,
+    /// With `--backend replay`: the most each transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
+    max_transcript_mib: u64,
     /// Print the tables of this results file and run nothing (with --prices, its lines'
     /// tokens priced anew).
     #[arg(long, conflicts_with_all = ["tasks", "methods", "out", "prompts"])]
@@ -100,9 +109,19 @@ enum TableFormat {
     Json,
 }
 
+impl BenchArgs {
+    /// What `--max-results-mib` and `--max-transcript-mib` allow.
+    fn limits(&self) -> ReadLimits {
+        ReadLimits {
+            results_bytes: self.max_results_mib.saturating_mul(MIB),
+            transcript_bytes: self.max_transcript_mib.saturating_mul(MIB),
+        }
+    }
+}
+
 pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
     if let Some(path) = &args.report {
-        let file = bench::read_results(path)?;
+        let file = bench::read_results_within(path, args.limits().results_bytes)?;
         if file.truncated_bytes > 0 {
             eprintln!(
                 "note: {}: the last line is cut off ({} bytes) and is ignored",
@@ -209,6 +228,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         seeds: args.seeds,
         concurrency: args.concurrency.max(1),
         out: out.clone(),
+        max_results_bytes: args.limits().results_bytes,
     };
     let info = config.episodes.backend.info();
     println!(
@@ -271,7 +291,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         out.display(),
         bench::transcripts_dir(out).display()
     );
-    let lines = bench::read_results(out)?.lines;
+    let lines = bench::read_results_within(out, args.limits().results_bytes)?.lines;
     print_tables(&lines, args.format);
     if outcome.interrupted {
         eprintln!("interrupted: re-run the same command to finish the rest");
@@ -294,6 +314,7 @@ fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
         endpoint: args.llm.config()?,
         sim_errors: sim_errors(args.sim_errors.as_deref())?,
         replay_from: args.replay_from.clone(),
+        limits: args.limits(),
     }
     .choose()
     .map_err(|e| match e {

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use clap::Args;
 use coherent_agents::episode;
 use coherent_agents::transcript;
+use coherent_core::files::MIB;
 use coherent_core::planner::Limits;
 
 use coherent_core::text::shown;
@@ -32,11 +33,17 @@ pub(crate) struct RenderArgs {
     /// Draw each robot's path along the executed actions of a `coherent run` transcript.
     #[arg(long)]
     transcript: Option<PathBuf>,
+    /// The most the transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
+    max_transcript_mib: u64,
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<u8, String> {
     let recorded = match &args.transcript {
-        Some(path) => Some((transcript::read(path)?, path)),
+        Some(path) => Some((
+            transcript::read_within(path, args.max_transcript_mib.saturating_mul(MIB))?,
+            path,
+        )),
         None => None,
     };
     let task = match (&recorded, &args.task_file) {

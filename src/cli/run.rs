@@ -8,10 +8,12 @@ use std::sync::Arc;
 
 use clap::Args;
 use coherent_agents::Cancel;
+use coherent_agents::bench::ReadLimits;
 use coherent_agents::episode::{Budget, MethodSpec, Settings};
 use coherent_agents::llm::BackendInfo;
-use coherent_agents::transcript::{Outcome, Round, Status, Summary};
+use coherent_agents::transcript::{self, Outcome, Round, Status, Summary};
 use coherent_core::Task;
+use coherent_core::files::MIB;
 use coherent_core::planner::Limits;
 use coherent_core::text::shown;
 
@@ -62,6 +64,9 @@ pub(crate) struct RunArgs {
     /// that every round comes out the same.
     #[arg(long)]
     replay: Option<PathBuf>,
+    /// With --replay: the most the transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
+    max_transcript_mib: u64,
     /// Print a JSON summary on stdout (step lines go to stderr).
     #[arg(long)]
     json: bool,
@@ -131,7 +136,8 @@ fn prepare(
             Some(file) => Some(tasks::pick_task(file, args.task_id)?),
             None => None,
         };
-        return episode::prepare_replay(path, given.as_ref(), args.out.clone(), prices)
+        let max_bytes = args.max_transcript_mib.saturating_mul(MIB);
+        return episode::prepare_replay(path, given.as_ref(), args.out.clone(), prices, max_bytes)
             .map_err(|e| e.to_string());
     }
     // Before anything else: a bad template must cost no model call.
@@ -149,6 +155,7 @@ fn prepare(
         endpoint,
         sim_errors: sim_errors(args.sim_errors.as_deref())?,
         replay_from: None,
+        limits: ReadLimits::default(),
     }
     .choose()
     .map_err(|e| e.to_string())?;

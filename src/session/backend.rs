@@ -6,7 +6,7 @@ use std::fmt;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent_agents::bench::{BackendChoice, Recorded};
+use coherent_agents::bench::{BackendChoice, ReadLimits, Recorded};
 use coherent_agents::{ErrorRates, OpenAiClient, OpenAiConfig};
 
 /// The backend asked for; `Auto` picks the simulated backend when error rates are given,
@@ -30,6 +30,8 @@ pub struct BackendRequest {
     pub sim_errors: Option<ErrorRates>,
     /// An earlier results file whose transcripts a replay answers from.
     pub replay_from: Option<PathBuf>,
+    /// How much of that results file and of each transcript may be read.
+    pub limits: ReadLimits,
 }
 
 /// Why the settings do not fit together. Each front end words these in its own terms
@@ -85,7 +87,7 @@ impl BackendRequest {
             return Err(BackendProblem::RatesNeedSimulated);
         }
         match (kind, self.replay_from) {
-            (BackendKind::Replay, Some(file)) => Recorded::read(&file)
+            (BackendKind::Replay, Some(file)) => Recorded::read(&file, self.limits)
                 .map(|r| BackendChoice::Replay(Arc::new(r)))
                 .map_err(BackendProblem::Setup),
             (BackendKind::Replay, None) => Err(BackendProblem::ReplayNeedsFile),
@@ -114,6 +116,7 @@ mod tests {
             endpoint: None,
             sim_errors: None,
             replay_from: None,
+            limits: ReadLimits::default(),
         }
     }
 

@@ -188,14 +188,16 @@ pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Failure> 
 
 /// Prepares the replay of the episode recorded at `path`: the task, settings (the prompt
 /// set included) and budget as recorded, answered from the recording (no network). With
-/// `given`, the recorded task must be that task. `prices` prices the recorded tokens.
+/// `given`, the recorded task must be that task. `prices` prices the recorded tokens; a
+/// transcript of more than `max_bytes` is refused.
 pub fn prepare_replay(
     path: &Path,
     given: Option<&Task>,
     out: PathBuf,
     prices: PriceTable,
+    max_bytes: u64,
 ) -> Result<Prepared, Failure> {
-    let recorded = transcript::read(path)?;
+    let recorded = transcript::read_within(path, max_bytes)?;
     if let Some(given) = given
         && native::to_value(given) != recorded.header.task
     {

@@ -26,6 +26,21 @@ pub fn price_table(file: Option<&Path>) -> Result<PriceTable, String> {
     }
 }
 
+/// A warning for each template of `prompts` (read from `origin`) that holds nothing but
+/// white space, which a write cut short (a full disk) leaves: its prompts say nothing.
+pub fn blank_warnings(origin: &Path, prompts: &Prompts) -> Vec<String> {
+    prompts
+        .blank_names()
+        .into_iter()
+        .map(|name| {
+            format!(
+                "{}: the template is blank, so its prompts tell the model nothing",
+                origin.join(name).display()
+            )
+        })
+        .collect()
+}
+
 /// One line about a prompt set that replaces built-in templates (`None` for the
 /// built-in set): the files and the set's hash, as the transcript records them.
 pub fn describe(prompts: &Prompts) -> Option<String> {

@@ -32,6 +32,7 @@ fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchCo
         seeds: 1,
         concurrency: 2,
         out,
+        max_results_bytes: bench::DEFAULT_MAX_RESULTS_BYTES,
     }
 }
 

@@ -134,6 +134,7 @@ async fn bench_over(urls: &[String], seeds: u32, out: &Path) -> Vec<ResultLine> 
         seeds,
         concurrency: 6,
         out: out.join("results.jsonl"),
+        max_results_bytes: bench::DEFAULT_MAX_RESULTS_BYTES,
     };
     let outcome = bench::run(&tasks(), &config, &Cancel::default(), &mut |_| {})
         .await

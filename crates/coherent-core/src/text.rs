@@ -60,6 +60,24 @@ pub fn cut(text: &str, max: usize) -> Cow<'_, str> {
     ))
 }
 
+/// `text` cut to its last `max` bytes or fewer (at a character boundary), after a note
+/// of the whole length when it was longer: for an error whose end says the most, such
+/// as a traceback.
+pub fn cut_front(text: &str, max: usize) -> Cow<'_, str> {
+    if text.len() <= max {
+        return Cow::Borrowed(text);
+    }
+    let mut start = text.len() - max;
+    while !text.is_char_boundary(start) {
+        start += 1;
+    }
+    Cow::Owned(format!(
+        "[cut: {} bytes in all] …{}",
+        text.len(),
+        &text[start..]
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,6 +88,9 @@ mod tests {
         assert_eq!(cut("abcdef", 3), "abc… [cut: 6 bytes in all]");
         // "é" is two bytes: a cut inside it moves back before it.
         assert_eq!(cut("aé", 2), "a… [cut: 3 bytes in all]");
+        assert_eq!(cut_front("abcdef", 3), "[cut: 6 bytes in all] …def");
+        assert_eq!(cut_front("éa", 2), "[cut: 3 bytes in all] …a");
+        assert_eq!(cut_front("short", 10), "short");
     }
 
     #[test]

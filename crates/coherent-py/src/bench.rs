@@ -10,8 +10,8 @@ use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::bench::{self as session_bench, TableFormat};
 use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, BenchOutcome, EpisodeSettings, Event, Progress, ResultLine,
-    Subset,
+    self, BackendChoice, BenchConfig, BenchOutcome, EpisodeSettings, Event, Progress, ReadLimits,
+    ResultLine, Subset,
 };
 use coherent_agents::{Cancel, MethodSpec};
 use coherent_core::planner::Limits;
@@ -172,6 +172,7 @@ pub(crate) fn run_backend(
         endpoint,
         sim_errors: crate::run::error_rates(sim_errors)?,
         replay_from,
+        limits: ReadLimits::default(),
     }
     .choose()
     .map_err(|e| match e {
@@ -241,6 +242,7 @@ pub(crate) fn run_bench<'py>(
         seeds,
         concurrency: concurrency.max(1),
         out,
+        max_results_bytes: ReadLimits::default().results_bytes,
     };
     let cancel = Cancel::default();
     let stop = cancel.clone();

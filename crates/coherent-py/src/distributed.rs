@@ -11,7 +11,8 @@ use std::sync::Arc;
 
 use coherent::session::bench::Worker;
 use coherent_agents::bench::{
-    EpisodeKey, EpisodeResult, EpisodeSettings, Event, Ledger, Progress, ResultLine, RunTasks,
+    EpisodeKey, EpisodeResult, EpisodeSettings, Event, Ledger, Progress, ReadLimits, ResultLine,
+    RunTasks,
 };
 use coherent_agents::{Cancel, PriceTable};
 use coherent_core::native;
@@ -98,7 +99,8 @@ impl PyLedger {
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
         let tasks =
             RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
-        let mut ledger = Ledger::open(&out).map_err(|e| errors::coherent(py, e))?;
+        let mut ledger = Ledger::open(&out, ReadLimits::default().results_bytes)
+            .map_err(|e| errors::coherent(py, e))?;
         let pending = ledger.plan(&tasks, &methods, seeds);
         let mut progress = progress.then(|| Progress::new(false));
         if let Some(p) = progress.as_mut() {

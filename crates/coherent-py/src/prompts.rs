@@ -2,11 +2,12 @@
 //! the prompt set and the price table, read by the session layer
 //! (`coherent::session::prompts`) as `--prompts` and `--prices` are.
 
-use std::path::Path;
+use std::ffi::CString;
+use std::path::PathBuf;
 
 use coherent::session::prompts;
 use coherent_agents::{PriceTable, Prompts};
-use pyo3::exceptions::PyTypeError;
+use pyo3::exceptions::{PyTypeError, PyUserWarning};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
@@ -26,7 +27,7 @@ pub(crate) fn prompt_set(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Prompts> {
         return Ok(Prompts::builtin());
     };
     let py = spec.py();
-    let set = if let Ok(d) = spec.cast::<PyDict>() {
+    let (set, origin) = if let Ok(d) = spec.cast::<PyDict>() {
         let files = d
             .iter()
             .map(|(k, v)| {
@@ -37,15 +38,26 @@ pub(crate) fn prompt_set(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Prompts> {
                 ))
             })
             .collect::<PyResult<Vec<_>>>()?;
-        Prompts::from_texts(Path::new("prompts"), files)
+        let origin = PathBuf::from("prompts");
+        (Prompts::from_texts(&origin, files), origin)
     } else if is_path(spec)? {
-        prompts::prompt_set(Some(&path(spec, "prompts")?))
+        let dir = path(spec, "prompts")?;
+        (prompts::prompt_set(Some(&dir)), dir)
     } else {
         return Err(PyTypeError::new_err(
             "prompts: expected a folder of template files or a dict of {file name: text}",
         ));
     };
-    set.map_err(|e| errors::prompt(py, &e))
+    let set = set.map_err(|e| errors::prompt(py, &e))?;
+    for warning in prompts::blank_warnings(&origin, &set) {
+        PyErr::warn(
+            py,
+            &py.get_type::<PyUserWarning>(),
+            &CString::new(warning)?,
+            1,
+        )?;
+    }
+    Ok(set)
 }
 
 /// `prices=`: None (the built-in table), a price file (JSON, or TOML for a `.toml`

@@ -9,6 +9,7 @@ use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
 use coherent::session::episode::{
     self as session_episode, EpisodeSpec, Failure, Prepared, Ran, Robots,
 };
+use coherent_agents::bench::ReadLimits;
 use coherent_agents::episode::{self, Method, Settings};
 use coherent_agents::llm::Usage;
 use coherent_agents::transcript::{self, Status, Summary, Transcript};
@@ -339,6 +340,7 @@ pub(crate) fn run(
         endpoint: llm.map(|l| l.get().config.clone()),
         sim_errors: error_rates(sim_errors)?,
         replay_from: None,
+        limits: ReadLimits::default(),
     }
     .choose()
     .map_err(|e| match e {
@@ -382,7 +384,7 @@ pub(crate) fn replay(
     let path = transcript.clone();
     let prices = price_table(prices)?;
     let ran = episode_off_the_gil(py, move |_| {
-        session_episode::prepare_replay(&path, None, out, prices)
+        session_episode::prepare_replay(&path, None, out, prices, transcript::DEFAULT_MAX_BYTES)
     })?;
     let mismatch = ran.replay.clone().and_then(Result::err);
     let task = Py::new(py, PyTask::shared(Arc::clone(&ran.task)))?;

@@ -26,8 +26,10 @@ pub use crate::harness::choice::{BackendChoice, Recorded};
 pub use crate::harness::job::{EpisodeResult, EpisodeSettings, RunTasks, episode_seed, run_one};
 pub use crate::harness::ledger::{BenchOutcome, Ledger};
 pub use crate::harness::progress::{Event, Progress};
+pub use crate::harness::results::DEFAULT_MAX_BYTES as DEFAULT_MAX_RESULTS_BYTES;
 pub use crate::harness::results::{
-    EpisodeKey, ResultLine, ResultsFile, mark_orphans, read_results, repair, transcripts_dir,
+    EpisodeKey, ReadLimits, ResultLine, ResultsFile, mark_orphans, read_results,
+    read_results_within, repair, transcripts_dir,
 };
 pub use crate::harness::subset::{PAPER40, Selection, Subset, select};
 
@@ -43,6 +45,8 @@ pub struct BenchConfig {
     pub concurrency: usize,
     /// The results file; transcripts go to [`transcripts_dir`] of it.
     pub out: PathBuf,
+    /// The most the results file may hold when read back to resume.
+    pub max_results_bytes: u64,
 }
 
 /// Runs every method on every task for every seed, `config.concurrency` at once, skipping
@@ -56,7 +60,7 @@ pub async fn run(
     progress: &mut (dyn FnMut(Event<'_>) + Send),
 ) -> Result<BenchOutcome, String> {
     let tasks = Arc::new(RunTasks::new(tasks)?);
-    let mut ledger = Ledger::open(&config.out)?;
+    let mut ledger = Ledger::open(&config.out, config.max_results_bytes)?;
     let keys = ledger.plan(&tasks, &config.episodes.methods, config.seeds);
     progress(Event::Start {
         to_run: keys.len(),

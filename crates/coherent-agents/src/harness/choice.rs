@@ -11,7 +11,8 @@ use crate::backends::builtin::BuiltinBackend;
 use crate::backends::llm::{Backend, BackendInfo};
 use crate::backends::openai::OpenAiClient;
 use crate::backends::simulated::ErrorRates;
-use crate::harness::results::{EpisodeKey, read_results};
+use crate::harness::results::{EpisodeKey, ReadLimits, read_results_within};
+use crate::records::transcript;
 
 /// Which backend answers the model-using methods.
 #[derive(Clone, Debug)]
@@ -35,12 +36,14 @@ pub struct Recorded {
     pub transcripts: HashMap<EpisodeKey, PathBuf>,
     /// The backend of the recordings (the first one's, when they differ).
     pub backend: BackendInfo,
+    /// The most each transcript may hold.
+    pub max_transcript_bytes: u64,
 }
 
 impl Recorded {
-    /// The final episodes of the results file `results`.
-    pub fn read(results: &Path) -> Result<Recorded, String> {
-        let file = read_results(results)?;
+    /// The final episodes of the results file `results`, read within `limits`.
+    pub fn read(results: &Path, limits: ReadLimits) -> Result<Recorded, String> {
+        let file = read_results_within(results, limits.results_bytes)?;
         let mut backend = None;
         let mut transcripts = HashMap::new();
         for line in file.lines.iter().filter(|l| l.is_final()) {
@@ -55,9 +58,25 @@ impl Recorded {
                 results.display()
             ));
         }
+        // Checked before any episode starts: a transcript that is gone, is no regular
+        // file (a device that never ends) or holds too much would stop the run midway.
+        let limit = transcript::limit(limits.transcript_bytes);
+        for path in transcripts.values() {
+            let meta = std::fs::metadata(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            if !meta.is_file() {
+                return Err(format!(
+                    "{}: not a regular file (a device? a folder?): a transcript must be one",
+                    path.display()
+                ));
+            }
+            if meta.len() > limit.bytes {
+                return Err(limit.exceeded(path).to_string());
+            }
+        }
         Ok(Recorded {
             results: results.to_owned(),
             transcripts,
+            max_transcript_bytes: limits.transcript_bytes,
             backend: backend.unwrap_or(BackendInfo {
                 kind: "none".into(),
                 model: String::new(),

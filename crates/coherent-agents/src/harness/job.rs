@@ -9,6 +9,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits};
+use coherent_core::text::cut;
 use coherent_core::{SymbolicEnv, Task};
 use tokio::sync::OnceCell;
 
@@ -19,7 +20,7 @@ use crate::episode::run::{run as run_episode, transcript_path};
 use crate::episode::settings::{Budget, MethodSpec, Settings};
 use crate::harness::choice::BackendChoice;
 use crate::harness::prices::PriceTable;
-use crate::harness::results::{EpisodeKey, ResultLine};
+use crate::harness::results::{ERROR_BYTES, EpisodeKey, ResultLine};
 use crate::harness::subset::same_key_twice;
 use crate::methods::templates::Prompts;
 use crate::records::replay::Replay;
@@ -219,7 +220,10 @@ pub async fn run_one(
                 )));
             };
             // A replay runs with the recorded settings and budget.
-            let replay = Replay::prepare(&transcript::read(path)?, path)?;
+            let replay = Replay::prepare(
+                &transcript::read_within(path, recorded.max_transcript_bytes)?,
+                path,
+            )?;
             let backend = Arc::clone(&replay.backend) as Arc<dyn Backend>;
             let (recorded_settings, recorded_budget) = (replay.settings.clone(), replay.budget);
             (backend, Some(replay), recorded_settings, recorded_budget)
@@ -287,7 +291,9 @@ pub async fn run_one(
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
         backend,
         uses_model,
-        error: mismatch.or(s.error),
+        error: mismatch
+            .or(s.error)
+            .map(|e| cut(&e, ERROR_BYTES).into_owned()),
         transcript: path.display().to_string(),
     };
     Ok(EpisodeResult::Line(Box::new(line.priced(&settings.prices))))

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crate::episode::settings::MethodSpec;
 use crate::harness::job::{EpisodeResult, RunTasks};
-use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results, repair};
+use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results_within, repair};
 
 /// What a run did.
 #[derive(Debug, Default)]
@@ -38,6 +38,8 @@ pub struct BenchOutcome {
 #[derive(Debug)]
 pub struct Ledger {
     out: PathBuf,
+    /// The most the results file may hold when read back.
+    max_bytes: u64,
     file: File,
     /// Episodes with a final line: in the file before the run, or written by it.
     done: HashSet<EpisodeKey>,
@@ -49,12 +51,13 @@ pub struct Ledger {
 impl Ledger {
     /// Opens the results file `out` (and its folder) for appending: a last line cut off
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
-    /// episodes with a final line are known to be done.
-    pub fn open(out: &Path) -> Result<Ledger, String> {
+    /// episodes with a final line are known to be done. A results file of more than
+    /// `max_bytes` is refused.
+    pub fn open(out: &Path, max_bytes: u64) -> Result<Ledger, String> {
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
         if out.exists() {
-            let file = read_results(out)?;
+            let file = read_results_within(out, max_bytes)?;
             outcome.repaired_bytes = file.truncated_bytes;
             repair(out, &file)?;
             done.extend(
@@ -74,6 +77,7 @@ impl Ledger {
             .map_err(|e| format!("{}: {e}", out.display()))?;
         Ok(Ledger {
             out: out.to_owned(),
+            max_bytes,
             file,
             done,
             written: HashSet::new(),
@@ -137,7 +141,7 @@ impl Ledger {
     /// points to, as resuming does: a worker that died mid-episode left them, and its
     /// episodes ran again elsewhere. They are added to the outcome's `orphaned`.
     pub fn mark_orphans(&mut self) -> Result<(), String> {
-        let lines = read_results(&self.out)?.lines;
+        let lines = read_results_within(&self.out, self.max_bytes)?.lines;
         let marked = mark_orphans(&self.out, &lines)?;
         self.outcome.orphaned.extend(marked);
         Ok(())

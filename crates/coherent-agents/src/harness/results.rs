@@ -3,10 +3,11 @@
 //! the last line short.
 
 use std::collections::HashSet;
-use std::fs::{File, OpenOptions};
+use std::fs::OpenOptions;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
@@ -104,25 +105,63 @@ pub struct ResultsFile {
     pub good_len: u64,
 }
 
-/// Reads a results file. A last line without its newline that does not parse is a write
-/// cut short (reported in `truncated_bytes`); any other bad line is an error naming the
-/// file, the line and the JSON path.
+/// The most a results file may hold unless told otherwise: about a million episodes'
+/// lines.
+pub const DEFAULT_MAX_BYTES: u64 = 1024 * MIB;
+
+/// The most one line of a results file may hold: a line is well under 2 KiB, its error
+/// cut at [`ERROR_BYTES`] when it is written.
+pub const MAX_LINE_BYTES: u64 = MIB;
+
+/// The most of an episode's error a results line keeps (the transcript has all of it).
+pub const ERROR_BYTES: usize = 64 << 10;
+
+/// How much a run may read back of the files it was given: its results file (to resume,
+/// to replay from, to report) and each transcript it replays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReadLimits {
+    pub results_bytes: u64,
+    pub transcript_bytes: u64,
+}
+
+impl Default for ReadLimits {
+    fn default() -> ReadLimits {
+        ReadLimits {
+            results_bytes: DEFAULT_MAX_BYTES,
+            transcript_bytes: crate::records::transcript::DEFAULT_MAX_BYTES,
+        }
+    }
+}
+
+/// The limits of a results file of at most `bytes`.
+fn limits(bytes: u64) -> (Limit, Limit) {
+    let line = Limit {
+        bytes: MAX_LINE_BYTES,
+        what: "a results file",
+        raise: None,
+    };
+    let total = Limit {
+        bytes,
+        what: "a results file",
+        raise: Some("--max-results-mib"),
+    };
+    (line, total)
+}
+
+/// Reads a results file of at most [`DEFAULT_MAX_BYTES`] ([`read_results_within`]).
 pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
-    let mut text = Vec::new();
-    File::open(path)
-        .and_then(|mut f| f.read_to_end(&mut text))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    read_results_within(path, DEFAULT_MAX_BYTES)
+}
+
+/// Reads a results file of at most `max_bytes`. A last line without its newline that
+/// does not parse is a write cut short (reported in `truncated_bytes`); any other bad
+/// line is an error naming the file, the line and the JSON path.
+pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, String> {
+    let (line_limit, total) = limits(max_bytes);
+    let mut lines = Lines::open(path, line_limit, total).map_err(|e| e.to_string())?;
     let mut out = ResultsFile::default();
-    let mut start = 0;
-    let mut number = 0;
-    while start < text.len() {
-        number += 1;
-        let (end, complete) = match text[start..].iter().position(|&b| b == b'\n') {
-            Some(i) => (start + i + 1, true),
-            None => (text.len(), false),
-        };
-        let raw = &text[start..end];
-        let parsed = std::str::from_utf8(raw)
+    while let Some(line) = lines.next_line().map_err(|e| e.to_string())? {
+        let parsed = std::str::from_utf8(line.bytes)
             .map_err(|e| e.to_string())
             .and_then(|s| {
                 if s.trim().is_empty() {
@@ -132,19 +171,18 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
                 parse_line(de).map(Some)
             });
         match parsed {
-            Ok(line) => {
-                out.lines.extend(line);
+            Ok(parsed) => {
+                out.lines.extend(parsed);
                 // A complete record missing only its newline is kept; repair adds it.
-                out.good_len = end as u64;
+                out.good_len = line.end();
             }
-            Err(_) if !complete => {
-                out.truncated_bytes = (end - start) as u64;
+            Err(_) if !line.complete() => {
+                out.truncated_bytes = line.bytes.len() as u64;
             }
             Err(e) => {
-                return Err(format!("{}: line {number}: {e}", path.display()));
+                return Err(format!("{}: line {}: {e}", path.display(), line.number));
             }
         }
-        start = end;
     }
     Ok(out)
 }

@@ -6,6 +6,14 @@ use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::Task;
+use coherent_core::files::{self, Limit, MIB};
+
+/// The most a subset file may hold: tens of thousands of `scene task_id` lines.
+pub const FILE_LIMIT: Limit = Limit {
+    bytes: MIB,
+    what: "a subset file",
+    raise: None,
+};
 
 /// The paper's 40-task subset (docs/semantics.md, "Steps, the budget and the scores"): 8 tasks per scene, by the scene's
 /// file name and the task id.
@@ -41,9 +49,11 @@ impl Subset {
         }
     }
 
-    /// Reads a subset file; errors name the file and the line.
+    /// Reads a subset file of at most [`FILE_LIMIT`]; errors name the file and the line.
     pub fn read_file(path: &Path) -> Result<Subset, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = files::read(path, &FILE_LIMIT).map_err(|e| e.to_string())?;
+        let text =
+            String::from_utf8(bytes).map_err(|e| format!("{}: not UTF-8: {e}", path.display()))?;
         let mut pairs = Vec::new();
         for (i, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();

@@ -13,10 +13,11 @@ use std::io;
 use std::sync::Arc;
 use std::time::Instant;
 
+use coherent_core::text::{cut, cut_front};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::policy::{Act, Executed, Policy, View};
+use crate::episode::policy::{Act, Choice, Executed, Policy, View};
 use crate::episode::rounds::{Episode, rounds};
 use crate::methods::joint;
 use crate::records::transcript::{Decision, Outcome, Round};
@@ -52,7 +53,7 @@ pub async fn run(
         };
         let mut round = Round::new(step);
         round.calls = act.calls;
-        match act.choice {
+        match bounded(act.choice) {
             Ok(choice) => {
                 round.external = Some(choice.clone());
                 let action = choice.action.unwrap_or_default();
@@ -81,6 +82,23 @@ pub async fn run(
         Ok(Some(round))
     };
     rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// The most of a method's note, action or error a round keeps: what a method says is
+/// text of any length, and the transcript must stay readable.
+pub const MAX_TEXT_BYTES: usize = 64 << 10;
+
+/// `choice` with its texts cut at [`MAX_TEXT_BYTES`]: the note and the action at their
+/// end, an error at its start (a traceback ends with the exception).
+fn bounded(choice: Result<Choice, String>) -> Result<Choice, String> {
+    match choice {
+        Ok(mut c) => {
+            c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
+            c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
+            Ok(c)
+        }
+        Err(why) => Err(cut_front(&why, MAX_TEXT_BYTES).into_owned()),
+    }
 }
 
 /// Runs `robot`'s `action` as the round's decision; a robot that is not in the team is a

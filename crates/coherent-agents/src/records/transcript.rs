@@ -5,10 +5,11 @@
 //! ([`crate::records::replay`]).
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use coherent_core::RobotReport;
+use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
 use coherent_core::NodeId;
@@ -255,19 +256,40 @@ pub struct Transcript {
     pub summary: Option<Summary>,
 }
 
-/// Reads a transcript; errors name the file and the line.
+/// The most a transcript may hold unless told otherwise: a PEFA episode of 100 steps
+/// with the built-in prompts takes a few MiB.
+pub const DEFAULT_MAX_BYTES: u64 = 64 * MIB;
+
+/// The limit of a transcript of at most `bytes` (any one line as much).
+pub fn limit(bytes: u64) -> Limit {
+    Limit {
+        bytes,
+        what: "a transcript",
+        raise: Some("--max-transcript-mib"),
+    }
+}
+
+/// Reads a transcript of at most [`DEFAULT_MAX_BYTES`]; errors name the file and the
+/// line.
 pub fn read(path: &Path) -> Result<Transcript, String> {
-    let file = File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    read_within(path, DEFAULT_MAX_BYTES)
+}
+
+/// Reads a transcript of at most `max_bytes`; errors name the file and the line.
+pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, String> {
+    let mut lines =
+        Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(|e| e.to_string())?;
     let mut header = None;
     let mut rounds = Vec::new();
     let mut summary = None;
-    for (i, line) in BufReader::new(file).lines().enumerate() {
+    while let Some(line) = lines.next_line().map_err(|e| e.to_string())? {
+        let i = line.number - 1;
         let at = || format!("{}: line {}", path.display(), i + 1);
-        let line = line.map_err(|e| format!("{}: {e}", at()))?;
+        let line = std::str::from_utf8(line.bytes).map_err(|e| format!("{}: {e}", at()))?;
         if line.trim().is_empty() {
             continue;
         }
-        let record: Record = serde_json::from_str(&line).map_err(|e| format!("{}: {e}", at()))?;
+        let record: Record = serde_json::from_str(line).map_err(|e| format!("{}: {e}", at()))?;
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {
