@@ -5,6 +5,7 @@
 
 use std::time::Duration;
 
+use coherent_agents::backends::address::redacted;
 use coherent_agents::retry::Backoff;
 use coherent_agents::{ApiKey, OpenAiConfig, OutputMode};
 
@@ -79,7 +80,11 @@ impl Endpoint {
         let model = model.ok_or_else(|| {
             format!(
                 "an endpoint is configured ({}) but no model: pass --model or set COHERENT_MODEL",
-                base_urls.join(",")
+                base_urls
+                    .iter()
+                    .map(|u| redacted(u))
+                    .collect::<Vec<_>>()
+                    .join(",")
             )
         })?;
         Ok(Some(OpenAiConfig {

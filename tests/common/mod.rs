@@ -58,29 +58,65 @@ pub fn env0() -> PathBuf {
     Path::new(env!("COHERENT_ORIGINAL_ENV")).join("env0.json")
 }
 
-/// One HTTP/1.1 request's JSON body: the headers up to the blank line, then
-/// `Content-Length` bytes. `None` when the client closed the connection or sent
+/// One HTTP/1.1 request as a server sees it.
+pub struct Request {
+    /// `POST /v1/chat/completions HTTP/1.1`.
+    pub line: String,
+    /// Each header's name (lower case) and value, in order.
+    pub headers: Vec<(String, String)>,
+    pub body: Value,
+}
+
+impl Request {
+    /// The values of the header `name` (lower case).
+    pub fn header(&self, name: &str) -> Vec<&str> {
+        self.headers
+            .iter()
+            .filter(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+            .collect()
+    }
+}
+
+/// One HTTP/1.1 request: the request line, the headers up to the blank line, then
+/// `Content-Length` bytes of JSON. `None` when the client closed the connection or sent
 /// something else.
-pub fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
+pub fn read_whole_request(reader: &mut BufReader<TcpStream>) -> Option<Request> {
+    let mut line = String::new();
+    if reader.read_line(&mut line).ok()? == 0 {
+        return None;
+    }
+    let mut headers = Vec::new();
     let mut length = 0;
     loop {
-        let mut line = String::new();
-        if reader.read_line(&mut line).ok()? == 0 {
+        let mut header = String::new();
+        if reader.read_line(&mut header).ok()? == 0 {
             return None;
         }
-        let line = line.trim_end();
-        if line.is_empty() {
+        let header = header.trim_end();
+        if header.is_empty() {
             break;
         }
-        if let Some((name, value)) = line.split_once(':')
-            && name.eq_ignore_ascii_case("content-length")
-        {
-            length = value.trim().parse().ok()?;
+        if let Some((name, value)) = header.split_once(':') {
+            let (name, value) = (name.trim().to_ascii_lowercase(), value.trim().to_owned());
+            if name == "content-length" {
+                length = value.parse().ok()?;
+            }
+            headers.push((name, value));
         }
     }
     let mut body = vec![0; length];
     reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
+    Some(Request {
+        line: line.trim_end().to_owned(),
+        headers,
+        body: serde_json::from_slice(&body).ok()?,
+    })
+}
+
+/// One HTTP/1.1 request's JSON body ([`read_whole_request`]).
+pub fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
+    read_whole_request(reader).map(|r| r.body)
 }
 
 /// A valid answer to whichever role asks, from the schema it sent: the first robot, or

@@ -9,6 +9,7 @@ use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
 use coherent::session::endpoint::{Endpoint, Patience};
+use coherent_agents::backends::address::redacted;
 use coherent_agents::llm::{Answer, Finish, LlmError, Message, Role};
 use coherent_agents::transcript::Call;
 use coherent_agents::{ApiKey, Chat, OpenAiClient, OpenAiConfig, OutputMode};
@@ -274,14 +275,15 @@ impl PyLlm {
         Ok(d)
     }
 
+    /// The base URLs as shown anywhere: without user or password, query values redacted.
     fn __repr__(&self, py: Python<'_>) -> String {
         let base_url = match self.config.base_urls.as_slice() {
-            [one] => py_repr(py, one),
+            [one] => py_repr(py, &redacted(one)),
             several => format!(
                 "[{}]",
                 several
                     .iter()
-                    .map(|u| py_repr(py, u))
+                    .map(|u| py_repr(py, &redacted(u)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
