@@ -407,6 +407,15 @@ fn a_server_killed_mid_episode_fails_the_step_with_a_timeout_and_ends_the_run() 
             && said.contains("stopped: robot_dog_13 did not answer"),
         "{said}"
     );
+    // The summary says what happened: a robot's silence, not an interruption.
+    let summary = said
+        .lines()
+        .find(|l| l.contains("| goal not reached |"))
+        .expect("a summary line");
+    assert!(
+        summary.starts_with("stopped: robot_dog_13 did not answer [movetowards] <fridge>(8)"),
+        "{summary}"
+    );
     let t = transcript(&runs);
     assert_eq!(t.summary["status"], "interrupted");
     assert_eq!(t.summary["steps"], 4);

@@ -15,12 +15,10 @@ use coherent_core::planner::Limits;
 use coherent_core::text::{shown, shown_lines};
 
 use super::args::{LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors};
+use super::signals::Stop;
 use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
 use crate::session::bench::{self as session_bench, TableFormat as Tables};
 use crate::session::{self, prompts};
-
-/// Exit status after Ctrl-C, as shells report SIGINT.
-const INTERRUPTED: u8 = 130;
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -234,21 +232,15 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
     println!(
         "backend: {} ({}){}",
         info.kind,
-        info.model,
-        info.base_url.map_or(String::new(), |u| format!(" at {u}"))
+        shown(&info.model),
+        info.base_url
+            .map_or(String::new(), |u| format!(" at {}", shown(&u)))
     );
     if let Some(line) = prompts::describe(&config.episodes.prompts) {
         println!("{line}");
     }
     let cancel = Cancel::default();
-    let ctrl_c = {
-        let cancel = cancel.clone();
-        tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                cancel.cancel();
-            }
-        })
-    };
+    let stop = Stop::watch(&cancel);
     let terminal = std::io::stderr().is_terminal();
     let mut progress = Progress::new(terminal);
     let mut show = |e: Event<'_>| {
@@ -259,7 +251,6 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         }
     };
     let result = bench::run(&selection.tasks, &config, &cancel, &mut show).await;
-    ctrl_c.abort();
     if terminal {
         eprintln!();
     }
@@ -269,7 +260,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
             "note: {} transcripts of episodes killed mid-run had no results line; renamed to \
              *.jsonl.unfinished (e.g. {}), and their episodes ran again",
             outcome.orphaned.len(),
-            first.display()
+            shown(&first.display().to_string())
         );
     }
     if outcome.repaired_bytes > 0 {
@@ -295,7 +286,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
     print_tables(&lines, args.format);
     if outcome.interrupted {
         eprintln!("interrupted: re-run the same command to finish the rest");
-        return Ok(INTERRUPTED);
+        return Ok(stop.status());
     }
     Ok(0)
 }

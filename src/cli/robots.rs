@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, Subcommand, ValueEnum};
+use coherent_core::text::number;
 use coherent_ros::wire::{self, DEFAULT_NAMESPACE};
 use coherent_ros::{Faults, ServeOptions};
 
@@ -109,8 +110,12 @@ fn serve(args: ServeArgs) -> Result<u8, String> {
         namespace: wire::namespace(&args.namespace)?,
         physics: args.physics,
         faults: Faults {
-            delay: Duration::try_from_secs_f64(args.delay)
-                .map_err(|_| format!("--delay must be seconds >= 0, not {}", args.delay))?,
+            delay: Duration::try_from_secs_f64(args.delay).map_err(|_| {
+                format!(
+                    "--delay must be seconds from 0 to 1.8e19, not {}",
+                    number(args.delay)
+                )
+            })?,
             fail_rate: args.fail_rate,
             seed: args.seed,
             silent: args.silent,

@@ -23,6 +23,7 @@ use super::args::{
     AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors,
 };
 use super::robots::RobotFlags;
+use super::signals::Stop;
 use crate::session::backend::{BackendKind, BackendRequest};
 use crate::session::episode::{self, EpisodeSpec, Prepared};
 use crate::session::{self, prompts, tasks};
@@ -35,8 +36,6 @@ const BACKEND_FAILED: u8 = 3;
 const METHOD_FAILED: u8 = 4;
 /// Exit status when a robot over ROS 2 stopped answering (the environment stopped).
 const ROBOT_STOPPED: u8 = 5;
-/// Exit status after Ctrl-C, as shells report SIGINT.
-const INTERRUPTED: u8 = 130;
 
 #[derive(Args)]
 pub(crate) struct RunArgs {
@@ -195,23 +194,18 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     if let Some(line) = prompts::describe(&prepared.settings.prompts) {
         lines.say(&line);
     }
-    let ctrl_c = {
-        let cancel = cancel.clone();
-        tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                cancel.cancel();
-            }
-        })
-    };
+    let stop = Stop::watch(&cancel);
     let task = Arc::clone(&prepared.task);
     let max = prepared.budget.steps();
     let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
     let result = prepared.run(&cancel, &mut progress).await;
-    ctrl_c.abort();
     let ran = result.map_err(|e| e.to_string())?;
     let s = ran.summary();
     lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
-    lines.say(&format!("transcript: {}", ran.path.display()));
+    lines.say(&format!(
+        "transcript: {}",
+        shown(&ran.path.display().to_string())
+    ));
     match &ran.replay {
         Some(Ok(())) => lines.say(&format!(
             "replay: all {} rounds match the recording",
@@ -244,15 +238,13 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             })
         );
     }
-    if let (Status::Interrupted, Some(why)) = (s.status, &s.error) {
-        lines.say(&format!("stopped: {why}"));
-        return Ok(ROBOT_STOPPED);
-    }
     Ok(match s.status {
         Status::Success => 0,
         Status::Failure => FAILED,
         Status::BackendError => BACKEND_FAILED,
-        Status::Interrupted => INTERRUPTED,
+        // Stopped by the environment (a robot that stopped answering) says why.
+        Status::Interrupted if s.error.is_some() => ROBOT_STOPPED,
+        Status::Interrupted => stop.status(),
         Status::Error => METHOD_FAILED,
     })
 }
@@ -344,12 +336,15 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
 }
 
 fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {
-    let result = match s.status {
-        Status::Success => "success",
-        Status::Failure => "failure: step budget spent",
-        Status::BackendError => "stopped: the backend failed",
-        Status::Interrupted => "interrupted",
-        Status::Error => "stopped: the method raised an error",
+    let result = match (s.status, &s.error) {
+        (Status::Success, _) => "success".to_owned(),
+        (Status::Failure, _) => "failure: step budget spent".to_owned(),
+        (Status::BackendError, _) => "stopped: the backend failed".to_owned(),
+        // Stopped by the environment, not by a signal: what happened (a robot's
+        // silence, say).
+        (Status::Interrupted, Some(why)) => format!("stopped: {}", shown(why)),
+        (Status::Interrupted, None) => "interrupted".to_owned(),
+        (Status::Error, _) => "stopped: the method raised an error".to_owned(),
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {

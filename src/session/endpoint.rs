@@ -8,6 +8,7 @@ use std::time::Duration;
 use coherent_agents::backends::address::redacted;
 use coherent_agents::retry::Backoff;
 use coherent_agents::{ApiKey, OpenAiConfig, OutputMode};
+use coherent_core::text::number;
 
 /// How long the client waits and how often it retries.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -118,7 +119,12 @@ pub fn url_list(list: &str) -> Vec<String> {
 }
 
 fn seconds(s: f64, what: &str) -> Result<Duration, String> {
-    Duration::try_from_secs_f64(s).map_err(|_| format!("--{what} {s}: not a number of seconds"))
+    Duration::try_from_secs_f64(s).map_err(|_| {
+        format!(
+            "--{what} {}: not a number of seconds from 0 to 1.8e19",
+            number(s)
+        )
+    })
 }
 
 #[cfg(test)]

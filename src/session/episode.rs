@@ -11,6 +11,7 @@ use coherent_agents::llm::{Backend, BackendInfo, Usage};
 use coherent_agents::transcript::{self, Round, Transcript};
 use coherent_agents::{Cancel, Episode, PriceTable, Replay};
 use coherent_core::planner::Limits;
+use coherent_core::text::number;
 use coherent_core::{Environment, SymbolicEnv, Task, native};
 
 /// Why an episode could not run.
@@ -54,7 +55,7 @@ impl Robots {
     pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, String> {
         let seconds = |what: &str, s: f64| {
             std::time::Duration::try_from_secs_f64(s)
-                .map_err(|_| format!("{what} must be seconds >= 0, not {s}"))
+                .map_err(|_| format!("{what} must be seconds from 0 to 1.8e19, not {}", number(s)))
         };
         Ok(Robots::Ros2(coherent_ros::BridgeOptions {
             namespace: coherent_ros::wire::namespace(namespace)?,

@@ -138,3 +138,24 @@ pub fn answer(request: &Value) -> String {
     }
     .to_string()
 }
+
+/// A model server on loopback that reads requests and never answers, for runs that must
+/// stay busy until they are stopped: its URL, and a channel that hears of each request.
+pub fn silent_server() -> (String, std::sync::mpsc::Receiver<()>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("bind loopback");
+    let url = format!("http://{}/v1", listener.local_addr().expect("address"));
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for socket in listener.incoming().flatten() {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                let mut reader = BufReader::new(socket.try_clone().expect("a second handle"));
+                while read_request(&mut reader).is_some() {
+                    let _ = tx.send(());
+                }
+                drop(socket);
+            });
+        }
+    });
+    (url, rx)
+}

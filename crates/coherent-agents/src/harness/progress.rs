@@ -2,6 +2,8 @@
 
 use std::time::{Duration, Instant};
 
+use coherent_core::text::shown;
+
 use crate::harness::results::ResultLine;
 use crate::records::transcript::Status;
 
@@ -73,8 +75,8 @@ impl Progress {
                 Some(if self.terminal {
                     format!(
                         "\r\x1b[2K{head} | last: {} {} task {} seed {} {}",
-                        line.method,
-                        line.scene,
+                        shown(&line.method),
+                        shown(&line.scene),
                         line.task_id,
                         line.seed,
                         status_word(line.status)
@@ -82,8 +84,8 @@ impl Progress {
                 } else {
                     format!(
                         "{head} | {} {} task {} seed {}: {} in {} steps (GT {}), {} LLM calls, {:.1} s\n",
-                        line.method,
-                        line.scene,
+                        shown(&line.method),
+                        shown(&line.scene),
                         line.task_id,
                         line.seed,
                         status_word(line.status),
