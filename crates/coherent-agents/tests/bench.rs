@@ -458,6 +458,61 @@ async fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
     }
 }
 
+/// A transcript whose episode still runs elsewhere (its writer holds it) is never taken
+/// for one left over by a kill, while a leftover beside it is; and a second run on the
+/// same results file, or on one that shares its transcripts folder, is refused naming
+/// the first run's process.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_results_file() {
+    let dir = scratch("owned");
+    let out = dir.join("results.jsonl");
+    let seed0 = bench::transcripts_dir(&out).join("seed0");
+    let task = &paper40_env0()[0];
+    let live = seed0.join("env0-task2-pefa-live.jsonl");
+    let header = coherent_agents::transcript::Header {
+        format: coherent_agents::transcript::FORMAT.into(),
+        version: coherent_agents::transcript::VERSION,
+        coherent: "test".into(),
+        task: coherent_core::native::to_value(task),
+        task_name: task.meta.name.clone(),
+        method: "pefa".into(),
+        history: 5,
+        max_steps: 10,
+        gt_steps: task.meta.gt_steps,
+        physics: false,
+        backend: BackendInfo {
+            kind: "builtin".into(),
+            model: String::new(),
+            base_url: None,
+        },
+        temperature: None,
+        seed: None,
+        prompts: None,
+        started_ms: 0,
+        external: false,
+    };
+    let writer = coherent_agents::transcript::Writer::create(&live, header).expect("created");
+    let left = seed0.join("env0-task4-pefa-left.jsonl");
+    std::fs::write(&left, "{\"type\": \"header\"}\n").expect("write");
+    let marked = bench::mark_orphans(&out, &[]).expect("marked");
+    assert_eq!(marked, [left.with_extension("jsonl.unfinished")]);
+    assert!(live.exists(), "the live transcript keeps its name");
+    drop(writer);
+    let ledger = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES).expect("the first");
+    for other in [out.clone(), dir.join("results.json")] {
+        let e = bench::Ledger::open(&other, bench::DEFAULT_MAX_RESULTS_BYTES)
+            .expect_err("a second run");
+        let pid = std::process::id();
+        assert!(
+            e.contains("another benchmark run is using it")
+                && e.contains(&format!("process {pid}")),
+            "{e}"
+        );
+    }
+    drop(ledger);
+    bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES).expect("free again");
+}
+
 /// A results line with a key twice is refused, naming the line and the key (serde_json
 /// alone keeps the last one, so `"success": true, "success": false` would count as a
 /// failure unseen).

@@ -4,12 +4,15 @@
 
 use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
 use crate::episode::settings::MethodSpec;
 use crate::harness::job::{EpisodeResult, RunTasks};
-use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results_within, repair};
+use crate::harness::results::{
+    EpisodeKey, ResultLine, mark_orphans, read_results_within, repair, transcripts_dir,
+};
+use crate::records::lock;
 
 /// What a run did.
 #[derive(Debug, Default)]
@@ -34,10 +37,13 @@ pub struct BenchOutcome {
     pub orphaned: Vec<PathBuf>,
 }
 
-/// A run's results file, open for appending.
+/// A run's results file, open for appending, and the lock that makes the run its only
+/// writer (and the only one to rename transcripts in its folder).
 #[derive(Debug)]
 pub struct Ledger {
     out: PathBuf,
+    /// Held while the ledger lives ([`crate::records::lock`]).
+    _lock: File,
     /// The most the results file may hold when read back.
     max_bytes: u64,
     file: File,
@@ -53,7 +59,10 @@ impl Ledger {
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
     /// episodes with a final line are known to be done. A results file of more than
     /// `max_bytes` is refused.
+    /// Another run on the same results file, or on one whose transcripts share the
+    /// folder, is refused naming its process.
     pub fn open(out: &Path, max_bytes: u64) -> Result<Ledger, String> {
+        let lock = take_lock(out)?;
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
         if out.exists() {
@@ -77,6 +86,7 @@ impl Ledger {
             .map_err(|e| format!("{}: {e}", out.display()))?;
         Ok(Ledger {
             out: out.to_owned(),
+            _lock: lock,
             max_bytes,
             file,
             done,
@@ -147,6 +157,12 @@ impl Ledger {
         Ok(())
     }
 
+    /// The file whose lock makes a run the only one on `out` (in its transcripts
+    /// folder, which two results files of the same stem share).
+    pub fn lock_path(out: &Path) -> PathBuf {
+        transcripts_dir(out).join(".lock")
+    }
+
     /// What the run did so far.
     pub fn outcome(&self) -> &BenchOutcome {
         &self.outcome
@@ -157,4 +173,42 @@ impl Ledger {
         self.outcome.interrupted = interrupted;
         self.outcome
     }
+}
+
+/// Locks the run's lock file of `out` ([`Ledger::lock_path`]) and writes this process's
+/// id into it; when another run holds it, an error names that run's process.
+fn take_lock(out: &Path) -> Result<File, String> {
+    let path = Ledger::lock_path(out);
+    let io = |e: std::io::Error| format!("{}: {e}", path.display());
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let mut file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(io)?;
+    if !lock::try_exclusive(&file).map_err(io)? {
+        let mut holder = String::new();
+        let _ = file.read_to_string(&mut holder);
+        let holder = holder.trim();
+        let holder = if holder.is_empty() || holder.len() > 20 {
+            "another process".to_owned()
+        } else {
+            format!("process {holder}")
+        };
+        return Err(format!(
+            "{}: another benchmark run is using it ({holder} holds {}): wait for it to end, \
+             or give this run another --out",
+            out.display(),
+            path.display()
+        ));
+    }
+    file.set_len(0)
+        .and_then(|()| writeln!(file, "{}", std::process::id()))
+        .and_then(|()| file.flush())
+        .map_err(io)?;
+    Ok(file)
 }

@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
 use crate::harness::prices::PriceTable;
+use crate::records::lock;
 use crate::records::transcript::Status;
 
 /// One finished episode: a line of the results file.
@@ -258,7 +259,9 @@ pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
 
 /// Renames to `*.jsonl.unfinished` every transcript under [`transcripts_dir`] of `out`
 /// that none of `lines` points to: an episode killed mid-run (or between its last round
-/// and its results line) left it, and the episode runs again. Returns the new names.
+/// and its results line) left it, and the episode runs again. A transcript whose writer
+/// still holds it (an episode running in another process) is left alone. Returns the
+/// new names.
 pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, String> {
     let dir = transcripts_dir(out);
     if !dir.is_dir() {
@@ -279,6 +282,7 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, St
                 folders.push(path);
             } else if path.extension().is_some_and(|x| x == "jsonl")
                 && !pointed.contains(&path.canonicalize().map_err(|e| io(&path, e))?)
+                && !being_written(&path).map_err(|e| io(&path, e))?
             {
                 let mut renamed = path.clone().into_os_string();
                 renamed.push(".unfinished");
@@ -290,6 +294,13 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, St
     }
     marked.sort();
     Ok(marked)
+}
+
+/// Whether the transcript at `path` is locked by its writer, which is still running.
+fn being_written(path: &Path) -> io::Result<bool> {
+    let file = std::fs::File::open(path)?;
+    // Taken and, as the file closes, released at once: only a writer's lock stays.
+    Ok(!lock::try_exclusive(&file)?)
 }
 
 /// `results.jsonl` -> `results.transcripts/`, next to it.

@@ -16,6 +16,7 @@ use coherent_core::NodeId;
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
 use crate::methods::templates::PromptRecord;
+use crate::records::lock;
 
 pub const FORMAT: &str = "coherent-transcript";
 pub const VERSION: u32 = 1;
@@ -220,21 +221,23 @@ pub enum Record {
     Summary(Summary),
 }
 
-/// Writes a transcript line by line, flushing each.
+/// Writes a transcript line by line, flushing each; the file is locked while it is
+/// written ([`crate::records::lock`]), so that no benchmark takes it for one left over.
 #[derive(Debug)]
 pub struct Writer {
     file: File,
 }
 
 impl Writer {
-    /// Creates the file (and its folder) and writes the header.
+    /// Creates the file (and its folder), locks it and writes the header.
     pub fn create(path: &Path, header: Header) -> io::Result<Writer> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)?;
         }
-        let mut w = Writer {
-            file: File::create(path)?,
-        };
+        let file = File::create(path)?;
+        // A file just made is nobody else's: the lock is only for the others to see.
+        lock::try_exclusive(&file)?;
+        let mut w = Writer { file };
         w.write(&Record::Header(Box::new(header)))?;
         Ok(w)
     }
