@@ -637,7 +637,7 @@ fn bad_robot_flags_exit_2_before_anything_runs() {
         ),
         (
             vec!["--robots", "ros2", "--robot-timeout=-1"],
-            "the robot timeout must be seconds >= 0",
+            "the robot timeout must be seconds from 0 to 1.8e19, not -1",
         ),
     ] {
         let out = Command::new(BIN)

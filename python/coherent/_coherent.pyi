@@ -506,6 +506,7 @@ def run(
     max_states: int = ...,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
+    step_timeout: float | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
     ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
@@ -516,7 +517,9 @@ def run(
     replaces built-in templates (a bad one raises :class:`PromptError` before anything
     runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``). Raises
     :class:`BackendError` when the server fails for good, :class:`MethodError` when the
-    method raises; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
+    method raises or one of its steps (``M(task)`` and ``act``) takes longer than
+    ``step_timeout`` seconds; Ctrl-C stops the episode, whatever ``act`` is doing, and
+    raises ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -547,6 +550,7 @@ def run_bench(
     progress: bool = False,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
+    step_timeout: float | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""
@@ -597,6 +601,7 @@ class _BenchWorker:
         out: _PathLike,
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],
+        step_timeout: float | None = None,
     ) -> None: ...
     def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""

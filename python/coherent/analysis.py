@@ -95,6 +95,7 @@ def bench(
     prompts: PathLike | Mapping[str, str] | None = None,
     prices: PathLike | Mapping[str, Mapping[str, Any]] | None = None,
     executor: Literal["local", "ray"] | RayExecutor = "local",
+    step_timeout: float | None = None,
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
@@ -114,7 +115,9 @@ def bench(
     ``docs/methods.md``), named ``M.name`` or its class's name; ``"MODULE:CLASS"`` loads
     one. An exception in ``act`` ends that episode alone with status ``"error"`` and the
     traceback in ``error``; such episodes run again when the call is repeated.
-    ``max_steps`` sets every episode's budget (2 x GT by default).
+    ``step_timeout`` (seconds) ends a step of a method written in Python that takes
+    longer (its ``act``, or ``M(task)`` at the first step) as that method's error, and
+    the run goes on. ``max_steps`` sets every episode's budget (2 x GT by default).
 
     ``prompts`` (a folder of template files, or ``{file name: text}``) replaces built-in
     prompt templates; a template with an unknown placeholder raises
@@ -152,6 +155,7 @@ def bench(
         "progress": progress,
         "prompts": prompts,
         "prices": prices,
+        "step_timeout": step_timeout,
     }
     if runner is None:
         outcome = _coherent.run_bench(chosen, list(methods), **settings)

@@ -5,11 +5,12 @@
 //! method written in Python, which the Python package loads).
 
 use std::path::PathBuf;
+use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 use coherent_agents::episode::{External, Method, MethodSpec};
 use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode, PriceTable, Prompts};
-use coherent_core::text::shown;
+use coherent_core::text::{number, shown};
 
 use crate::session::endpoint::{Endpoint, Patience};
 use crate::session::prompts;
@@ -169,16 +170,31 @@ pub(crate) fn method_name(value: &str) -> Result<String, String> {
 /// file, and the class or callable in it); the Python package's console script has one.
 pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, String> + Send + Sync + 'a;
 
-/// The method a value of [`method_name`] names: a built-in one, or one that `load` loads.
+/// The method a value of [`method_name`] names: a built-in one, or one that `load` loads,
+/// each of its steps limited to `step_timeout` seconds (`--step-timeout`).
 pub(crate) fn method_spec(
     value: &str,
     load: Option<&LoadMethod<'_>>,
+    step_timeout: Option<f64>,
 ) -> Result<MethodSpec, String> {
     if let Some(method) = Method::from_name(value) {
         return Ok(method.into());
     }
+    let limit = step_timeout
+        .map(|s| {
+            Duration::try_from_secs_f64(s)
+                .ok()
+                .filter(|d| !d.is_zero())
+                .ok_or_else(|| {
+                    format!(
+                        "--step-timeout must be seconds above 0 and at most 1.8e19, not {}",
+                        number(s)
+                    )
+                })
+        })
+        .transpose()?;
     match load {
-        Some(load) => load(value).map(MethodSpec::External),
+        Some(load) => load(value).map(|m| MethodSpec::External(m.with_step_timeout(limit))),
         None => Err(format!(
             "method {value}: a method written in Python needs the Python package: run the \
              `coherent` command that `pip install .` installs (or `python -m coherent._cli`), \

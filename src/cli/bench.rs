@@ -36,6 +36,11 @@ pub struct BenchArgs {
     /// file, and its class; from the Python package's `coherent` only).
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,
+    /// The longest one step of a method written in Python may take, in seconds (its
+    /// act, and making it at the first step); a longer step ends that episode as the
+    /// method's error, and the run goes on.
+    #[arg(long, value_name = "SECONDS")]
+    step_timeout: Option<f64>,
     /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
     /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
     /// `replay`: the transcripts of --replay-from.
@@ -161,7 +166,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
     let methods = args
         .methods
         .iter()
-        .map(|m| method_spec(m, load))
+        .map(|m| method_spec(m, load, args.step_timeout))
         .collect::<Result<Vec<_>, _>>()?;
     if args.seeds == 0 {
         return Err("--seeds must be at least 1".into());

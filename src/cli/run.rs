@@ -50,6 +50,10 @@ pub(crate) struct RunArgs {
     /// .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
+    /// The longest one step of a method written in Python may take, in seconds (its
+    /// act, and making it at the first step); a longer step ends as the method's error.
+    #[arg(long, value_name = "SECONDS")]
+    step_timeout: Option<f64>,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = 5)]
     history: usize,
@@ -146,7 +150,7 @@ fn prepare(
         .as_deref()
         .ok_or("a task file is needed without --replay")?;
     let task = tasks::pick_task(file, args.task_id)?;
-    let method = method_spec(&args.method, load)?;
+    let method = method_spec(&args.method, load, args.step_timeout)?;
     let endpoint = args.llm.config()?;
     let temperature = endpoint.as_ref().map(|_| args.llm.temperature);
     let backend = BackendRequest {

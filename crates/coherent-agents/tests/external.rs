@@ -433,3 +433,43 @@ async fn a_methods_texts_of_any_length_are_cut_so_that_its_transcript_reads_back
     let back = transcript::read(&path).expect("reads back");
     assert_eq!(back.rounds, e.rounds);
 }
+
+/// Never answers: its step's future stays pending.
+struct Silent;
+
+impl Policy for Silent {
+    fn act(&mut self, _view: Arc<View>) -> BoxFuture<'_, Act> {
+        Box::pin(std::future::pending())
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_step_over_the_time_limit_ends_the_episode_as_the_methods_error() {
+    let out = scratch("step-timeout");
+    let task = common::task("env0", 0);
+    let make: Arc<MakePolicy> = Arc::new(|_: &Arc<Task>| Ok(Box::new(Silent) as Box<dyn Policy>));
+    let method = External::new("silent", make)
+        .expect("a valid name")
+        .with_step_timeout(Some(std::time::Duration::from_millis(200)));
+    let path = episode::transcript_path(&out, &task, method.name());
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let (e, _) = episode::run(
+        &task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(10),
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs");
+    assert_eq!(e.summary.status, Status::Error);
+    assert_eq!(e.rounds.len(), 1);
+    let error = e.summary.error.as_deref().expect("why");
+    assert!(
+        error.contains("took longer than its time limit of 0.2 s"),
+        "{error}"
+    );
+}

@@ -125,6 +125,22 @@ fn seconds(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
     Ok(s)
 }
 
+/// `step_timeout` of `run`, `run_bench` and the Ray worker: the longest one step of a
+/// method written in Python may take, or None for no limit.
+pub(crate) fn step_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Option<Duration>> {
+    optional(obj, |o| {
+        let s = seconds(o, "step_timeout")?;
+        if s == 0.0 {
+            return Err(errors::argument(
+                "step_timeout",
+                o,
+                "0 seconds: no step could end",
+            ));
+        }
+        Ok(Duration::from_secs_f64(s))
+    })
+}
+
 /// `connect_timeout` of `LLM`.
 pub(crate) fn connect_timeout(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
     seconds(obj, "connect_timeout")

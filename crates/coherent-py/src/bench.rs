@@ -5,6 +5,7 @@
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
@@ -199,7 +200,8 @@ pub(crate) fn run_backend(
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
     concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-    out = PathBuf::from("results.jsonl"), progress = false, prompts = None, prices = None
+    out = PathBuf::from("results.jsonl"), progress = false, prompts = None, prices = None,
+    step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
@@ -218,12 +220,13 @@ pub(crate) fn run_bench<'py>(
     progress: bool,
     prompts: Option<&Bound<'py, PyAny>>,
     prices: Option<&Bound<'py, PyAny>>,
+    #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Bound<'py, PyDict>> {
     // Before anything else: a bad template must cost no model call.
     let prompt_set = prompt_set(prompts)?;
     let prices = price_table(prices)?;
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
-    let mut python = Methods::new(py)?;
+    let mut python = Methods::new(py, step_timeout)?;
     let methods = run_methods(py, &methods, seeds, &objects, &mut python)?;
     let (choice, temperature) =
         run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;

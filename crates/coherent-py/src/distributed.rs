@@ -8,6 +8,7 @@ use std::collections::BTreeMap;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session::bench::Worker;
 use coherent_agents::bench::{
@@ -91,7 +92,7 @@ impl PyLedger {
         let prices = price_table(prices)?;
         // The methods written in Python are only named here; the workers run them.
         let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
-        let mut python = Methods::new(py)?;
+        let mut python = Methods::new(py, None)?;
         let methods = run_methods(py, &methods, seeds, &objects, &mut python);
         python.close(py)?;
         let methods = methods?;
@@ -206,7 +207,8 @@ impl PyWorker {
     #[new]
     #[pyo3(signature = (
         tasks, methods, *, backend = None, sim_errors = None, replay_from = None, history = 5,
-        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, out, prompts, prices
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, out, prompts, prices,
+        step_timeout = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -222,6 +224,7 @@ impl PyWorker {
         #[pyo3(from_py_with = args::out)] out: PathBuf,
         prompts: &Bound<'_, PyDict>,
         prices: &Bound<'_, PyDict>,
+        #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
     ) -> PyResult<PyWorker> {
         let mut read = Vec::new();
         for (i, text) in tasks.iter().enumerate() {
@@ -235,7 +238,7 @@ impl PyWorker {
             .iter()
             .map(|t| Py::new(py, PyTask::shared(Arc::clone(t))))
             .collect::<PyResult<Vec<_>>>()?;
-        let mut python = Methods::new(py)?;
+        let mut python = Methods::new(py, step_timeout)?;
         let methods = run_methods(py, &methods, 1, &objects, &mut python)?;
         // The driver refused a prompt set with a replay.
         let (backend, temperature) = run_backend(py, backend, sim_errors, replay_from, false)?;

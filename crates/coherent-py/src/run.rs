@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session;
 use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
@@ -312,7 +313,7 @@ fn failure(py: Python<'_>, episode: PyEpisode, cause: Option<PyErr>) -> PyResult
 #[pyo3(signature = (
     task, method = MethodArg::Name("pefa".to_owned()), *, llm = None, sim_errors = None,
     history = 5, max_steps = None, physics = false, seed = None, out = PathBuf::from("runs"),
-    max_states = Limits::DEFAULT_MAX_STATES, prompts = None, prices = None
+    max_states = Limits::DEFAULT_MAX_STATES, prompts = None, prices = None, step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
@@ -329,11 +330,12 @@ pub(crate) fn run(
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
     prompts: Option<&Bound<'_, PyAny>>,
     prices: Option<&Bound<'_, PyAny>>,
+    #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Py<PyEpisode>> {
     // Before anything else: a bad template must cost no model call.
     let prompts = prompt_set(prompts)?;
     let prices = price_table(prices)?;
-    let mut methods = Methods::new(py)?;
+    let mut methods = Methods::new(py, step_timeout)?;
     let method = method.spec(py, &mut methods, &[task.clone().unbind()])?;
     let backend = BackendRequest {
         kind: BackendKind::Auto,

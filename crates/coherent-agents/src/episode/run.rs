@@ -137,7 +137,8 @@ pub async fn run(
         MethodSpec::Builtin(method) => *method,
         MethodSpec::External(method) => {
             let made = method.make(task);
-            let episode = external::run(env, task, made, steps, cancel, &mut on_round).await;
+            let limit = method.step_timeout();
+            let episode = external::run(env, task, made, steps, limit, cancel, &mut on_round).await;
             return finish(episode.map_err(io)?, header, &mut writer, transcript);
         }
     };

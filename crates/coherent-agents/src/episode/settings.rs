@@ -3,6 +3,7 @@
 
 use std::fmt;
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent_core::Task;
 use coherent_core::planner::{self, Limits};
@@ -72,6 +73,9 @@ impl Method {
 pub struct External {
     name: String,
     make: Arc<MakePolicy>,
+    /// The longest one step may take (the policy's `act`, and its making at the first
+    /// step); `None` for no limit.
+    step_timeout: Option<Duration>,
 }
 
 impl External {
@@ -93,11 +97,24 @@ impl External {
         Ok(External {
             name: name.to_owned(),
             make,
+            step_timeout: None,
         })
+    }
+
+    /// The method with each step limited to `limit` (`None`: no limit): a step that takes
+    /// longer ends as the method's error.
+    pub fn with_step_timeout(mut self, limit: Option<Duration>) -> External {
+        self.step_timeout = limit;
+        self
     }
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The longest one step may take.
+    pub fn step_timeout(&self) -> Option<Duration> {
+        self.step_timeout
     }
 
     /// The policy of one episode of `task`, or why there is none.
@@ -110,14 +127,18 @@ impl fmt::Debug for External {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("External")
             .field("name", &self.name)
+            .field("step_timeout", &self.step_timeout)
             .finish_non_exhaustive()
     }
 }
 
-/// Two are the same method when they have the same name and the same maker.
+/// Two are the same method when they have the same name, the same maker and the same
+/// step limit.
 impl PartialEq for External {
     fn eq(&self, other: &External) -> bool {
-        self.name == other.name && Arc::ptr_eq(&self.make, &other.make)
+        self.name == other.name
+            && Arc::ptr_eq(&self.make, &other.make)
+            && self.step_timeout == other.step_timeout
     }
 }
 

@@ -7,13 +7,14 @@
 //! Faults are steps like any: an action outside the robot's list is run as written, so
 //! that the feasibility check gives the reason; a robot that is not in the team is a
 //! failed step that says so; no robot is no action (the step still counts). A policy
-//! that fails (raises, in Python) ends the episode with status `error` and its words.
+//! that fails (raises, in Python) ends the episode with status `error` and its words,
+//! and so does a step that takes longer than the method's step limit.
 
 use std::io;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
-use coherent_core::text::{cut, cut_front};
+use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
@@ -23,13 +24,14 @@ use crate::methods::joint;
 use crate::records::transcript::{Decision, Outcome, Round};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
-/// spent, the policy fails, or `cancel` fires. A policy that could not be made fails
-/// the first step.
+/// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
+/// fires. A policy that could not be made fails the first step.
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     made: Result<Box<dyn Policy>, String>,
     max_steps: u32,
+    step_timeout: Option<Duration>,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
@@ -40,10 +42,23 @@ pub async fn run(
         let act = match &mut policy {
             Ok(policy) => {
                 let view = Arc::new(View::now(env, task, step, max_steps, &history));
+                let act = policy.act(view);
+                // Without a limit, a step may take as long as it takes (a sleep of
+                // Duration::MAX would overflow the clock).
+                let limit = async {
+                    match step_timeout {
+                        Some(limit) => tokio::time::sleep(limit).await,
+                        None => std::future::pending().await,
+                    }
+                };
                 tokio::select! {
                     biased;
                     () = cancel.cancelled() => return Ok(None),
-                    act = policy.act(view) => act,
+                    act = act => act,
+                    () = limit => Act {
+                        choice: Err(out_of_time(step_timeout.unwrap_or_default())),
+                        calls: Vec::new(),
+                    },
                 }
             }
             Err(why) => Act {
@@ -82,6 +97,15 @@ pub async fn run(
         Ok(Some(round))
     };
     rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// The error of a step that took longer than `limit`.
+fn out_of_time(limit: Duration) -> String {
+    format!(
+        "the step took longer than its time limit of {} s (--step-timeout, step_timeout=), \
+         and was stopped",
+        number(limit.as_secs_f64())
+    )
 }
 
 /// The most of a method's note, action or error a round keeps: what a method says is
