@@ -8,6 +8,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::Result;
 use crate::feasibility::{self, Infeasible};
 use crate::graph::{NodeId, State};
+use crate::joint::{self, Part, Refusal};
 use crate::rules::{self, Observation};
 use crate::task::Task;
 
@@ -35,6 +36,34 @@ pub struct RobotReport {
     pub message: String,
 }
 
+/// What one robot's part of a joint step did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct PartOutcome {
+    pub robot: NodeId,
+    /// Why its action was not executed; `None` when it was.
+    pub infeasible: Option<Infeasible>,
+    /// What the robot said, as in [`Outcome::report`].
+    pub report: Option<RobotReport>,
+}
+
+impl PartOutcome {
+    pub fn executed(&self) -> bool {
+        self.infeasible.is_none()
+    }
+}
+
+/// What one joint step did.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct JointOutcome {
+    /// One per action of the step, in the order given.
+    pub parts: Vec<PartOutcome>,
+    /// Why the rules refused the step; a refused step executes nothing, and each
+    /// part's `infeasible` says what it means for that robot.
+    pub refused: Option<Refusal>,
+    /// Whether the goal holds after the step.
+    pub done: bool,
+}
+
 impl Outcome {
     pub fn executed(&self) -> bool {
         self.infeasible.is_none()
@@ -53,6 +82,37 @@ pub trait Environment {
     fn step(&mut self, robot: NodeId, action: &str) -> Result<Outcome>;
     /// Back to the task's initial state.
     fn reset(&mut self);
+
+    /// Checks and, when valid, executes a joint step: several robots' actions at once,
+    /// at most one each (docs/semantics.md, "Parallel steps"). A step with an action not
+    /// offered, or with two actions that interfere, is refused as a whole; that is not an
+    /// error, the outcome says why. An unknown robot is.
+    ///
+    /// Without an implementation of its own, an environment carries out a valid step's
+    /// actions one after the other with [`Environment::step`]: for a valid step every
+    /// order ends in the same state, so that is the step's meaning, if not its timing.
+    fn step_joint(&mut self, actions: &[(NodeId, &str)]) -> Result<JointOutcome> {
+        let step = match resolve_joint(self.task(), self.state(), actions)? {
+            Ok(step) => step,
+            Err(refused) => return Ok(refused_outcome(self.goal_satisfied(), actions, refused)),
+        };
+        let mut parts = Vec::with_capacity(step.len());
+        let mut done = self.goal_satisfied();
+        for &(robot, action) in actions {
+            let outcome = self.step(robot, action)?;
+            done = outcome.done;
+            parts.push(PartOutcome {
+                robot,
+                infeasible: outcome.infeasible,
+                report: outcome.report,
+            });
+        }
+        Ok(JointOutcome {
+            parts,
+            refused: None,
+            done,
+        })
+    }
 
     fn observe(&self, robot: NodeId) -> Result<Observation> {
         let r = self.task().robot_by_id(robot)?;
@@ -77,6 +137,45 @@ pub trait Environment {
     /// with the round in which it stops. The rules and physics never stop.
     fn stopped(&self) -> Option<String> {
         None
+    }
+}
+
+/// A joint step's actions resolved against the rules in state `s`, or why the step is
+/// refused; an error for an unknown robot.
+pub fn resolve_joint(
+    task: &Task,
+    s: &State,
+    actions: &[(NodeId, &str)],
+) -> Result<Result<Vec<Part>, Refusal>> {
+    let mut step = Vec::with_capacity(actions.len());
+    let mut infeasible = Vec::new();
+    for (i, &(robot, text)) in actions.iter().enumerate() {
+        let r = task.robot_by_id(robot)?;
+        match feasibility::check(task, s, r, text) {
+            Ok(a) => step.push((r, a)),
+            Err(why) => infeasible.push((i, why)),
+        }
+    }
+    if !infeasible.is_empty() {
+        return Ok(Err(Refusal::Infeasible(infeasible)));
+    }
+    Ok(joint::check(task, s, &step).map(|()| step))
+}
+
+/// The outcome of a refused joint step: nothing executed, each part told why.
+fn refused_outcome(done: bool, actions: &[(NodeId, &str)], refused: Refusal) -> JointOutcome {
+    JointOutcome {
+        parts: actions
+            .iter()
+            .enumerate()
+            .map(|(i, &(robot, _))| PartOutcome {
+                robot,
+                infeasible: Some(refused.part(i)),
+                report: None,
+            })
+            .collect(),
+        refused: Some(refused),
+        done,
     }
 }
 
@@ -116,6 +215,26 @@ impl Environment for SymbolicEnv {
             infeasible,
             done: self.goal_satisfied(),
             report: None,
+        })
+    }
+
+    fn step_joint(&mut self, actions: &[(NodeId, &str)]) -> Result<JointOutcome> {
+        let step = match resolve_joint(&self.task, &self.state, actions)? {
+            Ok(step) => step,
+            Err(refused) => return Ok(refused_outcome(self.goal_satisfied(), actions, refused)),
+        };
+        joint::apply(&self.task, &mut self.state, &step);
+        Ok(JointOutcome {
+            parts: actions
+                .iter()
+                .map(|&(robot, _)| PartOutcome {
+                    robot,
+                    infeasible: None,
+                    report: None,
+                })
+                .collect(),
+            refused: None,
+            done: self.goal_satisfied(),
         })
     }
 

@@ -78,6 +78,11 @@ pub enum Reason {
     /// The robot reports success, but the relations it observes afterwards disagree with
     /// the rules' state.
     Disagreement,
+    /// Another robot's action of the same joint step interferes with this one: the order
+    /// they ran in would matter (docs/semantics.md, "Parallel steps").
+    Interference,
+    /// The joint step this action was part of was refused for another action's sake.
+    StepRefused,
 }
 
 impl Reason {
@@ -119,11 +124,13 @@ impl Reason {
             Reason::Timeout => "timeout",
             Reason::Cancelled => "cancelled",
             Reason::Disagreement => "disagreement",
+            Reason::Interference => "interference",
+            Reason::StepRefused => "step_refused",
         }
     }
 
     /// Every reason, in declaration order.
-    pub const ALL: [Reason; 35] = [
+    pub const ALL: [Reason; 37] = [
         Reason::Unparsable,
         Reason::NoSuchNode,
         Reason::WrongRobotType,
@@ -159,6 +166,8 @@ impl Reason {
         Reason::Timeout,
         Reason::Cancelled,
         Reason::Disagreement,
+        Reason::Interference,
+        Reason::StepRefused,
     ];
 
     /// The reason whose [`Reason::name`] is `name`.
