@@ -4,6 +4,7 @@
 //! --net`, loopback up with multicast and a multicast route) and starts its processes in
 //! it (`nsenter`); tests running at once never see each other. This needs root (or the
 //! capabilities to make network namespaces); without them every test fails saying so.
+//! Hostile robots are here too: two servers for one robot, at the start or mid-episode.
 
 use std::fs::File;
 use std::io::{BufRead, BufReader};
@@ -591,6 +592,62 @@ fn a_robot_whose_server_never_starts_exits_2_naming_it() {
         "{err}"
     );
     assert!(!Path::new(&runs).exists(), "no episode, no transcript");
+}
+
+#[test]
+fn two_servers_for_one_robot_are_refused_at_the_start_naming_them() {
+    let ns = Netns::new("two-at-start");
+    let mut first = ns.spawn("serve-a", &["robots", "serve", &demo()]);
+    let mut second = ns.spawn("serve-b", &["robots", "serve", &demo()]);
+    first.wait_for("serving 3 robots", LONG);
+    second.wait_for("serving 3 robots", LONG);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let mut run = ns.spawn("run", &["run", &demo, "--robots", "ros2", "--out", &runs]);
+    assert_eq!(run.wait(LONG), 2, "{}", run.show());
+    let err = std::fs::read_to_string(&run.err).expect("stderr");
+    let servers = err
+        .split("2 ROS 2 action servers for robot_arm_6 under /coherent (")
+        .nth(1)
+        .unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(servers.matches("participant ").count(), 2, "{err}");
+    assert!(err.contains("stop all but one"), "{err}");
+    assert!(!Path::new(&runs).exists(), "no episode, no transcript");
+    for server in [&first, &second] {
+        assert!(!server.stdout().contains("accepted"), "{}", server.show());
+    }
+}
+
+#[test]
+fn a_second_server_that_takes_a_goal_mid_episode_stops_the_bridge() {
+    let ns = Netns::new("two-mid-episode");
+    let mut first = ns.spawn("serve-a", &["robots", "serve", &demo(), "--delay", "0.5"]);
+    first.wait_for("serving 3 robots", LONG);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let args = ["run", &demo, "--robots", "ros2", "--out", &runs];
+    let mut run = ns.spawn("run", &args);
+    first.wait_for("step 2 [movetowards] <door>(4) -> accepted", LONG);
+    let mut second = ns.spawn("serve-b", &["robots", "serve", &demo, "--delay", "0.5"]);
+    second.wait_for("serving 3 robots", LONG);
+    assert_eq!(
+        run.wait(LONG),
+        5,
+        "{}\n{}\n{}",
+        run.show(),
+        first.show(),
+        second.show()
+    );
+    let said = run.stdout();
+    assert!(
+        said.contains("two servers accepted the goal, participant "),
+        "{said}"
+    );
+    let t = transcript(&runs);
+    assert_eq!(t.summary["status"], "interrupted");
+    let error = t.summary["error"].as_str().expect("why");
+    assert!(error.contains("two servers accepted the goal"), "{error}");
+    assert!(second.stdout().contains("-> accepted"), "{}", second.show());
 }
 
 #[test]

@@ -14,8 +14,6 @@ use std::time::{Duration, Instant};
 use pyo3::prelude::*;
 use tokio::sync::oneshot;
 
-use crate::method::helpers;
-
 /// A job for the thread, run with the GIL held.
 type Job = Box<dyn FnOnce(Python<'_>) + Send>;
 
@@ -108,7 +106,8 @@ impl Drop for Interrupt {
                 .name("coherent-interrupt".into())
                 .spawn(move || {
                     Python::attach(|py| {
-                        let _ = helpers(py).and_then(|h| h.call_method1("interrupt", (ident,)));
+                        let helpers = py.import("coherent._methods");
+                        let _ = helpers.and_then(|h| h.call_method1("interrupt", (ident,)));
                     });
                 });
         }
