@@ -7,7 +7,8 @@ use std::hint::black_box;
 use std::sync::Arc;
 
 use coherent_agents::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, OutputMode, Query, Role, Usage,
+    Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, OutputMode, Query,
+    Role, Usage,
 };
 use coherent_agents::pefa::{self, Cancel, PefaConfig};
 use coherent_core::SymbolicEnv;
@@ -26,8 +27,9 @@ struct Instant {
 impl Backend for Instant {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "instant".into(),
-            model: "none".into(),
+            // It stands for a model's server with instant answers.
+            kind: BackendKind::OpenAi,
+            model: "instant".into(),
             base_url: None,
         }
     }

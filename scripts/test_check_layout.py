@@ -55,7 +55,7 @@ def test_a_clean_crate_passes_with_a_summary(tmp_path, capsys):
     assert code == 0
     assert out == [
         "check-layout: 2 files in 1 crates, 1 functions: "
-        "none over 900 or 150 lines, no import cycles"
+        "none over 900 or 150 lines, no import cycles, front ends through the session"
     ]
 
 
@@ -266,3 +266,24 @@ def _crate(root: Path):
 )
 def test_tokens(src, texts):
     assert [t.text for t in check_layout.lex(src)] == texts
+
+
+def test_a_front_end_that_names_a_crate_below_the_session_is_reported(tmp_path, capsys):
+    root = crate(
+        tmp_path,
+        {
+            "lib.rs": "pub mod cli;\npub mod session;\n",
+            "session.rs": "pub use coherent_core::Task;\n",
+            "cli/mod.rs": "//! Reads tasks (coherent-core, through the session).\n"
+            "use crate::session::Task;\n"
+            "// A coherent_agents::Cancel would do too.\n"
+            "pub fn f(_: coherent_core::Task, _: coherent_sim::X, _: coherent_core::Y) {}\n",
+        },
+    )
+    code, out = run(root, capsys)
+    assert code == 1
+    assert out == [
+        "src/cli/mod.rs:3: names coherent_agents, a crate below the session layer",
+        "src/cli/mod.rs:4: names coherent_core, a crate below the session layer",
+        "src/cli/mod.rs:4: names coherent_sim, a crate below the session layer",
+    ]

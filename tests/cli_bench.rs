@@ -318,3 +318,36 @@ fn a_second_bench_on_the_same_results_file_is_refused_and_touches_nothing() {
     let _ = first.wait();
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `bench --physics` carries every episode's actions out in Rapier too: the demo's
+/// optimal plan succeeds in its 22 steps, and its transcript says it ran in physics.
+#[test]
+fn bench_physics_runs_each_episode_in_rapier_too() {
+    let dir = scratch("bench-physics");
+    let out = dir.join("results.jsonl");
+    let demo = common::demo();
+    let args = [
+        "bench",
+        "--tasks",
+        common::utf8(&demo),
+        "--methods",
+        "optimal",
+        "--physics",
+        "--out",
+        common::utf8(&out),
+    ];
+    let ran = coherent(&args);
+    assert_eq!(ran.status.code(), Some(0), "{}", show(&ran));
+    let text = std::fs::read_to_string(&out).expect("results file");
+    let line: serde_json::Value = serde_json::from_str(text.trim()).expect("one line");
+    assert_eq!(
+        (line["success"].clone(), line["steps"].clone()),
+        (true.into(), 22.into())
+    );
+    let transcript = std::fs::read_to_string(line["transcript"].as_str().expect("a path"))
+        .expect("the transcript");
+    let header: serde_json::Value =
+        serde_json::from_str(transcript.lines().next().expect("a header")).expect("JSON");
+    assert_eq!(header["physics"], true);
+    assert_eq!(header["robots"], serde_json::json!({"kind": "local"}));
+}

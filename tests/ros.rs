@@ -283,6 +283,11 @@ fn the_demo_over_ros2_takes_the_same_22_steps_as_without_it_by_the_rules_and_in_
         assert_eq!(t.summary["status"], "success");
         assert_eq!(t.summary["steps"], 22);
         assert_eq!(t.header["physics"], false, "physics is the server's");
+        assert_eq!(
+            t.header["robots"],
+            serde_json::json!({"kind": "ros2", "namespace": namespace}),
+            "the transcript says where the robots were"
+        );
         for round in &t.rounds {
             let (robot, via, message) = report(round);
             assert_eq!(via, format!("ros2 {namespace}/{robot}/execute"));
@@ -558,6 +563,58 @@ fn a_robot_that_reports_failure_is_heard_by_the_assigner_in_its_next_prompt() {
             i + 2
         );
     }
+}
+
+/// `coherent bench --robots ros2` runs the demo's episode through the robots' servers:
+/// the same 22 steps to success, its transcript saying where the robots were; asked for
+/// more episodes at once, it runs one at a time and says so.
+#[test]
+fn a_benchmark_over_ros2_runs_the_demo_through_the_robots_servers() {
+    let ns = Netns::new("bench");
+    let demo = demo();
+    let mut server = ns.spawn(
+        "serve",
+        &["robots", "serve", &demo, "--namespace", "/bench"],
+    );
+    server.wait_for("serving 3 robots", LONG);
+    let results = ns.path("results.jsonl");
+    let args = [
+        "bench",
+        "--tasks",
+        &demo,
+        "--methods",
+        "pefa",
+        "--robots",
+        "ros2",
+        "--namespace",
+        "/bench",
+        "--concurrency",
+        "4",
+        "--out",
+        &results,
+    ];
+    let mut run = ns.spawn("bench", &args);
+    assert_eq!(run.wait(LONG), 0, "{}\n{}", run.show(), server.show());
+    let err = std::fs::read_to_string(&run.err).expect("stderr");
+    assert!(err.contains("one episode at a time"), "{err}");
+    let text = std::fs::read_to_string(&results).expect("a results file");
+    let lines: Vec<Value> = text
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON"))
+        .collect();
+    assert_eq!(lines.len(), 1, "{text}");
+    assert_eq!(lines[0]["status"], "success", "{text}");
+    assert_eq!(lines[0]["steps"], 22, "{text}");
+    let t = transcript(&ns.path("results.transcripts/seed0"));
+    assert_eq!(
+        t.header["robots"],
+        serde_json::json!({"kind": "ros2", "namespace": "/bench"})
+    );
+    for round in &t.rounds {
+        let (robot, via, _) = report(round);
+        assert_eq!(via, format!("ros2 /bench/{robot}/execute"));
+    }
+    assert_eq!(server.stdout().matches("-> succeeded").count(), 22);
 }
 
 #[test]

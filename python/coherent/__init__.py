@@ -26,10 +26,10 @@ matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasi
 ``pip install 'coherent[gym]'``.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import Any
+# The imports the package needs for itself are bound to underscored names, so that the
+# namespace holds the API (`__all__`), the submodules and nothing else.
+import importlib as _importlib
+from typing import Any as _Any
 
 from ._coherent import (
     DEFAULT_MAX_STATES,
@@ -39,6 +39,7 @@ from ._coherent import (
     ArgumentError,
     BackendError,
     CoherentError,
+    DataFileError,
     Decision,
     Env,
     Episode,
@@ -47,6 +48,7 @@ from ._coherent import (
     PromptError,
     Reply,
     ReplayMismatchError,
+    RobotError,
     Task,
     TaskFormatError,
     UnknownRobotError,
@@ -77,6 +79,7 @@ __all__ = [
     "ArgumentError",
     "BackendError",
     "CoherentError",
+    "DataFileError",
     "Decision",
     "Env",
     "Episode",
@@ -87,6 +90,7 @@ __all__ = [
     "Reply",
     "ReplayMismatchError",
     "Report",
+    "RobotError",
     "Task",
     "TaskFormatError",
     "UnknownRobotError",
@@ -110,12 +114,19 @@ __all__ = [
     "View",
 ]
 
-# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the
-# extra `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
-_SUBMODULES = ("analysis", "benchmark", "gym", "plot")
+# The public submodules. `analysis` and `executors` are imported above; the others load on
+# first use: `coherent.plot` imports matplotlib (slow to import; the extra
+# `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
+_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "plot")
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _Any:
     if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    # What `dir(coherent)` and completion show: the API and the submodules, not the
+    # private modules (`_coherent`, `_methods`, ...) that importing the package loads.
+    return sorted([*__all__, *_SUBMODULES])

@@ -140,6 +140,23 @@ class MethodError(CoherentError):
     episode: Episode
     """The episode up to there (status ``"error"``; the transcript has the traceback)."""
 
+class RobotError(CoherentError):
+    """Robots over ROS 2 could not be reached (no action server for some of them within
+    the wait, DDS could not start), or one stopped answering during an episode."""
+
+    episode: Episode | None
+    """The episode up to there (status ``"interrupted"``); None when no episode started."""
+
+class DataFileError(CoherentError, ValueError):
+    """A file of coherent's own formats other than tasks and prompt templates (a
+    transcript, a results file, a price table, a subset list) that cannot be read or
+    written, or does not follow its format."""
+
+    file: str
+    """The file the error is about."""
+    line: int | None
+    """The line the fault is on (1-based); None when it is not on one line."""
+
 class Task:
     """A task: the scene graph at the start, the robots, the goal and the ground truth.
 
@@ -506,6 +523,10 @@ def run(
     max_states: int = ...,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
+    robots: Literal["local", "ros2"] = "local",
+    namespace: str | None = None,
+    robot_timeout: float = 10.0,
+    server_wait: float = 10.0,
     step_timeout: float | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
@@ -515,11 +536,14 @@ def run(
     one). Without ``llm`` the built-in planner plays the model's roles, or with
     ``sim_errors`` (``"all=0.1"``, or rates by kind) the simulated backend. ``prompts``
     replaces built-in templates (a bad one raises :class:`PromptError` before anything
-    runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``). Raises
-    :class:`BackendError` when the server fails for good, :class:`MethodError` when the
-    method raises or one of its steps (``M(task)`` and ``act``) takes longer than
-    ``step_timeout`` seconds; Ctrl-C stops the episode, whatever ``act`` is doing, and
-    raises ``KeyboardInterrupt``."""
+    runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``, the same as
+    :func:`load_episode` gives for the transcript at the same prices). With
+    ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
+    actions out, as for :class:`Env`. Raises :class:`BackendError` when the server fails
+    for good, :class:`MethodError` when the method raises or one of its steps (``M(task)``
+    and ``act``) takes longer than ``step_timeout`` seconds, :class:`RobotError` when a
+    robot stops answering; Ctrl-C stops the episode, whatever ``act`` is doing, and raises
+    ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -550,6 +574,11 @@ def run_bench(
     progress: bool = False,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
+    physics: bool = False,
+    robots: Literal["local", "ros2"] = "local",
+    namespace: str | None = None,
+    robot_timeout: float = 10.0,
+    server_wait: float = 10.0,
     step_timeout: float | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
@@ -598,6 +627,7 @@ class _BenchWorker:
         history: int = 5,
         max_states: int = ...,
         max_steps: int | None = None,
+        physics: bool = False,
         out: _PathLike,
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],

@@ -95,6 +95,11 @@ def bench(
     prompts: PathLike | Mapping[str, str] | None = None,
     prices: PathLike | Mapping[str, Mapping[str, Any]] | None = None,
     executor: Literal["local", "ray"] | RayExecutor = "local",
+    physics: bool = False,
+    robots: Literal["local", "ros2"] = "local",
+    namespace: str | None = None,
+    robot_timeout: float = 10.0,
+    server_wait: float = 10.0,
     step_timeout: float | None = None,
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
@@ -128,6 +133,14 @@ def bench(
     ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
     ``df.attrs["malformed"]``.
 
+    ``physics=True`` carries every action out in Rapier too (a physical failure is an
+    infeasible step whose message has the numbers). ``robots="ros2"`` sends the actions
+    to one ROS 2 action server per robot under ``namespace`` (``coherent robots serve``,
+    or real robots; ``robot_timeout`` and ``server_wait`` as for :class:`Env`): the robots
+    of a namespace carry out one episode at a time, so the episodes run one by one (a
+    ``UserWarning`` says so when ``concurrency`` asks for more), and from this machine
+    only (``executor="local"``).
+
     ``executor``: ``"local"`` runs the episodes here, ``concurrency`` at once;
     ``"ray"`` (a local Ray cluster, or the one this process joined) or a
     :class:`~coherent.executors.RayExecutor` runs them on a Ray cluster, ``concurrency``
@@ -155,10 +168,22 @@ def bench(
         "progress": progress,
         "prompts": prompts,
         "prices": prices,
+        "physics": physics,
         "step_timeout": step_timeout,
     }
+    robot_settings = {
+        "robots": robots,
+        "namespace": namespace,
+        "robot_timeout": robot_timeout,
+        "server_wait": server_wait,
+    }
     if runner is None:
-        outcome = _coherent.run_bench(chosen, list(methods), **settings)
+        outcome = _coherent.run_bench(chosen, list(methods), **settings, **robot_settings)
+    elif robots != "local":
+        raise _coherent.ArgumentError(
+            f"robots={robots!r}: robots over ROS 2 carry out one episode at a time from this "
+            'machine: use executor="local"'
+        )
     else:
         outcome = runner.run(chosen, list(methods), **settings)
     frame = _frame(pandas, _coherent.read_results(out))

@@ -82,6 +82,7 @@ class RayExecutor:
         progress: bool,
         prompts: str | os.PathLike[str] | Mapping[str, str] | None,
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
+        physics: bool = False,
         step_timeout: float | None = None,
     ) -> dict[str, Any]:
         """Runs the benchmark as :func:`coherent.bench` describes; returns its outcome,
@@ -122,6 +123,7 @@ class RayExecutor:
             "history": history,
             "max_states": max_states,
             "max_steps": max_steps,
+            "physics": physics,
             "step_timeout": step_timeout,
             "out": out,
             # A folder or a price file of this machine's, as data: the workers' machines

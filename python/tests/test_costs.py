@@ -40,7 +40,9 @@ class _Stub(BaseHTTPRequestHandler):
         if schema["name"] == "proposal":
             content = {"reasoning": "go", "robot": props["robot"]["enum"][0], "subtask": "the first thing"}
         else:
-            content = {"action": props["action"]["enum"][0], "subtask_complete": False, "note": ""}
+            # A dialogue's speaker may have no action of its own yet: an empty list.
+            actions = props["action"]["enum"]
+            content = {"action": actions[0] if actions else "none", "subtask_complete": False, "note": ""}
         body = json.dumps(
             {
                 "choices": [{"message": {"role": "assistant", "content": json.dumps(content)}, "finish_reason": "stop"}],
@@ -151,6 +153,77 @@ def test_an_unknown_placeholder_raises_prompt_error_before_any_call(
     assert seen == [], "no model call was made"
 
 
+class _AsksTheModel:
+    """A method written in Python that asks the model once a step through ``coherent.LLM``
+    (priced by the built-in table: its model is ``gpt-4o-mini``), then takes the first
+    action of the first robot that has one."""
+
+    llm: coherent.LLM
+
+    def __init__(self, task: coherent.Task) -> None:
+        pass
+
+    def act(self, view: coherent.View) -> tuple[int, str]:
+        schema = {"type": "object", "properties": {"action": {"type": "string", "enum": ["go"]}}}
+        self.llm.chat("Which robot?", schema, max_tokens=10)
+        return _first_action(view)
+
+
+class _AsksNothing:
+    """A method written in Python that takes the first action and asks no model."""
+
+    def __init__(self, task: coherent.Task) -> None:
+        pass
+
+    def act(self, view: coherent.View) -> tuple[int, str]:
+        return _first_action(view)
+
+
+class _ReportsItsOwnCalls:
+    """A method written in Python that reports calls of a client of its own, whose model
+    no table prices."""
+
+    def __init__(self, task: coherent.Task) -> None:
+        pass
+
+    def act(self, view: coherent.View) -> coherent.Decision:
+        robot, action = _first_action(view)
+        return coherent.Decision(robot, action, prompt_tokens=100, completion_tokens=10, calls=1)
+
+
+def _first_action(view: coherent.View) -> tuple[int, str]:
+    return next((r, a[0]) for r, a in view.actions.items() if a)
+
+
+@pytest.mark.parametrize("method", [*coherent.METHODS, "asks-the-model", "asks-nothing", "reports-its-own-calls"])
+def test_an_episode_costs_what_its_transcript_costs(
+    task0: coherent.Task, stub: tuple[coherent.LLM, list[dict[str, Any]]], method: str, tmp_path: Path
+) -> None:
+    # One rule prices an episode as it runs and its transcript read back: the model it
+    # used (the backend's, or the client a method written in Python called through) at
+    # the built-in prices, and 0 for one that made no model call.
+    llm = coherent.LLM(base_url=stub[0].base_url, model="gpt-4o-mini")
+    python_methods = {"asks-the-model": _AsksTheModel, "asks-nothing": _AsksNothing, "reports-its-own-calls": _ReportsItsOwnCalls}
+    if method in python_methods:
+        cls = type(method.replace("-", "_"), (python_methods[method],), {"llm": llm, "name": method})
+        episode = coherent.run(task0, cls, max_steps=2, out=tmp_path)
+    else:
+        episode = coherent.run(task0, method, llm=llm, max_steps=2, out=tmp_path)
+    loaded = coherent.load_episode(episode.path)
+    assert episode.cost_usd == loaded.cost_usd, method
+    expected = {
+        "asks-the-model": "priced",
+        "asks-nothing": 0.0,
+        "reports-its-own-calls": None,
+        "mcts": 0.0,
+        "optimal": 0.0,
+    }.get(method, "priced")
+    if expected == "priced":
+        assert episode.cost_usd is not None and episode.cost_usd > 0, method
+    else:
+        assert episode.cost_usd == expected, method
+
+
 def test_bench_prices_lines_and_the_report_has_cost_per_task_and_per_success(
     env0_tasks: list[coherent.Task], stub: tuple[coherent.LLM, list[dict[str, Any]]], tmp_path: Path
 ) -> None:
@@ -193,7 +266,8 @@ def test_bench_prices_lines_and_the_report_has_cost_per_task_and_per_success(
         coherent.bench(tasks[:1], ["pefa"], out=tmp_path / "x.jsonl", prices={"m": {"input": 1, "outptu": 2}})
 
 
-def _line(method: str, model: str, task_id: int, success: bool, cost: float | None) -> dict[str, Any]:
+def _line(*, method: str, model: str, task_id: int, success: bool, cost: float | None) -> dict[str, Any]:
+    """A results line written by hand: env0, mono, seed 0, 5 steps, 10 calls."""
     return {
         "method": method,
         "scene": "env0",
@@ -219,18 +293,18 @@ def _line(method: str, model: str, task_id: int, success: bool, cost: float | No
 def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path) -> None:
     lines = [
         # pefa on a cheap model: SR 0.5 at 0.02 per task; on a dear one: SR 1.0 at 0.3.
-        _line("pefa", "cheap", 0, True, 0.01),
-        _line("pefa", "cheap", 1, False, 0.03),
-        _line("pefa", "dear", 0, True, 0.2),
-        _line("pefa", "dear", 1, True, 0.4),
+        _line(method="pefa", model="cheap", task_id=0, success=True, cost=0.01),
+        _line(method="pefa", model="cheap", task_id=1, success=False, cost=0.03),
+        _line(method="pefa", model="dear", task_id=0, success=True, cost=0.2),
+        _line(method="pefa", model="dear", task_id=1, success=True, cost=0.4),
         # cmrs on the dear model: SR 0.5 at 0.1, beaten by pefa on the cheap one.
-        _line("cmrs", "dear", 0, True, 0.1),
-        _line("cmrs", "dear", 1, False, 0.1),
+        _line(method="cmrs", model="dear", task_id=0, success=True, cost=0.1),
+        _line(method="cmrs", model="dear", task_id=1, success=False, cost=0.1),
         # The optimal plan asks no model: one point whatever the backend, at no cost.
-        _line("optimal", "dear", 0, False, 0.0),
-        _line("optimal", "cheap", 1, False, 0.0),
+        _line(method="optimal", model="dear", task_id=0, success=False, cost=0.0),
+        _line(method="optimal", model="cheap", task_id=1, success=False, cost=0.0),
         # A model without a price is left out and named.
-        _line("dmrs-1d", "unpriced", 0, True, None),
+        _line(method="dmrs-1d", model="unpriced", task_id=0, success=True, cost=None),
     ]
     frame = pd.DataFrame(
         [
@@ -258,4 +332,4 @@ def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path)
     ax.figure.savefig(tmp_path / "pareto.png")
     assert (tmp_path / "pareto.png").stat().st_size > 5_000
     with pytest.raises(ValueError, match="prices="):
-        plot.pareto([_line("pefa", "unpriced", 0, True, None)])
+        plot.pareto([_line(method="pefa", model="unpriced", task_id=0, success=True, cost=None)])

@@ -195,8 +195,8 @@ import coherent
 task = coherent.load_tasks(sys.argv[1])[0]
 try:
     coherent.Env(task, robots="ros2", namespace="/nobody", server_wait=0.5)
-except coherent.CoherentError as e:
-    print(e)
+except coherent.RobotError as e:
+    print(e, e.episode)
 """
 
 
@@ -205,6 +205,73 @@ def test_env_over_ros2_without_servers_raises_naming_the_robots(netns: Netns) ->
     out, _ = run.communicate(timeout=LONG)
     assert run.returncode == 0, out
     assert "no ROS 2 action server for robot_arm_6, quadrotor_11, robot_dog_13 under /nobody" in out
+    assert out.strip().endswith("None"), "no episode started"
+
+
+RUN_ONE = """
+import json, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+episode = coherent.run(task, robots="ros2", namespace=sys.argv[2], out=sys.argv[3])
+print(json.dumps({"status": episode.status, "steps": episode.steps, "robots": episode.header["robots"]}))
+"""
+
+BENCH_ONE = """
+import json, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+frame = coherent.bench([task], ["optimal"], robots="ros2", namespace=sys.argv[2], concurrency=4, out=sys.argv[3])
+print(json.dumps(frame[["status", "steps"]].to_dict("records")))
+"""
+
+
+def test_run_and_bench_over_ros2_carry_the_demo_out_through_the_robots_servers(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    # The robots' world is theirs: each episode gets servers of its own, started afresh.
+    server = serve(netns, coherent_exe, "--namespace", "/py_run")
+    run = netns.popen(
+        [sys.executable, "-c", RUN_ONE, str(DEMO), "/py_run", str(tmp_path)], stdout=subprocess.PIPE
+    )
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    result = json.loads(out.splitlines()[-1])
+    assert (result["status"], result["steps"]) == ("success", 22)
+    assert result["robots"] == {"kind": "ros2", "namespace": "/py_run"}
+    server.kill()
+    server.communicate(timeout=LONG)
+    server = serve(netns, coherent_exe, "--namespace", "/py_bench")
+    bench = netns.popen(
+        [sys.executable, "-c", BENCH_ONE, str(DEMO), "/py_bench", str(tmp_path / "r.jsonl")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    out, err = bench.communicate(timeout=LONG)
+    assert bench.returncode == 0, out + err
+    assert json.loads(out.splitlines()[-1]) == [{"status": "success", "steps": 22}]
+    assert "one episode at a time" in err, "concurrency 4 asked for, one used"
+
+
+SILENT = """
+import sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+try:
+    coherent.run(task, robots="ros2", namespace=sys.argv[2], robot_timeout=1, out=sys.argv[3])
+except coherent.RobotError as e:
+    print(e.episode.status, e.episode.steps)
+"""
+
+
+def test_a_robot_that_stops_answering_raises_robot_error_with_the_episode(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    serve(netns, coherent_exe, "--namespace", "/py_silent", "--silent", "robot_dog_13")
+    run = netns.popen([sys.executable, "-c", SILENT, str(DEMO), "/py_silent", str(tmp_path)], stdout=subprocess.PIPE)
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    status, steps = out.split()
+    assert status == "interrupted" and int(steps) >= 1, out
 
 
 def test_env_robots_and_namespace_are_checked() -> None:

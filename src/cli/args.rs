@@ -1,19 +1,22 @@
 //! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
-//! that the same setting has the same flag; resolving them with the environment is the
-//! session layer's, [`crate::session::endpoint`]), `--prompts` and `--prices` (read by
-//! [`crate::session::prompts`]), `--sim-errors`, the method names (and `MODULE:CLASS`, a
-//! method written in Python, which the Python package loads).
+//! that the same setting has the same flag, its defaults those of the endpoint settings,
+//! [`OpenAiConfig::default`]), `--prompts` and `--prices`, the robots' flags
+//! (`--robots ros2` and its namespace and waits), `--sim-errors`, the method names (and
+//! `MODULE:CLASS`, a method written in Python, which the Python package loads).
 
 use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
-use coherent_agents::episode::{External, Method, MethodSpec};
-use coherent_agents::{ApiKey, ErrorRates, OpenAiConfig, OutputMode, PriceTable, Prompts};
-use coherent_core::text::{number, shown};
 
-use crate::session::endpoint::{Endpoint, Patience};
-use crate::session::prompts;
+use crate::session::Error;
+use crate::session::backend::EndpointSource;
+use crate::session::engine::{
+    ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, External, Method, MethodSpec, OpenAiConfig,
+    OutputMode, number,
+};
+use crate::session::prompts::{PriceSource, PromptSource};
+use crate::session::robots::Robots;
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -49,7 +52,7 @@ pub(crate) struct LlmArgs {
     /// Model name [env: COHERENT_MODEL].
     #[arg(long)]
     model: Option<String>,
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = OpenAiConfig::default().temperature)]
     pub temperature: f32,
     /// The model's sampling seed (sent to the server); for `run`, also the seed of the
     /// simulated backend's mistakes, of MCTS and of DMRS's speaking order.
@@ -59,45 +62,53 @@ pub(crate) struct LlmArgs {
     #[arg(long, value_enum, default_value_t = AnswerFormat::JsonSchema)]
     pub answer_format: AnswerFormat,
     /// Seconds to wait for a connection.
-    #[arg(long, default_value_t = Patience::default().connect_timeout)]
+    #[arg(long, default_value_t = OpenAiConfig::default().connect_timeout.as_secs_f64())]
     connect_timeout: f64,
     /// Seconds of silence allowed while reading a response.
-    #[arg(long, default_value_t = Patience::default().read_timeout)]
+    #[arg(long, default_value_t = OpenAiConfig::default().read_timeout.as_secs_f64())]
     read_timeout: f64,
     /// Seconds one request may take in all.
-    #[arg(long, default_value_t = Patience::default().timeout)]
+    #[arg(long, default_value_t = OpenAiConfig::default().total_timeout.as_secs_f64())]
     timeout: f64,
     /// Retries of a request after 408, 429, 5xx, connection errors and timeouts.
-    #[arg(long, default_value_t = Patience::default().max_retries)]
+    #[arg(long, default_value_t = OpenAiConfig::default().backoff.max_retries)]
     max_retries: u32,
     /// Requests in flight at once (across all episodes of a benchmark).
-    #[arg(long, default_value_t = 4)]
+    #[arg(long, default_value_t = OpenAiConfig::default().concurrency)]
     pub requests: usize,
     /// The most bytes a response body may have; a longer one is a failed call.
-    #[arg(long, default_value_t = OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES)]
+    #[arg(long, default_value_t = OpenAiConfig::default().max_response_bytes)]
     max_response_bytes: usize,
 }
 
 impl LlmArgs {
-    /// The client's settings, when the flags or the environment configure an endpoint.
-    pub fn config(&self) -> Result<Option<OpenAiConfig>, String> {
-        Endpoint {
+    /// The endpoint the flags give, with what they leave unset from the environment.
+    pub fn endpoint(&self) -> Result<EndpointSource, Error> {
+        let seconds = |s: f64, what: &str| {
+            Duration::try_from_secs_f64(s).map_err(|_| {
+                Error::Invalid(format!(
+                    "--{what} {}: not a number of seconds from 0 to 1.8e19",
+                    number(s)
+                ))
+            })
+        };
+        Ok(EndpointSource::WithEnvironment(OpenAiConfig {
             base_urls: self.base_url.clone(),
             api_key: self.api_key.clone().map(ApiKey::new),
-            model: self.model.clone(),
+            model: self.model.clone().unwrap_or_default(),
             temperature: self.temperature,
             seed: self.seed,
-            format: self.answer_format.into(),
-            patience: Patience {
-                connect_timeout: self.connect_timeout,
-                read_timeout: self.read_timeout,
-                timeout: self.timeout,
+            connect_timeout: seconds(self.connect_timeout, "connect-timeout")?,
+            read_timeout: seconds(self.read_timeout, "read-timeout")?,
+            total_timeout: seconds(self.timeout, "timeout")?,
+            backoff: Backoff {
                 max_retries: self.max_retries,
+                ..Backoff::default()
             },
-            requests: self.requests,
+            concurrency: self.requests.max(1),
+            output: self.answer_format.into(),
             max_response_bytes: self.max_response_bytes,
-        }
-        .config()
+        }))
     }
 }
 
@@ -115,42 +126,76 @@ pub(crate) struct PromptPriceArgs {
 }
 
 impl PromptPriceArgs {
-    /// The prompt set of `--prompts`; an error names the file, the line and the
-    /// placeholder.
-    /// A blank template is a warning on stderr.
-    pub fn prompt_set(&self) -> Result<Prompts, String> {
-        let set = prompts::prompt_set(self.prompts.as_deref()).map_err(|e| e.to_string())?;
-        if let Some(dir) = &self.prompts {
-            for warning in prompts::blank_warnings(dir, &set) {
-                eprintln!("warning: {}", shown(&warning));
-            }
-        }
-        Ok(set)
+    /// The prompt set of `--prompts`.
+    pub fn prompt_source(&self) -> PromptSource {
+        self.prompts
+            .clone()
+            .map_or(PromptSource::Builtin, PromptSource::Folder)
     }
 
     /// The built-in price table with the entries of `--prices`.
-    pub fn price_table(&self) -> Result<PriceTable, String> {
-        prompts::price_table(self.prices.as_deref())
+    pub fn price_source(&self) -> PriceSource {
+        self.prices
+            .clone()
+            .map_or(PriceSource::Builtin, PriceSource::File)
     }
 
     /// Refuses `--prompts` for a replay, which renders the prompt set it recorded.
-    pub fn no_prompts_for_a_replay(&self, flag: &str) -> Result<(), String> {
+    pub fn no_prompts_for_a_replay(&self, flag: &str) -> Result<(), Error> {
         match &self.prompts {
-            Some(_) => Err(format!(
+            Some(_) => Err(Error::Invalid(format!(
                 "--prompts and {flag} do not go together: a replay renders the prompt set \
                  its transcript recorded"
-            )),
+            ))),
             None => Ok(()),
+        }
+    }
+}
+
+/// Who carries the actions out.
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum RobotsKind {
+    /// This process: the rules, or Rapier too with --physics.
+    Local,
+    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
+    Ros2,
+}
+
+/// The flags of `coherent run` and `coherent bench` for robots over ROS 2.
+#[derive(Args)]
+pub(crate) struct RobotFlags {
+    /// Who carries the actions out: `local` (this process), or `ros2` (one ROS 2 action
+    /// server per robot at /<namespace>/<robot>/execute).
+    #[arg(long, value_enum, default_value = "local")]
+    robots: RobotsKind,
+    /// With --robots ros2: the namespace of the robots' actions.
+    #[arg(long, default_value = DEFAULT_NAMESPACE)]
+    namespace: String,
+    /// With --robots ros2: seconds a robot may stay silent during a step (no answer, no
+    /// feedback, no result) before the step fails and the episode stops (exit 5).
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    robot_timeout: f64,
+    /// With --robots ros2: seconds to wait for every robot's server before the first
+    /// step; exit 2 naming the robots without one.
+    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
+    server_wait: f64,
+}
+
+impl RobotFlags {
+    pub(crate) fn robots(&self) -> Result<Robots, Error> {
+        match self.robots {
+            RobotsKind::Local => Ok(Robots::Local),
+            RobotsKind::Ros2 => Robots::ros2(&self.namespace, self.robot_timeout, self.server_wait),
         }
     }
 }
 
 /// The simulated backend's error rates of a `--sim-errors` flag, if given; a bad value is
 /// an error naming the flag.
-pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, String> {
+pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, Error> {
     flag.map(ErrorRates::parse)
         .transpose()
-        .map_err(|e| format!("--sim-errors: {e}"))
+        .map_err(|e| Error::Invalid(format!("--sim-errors: {e}")))
 }
 
 /// A value of `--method` and `--methods`: a built-in method's name, or `MODULE:CLASS`,
@@ -168,7 +213,7 @@ pub(crate) fn method_name(value: &str) -> Result<String, String> {
 
 /// Loads a method written in Python from `MODULE:CLASS` (an importable module or a `.py`
 /// file, and the class or callable in it); the Python package's console script has one.
-pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, String> + Send + Sync + 'a;
+pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, Error> + Send + Sync + 'a;
 
 /// The method a value of [`method_name`] names: a built-in one, or one that `load` loads,
 /// each of its steps limited to `step_timeout` seconds (`--step-timeout`).
@@ -176,7 +221,7 @@ pub(crate) fn method_spec(
     value: &str,
     load: Option<&LoadMethod<'_>>,
     step_timeout: Option<f64>,
-) -> Result<MethodSpec, String> {
+) -> Result<MethodSpec, Error> {
     if let Some(method) = Method::from_name(value) {
         return Ok(method.into());
     }
@@ -186,19 +231,19 @@ pub(crate) fn method_spec(
                 .ok()
                 .filter(|d| !d.is_zero())
                 .ok_or_else(|| {
-                    format!(
+                    Error::Invalid(format!(
                         "--step-timeout must be seconds above 0 and at most 1.8e19, not {}",
                         number(s)
-                    )
+                    ))
                 })
         })
         .transpose()?;
     match load {
         Some(load) => load(value).map(|m| MethodSpec::External(m.with_step_timeout(limit))),
-        None => Err(format!(
+        None => Err(Error::Invalid(format!(
             "method {value}: a method written in Python needs the Python package: run the \
              `coherent` command that `pip install .` installs (or `python -m coherent._cli`), \
              not the plain binary"
-        )),
+        ))),
     }
 }

@@ -5,20 +5,23 @@ use std::io::{IsTerminal, Write};
 use std::path::PathBuf;
 
 use clap::{Args, ValueEnum};
-use coherent_agents::Cancel;
-use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, EpisodeSettings, Event, Progress, ReadLimits, Subset,
-};
-use coherent_agents::transcript;
-use coherent_core::files::MIB;
-use coherent_core::planner::Limits;
-use coherent_core::text::{shown, shown_lines};
 
-use super::args::{LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors};
+use super::args::{
+    LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec, sim_errors,
+};
 use super::signals::Stop;
-use crate::session::backend::{BackendKind as Kind, BackendProblem, BackendRequest};
-use crate::session::bench::{self as session_bench, TableFormat as Tables};
-use crate::session::{self, prompts};
+use super::status;
+use crate::session::backend::{BackendName, BackendRequest};
+use crate::session::bench::{
+    self as session_bench, BenchConfig, EpisodesRequest, TableFormat as Tables,
+};
+use crate::session::engine::{
+    Cancel, DEFAULT_MAX_RESULTS_BYTES, DEFAULT_MAX_TRANSCRIPT_BYTES, Event, HISTORY_WINDOW, Limits,
+    MIB, Progress, ReadLimits, ResultLine, Subset, read_results_within, shown, shown_lines,
+    transcripts_dir,
+};
+use crate::session::error::BackendProblem;
+use crate::session::{self, Error, prompts};
 
 #[derive(Args)]
 pub struct BenchArgs {
@@ -36,20 +39,27 @@ pub struct BenchArgs {
     /// file, and its class; from the Python package's `coherent` only).
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,
+    /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
+    /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
+    /// `replay`: the transcripts of --replay-from.
+    #[arg(long, value_enum, default_value_t = BackendFlag::Auto)]
+    backend: BackendFlag,
+    /// With `--backend replay`: an earlier results file, whose episodes are replayed from
+    /// their transcripts (no network) and checked against them.
+    #[arg(long)]
+    replay_from: Option<PathBuf>,
+    /// The most a results file may hold (--out when resuming, --report, --replay-from),
+    /// in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_RESULTS_BYTES / MIB)]
+    max_results_mib: u64,
+    /// With `--backend replay`: the most each transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
     /// The longest one step of a method written in Python may take, in seconds (its
     /// act, and making it at the first step); a longer step ends that episode as the
     /// method's error, and the run goes on.
     #[arg(long, value_name = "SECONDS")]
     step_timeout: Option<f64>,
-    /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
-    /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
-    /// `replay`: the transcripts of --replay-from.
-    #[arg(long, value_enum, default_value_t = BackendKind::Auto)]
-    backend: BackendKind,
-    /// With `--backend replay`: an earlier results file, whose episodes are replayed from
-    /// their transcripts (no network) and checked against them.
-    #[arg(long)]
-    replay_from: Option<PathBuf>,
     /// The simulated backend's error rates: `hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`
     /// or `all=0.1`; kinds not named are 0.
     #[arg(long)]
@@ -63,13 +73,6 @@ pub struct BenchArgs {
     /// Results file (JSON lines), appended to; re-running skips finished episodes.
     #[arg(long, required_unless_present = "report")]
     out: Option<PathBuf>,
-    /// The most a results file may hold (--out when resuming, --report, --replay-from),
-    /// in MiB.
-    #[arg(long, value_name = "MIB", default_value_t = bench::DEFAULT_MAX_RESULTS_BYTES / MIB)]
-    max_results_mib: u64,
-    /// With `--backend replay`: the most each transcript may hold, in MiB.
-    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
-    max_transcript_mib: u64,
     /// Print the tables of this results file and run nothing (with --prices, its lines'
     /// tokens priced anew).
     #[arg(long, conflicts_with_all = ["tasks", "methods", "out", "prompts"])]
@@ -78,7 +81,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = TableFormat::Markdown)]
     format: TableFormat,
     /// Rounds of history the task assigner sees (executed actions for the baselines).
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = HISTORY_WINDOW)]
     history: usize,
     /// Most states one search of the built-in planner may visit.
     #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
@@ -87,6 +90,12 @@ pub struct BenchArgs {
     /// optimum without one).
     #[arg(long)]
     max_steps: Option<u32>,
+    /// Execute every action in Rapier too; a physical failure is an infeasible step
+    /// whose message has the numbers.
+    #[arg(long)]
+    physics: bool,
+    #[command(flatten)]
+    robots: RobotFlags,
     #[command(flatten)]
     llm: LlmArgs,
     #[command(flatten)]
@@ -97,7 +106,7 @@ pub struct BenchArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum BackendKind {
+enum BackendFlag {
     Auto,
     Builtin,
     Simulated,
@@ -122,9 +131,9 @@ impl BenchArgs {
     }
 }
 
-pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
+pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, Error> {
     if let Some(path) = &args.report {
-        let file = bench::read_results_within(path, args.limits().results_bytes)?;
+        let file = read_results_within(path, args.limits().results_bytes)?;
         if file.truncated_bytes > 0 {
             eprintln!(
                 "note: {}: the last line is cut off ({} bytes) and is ignored",
@@ -134,11 +143,11 @@ pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, S
         }
         let mut lines = file.lines;
         if args.inputs.prices.is_some() {
-            let prices = args.inputs.price_table()?;
+            let prices = args.inputs.price_source().read()?;
             lines = lines.into_iter().map(|l| l.priced(&prices)).collect();
         }
         print_tables(&lines, args.format);
-        return Ok(0);
+        return Ok(status::OK);
     }
     if let Some(seed) = args.old_llm_seed {
         args.llm.seed = Some(seed);
@@ -146,7 +155,7 @@ pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, S
     session::block_on(run_async(args, load))?
 }
 
-fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
+fn print_tables(lines: &[ResultLine], format: TableFormat) {
     let format = match format {
         TableFormat::Markdown => Tables::Markdown,
         TableFormat::Csv => Tables::Csv,
@@ -159,25 +168,52 @@ fn print_tables(lines: &[bench::ResultLine], format: TableFormat) {
     let _ = std::io::stdout().write_all(text.as_bytes());
 }
 
-async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
-    let (Some(tasks_path), Some(out)) = (&args.tasks, &args.out) else {
-        return Err("--tasks, --methods and --out are needed to run".into());
-    };
+/// The episodes' settings the flags ask for.
+fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesRequest, Error> {
     let methods = args
         .methods
         .iter()
         .map(|m| method_spec(m, load, args.step_timeout))
         .collect::<Result<Vec<_>, _>>()?;
     if args.seeds == 0 {
-        return Err("--seeds must be at least 1".into());
+        return Err(Error::Invalid("--seeds must be at least 1".into()));
     }
     // Before anything else: a bad template must cost no model call.
-    if args.backend == BackendKind::Replay {
+    if args.backend == BackendFlag::Replay {
         args.inputs.no_prompts_for_a_replay("--backend replay")?;
     }
-    let prompt_set = args.inputs.prompt_set()?;
-    let prices = args.inputs.price_table()?;
-    let backend = backend(&args)?;
+    Ok(EpisodesRequest {
+        backend: BackendRequest {
+            name: match args.backend {
+                BackendFlag::Auto => BackendName::Auto,
+                BackendFlag::Builtin => BackendName::Builtin,
+                BackendFlag::Simulated => BackendName::Simulated,
+                BackendFlag::Openai => BackendName::OpenAi,
+                BackendFlag::Replay => BackendName::Replay,
+            },
+            endpoint: args.llm.endpoint()?,
+            sim_errors: sim_errors(args.sim_errors.as_deref())?,
+            replay_from: args.replay_from.clone(),
+            limits: args.limits(),
+        },
+        prompts: args.inputs.prompt_source(),
+        prices: args.inputs.price_source(),
+        history: args.history,
+        max_states: args.max_states,
+        max_steps: args.max_steps,
+        physics: args.physics,
+        robots: args.robots.robots()?,
+        ..EpisodesRequest::new(methods)
+    })
+}
+
+async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, Error> {
+    let (Some(tasks_path), Some(out)) = (&args.tasks, &args.out) else {
+        return Err(Error::Invalid(
+            "--tasks, --methods and --out are needed to run".into(),
+        ));
+    };
+    let settings = episodes(&args, load)?.prepare().map_err(worded)?;
     let subset = session_bench::subset(&args.subset)?;
     let chosen = session_bench::choose(tasks_path, &subset)?;
     for e in &chosen.malformed {
@@ -214,20 +250,10 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         );
     }
     if selection.tasks.is_empty() {
-        return Err("no tasks to run".into());
+        return Err(Error::Invalid("no tasks to run".into()));
     }
     let config = BenchConfig {
-        episodes: EpisodeSettings {
-            methods,
-            history: args.history,
-            temperature: matches!(backend, BackendChoice::OpenAi(_))
-                .then_some(args.llm.temperature),
-            max_states: args.max_states,
-            max_steps: args.max_steps,
-            backend,
-            prompts: prompt_set,
-            prices,
-        },
+        episodes: settings,
         seeds: args.seeds,
         concurrency: args.concurrency.max(1),
         out: out.clone(),
@@ -244,6 +270,14 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
     if let Some(line) = prompts::describe(&config.episodes.prompts) {
         println!("{line}");
     }
+    if let Some(dir) = &args.inputs.prompts {
+        for warning in prompts::blank_warnings(dir, &config.episodes.prompts) {
+            eprintln!("warning: {}", shown(&warning));
+        }
+    }
+    if let Some(note) = config.concurrency_note() {
+        eprintln!("note: {note}");
+    }
     let cancel = Cancel::default();
     let stop = Stop::watch(&cancel);
     let terminal = std::io::stderr().is_terminal();
@@ -255,7 +289,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
             let _ = err.flush();
         }
     };
-    let result = bench::run(&selection.tasks, &config, &cancel, &mut show).await;
+    let result = session_bench::run(&selection.tasks, &config, &cancel, &mut show).await;
     if terminal {
         eprintln!();
     }
@@ -285,42 +319,33 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         outcome.written,
         outcome.unfinished,
         out.display(),
-        bench::transcripts_dir(out).display()
+        transcripts_dir(out).display()
     );
-    let lines = bench::read_results_within(out, args.limits().results_bytes)?.lines;
+    let lines = read_results_within(out, args.limits().results_bytes)?.lines;
     print_tables(&lines, args.format);
     if outcome.interrupted {
         eprintln!("interrupted: re-run the same command to finish the rest");
         return Ok(stop.status());
     }
-    Ok(0)
+    Ok(status::OK)
 }
 
-/// The backend the flags and environment ask for.
-fn backend(args: &BenchArgs) -> Result<BackendChoice, String> {
-    let kind = match args.backend {
-        BackendKind::Auto => Kind::Auto,
-        BackendKind::Builtin => Kind::Builtin,
-        BackendKind::Simulated => Kind::Simulated,
-        BackendKind::Openai => Kind::OpenAi,
-        BackendKind::Replay => Kind::Replay,
-    };
-    BackendRequest {
-        kind,
-        endpoint: args.llm.config()?,
-        sim_errors: sim_errors(args.sim_errors.as_deref())?,
-        replay_from: args.replay_from.clone(),
-        limits: args.limits(),
-    }
-    .choose()
-    .map_err(|e| match e {
-        BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
-            "--sim-errors needs --backend simulated".into()
+/// `e`, a backend problem worded with the flags that set it.
+fn worded(e: Error) -> Error {
+    let Error::Backend(problem) = e else { return e };
+    Error::Invalid(
+        match problem {
+            BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
+                "--sim-errors needs --backend simulated"
+            }
+            BackendProblem::ReplayNeedsFile | BackendProblem::FileNeedsReplay => {
+                "--backend replay and --replay-from FILE go together"
+            }
+            BackendProblem::NoEndpoint => {
+                "--backend openai needs an endpoint: --base-url or OPENAI_BASE_URL, and a model (--model or COHERENT_MODEL)"
+            }
+            BackendProblem::ReplayIsForBenchmarks => return Error::Backend(problem),
         }
-        BackendProblem::ReplayNeedsFile | BackendProblem::FileNeedsReplay => {
-            "--backend replay and --replay-from FILE go together".into()
-        }
-        BackendProblem::NoEndpoint => "--backend openai needs an endpoint: --base-url or OPENAI_BASE_URL, and a model (--model or COHERENT_MODEL)".into(),
-        BackendProblem::Setup(why) => why,
-    })
+        .into(),
+    )
 }

@@ -10,17 +10,15 @@ mod render;
 mod robots;
 mod run;
 mod signals;
+mod status;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use clap::{Parser, Subcommand};
-use coherent_core::Error;
-use coherent_core::Task;
-use coherent_core::planner::{Analysis, Limits};
-use coherent_core::text::{shown, shown_lines};
 
-use crate::session::{check, tasks};
+use crate::session::engine::{Analysis, Limits, Task, TaskError, shown, shown_lines};
+use crate::session::{Error, check, tasks};
 
 pub use args::LoadMethod;
 
@@ -43,8 +41,8 @@ enum Command {
     /// Run a planning method on one task: one line per step, a summary, a transcript.
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
     /// 3 when the model's server fails for good or a replay diverges, 4 when a method
-    /// written in Python raised, 5 when a robot
-    /// over ROS 2 stops answering, 130 on Ctrl-C.
+    /// written in Python raised, 5 when a robot over ROS 2 stops answering, 130 on
+    /// Ctrl-C.
     Run(Box<run::RunArgs>),
     /// Robots over ROS 2: `serve` starts a task's reference robot servers.
     Robots(robots::RobotsArgs),
@@ -129,36 +127,11 @@ where
         }
     };
     let result = match cli.command {
-        Command::Render(args) => {
-            return render::render(&args).unwrap_or_else(|e| {
-                error(&e);
-                2
-            });
-        }
-        Command::Run(args) => {
-            return run::run(*args, load).unwrap_or_else(|e| {
-                error(&e);
-                2
-            });
-        }
-        Command::Robots(args) => {
-            return robots::robots(args).unwrap_or_else(|e| {
-                eprintln!("error: {e}");
-                2
-            });
-        }
-        Command::Bench(args) => {
-            return bench::bench(*args, load).unwrap_or_else(|e| {
-                error(&e);
-                2
-            });
-        }
-        Command::Prompts(args) => {
-            return prompts::prompts(&args).unwrap_or_else(|e| {
-                error(&e);
-                2
-            });
-        }
+        Command::Render(args) => render::render(&args),
+        Command::Run(args) => run::run(*args, load),
+        Command::Robots(args) => robots::robots(args),
+        Command::Bench(args) => bench::bench(*args, load),
+        Command::Prompts(args) => prompts::prompts(&args),
         Command::Validate {
             files,
             max_states,
@@ -180,13 +153,10 @@ where
             &limits(max_states, max_memory),
         ),
     };
-    match result {
-        Ok(code) => code,
-        Err(e) => {
-            error(&e);
-            2
-        }
-    }
+    result.unwrap_or_else(|e| {
+        error(&e);
+        status::of_error(&e)
+    })
 }
 
 /// Says `error: ...` on stderr, each line of the message escaped ([`shown`]): a message
@@ -275,10 +245,10 @@ fn plan(
             .iter()
             .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
         {
-            return Err(Error::Io {
+            return Err(Error::Task(TaskError::Io {
                 file: file.display().to_string(),
                 message: format!("no task with task_id {missing}"),
-            });
+            }));
         }
     }
     let stdout = std::io::stdout();

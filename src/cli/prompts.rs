@@ -4,7 +4,8 @@
 use std::path::PathBuf;
 
 use clap::{Args, Subcommand};
-use coherent_agents::templates;
+
+use crate::session::{Error, prompts as session_prompts};
 
 #[derive(Args)]
 pub(crate) struct PromptsArgs {
@@ -23,10 +24,10 @@ enum PromptsCommand {
     },
 }
 
-pub(crate) fn prompts(args: &PromptsArgs) -> Result<u8, String> {
+pub(crate) fn prompts(args: &PromptsArgs) -> Result<u8, Error> {
     match &args.command {
         PromptsCommand::Export { dir, force } => {
-            let written = templates::export(dir, *force).map_err(|e| e.to_string())?;
+            let written = session_prompts::export(dir, *force)?;
             println!(
                 "wrote {} templates to {}; edit them and pass --prompts {} to run or bench",
                 written.len(),

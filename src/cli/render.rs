@@ -6,14 +6,9 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use clap::Args;
-use coherent_agents::episode;
-use coherent_agents::transcript;
-use coherent_core::files::MIB;
-use coherent_core::planner::Limits;
 
-use coherent_core::text::shown;
-
-use crate::session::{render, tasks};
+use crate::session::engine::{DEFAULT_MAX_TRANSCRIPT_BYTES, Limits, MIB, shown};
+use crate::session::{Error, episode, render, tasks};
 
 #[derive(Args)]
 pub(crate) struct RenderArgs {
@@ -34,28 +29,30 @@ pub(crate) struct RenderArgs {
     #[arg(long)]
     transcript: Option<PathBuf>,
     /// The most the transcript may hold, in MiB.
-    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
     max_transcript_mib: u64,
 }
 
-pub(crate) fn render(args: &RenderArgs) -> Result<u8, String> {
-    let recorded = match &args.transcript {
-        Some(path) => Some((
-            transcript::read_within(path, args.max_transcript_mib.saturating_mul(MIB))?,
-            path,
-        )),
-        None => None,
-    };
+pub(crate) fn render(args: &RenderArgs) -> Result<u8, Error> {
+    let max_bytes = args.max_transcript_mib.saturating_mul(MIB);
+    let recorded = args
+        .transcript
+        .as_deref()
+        .map(|path| episode::recorded(path, max_bytes))
+        .transpose()?;
     let task = match (&recorded, &args.task_file) {
-        (Some((t, path)), _) => episode::recorded_task(t, path)?,
-        (None, Some(file)) => tasks::pick_task(file, args.task_id)?,
-        (None, None) => return Err("a task file is needed without --transcript".into()),
+        (Some(recorded), _) => Arc::clone(&recorded.task),
+        (None, Some(file)) => Arc::new(tasks::pick_task(file, args.task_id)?),
+        (None, None) => {
+            return Err(Error::Invalid(
+                "a task file is needed without --transcript".into(),
+            ));
+        }
     };
-    let task = Arc::new(task);
     let paths = if args.plan {
         Some(render::plan_paths(&task, &Limits::default())?)
-    } else if let Some((t, _)) = &recorded {
-        Some(render::replay_paths(&task, t)?)
+    } else if let Some(recorded) = &recorded {
+        Some(render::replay_paths(&task, &recorded.transcript)?)
     } else {
         None
     };
@@ -63,7 +60,11 @@ pub(crate) fn render(args: &RenderArgs) -> Result<u8, String> {
         eprintln!("warning: {}", shown(why));
     }
     let svg = render::svg(&task, paths.as_ref().map(|p| p.paths.as_slice()))?;
-    std::fs::write(&args.out, svg).map_err(|e| format!("{}: {e}", args.out.display()))?;
+    std::fs::write(&args.out, svg).map_err(|e| Error::File {
+        file: args.out.display().to_string(),
+        line: None,
+        message: e.to_string(),
+    })?;
     println!("wrote {}", args.out.display());
     Ok(0)
 }

@@ -1,16 +1,13 @@
-//! `coherent robots serve`: the reference robot servers of a task over ROS 2, and the
-//! flags with which `coherent run` sends its actions to robots over ROS 2.
+//! `coherent robots serve`: the reference robot servers of a task over ROS 2 (the flags
+//! with which `run` and `bench` send their actions to robots are in `args.rs`).
 
 use std::path::PathBuf;
-use std::time::Duration;
 
-use clap::{Args, Subcommand, ValueEnum};
-use coherent_core::text::number;
-use coherent_ros::wire::{self, DEFAULT_NAMESPACE};
-use coherent_ros::{Faults, ServeOptions};
+use clap::{Args, Subcommand};
 
-use crate::session::episode::Robots;
-use crate::session::{self, tasks};
+use crate::session::Error;
+use crate::session::engine::DEFAULT_NAMESPACE;
+use crate::session::robots::{self, ServeRequest};
 
 #[derive(Args)]
 pub(crate) struct RobotsArgs {
@@ -60,76 +57,27 @@ struct ServeArgs {
     absent: Vec<String>,
 }
 
-/// Who carries `coherent run`'s actions out.
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub(crate) enum RobotsKind {
-    /// This process: the rules, or Rapier too with --physics.
-    Local,
-    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
-    Ros2,
-}
-
-/// `coherent run`'s flags for robots over ROS 2.
-#[derive(Args)]
-pub(crate) struct RobotFlags {
-    /// Who carries the actions out: `local` (this process), or `ros2` (one ROS 2 action
-    /// server per robot at /<namespace>/<robot>/execute).
-    #[arg(long, value_enum, default_value = "local")]
-    robots: RobotsKind,
-    /// With --robots ros2: the namespace of the robots' actions.
-    #[arg(long, default_value = DEFAULT_NAMESPACE)]
-    namespace: String,
-    /// With --robots ros2: seconds a robot may stay silent during a step (no answer, no
-    /// feedback, no result) before the step fails and the episode stops (exit 4).
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
-    robot_timeout: f64,
-    /// With --robots ros2: seconds to wait for every robot's server before the first
-    /// step; exit 2 naming the robots without one.
-    #[arg(long, default_value_t = 10.0, value_name = "SECONDS")]
-    server_wait: f64,
-}
-
-impl RobotFlags {
-    pub(crate) fn robots(&self) -> Result<Robots, String> {
-        match self.robots {
-            RobotsKind::Local => Ok(Robots::Local),
-            RobotsKind::Ros2 => Robots::ros2(&self.namespace, self.robot_timeout, self.server_wait),
-        }
-    }
-}
-
-pub(crate) fn robots(args: RobotsArgs) -> Result<u8, String> {
+pub(crate) fn robots(args: RobotsArgs) -> Result<u8, Error> {
     match args.command {
         RobotsCommand::Serve(args) => serve(args),
     }
 }
 
-fn serve(args: ServeArgs) -> Result<u8, String> {
-    let task = tasks::pick_task(&args.task_file, args.task_id)?;
-    let options = ServeOptions {
-        namespace: wire::namespace(&args.namespace)?,
+fn serve(args: ServeArgs) -> Result<u8, Error> {
+    let request = ServeRequest {
+        task_file: args.task_file,
+        task_id: args.task_id,
+        namespace: args.namespace,
         physics: args.physics,
-        faults: Faults {
-            delay: Duration::try_from_secs_f64(args.delay).map_err(|_| {
-                format!(
-                    "--delay must be seconds from 0 to 1.8e19, not {}",
-                    number(args.delay)
-                )
-            })?,
-            fail_rate: args.fail_rate,
-            seed: args.seed,
-            silent: args.silent,
-            refuse: args.refuse,
-            absent: args.absent,
-        },
+        delay: args.delay,
+        fail_rate: args.fail_rate,
+        seed: args.seed,
+        silent: args.silent,
+        refuse: args.refuse,
+        absent: args.absent,
     };
     let log = |line: &str| println!("{line}");
-    session::block_on(coherent_ros::serve(
-        std::sync::Arc::new(task),
-        options,
-        &log,
-        shutdown(),
-    ))??;
+    robots::serve(request, &log, shutdown())?;
     Ok(0)
 }
 

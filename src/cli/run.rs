@@ -7,35 +7,22 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use clap::Args;
-use coherent_agents::Cancel;
-use coherent_agents::bench::ReadLimits;
-use coherent_agents::episode::{Budget, MethodSpec, Settings};
-use coherent_agents::llm::BackendInfo;
-use coherent_agents::transcript::{self, Outcome, Round, Status, Summary};
-use coherent_core::Task;
-use coherent_core::files::MIB;
-use coherent_core::planner::Limits;
-use coherent_core::text::shown;
-
 use serde_json::json;
 
 use super::args::{
-    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, method_name, method_spec, sim_errors,
+    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
+    sim_errors,
 };
-use super::robots::RobotFlags;
 use super::signals::Stop;
-use crate::session::backend::{BackendKind, BackendRequest};
-use crate::session::episode::{self, EpisodeSpec, Prepared};
-use crate::session::{self, prompts, tasks};
-
-/// Exit status when the episode ran but the goal was not reached.
-const FAILED: u8 = 1;
-/// Exit status when the model's server failed for good or a replay diverged.
-const BACKEND_FAILED: u8 = 3;
-/// Exit status when a method written in Python raised an error.
-const METHOD_FAILED: u8 = 4;
-/// Exit status when a robot over ROS 2 stopped answering (the environment stopped).
-const ROBOT_STOPPED: u8 = 5;
+use super::status;
+use crate::session::backend::{BackendChoice, BackendRequest};
+use crate::session::engine::{
+    Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, HISTORY_WINDOW, Limits, MIB, MethodSpec, Round,
+    RoundOutcome, Status, Summary, Task, shown,
+};
+use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
+use crate::session::tasks::TaskSource;
+use crate::session::{self, Error, prompts};
 
 #[derive(Args)]
 pub(crate) struct RunArgs {
@@ -55,7 +42,7 @@ pub(crate) struct RunArgs {
     #[arg(long, value_name = "SECONDS")]
     step_timeout: Option<f64>,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = HISTORY_WINDOW)]
     history: usize,
     /// Step budget; by default 2 x the task's ground truth (2 x the optimum without one).
     #[arg(long)]
@@ -68,7 +55,7 @@ pub(crate) struct RunArgs {
     #[arg(long)]
     replay: Option<PathBuf>,
     /// With --replay: the most the transcript may hold, in MiB.
-    #[arg(long, value_name = "MIB", default_value_t = transcript::DEFAULT_MAX_BYTES / MIB)]
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
     max_transcript_mib: u64,
     /// Print a JSON summary on stdout (step lines go to stderr).
     #[arg(long)]
@@ -114,7 +101,7 @@ impl Lines {
     }
 }
 
-pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, String> {
+pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, Error> {
     if let Some(format) = args.old_format {
         args.llm.answer_format = format;
     }
@@ -126,68 +113,55 @@ pub(crate) fn run(mut args: RunArgs, load: Option<&LoadMethod<'_>>) -> Result<u8
     session::block_on(run_prepared(prepared, &args, cancel))?
 }
 
-/// The episode the flags ask for: a replay of a transcript, or a new one.
+/// The episode the flags ask for, ready to run: a replay of a transcript, or a new one.
 fn prepare(
     args: &RunArgs,
     cancel: &Cancel,
     load: Option<&LoadMethod<'_>>,
-) -> Result<Prepared, String> {
-    let prices = args.inputs.price_table()?;
-    if let Some(path) = &args.replay {
+) -> Result<Prepared, Error> {
+    let task = args.task_file.as_ref().map(|file| TaskSource::File {
+        path: file.clone(),
+        task_id: args.task_id,
+    });
+    if let Some(transcript) = &args.replay {
         args.inputs.no_prompts_for_a_replay("--replay")?;
-        let given = match &args.task_file {
-            Some(file) => Some(tasks::pick_task(file, args.task_id)?),
-            None => None,
+        let request = ReplayRequest {
+            transcript: transcript.clone(),
+            task,
+            prices: args.inputs.price_source(),
+            out: args.out.clone(),
+            max_bytes: args.max_transcript_mib.saturating_mul(MIB),
         };
-        let max_bytes = args.max_transcript_mib.saturating_mul(MIB);
-        return episode::prepare_replay(path, given.as_ref(), args.out.clone(), prices, max_bytes)
-            .map_err(|e| e.to_string());
+        return request.prepare();
     }
-    // Before anything else: a bad template must cost no model call.
-    let prompts = args.inputs.prompt_set()?;
-    let file = args
-        .task_file
-        .as_deref()
-        .ok_or("a task file is needed without --replay")?;
-    let task = tasks::pick_task(file, args.task_id)?;
-    let method = method_spec(&args.method, load, args.step_timeout)?;
-    let endpoint = args.llm.config()?;
-    let temperature = endpoint.as_ref().map(|_| args.llm.temperature);
-    let backend = BackendRequest {
-        kind: BackendKind::Auto,
-        endpoint,
-        sim_errors: sim_errors(args.sim_errors.as_deref())?,
-        replay_from: None,
-        limits: ReadLimits::default(),
-    }
-    .choose()
-    .map_err(|e| e.to_string())?;
-    let spec = EpisodeSpec {
-        task: Arc::new(task),
-        settings: Settings {
-            method,
-            history: args.history,
-            temperature,
-            seed: args.llm.seed,
-            physics: args.physics,
-            prompts,
+    let task =
+        task.ok_or_else(|| Error::Invalid("a task file is needed without --replay".into()))?;
+    let request = RunRequest {
+        backend: BackendRequest {
+            endpoint: args.llm.endpoint()?,
+            sim_errors: sim_errors(args.sim_errors.as_deref())?,
+            ..BackendRequest::default()
         },
+        prompts: args.inputs.prompt_source(),
+        prices: args.inputs.price_source(),
+        robots: args.robots.robots()?,
+        physics: args.physics,
         max_steps: args.max_steps,
-        backend,
+        history: args.history,
+        seed: args.llm.seed,
         max_states: args.max_states,
         out: args.out.clone(),
-        prices,
-        robots: args.robots.robots()?,
+        ..RunRequest::new(task, method_spec(&args.method, load, args.step_timeout)?)
     };
-    episode::prepare(spec, cancel).map_err(|e| e.to_string())
+    request.prepare(cancel)
 }
 
-async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Result<u8, String> {
+async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Result<u8, Error> {
     let lines = Lines { json: args.json };
     let info = prepared.backend_info();
-    let method = &prepared.settings.method;
+    let method = &prepared.settings().method;
     lines.say(&match method {
-        _ if method.uses_model() => backend_line(&info, prepared.replaying()),
+        _ if method.asks_backend() => backend_line(&prepared),
         MethodSpec::External(_) => format!(
             "backend: none ({} is a method written in Python: the models it calls are its own)",
             shown(method.name())
@@ -195,33 +169,36 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         MethodSpec::Builtin(_) => format!("backend: none ({} asks no model)", method.name()),
     });
     lines.say(&task_line(&prepared));
-    if let Some(line) = prompts::describe(&prepared.settings.prompts) {
+    if let Some(line) = prompts::describe(&prepared.settings().prompts) {
         lines.say(&line);
     }
+    if let Some(dir) = &args.inputs.prompts {
+        for warning in prompts::blank_warnings(dir, &prepared.settings().prompts) {
+            eprintln!("warning: {}", shown(&warning));
+        }
+    }
     let stop = Stop::watch(&cancel);
-    let task = Arc::clone(&prepared.task);
-    let max = prepared.budget.steps();
+    let task = Arc::clone(prepared.task());
+    let max = prepared.budget().steps();
     let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
     let result = prepared.run(&cancel, &mut progress).await;
-    let ran = result.map_err(|e| e.to_string())?;
+    let ran = result?;
     let s = ran.summary();
     lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
     lines.say(&format!(
         "transcript: {}",
         shown(&ran.path.display().to_string())
     ));
-    match &ran.replay {
-        Some(Ok(())) => lines.say(&format!(
+    let ending = ran.ending();
+    match &ending {
+        Ending::ReplayDiffers(why) => lines.say(&format!("replay: {}", shown(why))),
+        _ if ran.replay.is_some() => lines.say(&format!(
             "replay: all {} rounds match the recording",
             ran.transcript.rounds.len()
         )),
-        Some(Err(why)) => {
-            lines.say(&format!("replay: {}", shown(why)));
-            return Ok(BACKEND_FAILED);
-        }
-        None => {}
+        _ => {}
     }
-    if args.json {
+    if args.json && !matches!(ending, Ending::ReplayDiffers(_)) {
         println!(
             "{}",
             json!({
@@ -242,24 +219,20 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             })
         );
     }
-    Ok(match s.status {
-        Status::Success => 0,
-        Status::Failure => FAILED,
-        Status::BackendError => BACKEND_FAILED,
-        // Stopped by the environment (a robot that stopped answering) says why.
-        Status::Interrupted if s.error.is_some() => ROBOT_STOPPED,
-        Status::Interrupted => stop.status(),
-        Status::Error => METHOD_FAILED,
+    Ok(match ending {
+        // Ctrl-C or SIGTERM: the status the shell gives the signal.
+        Ending::Interrupted => stop.status(),
+        other => status::of_ending(&other),
     })
 }
 
 fn task_line(p: &Prepared) -> String {
-    let task = &p.task;
+    let task = p.task();
     let gt = task
         .meta
         .gt_steps
         .map_or("none".to_owned(), |g| g.to_string());
-    let budget_note = match p.budget {
+    let budget_note = match p.budget() {
         Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
         Budget::Given(n) => format!("{n} steps"),
         Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
@@ -269,25 +242,19 @@ fn task_line(p: &Prepared) -> String {
         shown(&task.meta.scene),
         task.meta.task_id,
         shown(&task.meta.instruction),
-        shown(p.settings.method.name())
+        shown(p.settings().method.name())
     )
 }
 
-fn backend_line(info: &BackendInfo, replay: Option<&Path>) -> String {
-    match (info.kind.as_str(), replay) {
-        ("replay", Some(path)) => format!(
-            "backend: replay of {} (recorded with model {}; no network)",
-            shown(&path.display().to_string()),
-            shown(&info.model)
-        ),
-        ("simulated", _) => format!(
+fn backend_line(p: &Prepared) -> String {
+    let info = p.backend_info();
+    match (p.backend_choice(), p.replaying()) {
+        (_, Some(path)) => replay_line(path, &info.model),
+        (Some(BackendChoice::Simulated(rates)), _) => format!(
             "backend: simulated (the optimal planner with seeded mistakes: {}; not a language model)",
-            shown(
-                info.model
-                    .trim_start_matches("optimal-planner with errors ")
-            )
+            shown(&rates.label())
         ),
-        ("openai", _) => format!(
+        (Some(BackendChoice::OpenAi(_)), _) => format!(
             "backend: OpenAI-compatible endpoint {} with model {}",
             shown(&info.base_url.clone().unwrap_or_default()),
             shown(&info.model)
@@ -297,6 +264,14 @@ fn backend_line(info: &BackendInfo, replay: Option<&Path>) -> String {
               or pass --base-url, --model and --api-key)"
             .to_owned(),
     }
+}
+
+fn replay_line(path: &Path, model: &str) -> String {
+    format!(
+        "backend: replay of {} (recorded with model {}; no network)",
+        shown(&path.display().to_string()),
+        shown(model)
+    )
 }
 
 fn step_line(task: &Task, r: &Round, max: u32) -> String {
@@ -319,15 +294,15 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
         .filter(|p| shown(&p.subtask) != action)
         .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
     let outcome = match &r.outcome {
-        Outcome::Executed if r.done => "ok, goal reached".to_owned(),
-        Outcome::Executed => "ok".to_owned(),
-        Outcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
-        Outcome::Declined => "declined".to_owned(),
-        Outcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
-        Outcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
-        Outcome::BackendError { message } => format!("backend failed: {}", shown(message)),
+        RoundOutcome::Executed if r.done => "ok, goal reached".to_owned(),
+        RoundOutcome::Executed => "ok".to_owned(),
+        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
+        RoundOutcome::Declined => "declined".to_owned(),
+        RoundOutcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
+        RoundOutcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
+        RoundOutcome::BackendError { message } => format!("backend failed: {}", shown(message)),
         // The last line of the error (a Python traceback ends with the exception).
-        Outcome::MethodError { message } => format!(
+        RoundOutcome::MethodError { message } => format!(
             "the method failed: {}",
             shown(message.trim_end().lines().last().unwrap_or(""))
         ),

@@ -5,13 +5,10 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
 
-use coherent_agents::Cancel;
 use tokio::task::JoinHandle;
 
-/// Exit status after Ctrl-C (SIGINT), as shells report it.
-pub(crate) const INTERRUPTED: u8 = 130;
-/// Exit status after SIGTERM, as shells report it.
-pub(crate) const TERMINATED: u8 = 143;
+use super::status::{INTERRUPTED, TERMINATED};
+use crate::session::engine::Cancel;
 
 /// Watches for the signals while a command runs; dropped, it stops watching.
 pub(crate) struct Stop {

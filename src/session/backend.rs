@@ -1,18 +1,31 @@
 //! Which backend answers the model's roles, chosen once for `run`, `bench` and Python
 //! alike: the built-in planner, the simulated backend (the planner with seeded mistakes),
-//! an OpenAI-compatible endpoint, or the transcripts of an earlier benchmark.
+//! an OpenAI-compatible endpoint, or the transcripts of an earlier benchmark; and each
+//! episode's own backend of that choice. The endpoint's settings are what a front end
+//! was told (flags, keyword arguments), completed from the environment
+//! (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL`; [`complete`]); several base
+//! URLs serve one model from several servers (the client spreads the requests over
+//! them).
 
-use std::fmt;
-use std::path::PathBuf;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::bench::{BackendChoice, ReadLimits, Recorded};
-use coherent_agents::{ErrorRates, OpenAiClient, OpenAiConfig};
+use coherent_agents::backends::address::redacted;
+use coherent_agents::bench::{EpisodeKey, ReadLimits, read_results_within};
+use coherent_agents::llm::Backend;
+use coherent_agents::transcript;
+use coherent_agents::{ApiKey, OpenAiConfig};
+use coherent_agents::{BackendInfo, BackendKind, BuiltinBackend, ErrorRates, OpenAiClient};
+use coherent_core::planner::Limits;
 
-/// The backend asked for; `Auto` picks the simulated backend when error rates are given,
-/// else the endpoint when one is configured, else the built-in planner.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BackendKind {
+use crate::session::error::{BackendProblem, Error};
+
+/// The backend a front end names; `Auto` picks the simulated backend when error rates
+/// are given, else the endpoint when one is configured, else the built-in planner.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BackendName {
+    #[default]
     Auto,
     Builtin,
     Simulated,
@@ -20,12 +33,24 @@ pub enum BackendKind {
     Replay,
 }
 
+/// Where the model endpoint's settings come from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum EndpointSource {
+    /// No endpoint.
+    #[default]
+    None,
+    /// These settings as they are (Python's `LLM`, complete when it was made).
+    Given(OpenAiConfig),
+    /// These settings, what they leave unset taken from the environment ([`complete`]);
+    /// no endpoint when neither configures one (the command line's flags).
+    WithEnvironment(OpenAiConfig),
+}
+
 /// Everything that decides the backend.
-#[derive(Debug)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct BackendRequest {
-    pub kind: BackendKind,
-    /// The endpoint, when one is configured ([`super::endpoint::Endpoint::config`]).
-    pub endpoint: Option<OpenAiConfig>,
+    pub name: BackendName,
+    pub endpoint: EndpointSource,
     /// The simulated backend's error rates.
     pub sim_errors: Option<ErrorRates>,
     /// An earlier results file whose transcripts a replay answers from.
@@ -34,74 +59,205 @@ pub struct BackendRequest {
     pub limits: ReadLimits,
 }
 
-/// Why the settings do not fit together. Each front end words these in its own terms
-/// (flags or keyword arguments), see [`Display`](fmt::Display) for the neutral text.
-#[derive(Debug, PartialEq)]
-pub enum BackendProblem {
-    /// Error rates were given for a backend other than the simulated one.
-    RatesNeedSimulated,
-    /// Error rates and an endpoint were both given without naming a backend.
-    RatesAndEndpoint,
-    /// A replay without the results file it answers from.
-    ReplayNeedsFile,
-    /// A results file to replay from, for a backend other than replay.
-    FileNeedsReplay,
-    /// The OpenAI-compatible backend without an endpoint.
-    NoEndpoint,
-    /// The client or the recordings could not be set up.
-    Setup(String),
+/// Which backend answers the model-using methods.
+#[derive(Clone, Debug)]
+pub enum BackendChoice {
+    /// The optimal planner in every role.
+    Builtin,
+    /// The planner with seeded mistakes; each episode gets its own seed.
+    Simulated(ErrorRates),
+    /// One client shared by every episode (its own concurrency limit holds across them).
+    OpenAi(Arc<OpenAiClient>),
+    /// The transcripts of an earlier run: each episode answers from the recording with
+    /// its method, task and seed, with the recorded settings, and must come out the same.
+    Replay(Arc<RecordedRun>),
 }
 
-impl fmt::Display for BackendProblem {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            BackendProblem::RatesNeedSimulated => {
-                "simulated error rates need the simulated backend"
+/// An earlier run's finished episodes, by key: the transcripts a replay answers from.
+#[derive(Debug)]
+pub struct RecordedRun {
+    /// The earlier results file.
+    pub results: PathBuf,
+    pub transcripts: HashMap<EpisodeKey, PathBuf>,
+    /// The backend of the recordings (the first one's, when they differ).
+    pub backend: BackendInfo,
+    /// The most each transcript may hold.
+    pub max_transcript_bytes: u64,
+}
+
+impl RecordedRun {
+    /// The final episodes of the results file `results`, read within `limits`; every
+    /// transcript they name is checked before any episode starts: a transcript that is
+    /// gone, no regular file (a device that never ends) or too large would stop the run
+    /// midway.
+    pub fn read(results: &Path, limits: ReadLimits) -> Result<RecordedRun, Error> {
+        let file = read_results_within(results, limits.results_bytes)?;
+        let mut backend = None;
+        let mut transcripts = HashMap::new();
+        for line in file.lines.iter().filter(|l| l.is_final()) {
+            if line.uses_model {
+                backend.get_or_insert_with(|| line.backend.clone());
             }
-            BackendProblem::RatesAndEndpoint => {
-                "simulated errors are for the simulated backend: leave out the endpoint"
+            transcripts.insert(line.key(), PathBuf::from(&line.transcript));
+        }
+        if transcripts.is_empty() {
+            return Err(Error::File {
+                file: results.display().to_string(),
+                line: None,
+                message: "no finished episodes to replay".into(),
+            });
+        }
+        let limit = transcript::limit(limits.transcript_bytes);
+        for path in transcripts.values() {
+            let meta = std::fs::metadata(path).map_err(|e| Error::File {
+                file: path.display().to_string(),
+                line: None,
+                message: e.to_string(),
+            })?;
+            if !meta.is_file() {
+                return Err(Error::File {
+                    file: path.display().to_string(),
+                    line: None,
+                    message: "not a regular file (a device? a folder?): a transcript must be one"
+                        .into(),
+                });
             }
-            BackendProblem::ReplayNeedsFile => "a replay needs the earlier results file",
-            BackendProblem::FileNeedsReplay => "a results file to replay from needs the replay backend",
-            BackendProblem::NoEndpoint => {
-                "the OpenAI-compatible backend needs an endpoint: a base URL (OPENAI_BASE_URL) and a model (COHERENT_MODEL)"
+            if meta.len() > limit.bytes {
+                return Err(coherent_agents::Error::file(limit.exceeded(path)).into());
             }
-            BackendProblem::Setup(why) => why,
+        }
+        Ok(RecordedRun {
+            results: results.to_owned(),
+            transcripts,
+            backend: backend.unwrap_or_else(BackendInfo::none),
+            max_transcript_bytes: limits.transcript_bytes,
         })
     }
 }
 
 impl BackendRequest {
     /// The backend these settings ask for.
-    pub fn choose(self) -> Result<BackendChoice, BackendProblem> {
-        let kind = match self.kind {
-            BackendKind::Auto => match (&self.sim_errors, &self.endpoint) {
-                (Some(_), Some(_)) => return Err(BackendProblem::RatesAndEndpoint),
-                (Some(_), None) => BackendKind::Simulated,
-                (None, Some(_)) => BackendKind::OpenAi,
-                (None, None) => BackendKind::Builtin,
-            },
-            k => k,
+    pub fn choose(self) -> Result<BackendChoice, Error> {
+        let endpoint = match self.endpoint {
+            EndpointSource::None => None,
+            EndpointSource::Given(config) => Some(config),
+            EndpointSource::WithEnvironment(config) => complete(config)?,
         };
-        if self.sim_errors.is_some() && kind != BackendKind::Simulated {
-            return Err(BackendProblem::RatesNeedSimulated);
+        let name = match self.name {
+            BackendName::Auto => match (&self.sim_errors, &endpoint) {
+                (Some(_), Some(_)) => return Err(BackendProblem::RatesAndEndpoint.into()),
+                (Some(_), None) => BackendName::Simulated,
+                (None, Some(_)) => BackendName::OpenAi,
+                (None, None) => BackendName::Builtin,
+            },
+            n => n,
+        };
+        if self.sim_errors.is_some() && name != BackendName::Simulated {
+            return Err(BackendProblem::RatesNeedSimulated.into());
         }
-        match (kind, self.replay_from) {
-            (BackendKind::Replay, Some(file)) => Recorded::read(&file, self.limits)
-                .map(|r| BackendChoice::Replay(Arc::new(r)))
-                .map_err(BackendProblem::Setup),
-            (BackendKind::Replay, None) => Err(BackendProblem::ReplayNeedsFile),
-            (_, Some(_)) => Err(BackendProblem::FileNeedsReplay),
-            (BackendKind::Simulated, None) => Ok(BackendChoice::Simulated(
+        match (name, self.replay_from) {
+            (BackendName::Replay, Some(file)) => Ok(BackendChoice::Replay(Arc::new(
+                RecordedRun::read(&file, self.limits)?,
+            ))),
+            (BackendName::Replay, None) => Err(BackendProblem::ReplayNeedsFile.into()),
+            (_, Some(_)) => Err(BackendProblem::FileNeedsReplay.into()),
+            (BackendName::Simulated, None) => Ok(BackendChoice::Simulated(
                 self.sim_errors.unwrap_or_default(),
             )),
-            (BackendKind::OpenAi, None) => {
-                let config = self.endpoint.ok_or(BackendProblem::NoEndpoint)?;
+            (BackendName::OpenAi, None) => {
+                let config = endpoint.ok_or(BackendProblem::NoEndpoint)?;
                 OpenAiClient::new(config)
                     .map(|c| BackendChoice::OpenAi(Arc::new(c)))
-                    .map_err(|e| BackendProblem::Setup(e.to_string()))
+                    .map_err(|e| Error::Endpoint(e.to_string()))
             }
-            (BackendKind::Auto | BackendKind::Builtin, None) => Ok(BackendChoice::Builtin),
+            (BackendName::Auto | BackendName::Builtin, None) => Ok(BackendChoice::Builtin),
+        }
+    }
+}
+
+/// `config` with what it leaves unset taken from the environment: the base URLs (each
+/// given one may be a comma-separated list), the key and the model. An endpoint is
+/// configured by a base URL, or by a key and a model (then OpenAI's own endpoint);
+/// `None` when there is none.
+pub fn complete(mut config: OpenAiConfig) -> Result<Option<OpenAiConfig>, Error> {
+    let from_env = |name: &str| std::env::var(name).ok().filter(|v| !v.trim().is_empty());
+    if config.api_key.is_none() {
+        config.api_key = from_env("OPENAI_API_KEY").map(ApiKey::new);
+    }
+    if config.model.is_empty() {
+        config.model = from_env("COHERENT_MODEL").unwrap_or_default();
+    }
+    let mut base_urls: Vec<String> = config.base_urls.iter().flat_map(|l| url_list(l)).collect();
+    if base_urls.is_empty() {
+        base_urls = from_env("OPENAI_BASE_URL").map_or_else(Vec::new, |v| url_list(&v));
+    }
+    if base_urls.is_empty() {
+        if config.api_key.is_none() || config.model.is_empty() {
+            return Ok(None);
+        }
+        base_urls.push("https://api.openai.com/v1".to_owned());
+    }
+    if config.model.is_empty() {
+        return Err(Error::Endpoint(format!(
+            "an endpoint is configured ({}) but no model: pass --model or set COHERENT_MODEL",
+            base_urls
+                .iter()
+                .map(|u| redacted(u))
+                .collect::<Vec<_>>()
+                .join(",")
+        )));
+    }
+    config.base_urls = base_urls;
+    Ok(Some(config))
+}
+
+/// The base URLs of a comma-separated list (`OPENAI_BASE_URL`, a `--base-url` value),
+/// blanks left out.
+pub fn url_list(list: &str) -> Vec<String> {
+    list.split(',')
+        .map(str::trim)
+        .filter(|u| !u.is_empty())
+        .map(str::to_owned)
+        .collect()
+}
+
+impl BackendChoice {
+    /// The backend of one episode with seed `seed`, its searches bounded by `limits`
+    /// (the simulated backend's mistakes are seeded per episode). A replay's backend
+    /// depends on the episode's recording ([`coherent_agents::Replay`]): none here.
+    pub fn for_episode(&self, limits: &Limits, seed: u64) -> Result<Arc<dyn Backend>, Error> {
+        Ok(match self {
+            BackendChoice::Builtin => Arc::new(BuiltinBackend::new(limits.clone())),
+            BackendChoice::Simulated(rates) => {
+                Arc::new(BuiltinBackend::simulated(limits.clone(), *rates, seed))
+            }
+            BackendChoice::OpenAi(client) => Arc::clone(client) as Arc<dyn Backend>,
+            BackendChoice::Replay(_) => return Err(BackendProblem::ReplayIsForBenchmarks.into()),
+        })
+    }
+
+    /// The backend as transcripts and results lines name it.
+    pub fn info(&self) -> BackendInfo {
+        match self {
+            BackendChoice::Builtin => BuiltinBackend::new(Limits::default()).info(),
+            BackendChoice::Simulated(rates) => {
+                BuiltinBackend::simulated(Limits::default(), *rates, 0).info()
+            }
+            BackendChoice::OpenAi(client) => client.info(),
+            BackendChoice::Replay(recorded) => BackendInfo {
+                kind: BackendKind::Replay,
+                model: recorded.backend.model.clone(),
+                base_url: None,
+            },
+        }
+    }
+
+    /// The sampling temperature an episode records: the endpoint's, for a model that
+    /// samples; none for the planner's backends (a replay records its own).
+    pub fn temperature(&self) -> Option<f32> {
+        match self {
+            BackendChoice::OpenAi(client) => Some(client.config().temperature),
+            _ => None,
         }
     }
 }
@@ -110,30 +266,34 @@ impl BackendRequest {
 mod tests {
     use super::*;
 
-    fn request(kind: BackendKind) -> BackendRequest {
+    fn request(name: BackendName) -> BackendRequest {
         BackendRequest {
-            kind,
-            endpoint: None,
-            sim_errors: None,
-            replay_from: None,
-            limits: ReadLimits::default(),
+            name,
+            ..BackendRequest::default()
         }
     }
 
-    fn endpoint() -> Option<OpenAiConfig> {
-        Some(OpenAiConfig::new("http://127.0.0.1:9/v1", "m"))
+    fn endpoint() -> EndpointSource {
+        EndpointSource::Given(OpenAiConfig::new("http://127.0.0.1:9/v1", "m"))
+    }
+
+    fn problem(r: Result<BackendChoice, Error>) -> Option<BackendProblem> {
+        match r {
+            Err(Error::Backend(p)) => Some(p),
+            _ => None,
+        }
     }
 
     #[test]
     fn auto_follows_what_is_configured() {
         let rates = ErrorRates::parse("all=0.1").ok();
         assert!(matches!(
-            request(BackendKind::Auto).choose(),
+            request(BackendName::Auto).choose(),
             Ok(BackendChoice::Builtin)
         ));
         let simulated = BackendRequest {
             sim_errors: rates,
-            ..request(BackendKind::Auto)
+            ..request(BackendName::Auto)
         };
         assert!(matches!(
             simulated.choose(),
@@ -141,39 +301,64 @@ mod tests {
         ));
         let http = BackendRequest {
             endpoint: endpoint(),
-            ..request(BackendKind::Auto)
+            ..request(BackendName::Auto)
         };
         assert!(matches!(http.choose(), Ok(BackendChoice::OpenAi(_))));
         let both = BackendRequest {
             endpoint: endpoint(),
             sim_errors: rates,
-            ..request(BackendKind::Auto)
+            ..request(BackendName::Auto)
         };
-        assert_eq!(both.choose().err(), Some(BackendProblem::RatesAndEndpoint));
+        assert_eq!(
+            problem(both.choose()),
+            Some(BackendProblem::RatesAndEndpoint)
+        );
     }
 
     #[test]
     fn settings_that_do_not_fit_are_refused() {
         let rates = BackendRequest {
             sim_errors: ErrorRates::parse("all=0.1").ok(),
-            ..request(BackendKind::Builtin)
+            ..request(BackendName::Builtin)
         };
         assert_eq!(
-            rates.choose().err(),
+            problem(rates.choose()),
             Some(BackendProblem::RatesNeedSimulated)
         );
         assert_eq!(
-            request(BackendKind::Replay).choose().err(),
+            problem(request(BackendName::Replay).choose()),
             Some(BackendProblem::ReplayNeedsFile)
         );
         let file = BackendRequest {
             replay_from: Some("r.jsonl".into()),
-            ..request(BackendKind::Builtin)
+            ..request(BackendName::Builtin)
         };
-        assert_eq!(file.choose().err(), Some(BackendProblem::FileNeedsReplay));
         assert_eq!(
-            request(BackendKind::OpenAi).choose().err(),
+            problem(file.choose()),
+            Some(BackendProblem::FileNeedsReplay)
+        );
+        assert_eq!(
+            problem(request(BackendName::OpenAi).choose()),
             Some(BackendProblem::NoEndpoint)
         );
+    }
+
+    #[test]
+    fn base_urls_are_repeated_or_listed_with_commas() {
+        assert_eq!(
+            url_list(" http://a/v1, ,http://b/v1,"),
+            ["http://a/v1", "http://b/v1"]
+        );
+        let given = OpenAiConfig {
+            base_urls: vec!["http://a/v1,http://b/v1".into(), "http://c/v1".into()],
+            model: "m".into(),
+            ..OpenAiConfig::default()
+        };
+        let config = complete(given).expect("valid").expect("an endpoint");
+        assert_eq!(
+            config.base_urls,
+            ["http://a/v1", "http://b/v1", "http://c/v1"]
+        );
+        assert_eq!(config.model, "m");
     }
 }

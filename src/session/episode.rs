@@ -1,67 +1,159 @@
-//! One episode: prepared (the task, the settings, the budget, the backend, the
-//! environment), then run with its transcript written as it goes; or a recorded episode
-//! replayed from its transcript and checked against it.
+//! One episode, whoever asks for it, and the one runner of them all. A front end fills a
+//! request, a new episode ([`RunRequest`]: `coherent run`, `coherent.run`) or the replay
+//! of a transcript ([`ReplayRequest`]), and prepares it in one call that does the whole
+//! sequence (the prompt set, the prices, the task, the endpoint and the backend, the
+//! budget, the environment); a benchmark prepares each of its episodes
+//! ([`crate::session::bench`]). Each becomes an [`EpisodeSpec`] (the task, the settings,
+//! the budget, the backend, the robots); [`prepare`] builds its environment, and
+//! [`Prepared::run`] runs it: the transcript written as it goes, a replay compared with
+//! its recording, the model calls priced ([`ModelUse`]), into a [`Ran`].
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::bench::BackendChoice;
-use coherent_agents::episode::{self, Budget, Settings};
-use coherent_agents::llm::{Backend, BackendInfo, Usage};
-use coherent_agents::transcript::{self, Round, Transcript};
-use coherent_agents::{Cancel, Episode, PriceTable, Replay};
+use coherent_agents::episode::{self, Budget, HISTORY_WINDOW, MethodSpec, Settings};
+use coherent_agents::llm::Backend;
+use coherent_agents::transcript::{self, Round, Status, Transcript};
+use coherent_agents::{BackendInfo, Cancel, Episode, ModelUse, PriceTable, Replay};
 use coherent_core::planner::Limits;
-use coherent_core::text::number;
 use coherent_core::{Environment, SymbolicEnv, Task, native};
 
-/// Why an episode could not run.
+use crate::session::backend::{BackendChoice, BackendRequest};
+use crate::session::error::Error;
+use crate::session::prompts::{PriceSource, PromptSource};
+use crate::session::robots::{Robots, ros_error};
+use crate::session::tasks::TaskSource;
+
+/// A new episode.
 #[derive(Debug)]
-pub enum Failure {
-    /// The physical world could not be built for the task.
-    Physics(coherent_sim::PhysicsError),
-    /// Anything else: a budget that cannot be sized, a transcript that cannot be read or
-    /// written, a recording that does not fit the task given.
-    Other(String),
+pub struct RunRequest {
+    pub task: TaskSource,
+    pub method: MethodSpec,
+    /// Who answers the method's questions.
+    pub backend: BackendRequest,
+    pub prompts: PromptSource,
+    pub prices: PriceSource,
+    /// Who carries the actions out.
+    pub robots: Robots,
+    /// Every action in Rapier too.
+    pub physics: bool,
+    /// Overrides the budget of 2 x GT.
+    pub max_steps: Option<u32>,
+    /// Rounds of history the methods see.
+    pub history: usize,
+    /// The episode's seed: the simulated backend's mistakes, MCTS's search, DMRS's
+    /// speaking order (the model's sampling seed is the endpoint's).
+    pub seed: Option<u64>,
+    /// Most states one planner search may visit (the budget without a GT, the built-in
+    /// and simulated backends, the optimal method).
+    pub max_states: usize,
+    /// The folder the transcript goes to.
+    pub out: PathBuf,
 }
 
-impl std::fmt::Display for Failure {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            Failure::Physics(e) => write!(f, "physics: {}", e.message),
-            Failure::Other(why) => f.write_str(why),
+impl RunRequest {
+    /// `method` on `task` with the defaults: the backend the environment configures, the
+    /// built-in prompts and prices, local robots, no physics, 2 x GT steps, the history
+    /// window, transcripts into `runs/`.
+    pub fn new(task: TaskSource, method: MethodSpec) -> RunRequest {
+        RunRequest {
+            task,
+            method,
+            backend: BackendRequest::default(),
+            prompts: PromptSource::default(),
+            prices: PriceSource::default(),
+            robots: Robots::Local,
+            physics: false,
+            max_steps: None,
+            history: HISTORY_WINDOW,
+            seed: None,
+            max_states: Limits::DEFAULT_MAX_STATES,
+            out: PathBuf::from("runs"),
         }
     }
-}
 
-impl From<String> for Failure {
-    fn from(why: String) -> Failure {
-        Failure::Other(why)
+    /// The episode, ready to run. The prompt set is read first, so that a bad template
+    /// costs nothing; sizing the budget may plan (`cancel` stops it); over ROS 2 the
+    /// robots' servers are awaited.
+    pub fn prepare(self, cancel: &Cancel) -> Result<Prepared, Error> {
+        let prompts = self.prompts.read()?;
+        let prices = self.prices.read()?;
+        let task = self.task.task()?;
+        let choice = self.backend.choose()?;
+        let limits = Limits {
+            cancel: Some(cancel.flag()),
+            ..Limits::max_states(self.max_states)
+        };
+        let budget = Budget::searched(&task, self.max_steps, &limits)?;
+        let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
+        let settings = Settings {
+            method: self.method,
+            history: self.history,
+            temperature: choice.temperature(),
+            seed: self.seed,
+            physics: self.physics,
+            robots: self.robots.record(),
+            prompts,
+        };
+        let spec = EpisodeSpec {
+            task,
+            settings,
+            budget,
+            backend,
+            robots: self.robots,
+            out: self.out,
+            prices,
+            recording: None,
+            choice: Some(choice),
+        };
+        prepare(spec, cancel)
     }
 }
 
-/// Who carries an episode's actions out.
-#[derive(Clone, Debug, Default, PartialEq, Eq)]
-pub enum Robots {
-    /// This process: the rules, and Rapier too with physics.
-    #[default]
-    Local,
-    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
-    Ros2(coherent_ros::BridgeOptions),
+/// The replay of a recorded episode: its task, settings (the prompt set included) and
+/// budget as recorded, answered from the recording (no network), the robots in this
+/// process.
+#[derive(Debug)]
+pub struct ReplayRequest {
+    /// The transcript.
+    pub transcript: PathBuf,
+    /// When given, the recorded task must be this one.
+    pub task: Option<TaskSource>,
+    /// Prices the recorded tokens.
+    pub prices: PriceSource,
+    /// The folder the replay's transcript goes to.
+    pub out: PathBuf,
+    /// The most the transcript may hold.
+    pub max_bytes: u64,
 }
 
-impl Robots {
-    /// Robots over ROS 2 under `namespace` (made absolute), each allowed `robot_timeout`
-    /// seconds of silence in a step, all awaited `server_wait` seconds before the first.
-    pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, String> {
-        let seconds = |what: &str, s: f64| {
-            std::time::Duration::try_from_secs_f64(s)
-                .map_err(|_| format!("{what} must be seconds from 0 to 1.8e19, not {}", number(s)))
+impl ReplayRequest {
+    /// The replay, ready to run; a transcript of more than `max_bytes` is refused.
+    pub fn prepare(self) -> Result<Prepared, Error> {
+        let prices = self.prices.read()?;
+        let path = self.transcript;
+        let recorded = transcript::read_within(&path, self.max_bytes)?;
+        if let Some(given) = self.task
+            && native::to_value(&*given.task()?) != recorded.header.task
+        {
+            return Err(Error::Invalid(format!(
+                "the task given differs from the one recorded in {}",
+                path.display()
+            )));
+        }
+        let replay = Replay::prepare(&recorded, &path)?;
+        let spec = EpisodeSpec {
+            task: Arc::clone(&replay.task),
+            settings: replay.settings.clone(),
+            budget: replay.budget,
+            backend: Arc::clone(&replay.backend) as Arc<dyn Backend>,
+            robots: Robots::Local,
+            out: self.out,
+            prices,
+            recording: Some((replay, path)),
+            choice: None,
         };
-        Ok(Robots::Ros2(coherent_ros::BridgeOptions {
-            namespace: coherent_ros::wire::namespace(namespace)?,
-            robot_timeout: seconds("the robot timeout", robot_timeout)?,
-            server_wait: seconds("the wait for the servers", server_wait)?,
-        }))
+        prepare(spec, &Cancel::default())
     }
 }
 
@@ -73,84 +165,170 @@ pub fn environment(
     physics: bool,
     robots: &Robots,
     cancel: &Cancel,
-) -> Result<Box<dyn Environment + Send + Sync>, Failure> {
+) -> Result<Box<dyn Environment + Send + Sync>, Error> {
     Ok(match robots {
-        Robots::Local if physics => {
-            Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task)).map_err(Failure::Physics)?)
-        }
+        Robots::Local if physics => Box::new(coherent_sim::PhysicalEnv::new(Arc::clone(task))?),
         Robots::Local => Box::new(SymbolicEnv::new(Arc::clone(task))),
         Robots::Ros2(_) if physics => {
-            return Err(Failure::Other(
+            return Err(Error::Invalid(
                 "over ROS 2 physics is the robots' business: pass --physics to \
                  `coherent robots serve` instead"
                     .into(),
             ));
         }
         Robots::Ros2(options) => Box::new(
-            coherent_ros::Ros2Env::connect(Arc::clone(task), options.clone(), Some(cancel.flag()))
-                .map_err(|e| Failure::Other(e.to_string()))?,
+            coherent_ros::Ros2Env::connect(
+                Arc::clone(task),
+                options.clone(),
+                Some(cancel.flag()),
+                crate::session::runtime()?.handle().clone(),
+            )
+            .map_err(ros_error)?,
         ),
     })
 }
 
-/// What a new episode is to be.
-#[derive(Debug)]
+/// Everything one episode runs with.
 pub struct EpisodeSpec {
     pub task: Arc<Task>,
     /// The method, its history window, the sampling settings, physics or not, the
-    /// prompt set.
-    pub settings: Settings,
-    /// Overrides the budget of 2 x GT.
-    pub max_steps: Option<u32>,
-    pub backend: BackendChoice,
-    /// Most states one planner search may visit (the budget without a GT, the built-in
-    /// and simulated backends, the optimal method).
-    pub max_states: usize,
-    /// The folder the transcript goes to.
-    pub out: PathBuf,
-    /// Prices the episode's tokens ([`Ran::cost_usd`]).
-    pub prices: PriceTable,
-    /// Who carries the actions out.
-    pub robots: Robots,
-}
-
-/// An episode ready to run.
-pub struct Prepared {
-    pub task: Arc<Task>,
+    /// prompt set (the robots are recorded from [`EpisodeSpec::robots`]).
     pub settings: Settings,
     pub budget: Budget,
-    backend: Arc<dyn Backend>,
+    /// Answers the method's questions.
+    pub backend: Arc<dyn Backend>,
+    /// Who carries the actions out.
+    pub robots: Robots,
+    /// The folder the transcript goes to.
+    pub out: PathBuf,
+    /// Prices the model calls ([`Ran::cost_usd`]).
+    pub prices: PriceTable,
+    /// The recording a replay answers from and is compared with, and its file.
+    pub recording: Option<(Replay, PathBuf)>,
+    /// The backend chosen for a new episode, as the front ends describe it (none for a
+    /// replay).
+    pub choice: Option<BackendChoice>,
+}
+
+/// An episode ready to run: its spec and its environment.
+pub struct Prepared {
+    spec: EpisodeSpec,
     env: Box<dyn Environment + Send + Sync>,
-    out: PathBuf,
-    prices: PriceTable,
-    /// The recording a replay answers from and is checked against, and its file.
-    recording: Option<(Replay, PathBuf)>,
+}
+
+impl std::fmt::Debug for EpisodeSpec {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("EpisodeSpec")
+            .field("task", &self.task.meta.name)
+            .field("settings", &self.settings)
+            .field("budget", &self.budget)
+            .field("backend", &self.backend.info())
+            .field("robots", &self.robots)
+            .finish_non_exhaustive()
+    }
 }
 
 impl std::fmt::Debug for Prepared {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Prepared")
-            .field("task", &self.task.meta.name)
-            .field("settings", &self.settings)
-            .field("budget", &self.budget)
-            .field("backend", &self.backend.info())
+            .field("spec", &self.spec)
             .finish_non_exhaustive()
     }
 }
 
+/// Builds the environment of the episode `spec` (over ROS 2, once the robots' servers
+/// are there; `cancel` cancels a goal in flight).
+pub fn prepare(mut spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Error> {
+    spec.settings.robots = spec.robots.record();
+    let env = environment(&spec.task, spec.settings.physics, &spec.robots, cancel)?;
+    Ok(Prepared { spec, env })
+}
+
+/// An episode read back from its transcript: the task it ran and what it recorded.
+#[derive(Debug)]
+pub struct Recorded {
+    pub task: Arc<Task>,
+    pub transcript: Transcript,
+    /// The transcript's file.
+    pub path: PathBuf,
+}
+
+/// The episode recorded in the transcript at `path`, of at most `max_bytes`.
+pub fn recorded(path: &Path, max_bytes: u64) -> Result<Recorded, Error> {
+    let transcript = transcript::read_within(path, max_bytes)?;
+    let task = Arc::new(episode::recorded_task(&transcript, path)?);
+    Ok(Recorded {
+        task,
+        transcript,
+        path: path.to_owned(),
+    })
+}
+
+impl Recorded {
+    /// The summary of a finished episode; an error when the transcript has none (the
+    /// episode was killed before its end).
+    pub fn finished(&self) -> Result<&transcript::Summary, Error> {
+        self.transcript.summary.as_ref().ok_or_else(|| Error::File {
+            file: self.path.display().to_string(),
+            line: None,
+            message: "no summary line: the episode did not finish".into(),
+        })
+    }
+
+    /// What its model calls cost at `prices`, by the rule they cost when it ran
+    /// ([`ModelUse`]); `None` when the model has no price or the episode did not finish.
+    pub fn cost(&self, prices: &PriceTable) -> Option<f64> {
+        let t = &self.transcript;
+        let summary = t.summary.as_ref()?;
+        ModelUse::of(&t.header, &t.rounds, summary).cost(prices)
+    }
+}
+
+/// How an episode's replay came out.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum ReplayCheck {
+    /// Every round and the summary as recorded.
+    Same,
+    /// It first differs here.
+    Differs(String),
+}
+
 /// An episode as it ran: the transcript as written (in memory), where it is, whether the
-/// goal holds at the end, and for a replay whether it came out as recorded.
+/// goal holds at the end, for a replay whether it came out as recorded, and what its
+/// model calls cost.
 #[derive(Debug)]
 pub struct Ran {
     pub task: Arc<Task>,
     pub transcript: Transcript,
     pub path: PathBuf,
     pub goal_satisfied: bool,
-    /// `Some(Err(why))` when a replayed round or summary differs from the recording.
-    pub replay: Option<Result<(), String>>,
-    /// What the model calls cost in USD (`PriceTable::episode_cost`); `None` when the
-    /// model has no price.
+    /// `Some` for a replay.
+    pub replay: Option<ReplayCheck>,
+    /// The model that answered, the tokens and the calls.
+    pub model_use: ModelUse,
+    /// What the model calls cost in USD ([`ModelUse::cost`]); `None` when the model has
+    /// no price.
     pub cost_usd: Option<f64>,
+}
+
+/// How an episode ended, as the front ends report it (an exit status, an exception).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Ending {
+    /// The goal holds.
+    GoalReached,
+    /// The step budget is spent.
+    BudgetSpent,
+    /// The model's server failed for good.
+    BackendFailed(String),
+    /// A replay did not come out as recorded.
+    ReplayDiffers(String),
+    /// A method written outside the crate (Python) raised.
+    MethodFailed(String),
+    /// A robot over ROS 2 stopped answering (or disagreed with the rules): the
+    /// environment stopped the episode.
+    RobotStopped(String),
+    /// Stopped from outside (Ctrl-C).
+    Interrupted,
 }
 
 impl Ran {
@@ -160,81 +338,52 @@ impl Ran {
             .as_ref()
             .expect("a finished episode has its summary")
     }
-}
 
-/// Prepares a new episode: sizes its budget (which may plan, stopped by `cancel`),
-/// builds its backend and its environment.
-pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Failure> {
-    let limits = Limits {
-        cancel: Some(cancel.flag()),
-        ..Limits::max_states(spec.max_states)
-    };
-    let budget = Budget::of(&spec.task, spec.max_steps, &limits)?;
-    let seed = spec.settings.seed.unwrap_or(0);
-    let backend = spec.backend.for_episode(&limits, seed).ok_or_else(|| {
-        Failure::Other("a benchmark's replay backend answers benchmark episodes only".into())
-    })?;
-    let env = environment(&spec.task, spec.settings.physics, &spec.robots, cancel)?;
-    Ok(Prepared {
-        task: spec.task,
-        settings: spec.settings,
-        budget,
-        backend,
-        env,
-        out: spec.out,
-        prices: spec.prices,
-        recording: None,
-    })
-}
-
-/// Prepares the replay of the episode recorded at `path`: the task, settings (the prompt
-/// set included) and budget as recorded, answered from the recording (no network). With
-/// `given`, the recorded task must be that task. `prices` prices the recorded tokens; a
-/// transcript of more than `max_bytes` is refused.
-pub fn prepare_replay(
-    path: &Path,
-    given: Option<&Task>,
-    out: PathBuf,
-    prices: PriceTable,
-    max_bytes: u64,
-) -> Result<Prepared, Failure> {
-    let recorded = transcript::read_within(path, max_bytes)?;
-    if let Some(given) = given
-        && native::to_value(given) != recorded.header.task
-    {
-        return Err(Failure::Other(format!(
-            "the task given differs from the one recorded in {}",
-            path.display()
-        )));
+    /// How the episode ended; a replay that differs from its recording says so first.
+    pub fn ending(&self) -> Ending {
+        if let Some(ReplayCheck::Differs(why)) = &self.replay {
+            return Ending::ReplayDiffers(why.clone());
+        }
+        let s = self.summary();
+        let error = || s.error.clone().unwrap_or_default();
+        match s.status {
+            Status::Success => Ending::GoalReached,
+            Status::Failure => Ending::BudgetSpent,
+            Status::BackendError => Ending::BackendFailed(error()),
+            Status::Error => Ending::MethodFailed(error()),
+            // Only the environment says why when it stops an episode; Ctrl-C says nothing.
+            Status::Interrupted if s.error.is_some() => Ending::RobotStopped(error()),
+            Status::Interrupted => Ending::Interrupted,
+        }
     }
-    let replay = Replay::prepare(&recorded, path)?;
-    let env = environment(
-        &replay.task,
-        replay.settings.physics,
-        &Robots::Local,
-        &Cancel::default(),
-    )?;
-    Ok(Prepared {
-        task: Arc::clone(&replay.task),
-        settings: replay.settings.clone(),
-        budget: replay.budget,
-        backend: Arc::clone(&replay.backend) as Arc<dyn Backend>,
-        env,
-        out,
-        prices,
-        recording: Some((replay, path.to_owned())),
-    })
 }
 
 impl Prepared {
+    pub fn task(&self) -> &Arc<Task> {
+        &self.spec.task
+    }
+
+    pub fn settings(&self) -> &Settings {
+        &self.spec.settings
+    }
+
+    pub fn budget(&self) -> Budget {
+        self.spec.budget
+    }
+
     /// The backend that answers, as the transcript records it.
     pub fn backend_info(&self) -> BackendInfo {
-        self.backend.info()
+        self.spec.backend.info()
+    }
+
+    /// The backend chosen for a new episode (none for a replay).
+    pub fn backend_choice(&self) -> Option<&BackendChoice> {
+        self.spec.choice.as_ref()
     }
 
     /// The transcript a replay answers from.
     pub fn replaying(&self) -> Option<&Path> {
-        self.recording.as_ref().map(|(_, p)| p.as_path())
+        self.spec.recording.as_ref().map(|(_, p)| p.as_path())
     }
 
     /// Runs the episode, writing its transcript into the output folder; `progress` sees
@@ -243,35 +392,30 @@ impl Prepared {
         mut self,
         cancel: &Cancel,
         progress: &mut (dyn FnMut(&Round) + Send),
-    ) -> Result<Ran, Failure> {
-        let path = episode::transcript_path(&self.out, &self.task, self.settings.method.name());
+    ) -> Result<Ran, Error> {
+        let spec = &self.spec;
+        let path = episode::transcript_path(&spec.out, &spec.task, spec.settings.method.name());
         let (episode, header) = episode::run(
-            &self.task,
+            &spec.task,
             self.env.as_mut(),
-            self.backend.as_ref(),
-            &self.settings,
-            self.budget,
+            spec.backend.as_ref(),
+            &spec.settings,
+            spec.budget,
             &path,
             cancel,
             progress,
         )
         .await?;
-        let replay = self
-            .recording
-            .as_ref()
-            .map(|(replay, _)| replay.check(&episode));
+        let replay = spec.recording.as_ref().map(|(replay, _)| {
+            replay
+                .difference(&episode)
+                .map_or(ReplayCheck::Same, ReplayCheck::Differs)
+        });
         let Episode { rounds, summary } = episode;
-        let usage = Usage {
-            prompt_tokens: summary.prompt_tokens,
-            completion_tokens: summary.completion_tokens,
-            cached_tokens: summary.cached_tokens,
-        };
-        let uses_model = self.settings.method.uses_model();
-        let cost_usd = self
-            .prices
-            .episode_cost(&header.backend.model, uses_model, &usage);
+        let model_use = ModelUse::of(&header, &rounds, &summary);
+        let cost_usd = model_use.cost(&spec.prices);
         Ok(Ran {
-            task: self.task,
+            task: Arc::clone(&spec.task),
             transcript: Transcript {
                 header,
                 rounds,
@@ -280,6 +424,7 @@ impl Prepared {
             path,
             goal_satisfied: self.env.goal_satisfied(),
             replay,
+            model_use,
             cost_usd,
         })
     }

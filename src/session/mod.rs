@@ -1,43 +1,62 @@
 //! The session layer: the one way through the engine that every front end takes.
 //!
 //! The `coherent` command (`crate::cli`) and the Python package (`coherent-py`) parse
-//! their arguments and print or convert results; everything between — resolving the
-//! model endpoint, choosing the backend, reading tasks, building the environment, running,
-//! replaying and benchmarking episodes, validating and planning, drawing a scene — is
-//! here, written once:
+//! their arguments into the session's types, call it, and print or convert what comes
+//! back; everything between is here, written once:
 //!
-//! - [`endpoint`]: the model endpoint from explicit settings and the environment;
-//! - [`backend`]: which backend answers the model's roles (built-in, simulated,
-//!   OpenAI-compatible, replay), with the rules that tie the settings together;
-//! - [`tasks`]: reading task files, the compiled-in benchmark, picking one task;
-//! - [`episode`]: one episode, run or replayed, in a symbolic or physical environment or
-//!   with robots over ROS 2;
-//! - [`prompts`]: the prompt set and the price table a run is given, checked up front;
-//! - [`bench`]: methods x tasks x seeds into a resumable results file;
+//! - [`episode`]: an episode as a front end asks for it ([`episode::RunRequest`],
+//!   [`episode::ReplayRequest`]), prepared in one call, and the one episode runner under
+//!   `run`, `replay` and `bench`, in a symbolic or physical environment or with robots
+//!   over ROS 2;
+//! - [`bench`]: methods x tasks x seeds into a resumable results file, locally or
+//!   through a worker of a distributed executor;
+//! - [`backend`]: which backend answers, the model endpoint completed from the
+//!   environment;
+//! - [`robots`]: who carries the actions out, the reference robot servers over ROS 2;
+//! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
-//! - [`render`]: the scene from above and the robots' paths.
+//! - [`render`]: the scene from above and the robots' paths;
+//! - [`error`]: what goes wrong, by kind;
+//! - [`engine`]: the types of the crates below that front ends use on purpose
+//!   (`docs/architecture.md`, "What the session re-exports").
+//!
+//! [`runtime`] is the one place an async runtime is built.
 
 pub mod backend;
 pub mod bench;
 pub mod check;
-pub mod endpoint;
+pub mod engine;
 pub mod episode;
+pub mod error;
 pub mod prompts;
 pub mod render;
+pub mod robots;
 pub mod tasks;
 
 use std::future::Future;
+use std::sync::OnceLock;
 
-/// Runs `future` to completion on a runtime made for it.
-pub fn block_on<F: Future>(future: F) -> Result<F::Output, String> {
+pub use error::{Error, Result};
+
+/// Runs `future` to completion on the session's runtime, from a thread outside it.
+pub fn block_on<F: Future>(future: F) -> Result<F::Output> {
     Ok(runtime()?.block_on(future))
 }
 
-/// The one place the engine's async work (model calls, timers, concurrent episodes)
-/// gets a runtime. Multi-threaded, so that a benchmark's episodes use every core.
-pub fn runtime() -> Result<tokio::runtime::Runtime, String> {
-    tokio::runtime::Builder::new_multi_thread()
-        .enable_all()
-        .build()
-        .map_err(|e| format!("cannot start the async runtime: {e}"))
+/// The runtime of the engine's async work (model calls, timers, concurrent episodes, the
+/// robots' DDS traffic), built once per process on first use: the one place a runtime
+/// is built. Multi-threaded, so that a benchmark's episodes use every core.
+pub fn runtime() -> Result<&'static tokio::runtime::Runtime> {
+    static RUNTIME: OnceLock<std::result::Result<tokio::runtime::Runtime, String>> =
+        OnceLock::new();
+    RUNTIME
+        .get_or_init(|| {
+            tokio::runtime::Builder::new_multi_thread()
+                .thread_name("coherent")
+                .enable_all()
+                .build()
+                .map_err(|e| format!("cannot start the async runtime: {e}"))
+        })
+        .as_ref()
+        .map_err(|why| Error::Internal(why.clone()))
 }

@@ -1,28 +1,63 @@
 //! What a run is given besides its task and backend, read once for `run`, `bench` and
-//! Python alike: the prompt set (the built-in templates, with the files of a folder in
-//! their place) and the price table (the built-in one, with a file's entries added).
-//! Both are checked here, before any episode starts, so that a bad template costs no
-//! model call.
+//! Python alike: the prompt set (the built-in templates, with others in their place) and
+//! the price table (the built-in one, with entries added). Both are read before any
+//! episode starts, so that a bad template costs no model call.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
-use coherent_agents::{PriceTable, PromptError, Prompts};
+use coherent_agents::{PriceTable, Prompts, templates};
 
-/// The prompt set: the built-in templates, with those of `dir` in their place.
-pub fn prompt_set(dir: Option<&Path>) -> Result<Prompts, PromptError> {
-    match dir {
-        Some(dir) => Prompts::read_dir(dir),
-        None => Ok(Prompts::builtin()),
+use crate::session::error::Error;
+
+/// Where a run's prompt templates come from.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum PromptSource {
+    /// The built-in templates.
+    #[default]
+    Builtin,
+    /// A folder whose template files replace the built-in ones of the same name.
+    Folder(PathBuf),
+    /// Template texts by file name, in place of the built-in ones of that name (Python's
+    /// dict, a worker's copy of the driver's set).
+    Texts(Vec<(String, String)>),
+}
+
+impl PromptSource {
+    /// The prompt set; an error names the file, the line and the placeholder.
+    pub fn read(self) -> Result<Prompts, Error> {
+        Ok(match self {
+            PromptSource::Builtin => Prompts::builtin(),
+            PromptSource::Folder(dir) => Prompts::read_dir(&dir)?,
+            PromptSource::Texts(files) => Prompts::from_texts(Path::new("prompts"), files)?,
+        })
     }
 }
 
-/// The price table: the built-in one, with the entries of the file at `file` (JSON, or
-/// TOML for a `.toml` file) added or in place of those of the same model.
-pub fn price_table(file: Option<&Path>) -> Result<PriceTable, String> {
-    let builtin = PriceTable::builtin();
-    match file {
-        Some(file) => Ok(builtin.overridden_by(PriceTable::read(file)?)),
-        None => Ok(builtin),
+/// Where a run's prices come from.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum PriceSource {
+    /// The built-in table.
+    #[default]
+    Builtin,
+    /// A price file (JSON, or TOML for a `.toml` file) whose entries are added to the
+    /// built-in table, in place of those of the same model.
+    File(PathBuf),
+    /// The entries of a JSON object by model, added likewise (Python's dict, a worker's
+    /// copy of the driver's table).
+    Json(String),
+}
+
+impl PriceSource {
+    /// The price table.
+    pub fn read(self) -> Result<PriceTable, Error> {
+        let builtin = PriceTable::builtin();
+        Ok(match self {
+            PriceSource::Builtin => builtin,
+            PriceSource::File(file) => builtin.overridden_by(PriceTable::read(&file)?),
+            PriceSource::Json(text) => {
+                builtin.overridden_by(PriceTable::parse_json(&text, "prices")?)
+            }
+        })
     }
 }
 
@@ -39,6 +74,12 @@ pub fn blank_warnings(origin: &Path, prompts: &Prompts) -> Vec<String> {
             )
         })
         .collect()
+}
+
+/// Writes every built-in template into `dir` (made when missing), one file each, and
+/// overwrites templates already there when `overwrite`; returns the files written.
+pub fn export(dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>, Error> {
+    Ok(templates::export(dir, overwrite)?)
 }
 
 /// One line about a prompt set that replaces built-in templates (`None` for the

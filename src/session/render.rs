@@ -3,10 +3,12 @@
 
 use std::sync::Arc;
 
-use coherent_agents::transcript::{Outcome, Transcript};
+use coherent_agents::transcript::{RoundOutcome, Transcript};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task};
 use coherent_sim::{PhysicalEnv, layout, render};
+
+use crate::session::error::Error;
 
 /// A robot's track, `[x, y, z]` points, as `coherent_sim` records it.
 pub type RobotPath = (coherent_core::NodeId, Vec<[f32; 3]>);
@@ -20,21 +22,30 @@ pub struct Paths {
 }
 
 /// The task's scene at its start from above, with `paths` drawn when given.
-pub fn svg(task: &Task, paths: Option<&[RobotPath]>) -> Result<String, String> {
-    let layout = layout::for_task(task).map_err(|e| format!("layout: {}", e.0))?;
-    Ok(render::svg(task, &layout, &task.init, paths))
+pub fn svg(task: &Task, paths: Option<&[RobotPath]>) -> Result<String, Error> {
+    Ok(render::svg(task, &scene_layout(task)?, &task.init, paths))
+}
+
+/// The geometry of `task`'s scene: its own, or the one generated from its graph.
+pub fn scene_layout(task: &Task) -> Result<layout::Layout, Error> {
+    layout::for_task(task).map_err(|e| {
+        Error::Physics(coherent_sim::PhysicsError {
+            kind: coherent_sim::FailureKind::Layout,
+            message: format!("layout: {}", e.0),
+        })
+    })
 }
 
 /// The robots' paths when the task's optimal plan is carried out in physics.
-pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, String> {
+pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, Error> {
     let analysis = planner::analyse(task, limits);
     let plan = analysis.plan.ok_or_else(|| {
-        format!(
+        Error::Invalid(format!(
             "no plan to draw: {}",
             analysis
                 .reason
                 .unwrap_or_else(|| "the search stopped".into())
-        )
+        ))
     })?;
     let report = coherent_sim::execute_plan(task, &plan);
     Ok(Paths {
@@ -46,18 +57,17 @@ pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, String> {
 }
 
 /// The robots' paths when the transcript's executed actions are carried out in physics.
-pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, String> {
-    let mut env =
-        PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {}", e.message))?;
+pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
+    let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
     for round in &t.rounds {
-        let (Outcome::Executed, Some(p), Some(d)) =
+        let (RoundOutcome::Executed, Some(p), Some(d)) =
             (&round.outcome, &round.proposal, &round.decision)
         else {
             continue;
         };
         let Some(action) = &d.action else { continue };
-        let outcome = env.step(p.robot, action).map_err(|e| e.to_string())?;
+        let outcome = env.step(p.robot, action)?;
         if let Some(why) = outcome.infeasible {
             warning = Some(format!(
                 "round {}: {action} failed in physics, paths drawn up to there: {why}",

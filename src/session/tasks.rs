@@ -1,9 +1,31 @@
 //! Reading tasks: files and folders of either format, the project's own benchmark by
-//! its name, and one task of a file.
+//! its name, one task of a file, and where an episode's task comes from
+//! ([`TaskSource`]).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
+use coherent_agents::bench::{Subset, select};
 use coherent_core::{Error, Task, benchmark, load};
+
+/// Where an episode's task comes from.
+#[derive(Clone, Debug, PartialEq)]
+pub enum TaskSource {
+    /// The task `task_id` of a file (its only task when `None`).
+    File { path: PathBuf, task_id: Option<i64> },
+    /// A task already read.
+    Given(Arc<Task>),
+}
+
+impl TaskSource {
+    /// The task.
+    pub fn task(self) -> Result<Arc<Task>, Error> {
+        match self {
+            TaskSource::File { path, task_id } => pick_task(&path, task_id).map(Arc::new),
+            TaskSource::Given(task) => Ok(task),
+        }
+    }
+}
 
 /// The tasks at `path` ([`load::read_tasks`]: one result per task, so that one malformed
 /// task does not hide the others), or, when `path` is `native` and no such file exists,
@@ -13,6 +35,11 @@ pub fn read_tasks(path: &Path) -> coherent_core::Result<Vec<coherent_core::Resul
         return Ok(benchmark::tasks()?.into_iter().map(Ok).collect());
     }
     load::read_tasks(path)
+}
+
+/// The project's own benchmark, compiled in: the tasks `subset` picks of it.
+pub fn benchmark(subset: &Subset) -> Result<Vec<Arc<Task>>, crate::session::Error> {
+    Ok(select(benchmark::tasks()?, subset)?.tasks)
 }
 
 /// What [`read_all`] found.
@@ -49,9 +76,13 @@ pub fn read_all(paths: &[PathBuf]) -> Read {
 }
 
 /// The task `id` of `file`, or its only task when `id` is `None`.
-pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
-    let results = read_tasks(file).map_err(|e| e.to_string())?;
-    let name = file.display();
+pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, Error> {
+    let results = read_tasks(file)?;
+    let name = file.display().to_string();
+    let no = |message: String| Error::Io {
+        file: name.clone(),
+        message,
+    };
     match id {
         Some(id) => {
             let mut malformed = Vec::new();
@@ -62,18 +93,18 @@ pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, String> {
                     Err(e) => malformed.push(e.to_string()),
                 }
             }
-            let mut message = format!("{name}: no well-formed task with task_id {id}");
+            let mut message = format!("no well-formed task with task_id {id}");
             for e in malformed {
                 message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
             }
-            Err(message)
+            Err(no(message))
         }
         None => {
             let mut results = results;
             match results.len() {
-                1 => results.pop().expect("one task").map_err(|e| e.to_string()),
-                0 => Err(format!("{name}: no tasks")),
-                n => Err(format!("{name}: {n} tasks; choose one with --task ID")),
+                1 => results.pop().expect("one task"),
+                0 => Err(no("no tasks".into())),
+                n => Err(no(format!("{n} tasks; choose one with --task ID"))),
             }
         }
     }

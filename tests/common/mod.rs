@@ -53,9 +53,22 @@ pub fn demo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json")
 }
 
-/// The released env0 tasks (`COHERENT_ORIGINAL_ENV`, set in `.cargo/config.toml`).
+/// The released benchmark's folder (`COHERENT_ORIGINAL_ENV`, set in
+/// `.cargo/config.toml`).
+pub fn released() -> PathBuf {
+    PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
+}
+
+/// The released env0 tasks.
 pub fn env0() -> PathBuf {
-    Path::new(env!("COHERENT_ORIGINAL_ENV")).join("env0.json")
+    released().join("env0.json")
+}
+
+/// Task `id` of the released scene `scene` (`env0`..`env3`).
+pub fn released_task(scene: &str, id: i64) -> std::sync::Arc<coherent::session::engine::Task> {
+    let path = released().join(format!("{scene}.json"));
+    let task = coherent::session::tasks::pick_task(&path, Some(id)).expect("the task is there");
+    std::sync::Arc::new(task)
 }
 
 /// One HTTP/1.1 request as a server sees it.

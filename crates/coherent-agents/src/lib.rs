@@ -22,43 +22,57 @@
 //!   ([`builtin`]; with seeded mistakes, the simulated backend) and a recorded transcript
 //!   ([`replay`]).
 //! - [`records`]: what an episode leaves behind. Its [`transcript`], and [`Replay`],
-//!   which sets up the replay of a recorded episode and checks it against the recording.
-//! - [`harness`]: the benchmark. [`bench`](mod@bench) runs methods x tasks x seeds into a
-//!   results file, each line priced from a [`PriceTable`] ([`prices`]); [`report`] turns
-//!   it into the paper's tables.
+//!   which sets up the replay of a recorded episode and compares it with the recording.
+//! - [`harness`] (also named [`bench`](mod@bench)): the benchmark's bookkeeping. The
+//!   results file and the [`Ledger`](bench::Ledger) that resumes it, the subsets, what an
+//!   episode costs ([`prices`]: a [`PriceTable`] and [`ModelUse`]), and [`report`], the
+//!   paper's tables. Running the episodes is the session's (the root package).
+//!
+//! [`Error`] is what a caller outside the crate gets when something cannot be done.
 //!
 //! No file reaches back to one that uses it. From the bottom: [`llm`] is the vocabulary
 //! of a model call; the transcript records calls in it; the backends answer them (the
 //! replay one from a transcript; the built-in one picks from the [`joint`] action
 //! space); the episode loop asks backends and fills the records; the methods are built
 //! on the loop, and [`episode::run()`] on the methods; [`Replay`] prepares a run of it,
-//! and the harness drives it all. [`rng`] is the crate's one random number generator.
+//! and the harness keeps the books of many. [`rng`] is the crate's one random number
+//! generator.
 //!
 //! The modules are also reachable at the crate root by their short names
 //! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
 
 pub mod backends;
 pub mod episode;
+pub mod error;
 pub mod harness;
 pub mod methods;
 pub mod records;
 pub mod rng;
 
 pub use backends::{builtin, llm, openai, replay, retry};
-pub use harness::{bench, prices, report};
-pub use methods::{cmrs, dmrs, external, joint, mcts, optimal, pefa, prompt, templates};
+pub use harness as bench;
+pub use harness::{prices, report};
+pub use methods::{
+    answer, central, cmrs, dmrs, external, feedback, joint, mcts, optimal, pefa, prompt, templates,
+};
 pub use records::transcript;
 
 pub use backends::builtin::BuiltinBackend;
-pub use backends::llm::{Answer, Backend, BackendInfo, LlmError, LlmErrorKind, OutputMode};
+pub use backends::llm::{
+    Answer, Backend, BackendInfo, BackendKind, LlmError, LlmErrorKind, OutputMode,
+};
 pub use backends::openai::{ApiKey, Chat, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
-pub use episode::{Budget, Cancel, Episode, External, Method, MethodSpec, Policy, Settings, View};
-pub use harness::prices::PriceTable;
+pub use episode::{
+    Budget, Cancel, Episode, External, HISTORY_WINDOW, History, Method, MethodSpec, Policy,
+    Settings, StepView,
+};
+pub use error::Error;
+pub use harness::prices::{ModelUse, PriceTable};
 pub use methods::assigner::TaskAssigner;
 pub use methods::executor::RobotExecutor;
 pub use methods::pefa::PefaConfig;
 pub use methods::templates::{PromptError, Prompts};
 pub use records::replay::Replay;
-pub use records::transcript::{Status, Summary, Transcript};
+pub use records::transcript::{RoundOutcome, Status, Summary, Transcript};

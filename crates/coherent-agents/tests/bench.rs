@@ -1,18 +1,14 @@
-//! The benchmark harness and its tables: resume after a crash, reproducibility whatever
-//! the concurrency, the paper40 selection, and report numbers worked out by hand.
+//! The benchmark's bookkeeping and its tables: the paper40 selection, subset files, the
+//! results file read back, and report numbers worked out by hand. (Runs, resumed and
+//! cancelled: the root package's `tests/bench_runs.rs`.)
 
 use std::path::PathBuf;
-use std::sync::Arc;
 
-use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, EpisodeSettings, ResultLine, Subset,
-};
-use coherent_agents::episode::{Method, MethodSpec};
-use coherent_agents::llm::BackendInfo;
+use coherent_agents::PriceTable;
+use coherent_agents::bench::{self, ResultLine, Subset};
+use coherent_agents::llm::{BackendInfo, BackendKind};
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
-use coherent_agents::{Cancel, ErrorRates, PriceTable};
-use coherent_core::Task;
 
 mod common;
 
@@ -21,25 +17,6 @@ fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("scratch folder");
     dir
-}
-
-fn config(out: PathBuf, methods: Vec<Method>, backend: BackendChoice) -> BenchConfig {
-    BenchConfig {
-        episodes: EpisodeSettings::new(
-            methods.into_iter().map(MethodSpec::from).collect(),
-            backend,
-        ),
-        seeds: 1,
-        concurrency: 2,
-        out,
-        max_results_bytes: bench::DEFAULT_MAX_RESULTS_BYTES,
-    }
-}
-
-fn paper40_env0() -> Vec<Arc<Task>> {
-    bench::select(common::scenes(&[0]), &Subset::Paper40)
-        .expect("distinct tasks")
-        .tasks
 }
 
 #[test]
@@ -77,255 +54,155 @@ fn a_subset_file_picks_its_pairs_and_reports_absent_ones() {
     assert_eq!(ids, [2, 4]);
     assert_eq!(s.missing, [("env9".to_owned(), 1)]);
     std::fs::write(&path, "env0 2\nenv0 four\n").expect("write");
-    let e = Subset::read_file(&path).expect_err("a bad id");
+    let e = Subset::read_file(&path).expect_err("a bad id").to_string();
     assert!(e.contains("subset.txt: line 2"), "{e}");
 }
 
-fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
-    ResultLine {
-        method: "pefa".into(),
-        scene: task.meta.scene.clone(),
-        task_id: task.meta.task_id,
-        task_type: Some("mono".into()),
-        seed,
-        episode_seed: 0,
-        success: status == Status::Success,
-        status,
-        steps,
-        gt_steps: task.meta.gt_steps,
-        optimal_steps: None,
-        max_steps: 99,
-        llm_calls: 0,
-        prompt_tokens: 0,
-        completion_tokens: 0,
-        cached_tokens: 0,
-        cost_usd: None,
-        wall_ms: 0.0,
-        backend: BackendInfo {
-            kind: "builtin".into(),
-            model: "optimal-planner".into(),
-            base_url: None,
-        },
-        uses_model: true,
-        error: None,
-        transcript: String::new(),
-    }
-}
-
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn resume_skips_finished_episodes_reruns_unfinished_ones_and_repairs_a_cut_line() {
-    let dir = scratch("resume");
-    let out = dir.join("results.jsonl");
-    let tasks: Vec<Arc<Task>> = paper40_env0().into_iter().take(3).collect();
-    // Task 0 finished (with a step count no real run gives, to see it is kept), task 1
-    // stopped on a backend error, and a line for task 2 was cut off by a crash.
-    let finished = hand_line(&tasks[0], 0, Status::Success, 77);
-    let failed = hand_line(&tasks[1], 0, Status::BackendError, 1);
-    let mut text = String::new();
-    for l in [&finished, &failed] {
-        text.push_str(&serde_json::to_string(l).expect("encodes"));
-        text.push('\n');
-    }
-    text.push_str(r#"{"method":"pefa","scene":"env0","task_id":"#);
-    std::fs::write(&out, &text).expect("write");
-
-    let config = config(out.clone(), vec![Method::Pefa], BackendChoice::Builtin);
-    let mut events = 0;
-    let outcome = bench::run(&tasks, &config, &Cancel::default(), &mut |_| events += 1)
-        .await
-        .expect("runs");
-    assert_eq!(outcome.total, 3);
-    assert_eq!(outcome.skipped, 1, "the finished episode is not run again");
-    assert_eq!(
-        outcome.written, 2,
-        "the backend error and the cut-off one run"
-    );
-    assert_eq!(outcome.unfinished, 0);
-    assert!(outcome.repaired_bytes > 0);
-    assert_eq!(events, 1 + 2, "a start event and one per episode");
-
-    let file = bench::read_results(&out).expect("a clean file now");
-    assert_eq!(file.truncated_bytes, 0);
-    assert_eq!(file.lines.len(), 4);
-    let (finals, unfinished) = report::final_lines(&file.lines);
-    assert_eq!((finals.len(), unfinished), (3, 0));
-    let kept = finals
-        .iter()
-        .find(|l| l.task_id == tasks[0].meta.task_id)
-        .expect("task 0");
-    assert_eq!(kept.steps, 77);
-    assert!(finals.iter().all(|l| l.status == Status::Success));
-
-    // Everything is finished: a third run runs nothing.
-    let again = bench::run(&tasks, &config, &Cancel::default(), &mut |_| {})
-        .await
-        .expect("runs");
-    assert_eq!((again.skipped, again.written), (3, 0));
-    assert_eq!(bench::read_results(&out).expect("reads").lines.len(), 4);
-}
-
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_cancelled_run_writes_nothing_twice_and_the_rerun_finishes_the_rest() {
-    let dir = scratch("cancel");
-    let out = dir.join("results.jsonl");
-    let tasks = paper40_env0();
-    let mut config = config(
-        out.clone(),
-        vec![Method::Pefa, Method::Mcts],
-        BackendChoice::Builtin,
-    );
-    config.concurrency = 1;
-    let cancel = Cancel::default();
-    let stop = cancel.clone();
-    let mut seen = 0;
-    let first = bench::run(&tasks, &config, &cancel, &mut |e| {
-        if matches!(e, bench::Event::Finished(_)) {
-            seen += 1;
-            if seen == 3 {
-                stop.cancel();
-            }
-        }
-    })
-    .await
-    .expect("runs");
-    assert!(first.interrupted);
-    assert!(first.written >= 3 && first.written < 16, "{first:?}");
-    let second = bench::run(&tasks, &config, &Cancel::default(), &mut |_| {})
-        .await
-        .expect("runs");
-    assert!(!second.interrupted);
-    let lines = bench::read_results(&out).expect("reads").lines;
-    let (finals, unfinished) = report::final_lines(&lines);
-    assert_eq!((finals.len(), unfinished), (16, 0));
-    let finished_first = lines[..first.written]
-        .iter()
-        .filter(|l| l.is_final())
-        .count();
-    assert_eq!(second.skipped, finished_first);
-    // No episode has two final lines.
-    let finals_written = lines.iter().filter(|l| l.is_final()).count();
-    assert_eq!(finals_written, 16);
-}
-
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_same_seeds_give_the_same_lines_at_concurrency_1_and_4() {
-    let dir = scratch("determinism");
-    let tasks = paper40_env0();
-    let rates = ErrorRates::parse("all=0.2").expect("valid rates");
-    let mut lines = Vec::new();
-    for concurrency in [1, 4] {
-        let out = dir.join(format!("c{concurrency}.jsonl"));
-        let mut config = config(
-            out.clone(),
-            vec![Method::Pefa, Method::PefaNoHistory, Method::Mcts],
-            BackendChoice::Simulated(rates),
-        );
-        config.seeds = 2;
-        config.concurrency = concurrency;
-        bench::run(&tasks, &config, &Cancel::default(), &mut |_| {})
-            .await
-            .expect("runs");
-        let mut got: Vec<ResultLine> = bench::read_results(&out)
-            .expect("reads")
-            .lines
-            .into_iter()
-            .map(|l| ResultLine {
-                wall_ms: 0.0,
-                transcript: String::new(),
-                ..l
-            })
-            .collect();
-        got.sort_by_key(ResultLine::key);
-        lines.push(got);
-    }
-    assert_eq!(lines[0].len(), 8 * 3 * 2);
-    assert_eq!(lines[0], lines[1]);
-    // The errors bite: some model-using episode takes more steps than the optimum.
-    assert!(
-        lines[0]
-            .iter()
-            .any(|l| l.uses_model && l.optimal_steps.is_some_and(|o| l.steps > o)),
-        "no simulated error changed any episode"
-    );
-    assert!(
-        lines[0]
-            .iter()
-            .all(|l| l.backend.kind == "simulated" && l.is_final())
-    );
-    // Seeds differ: the two seeds of some episode differ.
-    let differ = lines[0].windows(2).any(|w| {
-        w[0].method == w[1].method && w[0].task_id == w[1].task_id && w[0].steps != w[1].steps
-    });
-    assert!(differ, "seed 0 and seed 1 ran alike everywhere");
-}
-
-#[allow(clippy::too_many_arguments)]
-fn line(
-    method: &str,
-    scene: &str,
+/// A results line written by hand, field by field; what a test leaves out is the
+/// default: pefa on env0 task 1 (mono, ground truth 5), seed 0, a success in 5 steps with
+/// 10 model calls of 100 prompt and 10 completion tokens each, on the simulated backend.
+#[derive(Clone, Copy)]
+struct Hand {
+    method: &'static str,
+    scene: &'static str,
     task_id: i64,
-    kind: Option<&str>,
+    task_type: &'static str,
     gt: u32,
     seed: u32,
     status: Status,
     steps: u32,
     calls: u32,
-) -> String {
-    let mut l = ResultLine {
-        method: method.into(),
-        scene: scene.into(),
-        task_id,
-        task_type: kind.map(Into::into),
-        seed,
-        episode_seed: 0,
-        success: status == Status::Success,
-        status,
-        steps,
-        gt_steps: Some(gt),
-        optimal_steps: Some(gt),
-        max_steps: gt.saturating_mul(2),
-        llm_calls: calls,
-        prompt_tokens: u64::from(calls) * 100,
-        completion_tokens: u64::from(calls) * 10,
-        cached_tokens: 0,
-        cost_usd: None,
-        wall_ms: 1.0,
-        backend: BackendInfo {
-            kind: "simulated".into(),
-            model:
-                "optimal-planner with errors hallucinate=0.1,wrong_robot=0,malformed=0,suboptimal=0"
-                    .into(),
-            base_url: None,
-        },
-        uses_model: true,
-        error: None,
-        transcript: "t.jsonl".into(),
-    };
-    if method == "mcts" {
-        l.uses_model = false;
+}
+
+impl Default for Hand {
+    fn default() -> Hand {
+        Hand {
+            method: "pefa",
+            scene: "env0",
+            task_id: 1,
+            task_type: "mono",
+            gt: 5,
+            seed: 0,
+            status: Status::Success,
+            steps: 5,
+            calls: 10,
+        }
     }
-    serde_json::to_string(&l).expect("encodes") + "\n"
+}
+
+impl Hand {
+    fn line(self) -> ResultLine {
+        ResultLine {
+            method: self.method.into(),
+            scene: self.scene.into(),
+            task_id: self.task_id,
+            task_type: Some(self.task_type.into()),
+            seed: self.seed,
+            episode_seed: 0,
+            success: self.status == Status::Success,
+            status: self.status,
+            steps: self.steps,
+            gt_steps: Some(self.gt),
+            optimal_steps: Some(self.gt),
+            max_steps: self.gt.saturating_mul(2),
+            llm_calls: self.calls,
+            prompt_tokens: u64::from(self.calls) * 100,
+            completion_tokens: u64::from(self.calls) * 10,
+            cached_tokens: 0,
+            cost_usd: None,
+            wall_ms: 1.0,
+            backend: BackendInfo {
+                kind: BackendKind::Simulated,
+                model:
+                    "optimal-planner with errors hallucinate=0.1,wrong_robot=0,malformed=0,suboptimal=0"
+                        .into(),
+                base_url: None,
+            },
+            // MCTS plans without a model.
+            uses_model: self.method != "mcts",
+            error: None,
+            transcript: "t.jsonl".into(),
+        }
+    }
+
+    /// The line as the results file holds it.
+    fn jsonl(self) -> String {
+        serde_json::to_string(&self.line()).expect("encodes") + "\n"
+    }
 }
 
 #[test]
 fn report_numbers_match_a_hand_computation() {
-    use Status::{BackendError, Failure, Interrupted, Success};
+    use Status::{BackendError, Failure, Interrupted};
     let dir = scratch("report");
     let path = dir.join("r.jsonl");
+    // Task A: env0 task 1 (mono, GT 5); task B: env1 task 2 (dual, GT 10).
+    let a = Hand::default();
+    let b = Hand {
+        scene: "env1",
+        task_id: 2,
+        task_type: "dual",
+        gt: 10,
+        ..a
+    };
+    let mcts = |task: Hand| Hand {
+        method: "mcts",
+        calls: 0,
+        ..task
+    };
     let text = [
-        // pefa, seed 0: A (mono, GT 5) in 5; B (dual, GT 10) fails: counts 21.
-        line("pefa", "env0", 1, Some("mono"), 5, 0, Success, 5, 10),
-        line("pefa", "env1", 2, Some("dual"), 10, 0, Failure, 20, 40),
+        // pefa, seed 0: A in 5; B fails: counts 21.
+        Hand { steps: 5, ..a },
+        Hand {
+            status: Failure,
+            steps: 20,
+            calls: 40,
+            ..b
+        },
         // pefa, seed 1: A in 6; B first hit a backend error, then ran again in 10.
-        line("pefa", "env0", 1, Some("mono"), 5, 1, Success, 6, 12),
-        line("pefa", "env1", 2, Some("dual"), 10, 1, BackendError, 3, 6),
-        line("pefa", "env1", 2, Some("dual"), 10, 1, Success, 10, 20),
-        // An episode that never finished: left out, counted as unfinished.
-        line("pefa", "env1", 3, Some("trio"), 12, 0, Interrupted, 2, 4),
+        Hand {
+            seed: 1,
+            steps: 6,
+            calls: 12,
+            ..a
+        },
+        Hand {
+            seed: 1,
+            status: BackendError,
+            steps: 3,
+            calls: 6,
+            ..b
+        },
+        Hand {
+            seed: 1,
+            steps: 10,
+            calls: 20,
+            ..b
+        },
+        // An episode that never finished (env1 task 3, trio, GT 12): left out, counted as
+        // unfinished.
+        Hand {
+            task_id: 3,
+            task_type: "trio",
+            gt: 12,
+            status: Interrupted,
+            steps: 2,
+            calls: 4,
+            ..b
+        },
         // mcts, one seed: A fails (11), B fails (21).
-        line("mcts", "env0", 1, Some("mono"), 5, 0, Failure, 10, 0),
-        line("mcts", "env1", 2, Some("dual"), 10, 0, Failure, 20, 0),
+        Hand {
+            status: Failure,
+            steps: 10,
+            ..mcts(a)
+        },
+        Hand {
+            status: Failure,
+            steps: 20,
+            ..mcts(b)
+        },
     ]
+    .map(Hand::jsonl)
     .concat();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
@@ -408,67 +285,27 @@ fn report_numbers_match_a_hand_computation() {
 fn a_bad_line_in_the_middle_is_an_error_naming_the_file_line_and_field() {
     let dir = scratch("badline");
     let path = dir.join("r.jsonl");
-    let good = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        5,
-        0,
-        Status::Success,
-        5,
-        10,
-    );
+    let good = Hand::default().jsonl();
     let bad = good.replace("\"steps\":5", "\"steps\":\"five\"");
     std::fs::write(&path, format!("{good}{bad}{good}")).expect("write");
-    let e = bench::read_results(&path).expect_err("a bad line");
+    let e = bench::read_results(&path)
+        .expect_err("a bad line")
+        .to_string();
     assert!(e.contains("r.jsonl: line 2"), "{e}");
     assert!(e.contains("$.steps"), "{e}");
-}
-
-/// A kill mid-episode leaves a transcript with no summary that no results line points to;
-/// the next run renames it `*.jsonl.unfinished`, says so, runs that episode again, and
-/// leaves the transcripts of finished episodes alone.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
-    let dir = scratch("orphans");
-    let out = dir.join("results.jsonl");
-    let tasks = paper40_env0();
-    let config = config(out.clone(), vec![Method::Optimal], BackendChoice::Builtin);
-    let first = bench::run(&tasks[..2], &config, &Cancel::default(), &mut |_| {})
-        .await
-        .expect("runs");
-    assert!(first.orphaned.is_empty());
-    // What a kill leaves: a transcript with a header and no summary, and no line for it.
-    let killed = bench::transcripts_dir(&out).join("seed0/env0-task99-optimal-killed.jsonl");
-    std::fs::write(&killed, "{\"type\": \"header\"}\n").expect("write");
-    let second = bench::run(&tasks[..3], &config, &Cancel::default(), &mut |_| {})
-        .await
-        .expect("runs");
-    assert_eq!((second.skipped, second.written), (2, 1));
-    let renamed = killed.with_extension("jsonl.unfinished");
-    assert_eq!(second.orphaned, std::slice::from_ref(&renamed));
-    assert!(renamed.exists() && !killed.exists());
-    for line in bench::read_results(&out).expect("reads").lines {
-        assert!(
-            PathBuf::from(&line.transcript).exists(),
-            "{}",
-            line.transcript
-        );
-    }
 }
 
 /// A transcript whose episode still runs elsewhere (its writer holds it) is never taken
 /// for one left over by a kill, while a leftover beside it is; and a second run on the
 /// same results file, or on one that shares its transcripts folder, is refused naming
 /// the first run's process.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_results_file() {
+#[test]
+fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_results_file() {
     let dir = scratch("owned");
     let out = dir.join("results.jsonl");
     let seed0 = bench::transcripts_dir(&out).join("seed0");
-    let task = &paper40_env0()[0];
-    let live = seed0.join("env0-task2-pefa-live.jsonl");
+    let task = &common::scenes(&[0])[0];
+    let live = seed0.join("env0-task0-pefa-live.jsonl");
     let header = coherent_agents::transcript::Header {
         format: coherent_agents::transcript::FORMAT.into(),
         version: coherent_agents::transcript::VERSION,
@@ -480,8 +317,9 @@ async fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds
         max_steps: 10,
         gt_steps: task.meta.gt_steps,
         physics: false,
+        robots: coherent_agents::transcript::RobotsRecord::Local,
         backend: BackendInfo {
-            kind: "builtin".into(),
+            kind: BackendKind::Builtin,
             model: String::new(),
             base_url: None,
         },
@@ -501,7 +339,8 @@ async fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds
     let ledger = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES).expect("the first");
     for other in [out.clone(), dir.join("results.json")] {
         let e = bench::Ledger::open(&other, bench::DEFAULT_MAX_RESULTS_BYTES)
-            .expect_err("a second run");
+            .expect_err("a second run")
+            .to_string();
         let pid = std::process::id();
         assert!(
             e.contains("another benchmark run is using it")
@@ -520,20 +359,12 @@ async fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds
 fn a_results_line_with_a_key_twice_is_refused() {
     let dir = scratch("duplicate-key");
     let path = dir.join("r.jsonl");
-    let good = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        5,
-        0,
-        Status::Success,
-        5,
-        10,
-    );
+    let good = Hand::default().jsonl();
     let twice = good.replacen('{', "{\"success\":false,", 1);
     std::fs::write(&path, format!("{good}{twice}")).expect("write");
-    let e = bench::read_results(&path).expect_err("a key twice");
+    let e = bench::read_results(&path)
+        .expect_err("a key twice")
+        .to_string();
     assert!(
         e.contains("r.jsonl: line 2") && e.contains("duplicate key \"success\" at $.success"),
         "{e}"
@@ -546,17 +377,12 @@ fn a_results_line_with_a_key_twice_is_refused() {
 fn a_huge_ground_truth_counts_without_wrapping() {
     let dir = scratch("huge-gt");
     let path = dir.join("r.jsonl");
-    let text = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        u32::MAX,
-        0,
-        Status::Failure,
-        5,
-        10,
-    );
+    let text = Hand {
+        gt: u32::MAX,
+        status: Status::Failure,
+        ..Hand::default()
+    }
+    .jsonl();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
     assert_eq!(
@@ -576,56 +402,33 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
         "p.json",
     )
     .expect("a table");
-    let on_m = |text: String| {
-        let mut l: ResultLine = serde_json::from_str(&text).expect("a line");
+    let on_m = |hand: Hand| {
+        let mut l = hand.line();
         l.backend.model = "m".into();
         l
     };
     let lines = vec![
-        on_m(line(
-            "pefa",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            10,
-        )),
-        on_m(line(
-            "pefa",
-            "env1",
-            2,
-            Some("dual"),
-            10,
-            0,
-            Status::Failure,
-            20,
-            30,
-        )),
-        on_m(line(
-            "mcts",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            0,
-        )),
-        on_m(line(
-            "cmrs",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            4,
-        )),
+        on_m(Hand::default()),
+        on_m(Hand {
+            scene: "env1",
+            task_id: 2,
+            task_type: "dual",
+            gt: 10,
+            status: Status::Failure,
+            steps: 20,
+            calls: 30,
+            ..Hand::default()
+        }),
+        on_m(Hand {
+            method: "mcts",
+            calls: 0,
+            ..Hand::default()
+        }),
+        on_m(Hand {
+            method: "cmrs",
+            calls: 4,
+            ..Hand::default()
+        }),
     ];
     let mut priced: Vec<ResultLine> = lines.into_iter().map(|l| l.priced(&prices)).collect();
     let close = |a: f64, b: f64| (a - b).abs() < 1e-12;

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::llm::Role;
-use coherent_agents::transcript::{self, Outcome, Status};
+use coherent_agents::transcript::{self, RoundOutcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Replay};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
@@ -25,7 +25,7 @@ async fn run_builtin(
     task: &Arc<Task>,
     out: &Path,
 ) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
-    let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
+    let budget = Budget::searched(task, None, &Limits::default()).expect("a budget");
     let path = episode::transcript_path(out, task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     let e = episode::run(
@@ -62,7 +62,7 @@ async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
                 assert_eq!(s.status, Status::Success, "{name}");
                 assert_eq!(s.steps, optimum, "{name}: steps against the optimum");
                 assert!(
-                    e.rounds.iter().all(|r| r.outcome == Outcome::Executed),
+                    e.rounds.iter().all(|r| r.outcome == RoundOutcome::Executed),
                     "{name}"
                 );
                 solved += 1;
@@ -78,7 +78,7 @@ async fn builtin_solves_every_solvable_task_in_the_optimal_number_of_steps() {
                 assert!(
                     e.rounds
                         .iter()
-                        .all(|r| matches!(&r.outcome, Outcome::NoProposal { why } if why.contains("CONTAINERS"))),
+                        .all(|r| matches!(&r.outcome, RoundOutcome::NoProposal { why } if why.contains("CONTAINERS"))),
                     "{name}: the refusal says why"
                 );
             }
@@ -134,7 +134,7 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
         }
     };
     let (setup, replayed) = replay(&recorded).await;
-    setup.check(&replayed).expect("same rounds");
+    assert_eq!(setup.difference(&replayed), None, "same rounds");
 
     // A prompt that differs from the recording stops the replay with the round named.
     let mut changed = recorded.clone();
@@ -148,11 +148,13 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
         error.contains("round 3") && error.contains("prompt"),
         "{error}"
     );
-    assert!(setup.check(&diverged).is_err());
+    assert!(setup.difference(&diverged).is_some());
 
     // A transcript of a method this version does not know cannot be replayed.
     let mut unknown = recorded.clone();
     unknown.header.method = "nope".into();
-    let error = Replay::prepare(&unknown, Path::new("recorded")).expect_err("no such method");
+    let error = Replay::prepare(&unknown, Path::new("recorded"))
+        .expect_err("no such method")
+        .to_string();
     assert!(error.contains("unknown method \"nope\""), "{error}");
 }

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use coherent_agents::episode::{self, Budget, Method, Settings};
 use coherent_agents::llm::{Finish, LlmErrorKind, OutputMode};
 use coherent_agents::retry::Backoff;
-use coherent_agents::transcript::{self, Outcome, Status};
+use coherent_agents::transcript::{self, RoundOutcome, Status};
 use coherent_agents::{ApiKey, Cancel, Episode, OpenAiClient, OpenAiConfig};
 use coherent_core::{SymbolicEnv, Task, load_tasks};
 use serde_json::json;
@@ -198,7 +198,7 @@ async fn too_many_requests_waits_for_retry_after_then_succeeds() {
         "waited {} ms",
         answer.latency_ms
     );
-    assert_eq!(r.episode.rounds[0].outcome, Outcome::Executed);
+    assert_eq!(r.episode.rounds[0].outcome, RoundOutcome::Executed);
     assert_eq!(r.episode.summary.prompt_tokens, 200);
     assert_eq!(r.episode.summary.completion_tokens, 20);
 }
@@ -216,7 +216,11 @@ async fn recovers_after_one(fault: Fault, name: &str) {
         Some(2),
         "{name}"
     );
-    assert_eq!(r.episode.rounds[0].outcome, Outcome::Executed, "{name}");
+    assert_eq!(
+        r.episode.rounds[0].outcome,
+        RoundOutcome::Executed,
+        "{name}"
+    );
 }
 
 #[tokio::test]
@@ -257,7 +261,7 @@ async fn a_server_that_always_hangs_ends_the_episode_in_bounded_time() {
     assert_eq!(error.attempts, 3);
     assert!(matches!(
         r.episode.rounds[0].outcome,
-        Outcome::BackendError { .. }
+        RoundOutcome::BackendError { .. }
     ));
     assert!(r.transcript.summary.expect("summary").error.is_some());
 }
@@ -281,9 +285,11 @@ async fn malformed_json_costs_the_round_and_the_episode_goes_on() {
         first.calls[0].error.as_ref().map(|e| e.kind),
         Some(LlmErrorKind::Malformed)
     );
-    assert!(matches!(&first.outcome, Outcome::NoProposal { why } if why.contains("malformed")));
+    assert!(
+        matches!(&first.outcome, RoundOutcome::NoProposal { why } if why.contains("malformed"))
+    );
     assert!(first.feedback.contains("could not be used"));
-    assert_eq!(r.episode.rounds[1].outcome, Outcome::Executed);
+    assert_eq!(r.episode.rounds[1].outcome, RoundOutcome::Executed);
     assert_eq!(r.episode.summary.status, Status::Failure);
     assert_eq!(r.episode.summary.steps, 2);
 }
@@ -305,7 +311,7 @@ async fn truncated_refused_and_empty_answers_are_outcomes_not_panics() {
     let whys: Vec<String> = r.episode.rounds[..3]
         .iter()
         .map(|round| match &round.outcome {
-            Outcome::NoProposal { why } => why.clone(),
+            RoundOutcome::NoProposal { why } => why.clone(),
             other => panic!("expected no proposal, got {other:?}"),
         })
         .collect();
@@ -317,7 +323,7 @@ async fn truncated_refused_and_empty_answers_are_outcomes_not_panics() {
         .as_ref()
         .expect("an answer");
     assert_eq!(first.finish, Finish::Length);
-    assert_eq!(r.episode.rounds[3].outcome, Outcome::Executed);
+    assert_eq!(r.episode.rounds[3].outcome, RoundOutcome::Executed);
 }
 
 #[tokio::test]
@@ -345,7 +351,7 @@ async fn a_server_without_json_schema_gets_json_object_then_text() {
         .collect();
     assert_eq!(modes, [OutputMode::Text, OutputMode::Text]);
     assert_eq!(round.proposal.as_ref().map(|p| p.robot.0), Some(6));
-    assert_eq!(round.outcome, Outcome::Executed);
+    assert_eq!(round.outcome, RoundOutcome::Executed);
     let seen = server.seen.lock().expect("log");
     assert_eq!(seen[0].body["response_format"]["type"], "json_schema");
     assert_eq!(seen[1].body["response_format"]["type"], "json_object");
@@ -395,5 +401,5 @@ async fn a_truncated_answer_counts_when_the_action_came_before_the_cut() {
         round.decision.as_ref().and_then(|d| d.action.as_deref()),
         Some("[grab] <mug>(7)")
     );
-    assert_eq!(round.outcome, Outcome::Executed);
+    assert_eq!(round.outcome, RoundOutcome::Executed);
 }

@@ -5,14 +5,15 @@
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
-use coherent_agents::joint::{JointAction, joint_actions, match_line, read_line};
+use coherent_agents::answer::{match_line, read_line};
+use coherent_agents::joint::{JointAction, joint_actions};
 use coherent_agents::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
-    Role, Usage,
+    Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
+    OutputMode, Query, Role, Usage,
 };
 use coherent_agents::mcts::{self, MctsConfig, mix_prior, puct, softmax_q};
 use coherent_agents::rng::Rng;
-use coherent_agents::transcript::{Outcome, Status};
+use coherent_agents::transcript::{RoundOutcome, Status};
 use coherent_agents::{Cancel, Episode};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{State, SymbolicEnv, Task, rules};
@@ -106,7 +107,7 @@ fn answer(text: String, finish: Finish) -> Answer {
 impl Backend for Oracle {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "test".into(),
+            kind: BackendKind::Builtin,
             model: "oracle".into(),
             base_url: None,
         }
@@ -131,7 +132,7 @@ struct Garbage {
 impl Backend for Garbage {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "test".into(),
+            kind: BackendKind::Simulated,
             model: "garbage".into(),
             base_url: None,
         }
@@ -414,7 +415,7 @@ async fn primitive_mcts_solves_a_short_task() {
         );
         assert_eq!(
             r.outcome,
-            Outcome::Executed,
+            RoundOutcome::Executed,
             "the rules' own actions are feasible"
         );
     }
@@ -497,7 +498,7 @@ async fn a_backend_gone_for_good_ends_the_episode() {
     impl Backend for Gone {
         fn info(&self) -> BackendInfo {
             BackendInfo {
-                kind: "test".into(),
+                kind: BackendKind::OpenAi,
                 model: "gone".into(),
                 base_url: None,
             }
@@ -510,7 +511,10 @@ async fn a_backend_gone_for_good_ends_the_episode() {
     let e = episode(&task, Some(&Gone), &MctsConfig::default(), 8).await;
     assert_eq!(e.summary.status, Status::BackendError);
     assert_eq!(e.summary.steps, 1);
-    assert!(matches!(e.rounds[0].outcome, Outcome::BackendError { .. }));
+    assert!(matches!(
+        e.rounds[0].outcome,
+        RoundOutcome::BackendError { .. }
+    ));
     assert!(
         e.summary
             .error

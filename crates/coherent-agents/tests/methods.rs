@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_agents::episode::{self, Budget, Method, Settings};
-use coherent_agents::transcript::{Outcome, Status};
+use coherent_agents::transcript::{RoundOutcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
@@ -17,7 +17,7 @@ fn out(name: &str) -> PathBuf {
 }
 
 async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Episode {
-    let budget = Budget::of(task, None, &Limits::default()).expect("a budget");
+    let budget = Budget::searched(task, None, &Limits::default()).expect("a budget");
     let path = episode::transcript_path(&out(method.name()), task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     episode::run(
@@ -110,16 +110,19 @@ async fn the_simulated_backend_makes_its_mistakes_reproducibly() {
         );
         seen.extend(once.rounds.iter().map(|r| r.outcome.clone()));
     }
-    let kinds = |f: fn(&Outcome) -> bool| seen.iter().filter(|o| f(o)).count();
+    let kinds = |f: fn(&RoundOutcome) -> bool| seen.iter().filter(|o| f(o)).count();
     assert!(
-        kinds(|o| matches!(o, Outcome::Infeasible { .. })) > 0,
+        kinds(|o| matches!(o, RoundOutcome::Infeasible { .. })) > 0,
         "hallucinated actions are refused"
     );
     assert!(
-        kinds(|o| matches!(o, Outcome::NoProposal { .. } | Outcome::NoDecision { .. })) > 0,
+        kinds(|o| matches!(
+            o,
+            RoundOutcome::NoProposal { .. } | RoundOutcome::NoDecision { .. }
+        )) > 0,
         "malformed answers cost rounds"
     );
-    assert!(kinds(|o| *o == Outcome::Executed) > 0);
+    assert!(kinds(|o| *o == RoundOutcome::Executed) > 0);
 }
 
 #[test]

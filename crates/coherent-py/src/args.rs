@@ -116,43 +116,42 @@ pub(crate) fn temperature(obj: &Bound<'_, PyAny>) -> PyResult<f32> {
 }
 
 /// A timeout in seconds: finite, not negative, and at most what a `Duration` holds.
-fn seconds(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<f64> {
+fn seconds(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Duration> {
     let s = finite(obj, name)?;
-    if Duration::try_from_secs_f64(s).is_err() {
+    Duration::try_from_secs_f64(s).map_err(|_| {
         let why = format!("out of range: 0 to {} seconds", Duration::MAX.as_secs());
-        return Err(errors::argument(name, obj, why));
-    }
-    Ok(s)
+        errors::argument(name, obj, why)
+    })
 }
 
 /// `step_timeout` of `run`, `run_bench` and the Ray worker: the longest one step of a
 /// method written in Python may take, or None for no limit.
 pub(crate) fn step_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Option<Duration>> {
     optional(obj, |o| {
-        let s = seconds(o, "step_timeout")?;
-        if s == 0.0 {
+        let limit = seconds(o, "step_timeout")?;
+        if limit.is_zero() {
             return Err(errors::argument(
                 "step_timeout",
                 o,
                 "0 seconds: no step could end",
             ));
         }
-        Ok(Duration::from_secs_f64(s))
+        Ok(limit)
     })
 }
 
 /// `connect_timeout` of `LLM`.
-pub(crate) fn connect_timeout(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
+pub(crate) fn connect_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Duration> {
     seconds(obj, "connect_timeout")
 }
 
 /// `read_timeout` of `LLM`.
-pub(crate) fn read_timeout(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
+pub(crate) fn read_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Duration> {
     seconds(obj, "read_timeout")
 }
 
 /// `timeout` of `LLM`.
-pub(crate) fn timeout(obj: &Bound<'_, PyAny>) -> PyResult<f64> {
+pub(crate) fn timeout(obj: &Bound<'_, PyAny>) -> PyResult<Duration> {
     seconds(obj, "timeout")
 }
 

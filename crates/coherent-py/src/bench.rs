@@ -2,29 +2,29 @@
 //! and the paper's tables of the results, through the session layer
 //! (`coherent::session::bench`) as `coherent bench` does.
 
+use std::ffi::CString;
 use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent::session;
-use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
-use coherent::session::bench::{self as session_bench, TableFormat};
-use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, BenchOutcome, EpisodeSettings, Event, Progress, ReadLimits,
-    ResultLine, Subset,
+use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
+use coherent::session::bench::{self as session_bench, BenchConfig, EpisodesRequest, TableFormat};
+use coherent::session::engine::{
+    BenchOutcome, Cancel, DEFAULT_MAX_RESULTS_BYTES, Event, HISTORY_WINDOW, Limits, MethodSpec,
+    Progress, ResultLine, Subset, read_results as read_results_file, select as select_tasks,
 };
-use coherent_agents::{Cancel, MethodSpec};
-use coherent_core::planner::Limits;
-use pyo3::exceptions::{PyOverflowError, PyTypeError, PyValueError};
+use coherent::session::error::BackendProblem;
+use coherent::session::{self, Error};
+use pyo3::exceptions::{PyOverflowError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{self, interruptible, to_py};
 use crate::llm::PyLlm;
 use crate::method::{MethodArg, Methods};
-use crate::prompts::{price_table, prompt_set};
-use crate::task::PyTask;
+use crate::prompts::{price_source, prompt_source};
+use crate::task::{PyTask, robots_arg};
 use crate::{args, errors};
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
@@ -37,7 +37,9 @@ fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
         return Ok(named);
     }
     match convert::path(subset, "subset") {
-        Ok(path) => return Subset::read_file(&path).map_err(|e| errors::coherent(py, e)),
+        Ok(path) => {
+            return session_bench::subset_file(&path).map_err(|e| errors::session_err(py, e));
+        }
         // A `TypeError`: no path, so maybe pairs; else a path that names no file.
         Err(e) if !e.is_instance_of::<PyTypeError>(py) => return Err(e),
         Err(_) => {}
@@ -87,7 +89,7 @@ pub(crate) fn select(
     let subset = subset_of(subset)?;
     let owned = tasks.iter().map(|t| (*t.get().task).clone()).collect();
     let selection =
-        bench::select(owned, &subset).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
+        select_tasks(owned, &subset).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
     Ok((
         selection.tasks.into_iter().map(PyTask::shared).collect(),
         selection.missing,
@@ -136,72 +138,77 @@ pub(crate) fn run_methods(
 }
 
 /// The backend `coherent.bench`'s `backend`, `sim_errors` and `replay_from` ask for
-/// (`prompts`: whether a prompt set was given, which a replay refuses), and the
-/// temperature the episodes record (an LLM's).
+/// (`prompts`: whether a prompt set was given, which a replay refuses).
 pub(crate) fn run_backend(
-    py: Python<'_>,
     backend: Option<&Bound<'_, PyAny>>,
     sim_errors: Option<&Bound<'_, PyAny>>,
     replay_from: Option<PathBuf>,
     prompts: bool,
-) -> PyResult<(BackendChoice, Option<f32>)> {
-    let (kind, endpoint) = match backend {
+) -> PyResult<BackendRequest> {
+    let (name, endpoint) = match backend {
         Some(b) if b.is_instance_of::<PyLlm>() => (
-            BackendKind::OpenAi,
-            Some(b.cast::<PyLlm>()?.get().config.clone()),
+            BackendName::OpenAi,
+            EndpointSource::Given(b.cast::<PyLlm>()?.get().config.clone()),
         ),
-        None => (BackendKind::Builtin, None),
+        None => (BackendName::Builtin, EndpointSource::None),
         Some(b) => match b.cast::<PyString>().map(convert::utf8) {
-            Ok(Ok("builtin")) => (BackendKind::Builtin, None),
-            Ok(Ok("simulated")) => (BackendKind::Simulated, None),
+            Ok(Ok("builtin")) => (BackendName::Builtin, EndpointSource::None),
+            Ok(Ok("simulated")) => (BackendName::Simulated, EndpointSource::None),
             Ok(Ok("replay")) if prompts => {
                 return Err(PyValueError::new_err(
                     "prompts= and backend=\"replay\" do not go together: a replay renders \
                      the prompt set its transcripts recorded",
                 ));
             }
-            Ok(Ok("replay")) => (BackendKind::Replay, None),
+            Ok(Ok("replay")) => (BackendName::Replay, EndpointSource::None),
             _ => {
                 let expected = "expected \"builtin\", \"simulated\", \"replay\" or an LLM";
                 return Err(errors::argument("backend", b, expected));
             }
         },
     };
-    let temperature = endpoint.as_ref().map(|c| c.temperature);
-    let choice = BackendRequest {
-        kind,
+    Ok(BackendRequest {
+        name,
         endpoint,
         sim_errors: crate::run::error_rates(sim_errors)?,
         replay_from,
-        limits: ReadLimits::default(),
-    }
-    .choose()
-    .map_err(|e| match e {
+        ..BackendRequest::default()
+    })
+}
+
+/// The exception of an error in preparing a run's episodes: the backend's problems
+/// worded with `coherent.bench`'s keyword arguments, the others by their kind.
+pub(crate) fn settings_err(py: Python<'_>, e: Error) -> PyErr {
+    let Error::Backend(problem) = &e else {
+        return errors::session_err(py, e);
+    };
+    let message = match problem {
         BackendProblem::RatesNeedSimulated | BackendProblem::RatesAndEndpoint => {
-            errors::invalid(py, "sim_errors needs backend=\"simulated\"")
+            "sim_errors needs backend=\"simulated\""
         }
-        BackendProblem::ReplayNeedsFile => errors::invalid(
-            py,
-            "backend=\"replay\" needs replay_from=, an earlier results file",
-        ),
-        BackendProblem::FileNeedsReplay => {
-            errors::invalid(py, "replay_from needs backend=\"replay\"")
+        BackendProblem::ReplayNeedsFile => {
+            "backend=\"replay\" needs replay_from=, an earlier results file"
         }
-        other => errors::coherent(py, other.to_string()),
-    })?;
-    Ok((choice, temperature))
+        BackendProblem::FileNeedsReplay => "replay_from needs backend=\"replay\"",
+        BackendProblem::NoEndpoint | BackendProblem::ReplayIsForBenchmarks => {
+            return errors::session_err(py, e);
+        }
+    };
+    errors::invalid(py, message)
 }
 
 /// Runs every method on every task for every seed into the results file `out` (JSON
 /// lines, appended, resumable: finished episodes are skipped), as `coherent bench`
-/// does, with the prompt set `prompts` and each line priced from `prices`. Returns what
-/// the run did.
+/// does, with the prompt set `prompts` and each line priced from `prices`; with
+/// `physics`, every action in Rapier too; with `robots="ros2"`, carried out by robots
+/// over ROS 2 (one episode at a time). Returns what the run did.
 #[pyfunction]
 #[pyo3(signature = (
     tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
-    concurrency = 4, history = 5, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-    out = PathBuf::from("results.jsonl"), progress = false, prompts = None, prices = None,
-    step_timeout = None
+    concurrency = 4, history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES,
+    max_steps = None, out = PathBuf::from("results.jsonl"), progress = false, prompts = None,
+    prices = None, physics = false, robots = "local", namespace = None, robot_timeout = 10.0,
+    server_wait = 10.0, step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
@@ -220,33 +227,43 @@ pub(crate) fn run_bench<'py>(
     progress: bool,
     prompts: Option<&Bound<'py, PyAny>>,
     prices: Option<&Bound<'py, PyAny>>,
+    physics: bool,
+    robots: &str,
+    namespace: Option<&str>,
+    robot_timeout: f64,
+    server_wait: f64,
     #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    // Before anything else: a bad template must cost no model call.
-    let prompt_set = prompt_set(prompts)?;
-    let prices = price_table(prices)?;
+    let prompts_given = prompts.is_some();
+    let request = EpisodesRequest {
+        prompts: prompt_source(prompts)?,
+        prices: price_source(prices)?,
+        backend: run_backend(backend, sim_errors, replay_from, prompts_given)?,
+        robots: robots_arg(py, robots, namespace, robot_timeout, server_wait)?,
+        physics,
+        history,
+        max_states,
+        max_steps,
+        ..EpisodesRequest::new(Vec::new())
+    };
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
     let mut python = Methods::new(py, step_timeout)?;
     let methods = run_methods(py, &methods, seeds, &objects, &mut python)?;
-    let (choice, temperature) =
-        run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
+    let settings = EpisodesRequest { methods, ..request }
+        .prepare()
+        .map_err(|e| settings_err(py, e))?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
     let config = BenchConfig {
-        episodes: EpisodeSettings {
-            methods,
-            backend: choice,
-            history,
-            temperature,
-            max_states,
-            max_steps,
-            prompts: prompt_set,
-            prices,
-        },
+        episodes: settings,
         seeds,
         concurrency: concurrency.max(1),
         out,
-        max_results_bytes: ReadLimits::default().results_bytes,
+        max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
     };
+    if let Some(note) = config.concurrency_note() {
+        let message = CString::new(note).unwrap_or_default();
+        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
+    }
     let cancel = Cancel::default();
     let stop = cancel.clone();
     let result = interruptible(
@@ -263,7 +280,7 @@ pub(crate) fn run_bench<'py>(
         },
     );
     python.close(py)?;
-    let outcome = result?.map_err(|e| errors::coherent(py, e))?;
+    let outcome = result?.map_err(|e| errors::session_err(py, e))?;
     outcome_dict(py, &outcome)
 }
 
@@ -274,8 +291,8 @@ pub(crate) fn read_results(
     #[pyo3(from_py_with = args::path)] path: PathBuf,
 ) -> PyResult<Bound<'_, PyList>> {
     let file = py
-        .detach(|| bench::read_results(&path))
-        .map_err(|e| errors::coherent(py, e))?;
+        .detach(|| read_results_file(&path))
+        .map_err(|e| errors::session_err(py, e.into()))?;
     let list = PyList::empty(py);
     for line in &file.lines {
         list.append(to_py(py, line)?)?;
@@ -305,7 +322,7 @@ pub(crate) fn report_tables<'py>(
     lines: &Bound<'py, PyList>,
 ) -> PyResult<Bound<'py, PyAny>> {
     let lines = result_lines(lines)?;
-    to_py(py, &coherent_agents::report::build(&lines))
+    to_py(py, &session_bench::report(&lines))
 }
 
 /// The tables as text: `"markdown"`, `"csv"` or `"json"`, as `coherent bench --report`

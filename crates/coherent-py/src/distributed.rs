@@ -10,22 +10,20 @@ use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent::session::bench::Worker;
-use coherent_agents::bench::{
-    EpisodeKey, EpisodeResult, EpisodeSettings, Event, Ledger, Progress, ReadLimits, ResultLine,
-    RunTasks,
+use coherent::session::bench::{EpisodesRequest, RunTasks, Worker};
+use coherent::session::engine::{
+    Cancel, DEFAULT_MAX_RESULTS_BYTES, EpisodeKey, EpisodeResult, Event, HISTORY_WINDOW, Ledger,
+    Limits, PriceTable, Progress, ResultLine, native,
 };
-use coherent_agents::{Cancel, PriceTable};
-use coherent_core::native;
-use coherent_core::planner::Limits;
+use coherent::session::prompts::{PriceSource, PromptSource};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::bench::{outcome_dict, run_backend, run_methods};
-use crate::convert::to_py;
+use crate::bench::{outcome_dict, run_backend, run_methods, settings_err};
+use crate::convert::{json_at, text, to_py};
 use crate::method::{MethodArg, Methods};
-use crate::prompts::{price_table, prompt_set};
+use crate::prompts::{price_source, prompt_source};
 use crate::task::PyTask;
 use crate::{args, errors};
 
@@ -88,21 +86,29 @@ impl PyLedger {
         prompts: Option<&Bound<'_, PyAny>>,
         prices: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyLedger> {
-        let prompt_set = prompt_set(prompts)?;
-        let prices = price_table(prices)?;
+        let prompts_given = prompts.is_some();
+        let request = EpisodesRequest {
+            prompts: prompt_source(prompts)?,
+            prices: price_source(prices)?,
+            backend: run_backend(backend, sim_errors, replay_from, prompts_given)?,
+            ..EpisodesRequest::new(Vec::new())
+        };
         // The methods written in Python are only named here; the workers run them.
         let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
         let mut python = Methods::new(py, None)?;
         let methods = run_methods(py, &methods, seeds, &objects, &mut python);
         python.close(py)?;
         let methods = methods?;
-        run_backend(py, backend, sim_errors, replay_from, prompts.is_some())?;
+        // The settings checked as `coherent.bench` checks them (the backend's too, though
+        // the workers make their own).
+        let settings = EpisodesRequest { methods, ..request }
+            .prepare()
+            .map_err(|e| settings_err(py, e))?;
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
-        let tasks =
-            RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
-        let mut ledger = Ledger::open(&out, ReadLimits::default().results_bytes)
-            .map_err(|e| errors::coherent(py, e))?;
-        let pending = ledger.plan(&tasks, &methods, seeds);
+        RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
+        let mut ledger = Ledger::open(&out, DEFAULT_MAX_RESULTS_BYTES)
+            .map_err(|e| errors::session_err(py, e.into()))?;
+        let pending = ledger.plan(&tasks, &settings.methods, seeds);
         let mut progress = progress.then(|| Progress::new(false));
         if let Some(p) = progress.as_mut() {
             let start = Event::Start {
@@ -115,8 +121,8 @@ impl PyLedger {
             ledger: Some(ledger),
             pending,
             progress,
-            prompts: prompt_set.record().replaced,
-            prices,
+            prompts: settings.prompts.record().replaced,
+            prices: settings.prices,
         })
     }
 
@@ -157,7 +163,7 @@ impl PyLedger {
         let written = self
             .ledger()?
             .record(result)
-            .map_err(|e| errors::coherent(py, e))?;
+            .map_err(|e| errors::session_err(py, e.into()))?;
         if let (Some(line), Some(p)) = (&written, self.progress.as_mut()) {
             show(p.line(&Event::Finished(line)));
         }
@@ -180,7 +186,9 @@ impl PyLedger {
             .take()
             .ok_or_else(|| PyValueError::new_err("the run is finished"))?;
         if orphans {
-            ledger.mark_orphans().map_err(|e| errors::coherent(py, e))?;
+            ledger
+                .mark_orphans()
+                .map_err(|e| errors::session_err(py, e.into()))?;
         }
         outcome_dict(py, &ledger.finish(interrupted))
     }
@@ -206,9 +214,9 @@ pub(crate) struct PyWorker {
 impl PyWorker {
     #[new]
     #[pyo3(signature = (
-        tasks, methods, *, backend = None, sim_errors = None, replay_from = None, history = 5,
-        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, out, prompts, prices,
-        step_timeout = None
+        tasks, methods, *, backend = None, sim_errors = None, replay_from = None,
+        history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
+        physics = false, out, prompts, prices, step_timeout = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -221,6 +229,7 @@ impl PyWorker {
         #[pyo3(from_py_with = args::history)] history: usize,
         #[pyo3(from_py_with = args::max_states)] max_states: usize,
         #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
+        physics: bool,
         #[pyo3(from_py_with = args::out)] out: PathBuf,
         prompts: &Bound<'_, PyDict>,
         prices: &Bound<'_, PyDict>,
@@ -230,8 +239,8 @@ impl PyWorker {
         for (i, text) in tasks.iter().enumerate() {
             let value: serde_json::Value = serde_json::from_str(text)
                 .map_err(|e| PyValueError::new_err(format!("task {i}: {e}")))?;
-            let task = native::read(&format!("task {i}"), &value)
-                .map_err(|e| errors::coherent(py, e.to_string()))?;
+            let task =
+                native::read(&format!("task {i}"), &value).map_err(|e| errors::core_err(py, e))?;
             read.push(Arc::new(task));
         }
         let objects = read
@@ -240,19 +249,30 @@ impl PyWorker {
             .collect::<PyResult<Vec<_>>>()?;
         let mut python = Methods::new(py, step_timeout)?;
         let methods = run_methods(py, &methods, 1, &objects, &mut python)?;
-        // The driver refused a prompt set with a replay.
-        let (backend, temperature) = run_backend(py, backend, sim_errors, replay_from, false)?;
-        let settings = EpisodeSettings {
-            methods,
-            backend,
+        // The driver refused a prompt set with a replay; the prompt set and the price
+        // table come as the driver's data.
+        let files = prompts
+            .iter()
+            .map(|(k, v)| {
+                Ok((
+                    text(&k, "prompts")?.to_owned(),
+                    text(&v, "prompts")?.to_owned(),
+                ))
+            })
+            .collect::<PyResult<Vec<_>>>()?;
+        let settings = EpisodesRequest {
+            backend: run_backend(backend, sim_errors, replay_from, false)?,
+            prompts: PromptSource::Texts(files),
+            prices: PriceSource::Json(json_at(prices.as_any(), "prices")?.to_string()),
             history,
-            temperature,
             max_states,
             max_steps,
-            prompts: prompt_set(Some(prompts.as_any()))?,
-            prices: price_table(Some(prices.as_any()))?,
-        };
-        let worker = Worker::new(&read, settings, &out).map_err(|e| errors::coherent(py, e))?;
+            physics,
+            ..EpisodesRequest::new(methods)
+        }
+        .prepare()
+        .map_err(|e| settings_err(py, e))?;
+        let worker = Worker::new(&read, settings, &out).map_err(|e| errors::session_err(py, e))?;
         Ok(PyWorker {
             worker,
             _python: python,
@@ -265,11 +285,11 @@ impl PyWorker {
         let key = key_of(key);
         let result = py
             .detach(|| self.worker.run(&key, &Cancel::default()))
-            .map_err(|e| errors::coherent(py, e))?;
+            .map_err(|e| errors::session_err(py, e))?;
         Ok(match result {
             EpisodeResult::Line(line) => {
                 let json = serde_json::to_string(&line)
-                    .map_err(|e| errors::coherent(py, format!("a results line: {e}")))?;
+                    .map_err(|e| PyValueError::new_err(format!("a results line: {e}")))?;
                 ("line".to_owned(), Some(json))
             }
             EpisodeResult::TaskSkipped(why) => ("skipped".to_owned(), Some(why)),

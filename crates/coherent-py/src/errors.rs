@@ -1,11 +1,14 @@
 //! The exception tree: `CoherentError` and a few subclasses, each raised for one kind of
-//! failure, with the attributes a caller needs to act on it.
+//! failure, with the attributes a caller needs to act on it. The session's errors
+//! ([`session_err`]) and the ways an episode ends ([`ending_err`]) map to them by kind,
+//! one class each.
 
 use std::fmt::Display;
 
-use coherent_agents::PromptError;
-use coherent_core::Error;
-use pyo3::exceptions::{PyException, PyRuntimeError, PyValueError};
+use coherent::session::Error;
+use coherent::session::engine::{PromptError, TaskError};
+use coherent::session::episode::Ending;
+use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyString, PyTuple, PyType};
@@ -26,6 +29,8 @@ pub(crate) struct Exceptions {
     pub replay_mismatch: Py<PyType>,
     pub prompt: Py<PyType>,
     pub method: Py<PyType>,
+    pub robot: Py<PyType>,
+    pub data_file: Py<PyType>,
 }
 
 static EXCEPTIONS: PyOnceLock<Exceptions> = PyOnceLock::new();
@@ -116,30 +121,92 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
                  (status \"error\"; the transcript has the traceback); the method's own\n\
                  exception is the `__cause__`.",
             )?,
+            robot: sub(
+                "RobotError",
+                false,
+                "Robots over ROS 2 could not be reached (no action server for some of them\n\
+                 within the wait, DDS could not start), or one stopped answering during an\n\
+                 episode. Attribute `episode`: the episode up to there (status\n\
+                 \"interrupted\"), or None when no episode started.",
+            )?,
+            data_file: sub(
+                "DataFileError",
+                true,
+                "A file of coherent's own formats other than tasks and prompt templates (a\n\
+                 transcript, a results file, a price table, a subset list) that cannot be\n\
+                 read or written, or does not follow its format. Attributes: `file` and\n\
+                 `line` (None when the fault is not on one line).",
+            )?,
             base,
         })
     })
 }
 
+/// The exception of the session's error `e`, by its kind.
+pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
+    let message = e.to_string();
+    match e {
+        Error::Invalid(_) | Error::Backend(_) => error(py, Kind::Argument, message, None),
+        Error::Task(e) => core_err(py, e),
+        Error::Prompt(e) => prompt(py, &e),
+        Error::File { file, line, .. } => {
+            let built = exceptions(py).and_then(|exc| {
+                let value = exc.data_file.bind(py).call1((message.clone(),))?;
+                value.setattr("file", file)?;
+                value.setattr("line", line)?;
+                Ok(PyErr::from_value(value))
+            });
+            raised(message, built)
+        }
+        Error::Endpoint(_) => error(py, Kind::Backend, message, None),
+        Error::Physics(_) => error(py, Kind::Physics, message, None),
+        Error::Robots(_) => error(py, Kind::Robot, message, None),
+        Error::Interrupted => PyKeyboardInterrupt::new_err(message),
+        Error::Internal(_) => error(py, Kind::Coherent, message, None),
+    }
+}
+
+/// The exception an episode that ended as `ending` raises, with `episode` attached;
+/// `None` when it ended as episodes do (the goal reached, the budget spent, Ctrl-C).
+pub(crate) fn ending_err(py: Python<'_>, ending: &Ending, episode: Py<PyAny>) -> Option<PyErr> {
+    let (kind, why) = match ending {
+        Ending::GoalReached | Ending::BudgetSpent | Ending::Interrupted => return None,
+        Ending::BackendFailed(why) => (Kind::Backend, why),
+        Ending::MethodFailed(why) => (Kind::Method, why),
+        Ending::ReplayDiffers(why) => (Kind::ReplayMismatch, why),
+        Ending::RobotStopped(why) => (Kind::Robot, why),
+    };
+    // A traceback's last line is the exception; the whole of it is in the transcript.
+    let last = why.trim_end().lines().last().unwrap_or(why);
+    let path = episode
+        .bind(py)
+        .getattr("path")
+        .and_then(|p| p.str())
+        .map(|p| p.to_string())
+        .unwrap_or_default();
+    let message = format!("{last} (transcript: {path})");
+    Some(error(py, kind, message, Some(episode)))
+}
+
 /// Converts a `coherent-core` error into the matching Python exception.
-pub(crate) fn core_err(py: Python<'_>, e: Error) -> PyErr {
+pub(crate) fn core_err(py: Python<'_>, e: TaskError) -> PyErr {
     let message = e.to_string();
     let built = exceptions(py).and_then(|exc| {
         let value = match &e {
-            Error::Io { file, .. } => {
+            TaskError::Io { file, .. } => {
                 let v = exc.task_format.bind(py).call1((message.clone(),))?;
                 v.setattr("file", file)?;
                 v.setattr("json_path", py.None())?;
                 v
             }
-            Error::Malformed { file, path, .. } => {
+            TaskError::Malformed { file, path, .. } => {
                 let v = exc.task_format.bind(py).call1((message.clone(),))?;
                 v.setattr("file", file)?;
                 v.setattr("json_path", path.to_string())?;
                 v
             }
-            Error::UnknownRobot(_) => exc.unknown_robot.bind(py).call1((message.clone(),))?,
-            Error::BadAction { action, reason } => {
+            TaskError::UnknownRobot(_) => exc.unknown_robot.bind(py).call1((message.clone(),))?,
+            TaskError::BadAction { action, reason } => {
                 let v = exc.action_parse.bind(py).call1((message.clone(),))?;
                 v.setattr("action", action)?;
                 v.setattr("reason", reason)?;
@@ -168,10 +235,11 @@ pub(crate) enum Kind {
     Backend,
     ReplayMismatch,
     Method,
+    Robot,
 }
 
 /// An exception of class `kind` with `message`, and `episode` as its attribute for the
-/// two classes that carry one.
+/// classes that carry one.
 pub(crate) fn error(
     py: Python<'_>,
     kind: Kind,
@@ -187,9 +255,13 @@ pub(crate) fn error(
             Kind::Backend => &exc.backend,
             Kind::ReplayMismatch => &exc.replay_mismatch,
             Kind::Method => &exc.method,
+            Kind::Robot => &exc.robot,
         };
         let value = class.bind(py).call1((message.clone(),))?;
-        if matches!(kind, Kind::Backend | Kind::ReplayMismatch | Kind::Method) {
+        if matches!(
+            kind,
+            Kind::Backend | Kind::ReplayMismatch | Kind::Method | Kind::Robot
+        ) {
             value.setattr("episode", episode)?;
         }
         Ok(PyErr::from_value(value))
@@ -197,15 +269,7 @@ pub(crate) fn error(
     raised(message, built)
 }
 
-/// A `CoherentError` with `message`, for the engine's errors that are plain text.
-pub(crate) fn coherent(py: Python<'_>, message: impl Into<String>) -> PyErr {
-    error(py, Kind::Coherent, message, None)
-}
-
-pub(crate) fn physics(py: Python<'_>, e: coherent_sim::PhysicsError) -> PyErr {
-    error(py, Kind::Physics, e.message, None)
-}
-
+/// A `BackendError` with `message`, no episode.
 pub(crate) fn backend(py: Python<'_>, message: impl Into<String>) -> PyErr {
     error(py, Kind::Backend, message, None)
 }
@@ -275,7 +339,5 @@ pub(crate) fn prompt(py: Python<'_>, e: &PromptError) -> PyErr {
         value.setattr("placeholder", placeholder)?;
         Ok(PyErr::from_value(value))
     });
-    built.unwrap_or_else(|inner| {
-        PyRuntimeError::new_err(format!("{message} (while raising it: {inner})"))
-    })
+    raised(message, built)
 }

@@ -2,8 +2,9 @@
 //!
 //! Thin on purpose: these files convert types and errors and release the GIL around
 //! long work; behaviour lives in the session layer (`coherent::session`), which the
-//! `coherent` command uses too, and in `coherent-core`, `coherent-sim` and
-//! `coherent-agents` below it. `cli_main` starts that very command for the console
+//! `coherent` command uses too. They name nothing below the session: the types they
+//! need of the crates under it are the session's re-exports
+//! (`coherent::session::engine`). `cli_main` starts that very command for the console
 //! script.
 
 mod args;
@@ -25,11 +26,10 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
-use coherent::session::check;
-use coherent_agents::bench::{self as agents_bench, Subset};
-use coherent_agents::episode::{External, Method};
-use coherent_core::planner::Limits;
-use coherent_core::{action, benchmark, load};
+use coherent::session::engine::{
+    External, Limits, Mention, Method, Subset, load_tasks as read_all, parse_action as parse,
+};
+use coherent::session::{Error, check, tasks};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -47,9 +47,7 @@ fn load_tasks(
     py: Python<'_>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
 ) -> PyResult<Vec<PyTask>> {
-    let tasks = py
-        .detach(|| load::load_tasks(&path))
-        .map_err(|e| core_err(py, e))?;
+    let tasks = py.detach(|| read_all(&path)).map_err(|e| core_err(py, e))?;
     Ok(tasks.into_iter().map(PyTask::new).collect())
 }
 
@@ -62,7 +60,7 @@ fn read_tasks(
     #[pyo3(from_py_with = args::path)] path: PathBuf,
 ) -> PyResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
     let results = py
-        .detach(|| load::read_tasks(&path))
+        .detach(|| tasks::read_tasks(&path))
         .map_err(|e| core_err(py, e))?;
     let mut tasks = Vec::new();
     let mut errors = Vec::new();
@@ -95,10 +93,10 @@ fn benchmark_tasks(
             ));
         }
     };
-    let tasks = py.detach(benchmark::tasks).map_err(|e| core_err(py, e))?;
-    let selection =
-        agents_bench::select(tasks, &subset).map_err(pyo3::exceptions::PyValueError::new_err)?;
-    Ok(selection.tasks.into_iter().map(PyTask::shared).collect())
+    let tasks = py
+        .detach(|| tasks::benchmark(&subset))
+        .map_err(|e| errors::session_err(py, e))?;
+    Ok(tasks.into_iter().map(PyTask::shared).collect())
 }
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
@@ -156,8 +154,8 @@ fn parse_action<'py>(
     py: Python<'py>,
     #[pyo3(from_py_with = convert::action_text)] text: String,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let parsed = action::parse(&text).map_err(|e| core_err(py, e))?;
-    let mention = |m: &action::Mention| -> PyResult<Bound<'py, PyDict>> {
+    let parsed = parse(&text).map_err(|e| core_err(py, e))?;
+    let mention = |m: &Mention| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("name", &m.name)?;
         d.set_item("id", m.id.0)?;
@@ -179,13 +177,13 @@ fn cli_main(
     #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>,
 ) -> PyResult<u8> {
     let methods = Mutex::new(Methods::new(py, None)?);
-    let load = |spec: &str| -> Result<External, String> {
+    let load = |spec: &str| -> Result<External, Error> {
         Python::attach(|py| {
             let found = method::helpers(py)?.call_method1("load", (spec,))?;
             let mut methods = methods.lock().unwrap_or_else(PoisonError::into_inner);
             methods.add(&found, &[])
         })
-        .map_err(|e| format!("{spec}: {e}"))
+        .map_err(|e| Error::Invalid(format!("{spec}: {e}")))
     };
     let code = py.detach(|| {
         let code = coherent::cli::run_with(argv, Some(&load));
@@ -217,6 +215,8 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("ReplayMismatchError", exc.replay_mismatch.clone_ref(py))?;
     m.add("PromptError", exc.prompt.clone_ref(py))?;
     m.add("MethodError", exc.method.clone_ref(py))?;
+    m.add("RobotError", exc.robot.clone_ref(py))?;
+    m.add("DataFileError", exc.data_file.clone_ref(py))?;
     m.add_class::<PyTask>()?;
     m.add_class::<task::PyEnv>()?;
     m.add_class::<llm::PyLlm>()?;

@@ -4,15 +4,15 @@
 //! fallbacks, token accounting, the key in no text), and inside a method's `act` each
 //! call is filed in that step's round of the transcript, like a built-in method's.
 
+use std::sync::Arc;
 use std::sync::mpsc::{self, RecvTimeoutError};
-use std::sync::{Arc, OnceLock};
 use std::time::Duration;
 
-use coherent::session::endpoint::{Endpoint, Patience};
-use coherent_agents::backends::address::redacted;
-use coherent_agents::llm::{Answer, Finish, LlmError, Message, Role};
-use coherent_agents::transcript::Call;
-use coherent_agents::{ApiKey, Chat, OpenAiClient, OpenAiConfig, OutputMode};
+use coherent::session::engine::{
+    Answer, ApiKey, Backend, Backoff, Call, Chat, Finish, LlmError, Message, OpenAiClient,
+    OpenAiConfig, OutputMode, Role, redacted,
+};
+use coherent::session::{self, backend};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
@@ -22,17 +22,9 @@ use crate::convert::{json_at, py_repr, to_py};
 use crate::errors;
 use crate::method::{Recorder, helpers};
 
-/// The runtime the model calls of Python code run on, started when first needed.
-fn runtime() -> &'static tokio::runtime::Runtime {
-    static RUNTIME: OnceLock<tokio::runtime::Runtime> = OnceLock::new();
-    RUNTIME.get_or_init(|| {
-        tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(2)
-            .thread_name("coherent-llm")
-            .enable_all()
-            .build()
-            .expect("the model calls' runtime starts")
-    })
+/// The session's runtime, which the model calls of Python code run on.
+fn runtime(py: Python<'_>) -> PyResult<&'static tokio::runtime::Runtime> {
+    session::runtime().map_err(|e| errors::session_err(py, e))
 }
 
 /// Asks `client`, and files the call with `recorder` (the step being decided), if any.
@@ -72,10 +64,14 @@ pub(crate) struct PyLlm {
 impl PyLlm {
     #[new]
     #[pyo3(signature = (
-        base_url = None, model = None, api_key = None, *, temperature = 0.0, seed = None,
-        format = "json_schema", connect_timeout = 10.0, read_timeout = 120.0, timeout = 300.0,
-        max_retries = 4, concurrency = 4,
-        max_response_bytes = OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES
+        base_url = None, model = None, api_key = None, *,
+        temperature = OpenAiConfig::default().temperature, seed = None, format = "json_schema",
+        connect_timeout = OpenAiConfig::default().connect_timeout,
+        read_timeout = OpenAiConfig::default().read_timeout,
+        timeout = OpenAiConfig::default().total_timeout,
+        max_retries = OpenAiConfig::default().backoff.max_retries,
+        concurrency = OpenAiConfig::default().concurrency,
+        max_response_bytes = OpenAiConfig::default().max_response_bytes
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -86,9 +82,9 @@ impl PyLlm {
         #[pyo3(from_py_with = args::temperature)] temperature: f32,
         #[pyo3(from_py_with = args::seed)] seed: Option<u64>,
         #[pyo3(from_py_with = args::format)] format: &str,
-        #[pyo3(from_py_with = args::connect_timeout)] connect_timeout: f64,
-        #[pyo3(from_py_with = args::read_timeout)] read_timeout: f64,
-        #[pyo3(from_py_with = args::timeout)] timeout: f64,
+        #[pyo3(from_py_with = args::connect_timeout)] connect_timeout: Duration,
+        #[pyo3(from_py_with = args::read_timeout)] read_timeout: Duration,
+        #[pyo3(from_py_with = args::timeout)] timeout: Duration,
         #[pyo3(from_py_with = args::max_retries)] max_retries: u32,
         #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
         #[pyo3(from_py_with = args::max_response_bytes)] max_response_bytes: usize,
@@ -101,28 +97,31 @@ impl PyLlm {
                 "expected \"json_schema\", \"json_object\" or \"text\"",
             )
         })?;
-        let endpoint = Endpoint {
+        let given = OpenAiConfig {
             base_urls: base_url.unwrap_or_default(),
             api_key: api_key.map(ApiKey::new),
-            model,
+            model: model.unwrap_or_default(),
             temperature,
             seed,
-            format,
-            patience: Patience {
-                connect_timeout,
-                read_timeout,
-                timeout,
+            connect_timeout,
+            read_timeout,
+            total_timeout: timeout,
+            backoff: Backoff {
                 max_retries,
+                ..Backoff::default()
             },
-            requests: concurrency,
+            concurrency: concurrency.max(1),
+            output: format,
             max_response_bytes,
         };
-        let config = endpoint.config().map_err(|e| errors::backend(py, e))?.ok_or_else(|| {
-            errors::backend(
-                py,
-                "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and COHERENT_MODEL)",
-            )
-        })?;
+        let config = backend::complete(given)
+            .map_err(|e| errors::session_err(py, e))?
+            .ok_or_else(|| {
+                errors::backend(
+                    py,
+                    "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and COHERENT_MODEL)",
+                )
+            })?;
         // The client checks the rest (the model name, the URL); fail here, not mid-run.
         let client =
             OpenAiClient::new(config.clone()).map_err(|e| errors::backend(py, e.to_string()))?;
@@ -153,7 +152,7 @@ impl PyLlm {
         let recorder = Recorder::current(py)?;
         let (tx, mut rx) = mpsc::channel();
         let client = Arc::clone(&self.client);
-        let task = runtime().spawn(async move {
+        let task = runtime(py)?.spawn(async move {
             let _ = tx.send(ask(client, chat, call, recorder).await);
         });
         loop {
@@ -197,7 +196,7 @@ impl PyLlm {
         let settle = helpers(py)?.getattr("_settle")?.unbind();
         let (event_loop, pending) = (event_loop.unbind(), future.clone().unbind());
         let client = Arc::clone(&self.client);
-        runtime().spawn(async move {
+        runtime(py)?.spawn(async move {
             let result = ask(client, chat, call, recorder).await;
             Python::attach(|py| {
                 let (ok, value) = match result {
@@ -332,7 +331,7 @@ impl PyLlm {
             messages: messages.clone(),
             answer: None,
             error: None,
-            client: Some(coherent_agents::Backend::info(self.client.as_ref())),
+            client: Some(self.client.info()),
             endpoint: None,
         };
         let chat = Chat {

@@ -1,5 +1,5 @@
 //! Methods written in Python: a class (or any callable) `M` becomes a method of the
-//! engine (`coherent_agents::episode::External`): `M(task)` once per episode, then
+//! engine (an `External` method of the session's engine): `M(task)` once per episode, then
 //! `act(view)` once per step, given a `View` and answering a `Decision` or a
 //! `(robot, action)` tuple. `M(task)` and a plain `act` run on the episode's method
 //! thread (`crate::stepper`), with the GIL held for the call only, while the episode
@@ -10,12 +10,11 @@
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
-use coherent_agents::episode::{
-    Act, Choice, External, MakePolicy, Method, MethodSpec, Policy, RobotView, View,
+use coherent::session::Error;
+use coherent::session::engine::{
+    Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
+    Policy, RobotView, StepView, Task,
 };
-use coherent_agents::llm::BoxFuture;
-use coherent_agents::transcript::Call;
-use coherent_core::{NodeId, Task};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -59,11 +58,11 @@ impl Recorder {
 /// What a method is shown at each step.
 #[pyclass(name = "View", module = "coherent._coherent", frozen)]
 pub(crate) struct PyView {
-    view: Arc<View>,
+    view: Arc<StepView>,
     task: Py<PyTask>,
 }
 
-fn robot_of(view: &View, robot: i64) -> PyResult<&RobotView> {
+fn robot_of(view: &StepView, robot: i64) -> PyResult<&RobotView> {
     view.robot(NodeId(robot)).ok_or_else(|| {
         let ids: Vec<String> = view.robots.iter().map(|r| r.id.0.to_string()).collect();
         PyValueError::new_err(format!(
@@ -368,11 +367,11 @@ impl Methods {
                 method: Arc::clone(&maker),
                 task: Arc::clone(task),
                 object: Arc::new(Mutex::new(None)),
-                stepper: Stepper::start(&maker.threads)?,
+                stepper: Stepper::start(&maker.threads).map_err(MethodFailure)?,
             }) as Box<dyn Policy>)
         });
         let external = External::new(&name, make)
-            .map_err(PyValueError::new_err)?
+            .map_err(|e| errors::session_err(py, Error::from(e)))?
             .with_step_timeout(self.step_timeout);
         self.methods.push(shared);
         Ok(external)
@@ -442,7 +441,7 @@ fn start(
     py: Python<'_>,
     object: &Py<PyAny>,
     method: &Arc<PythonMethod>,
-    view: Arc<View>,
+    view: Arc<StepView>,
     recorder: &Py<Recorder>,
 ) -> PyResult<Started> {
     let task = method.task_object(py, &view.task)?;
@@ -469,7 +468,7 @@ fn start(
 }
 
 impl Policy for PythonPolicy {
-    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+    fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         Box::pin(async move {
             let calls = Arc::new(Mutex::new(Vec::new()));
             let (method, slot, task) = (
@@ -501,7 +500,10 @@ impl Policy for PythonPolicy {
                 None => Err("the method's thread has ended".into()),
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
-            Act { choice, calls }
+            Act {
+                choice: choice.map_err(MethodFailure),
+                calls,
+            }
         })
     }
 }

@@ -1,32 +1,29 @@
-//! Episodes: `run`, `replay`, `load_episode` and the `Episode` they give. The episode is the session layer's
-//! (`coherent::session::episode`), as for `coherent run`.
+//! Episodes: `run`, `replay`, `load_episode` and the `Episode` they give. The episode is
+//! the session's (`coherent::session::episode`), as for `coherent run`:
+//! this file converts the arguments and the results.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent::session;
-use coherent::session::backend::{BackendKind, BackendProblem, BackendRequest};
-use coherent::session::episode::{
-    self as session_episode, EpisodeSpec, Failure, Prepared, Ran, Robots,
+use coherent::session::backend::{BackendRequest, EndpointSource};
+use coherent::session::engine::{
+    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Limits, PriceTable, Summary, Transcript,
 };
-use coherent_agents::bench::ReadLimits;
-use coherent_agents::episode::{self, Method, Settings};
-use coherent_agents::llm::Usage;
-use coherent_agents::transcript::{self, Status, Summary, Transcript};
-use coherent_agents::{Cancel, ErrorRates, PriceTable};
-use coherent_core::planner::Limits;
+use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
+use coherent::session::tasks::TaskSource;
+use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::args;
 use crate::convert::{finite, interruptible, py_repr, text, to_py};
-use crate::errors::{self, Kind, short_repr};
+use crate::errors::{self, short_repr};
 use crate::llm::PyLlm;
 use crate::method::{MethodArg, Methods};
-use crate::prompts::{price_table, prompt_set};
-use crate::task::PyTask;
+use crate::prompts::{price_source, prompt_source};
+use crate::task::{PyTask, robots_arg};
 
 /// An episode as recorded in its transcript: the settings, every round, the summary.
 #[pyclass(name = "Episode", module = "coherent._coherent", frozen)]
@@ -39,44 +36,25 @@ pub(crate) struct PyEpisode {
 }
 
 impl PyEpisode {
-    /// Reads the transcript at `path`; it must hold a finished episode.
+    /// Reads the transcript at `path`; it must hold a finished episode. Its cost is at
+    /// the built-in prices, by the same rule as the episode's when it ran.
     fn read(py: Python<'_>, path: &Path) -> PyResult<PyEpisode> {
-        let transcript = transcript::read(path).map_err(|e| errors::coherent(py, e))?;
-        let summary = transcript.summary.clone().ok_or_else(|| {
-            errors::coherent(
-                py,
-                format!(
-                    "{}: no summary line: the episode did not finish",
-                    path.display()
-                ),
-            )
-        })?;
-        let task =
-            episode::recorded_task(&transcript, path).map_err(|e| errors::coherent(py, e))?;
-        // Priced with the built-in table; a method of another name is taken to ask a model.
-        let uses_model =
-            Method::from_name(&transcript.header.method).is_none_or(Method::uses_model);
-        let usage = Usage {
-            prompt_tokens: summary.prompt_tokens,
-            completion_tokens: summary.completion_tokens,
-            cached_tokens: summary.cached_tokens,
-        };
-        let cost_usd = PriceTable::builtin().episode_cost(
-            &transcript.header.backend.model,
-            uses_model,
-            &usage,
-        );
+        let recorded = episode::recorded(path, DEFAULT_MAX_TRANSCRIPT_BYTES)
+            .map_err(|e| errors::session_err(py, e))?;
+        let summary = recorded
+            .finished()
+            .map_err(|e| errors::session_err(py, e))?
+            .clone();
+        let cost_usd = recorded.cost(&PriceTable::builtin());
         Ok(PyEpisode {
-            transcript,
+            transcript: recorded.transcript,
             summary,
             path: path.to_owned(),
-            task: Py::new(py, PyTask::new(task))?,
+            task: Py::new(py, PyTask::shared(recorded.task))?,
             cost_usd,
         })
     }
-}
 
-impl PyEpisode {
     /// The episode as it ran, from memory: its transcript and the very task it ran.
     fn from_ran(ran: Ran, task: Py<PyTask>) -> PyEpisode {
         let summary = ran.summary().clone();
@@ -263,57 +241,55 @@ pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Er
 }
 
 /// Runs a prepared episode on a worker thread (Ctrl-C cancels it between rounds or in a
-/// model call); `prepare` runs there too, since sizing a budget may plan.
+/// model call); `prepare` runs there too, since sizing a budget may plan and robots over
+/// ROS 2 are awaited.
 fn episode_off_the_gil(
     py: Python<'_>,
-    prepare: impl FnOnce(&Cancel) -> Result<Prepared, Failure> + Send + 'static,
+    prepare: impl FnOnce(&Cancel) -> Result<Prepared, Error> + Send + 'static,
 ) -> PyResult<Ran> {
     let cancel = Cancel::default();
     let stop = cancel.clone();
     let ran = interruptible(
         py,
         move || stop.cancel(),
-        move || -> Result<Ran, Failure> {
+        move || -> Result<Ran, Error> {
             let prepared = prepare(&cancel)?;
             session::block_on(prepared.run(&cancel, &mut |_| {}))?
         },
     )?;
-    ran.map_err(|f| match f {
-        Failure::Physics(e) => errors::physics(py, e),
-        Failure::Other(e) => errors::coherent(py, e),
-    })
+    ran.map_err(|e| errors::session_err(py, e))
 }
 
-/// Raises `BackendError` when the backend failed for good, or `MethodError` (with the
-/// method's exception as its cause, when there is one) when the method raised; either
-/// with the episode attached.
-fn failure(py: Python<'_>, episode: PyEpisode, cause: Option<PyErr>) -> PyResult<Py<PyEpisode>> {
-    let kind = match episode.summary.status {
-        Status::BackendError => Kind::Backend,
-        Status::Error => Kind::Method,
-        _ => return Py::new(py, episode),
-    };
-    let error = episode
-        .summary
-        .error
-        .as_deref()
-        .unwrap_or("the episode failed");
-    // A traceback's last line is the exception; the whole of it is in the transcript.
-    let last = error.trim_end().lines().last().unwrap_or(error);
-    let message = format!("{last} (transcript: {})", episode.path.display());
-    let episode = Py::new(py, episode)?;
-    let raised = errors::error(py, kind, message, Some(episode.into_any()));
-    raised.set_cause(py, cause);
-    Err(raised)
+/// The episode that `ran`, or the exception its ending raises (`BackendError`,
+/// `MethodError` with the method's exception as its cause when there is one,
+/// `ReplayMismatchError`, `RobotError`), with the episode attached.
+fn finished(
+    py: Python<'_>,
+    ran: Ran,
+    task: Py<PyTask>,
+    cause: Option<PyErr>,
+) -> PyResult<Py<PyEpisode>> {
+    let ending = ran.ending();
+    let episode = Py::new(py, PyEpisode::from_ran(ran, task))?;
+    match errors::ending_err(py, &ending, episode.clone_ref(py).into_any()) {
+        None => Ok(episode),
+        Some(raised) => {
+            raised.set_cause(py, cause);
+            Err(raised)
+        }
+    }
 }
 
 /// Runs `method` on `task` as `coherent run` does and returns the episode; its
-/// transcript goes to `out`.
+/// transcript goes to `out`. With `robots="ros2"`, each robot's ROS 2 action server
+/// under `namespace` carries the actions out.
 #[pyfunction]
 #[pyo3(signature = (
     task, method = MethodArg::Name("pefa".to_owned()), *, llm = None, sim_errors = None,
-    history = 5, max_steps = None, physics = false, seed = None, out = PathBuf::from("runs"),
-    max_states = Limits::DEFAULT_MAX_STATES, prompts = None, prices = None, step_timeout = None
+    history = coherent::session::engine::HISTORY_WINDOW, max_steps = None, physics = false,
+    seed = None, out = PathBuf::from("runs"), max_states = Limits::DEFAULT_MAX_STATES,
+    prompts = None, prices = None, robots = "local", namespace = None, robot_timeout = 10.0,
+    server_wait = 10.0, step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
@@ -330,46 +306,40 @@ pub(crate) fn run(
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
     prompts: Option<&Bound<'_, PyAny>>,
     prices: Option<&Bound<'_, PyAny>>,
+    robots: &str,
+    namespace: Option<&str>,
+    robot_timeout: f64,
+    server_wait: f64,
     #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Py<PyEpisode>> {
-    // Before anything else: a bad template must cost no model call.
-    let prompts = prompt_set(prompts)?;
-    let prices = price_table(prices)?;
+    let prompts = prompt_source(prompts)?;
+    let prices = price_source(prices)?;
+    let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
     let mut methods = Methods::new(py, step_timeout)?;
     let method = method.spec(py, &mut methods, &[task.clone().unbind()])?;
-    let backend = BackendRequest {
-        kind: BackendKind::Auto,
-        endpoint: llm.map(|l| l.get().config.clone()),
-        sim_errors: error_rates(sim_errors)?,
-        replay_from: None,
-        limits: ReadLimits::default(),
-    }
-    .choose()
-    .map_err(|e| match e {
-        BackendProblem::Setup(why) => errors::backend(py, why),
-        other => errors::invalid(py, other.to_string()),
-    })?;
-    let spec = EpisodeSpec {
-        task: Arc::clone(&task.get().task),
-        settings: Settings {
-            method,
-            history,
-            temperature: llm.map(|l| l.get().config.temperature),
-            seed,
-            physics,
-            prompts,
+    let request = RunRequest {
+        backend: BackendRequest {
+            endpoint: llm.map_or(EndpointSource::None, |l| {
+                EndpointSource::Given(l.get().config.clone())
+            }),
+            sim_errors: error_rates(sim_errors)?,
+            ..BackendRequest::default()
         },
+        prompts,
+        prices,
+        robots,
+        physics,
         max_steps,
-        backend,
+        history,
+        seed,
         max_states,
         out,
-        prices,
-        robots: Robots::Local,
+        ..RunRequest::new(TaskSource::Given(Arc::clone(&task.get().task)), method)
     };
-    let ran = episode_off_the_gil(py, move |cancel| session_episode::prepare(spec, cancel));
+    let ran = episode_off_the_gil(py, move |cancel| request.prepare(cancel));
     methods.close(py)?;
     let cause = methods.methods.first().and_then(|m| m.take_error());
-    failure(py, PyEpisode::from_ran(ran?, task.clone().unbind()), cause)
+    finished(py, ran?, task.clone().unbind(), cause)
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network) with the prompt
@@ -383,25 +353,16 @@ pub(crate) fn replay(
     #[pyo3(from_py_with = args::out)] out: PathBuf,
     prices: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
-    let path = transcript.clone();
-    let prices = price_table(prices)?;
-    let ran = episode_off_the_gil(py, move |_| {
-        session_episode::prepare_replay(&path, None, out, prices, transcript::DEFAULT_MAX_BYTES)
-    })?;
-    let mismatch = ran.replay.clone().and_then(Result::err);
+    let request = ReplayRequest {
+        transcript,
+        task: None,
+        prices: price_source(prices)?,
+        out,
+        max_bytes: DEFAULT_MAX_TRANSCRIPT_BYTES,
+    };
+    let ran = episode_off_the_gil(py, move |_| request.prepare())?;
     let task = Py::new(py, PyTask::shared(Arc::clone(&ran.task)))?;
-    let episode = PyEpisode::from_ran(ran, task);
-    if let Some(why) = mismatch {
-        let message = format!("{}: {why}", transcript.display());
-        let episode = Py::new(py, episode)?.into_any();
-        return Err(errors::error(
-            py,
-            Kind::ReplayMismatch,
-            message,
-            Some(episode),
-        ));
-    }
-    failure(py, episode, None)
+    finished(py, ran, task, None)
 }
 
 /// The episode recorded in a transcript file (`coherent run` or `coherent bench` wrote it).

@@ -5,16 +5,13 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use coherent::session::engine::{Limits, Task, Transcript};
 use coherent::session::render::{self, Paths, RobotPath};
-use coherent_agents::transcript::Transcript;
-use coherent_core::Task;
-use coherent_core::planner::Limits;
-use coherent_sim::layout;
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{interruptible, to_py};
-use crate::errors::{self, Kind};
+use crate::errors;
 use crate::run::PyEpisode;
 use crate::task::PyTask;
 
@@ -27,8 +24,7 @@ pub(crate) fn scene_layout<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let layout = layout::for_task(&task.get().task)
-        .map_err(|e| errors::error(py, Kind::Physics, format!("layout: {e}"), None))?;
+    let layout = render::scene_layout(&task.get().task).map_err(|e| errors::session_err(py, e))?;
     to_py(py, &layout)
 }
 
@@ -75,8 +71,7 @@ fn paths_of(py: Python<'_>, source: Source) -> PyResult<(Arc<Task>, Vec<RobotPat
             }
         },
     )?;
-    let (task, Paths { paths, warning }) =
-        result.map_err(|e| errors::error(py, Kind::Physics, e, None))?;
+    let (task, Paths { paths, warning }) = result.map_err(|e| errors::session_err(py, e))?;
     if let Some(why) = warning {
         eprintln!("warning: {why}");
     }
@@ -124,5 +119,5 @@ pub(crate) fn render_svg(
             Source::Plan(task) | Source::Episode(task, _) => (task, None),
         }
     };
-    render::svg(&task, drawn.as_deref()).map_err(|e| errors::error(py, Kind::Physics, e, None))
+    render::svg(&task, drawn.as_deref()).map_err(|e| errors::session_err(py, e))
 }

@@ -3,10 +3,13 @@
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, OnceLock};
 
-use coherent::session::episode::{Failure, Robots, environment};
-use coherent_agents::Cancel;
-use coherent_core::planner::{self, Limits};
-use coherent_core::{Environment, NodeId, RawGraph, Task, feasibility, native, original};
+use coherent::session::check;
+use coherent::session::engine::{
+    Cancel, DEFAULT_NAMESPACE, Environment, Limits, NodeId, RawGraph, Task, TaskError, feasibility,
+    native, original,
+};
+use coherent::session::episode::environment;
+use coherent::session::robots::Robots;
 use pyo3::exceptions::PyOverflowError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -81,7 +84,12 @@ impl PyTask {
         let kind = interruptible(
             py,
             move || cancel.store(true, Ordering::Relaxed),
-            move || planner::analyse(&task, &limits).task_type.map(|k| k.name()),
+            move || {
+                check::plan(&task, &limits, false)
+                    .analysis
+                    .task_type
+                    .map(|k| k.name())
+            },
         )?;
         Ok(*self.kind.get_or_init(|| kind))
     }
@@ -175,7 +183,7 @@ fn node_id(py: Python<'_>, task: &Task, robot: RobotArg) -> PyResult<NodeId> {
             .collect();
         core_err(
             py,
-            coherent_core::Error::UnknownRobot(format!(
+            TaskError::UnknownRobot(format!(
                 "robot={repr}: no node id is that large; the robots of task {}/{} are {}",
                 task.meta.scene,
                 task.meta.task_id,
@@ -220,33 +228,13 @@ impl PyEnv {
         server_wait: f64,
     ) -> PyResult<PyEnv> {
         let t = Arc::clone(&task.get().task);
-        let robots = match (robots, namespace) {
-            ("local", None) => Robots::Local,
-            ("local", Some(_)) => {
-                return Err(errors::invalid(py, "a namespace is for robots=\"ros2\""));
-            }
-            ("ros2", ns) => Robots::ros2(
-                ns.unwrap_or(coherent_ros::wire::DEFAULT_NAMESPACE),
-                robot_timeout,
-                server_wait,
-            )
-            .map_err(|e| errors::invalid(py, e))?,
-            (other, _) => {
-                return Err(errors::invalid(
-                    py,
-                    format!("robots={other:?}: \"local\" or \"ros2\""),
-                ));
-            }
-        };
+        let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
         let namespace = match &robots {
             Robots::Ros2(options) => Some(options.namespace.clone()),
             Robots::Local => None,
         };
         let built = py.detach(|| environment(&t, physics, &robots, &Cancel::default()));
-        let env = built.map_err(|f| match f {
-            Failure::Physics(e) => errors::physics(py, e),
-            Failure::Other(why) => errors::coherent(py, why),
-        })?;
+        let env = built.map_err(|e| errors::session_err(py, e))?;
         Ok(PyEnv {
             env,
             task: task.unbind(),
@@ -374,5 +362,26 @@ impl PyEnv {
             flag(self.physics),
             flag(self.env.goal_satisfied())
         )
+    }
+}
+
+/// The robots of `robots=` (`"local"` or `"ros2"`), with `namespace`, `robot_timeout`
+/// and `server_wait` for robots over ROS 2: `Env`'s, `run`'s and `bench`'s arguments.
+pub(crate) fn robots_arg(
+    py: Python<'_>,
+    robots: &str,
+    namespace: Option<&str>,
+    robot_timeout: f64,
+    server_wait: f64,
+) -> PyResult<Robots> {
+    match (robots, namespace) {
+        ("local", None) => Ok(Robots::Local),
+        ("local", Some(_)) => Err(errors::invalid(py, "a namespace is for robots=\"ros2\"")),
+        ("ros2", ns) => Robots::ros2(ns.unwrap_or(DEFAULT_NAMESPACE), robot_timeout, server_wait)
+            .map_err(|e| errors::session_err(py, e)),
+        (other, _) => Err(errors::invalid(
+            py,
+            format!("robots={other:?}: \"local\" or \"ros2\""),
+        )),
     }
 }

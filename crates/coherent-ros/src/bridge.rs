@@ -10,7 +10,8 @@ use coherent_core::feasibility::{self, Infeasible, Reason};
 use coherent_core::{Action, Environment, NodeId, Outcome, Robot, RobotReport, State, Task, rules};
 use ros2_client::action::GoalStatusEnum;
 
-use crate::link::{ConnectError, Exchange, Link};
+use crate::error::Error;
+use crate::link::{Exchange, Link};
 use crate::relations;
 use crate::wire::{self, ExecuteResult, Goal};
 
@@ -55,14 +56,16 @@ pub struct Ros2Env {
 
 impl Ros2Env {
     /// Connects to the servers of `task`'s robots, waiting up to
-    /// [`BridgeOptions::server_wait`] for all of them; `cancel` is the episode's flag.
+    /// [`BridgeOptions::server_wait`] for all of them; `cancel` is the episode's flag,
+    /// `runtime` the one DDS work is spun on.
     pub fn connect(
         task: Arc<Task>,
         options: BridgeOptions,
         cancel: Option<Arc<AtomicBool>>,
-    ) -> Result<Ros2Env, ConnectError> {
+        runtime: tokio::runtime::Handle,
+    ) -> Result<Ros2Env, Error> {
         let names = wire::robot_names(&task);
-        let link = Link::connect(&options.namespace, &names, options.server_wait)?;
+        let link = Link::connect(&options.namespace, &names, options.server_wait, runtime)?;
         Ok(Ros2Env {
             state: task.init.clone(),
             task,

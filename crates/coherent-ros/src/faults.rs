@@ -4,6 +4,8 @@
 
 use std::time::Duration;
 
+use crate::error::Error;
+
 /// What goes wrong on purpose; the default is nothing.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Faults {
@@ -23,12 +25,12 @@ pub struct Faults {
 
 impl Faults {
     /// Checks the rate and that every robot named is one of `robots`.
-    pub fn check(&self, robots: &[String]) -> Result<(), String> {
+    pub fn check(&self, robots: &[String]) -> Result<(), Error> {
         if !(0.0..=1.0).contains(&self.fail_rate) {
-            return Err(format!(
+            return Err(Error::Invalid(format!(
                 "the failure rate must be between 0 and 1, not {}",
                 coherent_core::text::number(self.fail_rate)
-            ));
+            )));
         }
         let unknown: Vec<&str> = self
             .silent
@@ -41,11 +43,11 @@ impl Faults {
         if unknown.is_empty() {
             Ok(())
         } else {
-            Err(format!(
+            Err(Error::Invalid(format!(
                 "no robot named {} in the task; its robots: {}",
                 unknown.join(", "),
                 robots.join(", ")
-            ))
+            )))
         }
     }
 
@@ -155,7 +157,10 @@ mod tests {
                 ..Faults::default()
             },
         ] {
-            let why = bad.check(&robots).expect_err("drone_1 is no robot");
+            let why = bad
+                .check(&robots)
+                .expect_err("drone_1 is no robot")
+                .to_string();
             assert!(
                 why.contains("drone_1") && why.contains("robot_dog_13"),
                 "{why}"

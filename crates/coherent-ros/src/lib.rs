@@ -11,6 +11,7 @@
 //! Rapier) and inject faults on demand ([`Faults`]).
 
 pub mod bridge;
+mod error;
 pub mod faults;
 mod link;
 pub mod relations;
@@ -18,6 +19,6 @@ pub mod server;
 pub mod wire;
 
 pub use bridge::{BridgeOptions, Ros2Env};
+pub use error::Error;
 pub use faults::Faults;
-pub use link::ConnectError;
 pub use server::{ServeOptions, World, serve};

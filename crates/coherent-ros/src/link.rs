@@ -2,10 +2,10 @@
 //! requests and replies of its goal, result and cancel services, and its feedback
 //! topic), made on the DDS participant itself rather than through an action client, so
 //! that every reply and feedback sample is seen with the participant that wrote it and
-//! each reader holds a few samples at most; a small runtime of its own; and one goal's
-//! exchange (send it, follow its feedback, take its result; cancel it on Ctrl-C or when
-//! the robot falls silent) as a blocking call that works inside an async runtime as well
-//! as outside one.
+//! each reader holds a few samples at most; and one goal's exchange (send it, follow its
+//! feedback, take its result; cancel it on Ctrl-C or when the robot falls silent) as a
+//! blocking call on the runtime the caller hands in (the session's, the one place a
+//! runtime is built), which works inside an async runtime as well as outside one.
 //!
 //! A robot is one server. Two servers for one robot at the start is an error that names
 //! them; during an episode, only the server that accepted a goal is heard about it (its
@@ -32,9 +32,10 @@ use ros2_client::dds::rustdds::{
     WriteOptionsBuilder,
 };
 use ros2_client::unique_identifier_msgs::UUID;
-use tokio::runtime::Runtime;
+use tokio::runtime::Handle;
 use tokio::time::{Instant, sleep, sleep_until, timeout};
 
+use crate::error::Error;
 use crate::wire::{self, CancelRequest, ExecuteResult, Feedback, Goal};
 
 /// How often the wait for the robots' servers looks again.
@@ -51,60 +52,6 @@ const READER_DEPTH: i32 = 4;
 
 type Writer<T> = DataWriter<T, CDRSerializerAdapter<T>>;
 type Reader<T> = SimpleDataReader<T, CDRDeserializerAdapter<T>>;
-
-/// Why the bridge could not start.
-#[derive(Debug, Clone, PartialEq, Eq)]
-pub enum ConnectError {
-    /// These robots had no action server within the time given.
-    Missing {
-        robots: Vec<String>,
-        namespace: String,
-        waited: Duration,
-    },
-    /// A robot has more than one action server: each would carry out every goal.
-    Several {
-        robot: String,
-        namespace: String,
-        /// The servers' DDS participants, as `participant 0f1e...`.
-        servers: Vec<String>,
-    },
-    /// DDS could not be set up.
-    Dds(String),
-}
-
-impl std::fmt::Display for ConnectError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            ConnectError::Missing {
-                robots,
-                namespace,
-                waited,
-            } => write!(
-                f,
-                "no ROS 2 action server for {} under {namespace} within {:.1} s (start the \
-                 robots' servers, e.g. `coherent robots serve TASK --namespace {namespace}`, \
-                 or wait longer with --server-wait)",
-                robots.join(", "),
-                waited.as_secs_f64()
-            ),
-            ConnectError::Several {
-                robot,
-                namespace,
-                servers,
-            } => write!(
-                f,
-                "{} ROS 2 action servers for {robot} under {namespace} ({}): each would carry \
-                 out every goal, and the robot's world and the rules' would part; stop all \
-                 but one",
-                servers.len(),
-                servers.join(", ")
-            ),
-            ConnectError::Dds(why) => write!(f, "ROS 2: {why}"),
-        }
-    }
-}
-
-impl std::error::Error for ConnectError {}
 
 /// How one goal ended, seen from the bridge.
 #[derive(Debug)]
@@ -175,12 +122,12 @@ impl Matches {
     }
 }
 
-/// The bridge's DDS ends, robot by robot, and a runtime to wait on them.
+/// The bridge's DDS ends, robot by robot, and the runtime to wait on them.
 pub(crate) struct Link {
     robots: Vec<Ends>,
     /// The participant, which lives as long as a handle to it does.
     _participant: DomainParticipant,
-    runtime: Option<Runtime>,
+    runtime: Handle,
 }
 
 impl std::fmt::Debug for Link {
@@ -222,8 +169,8 @@ fn reader_qos() -> QosPolicies {
 }
 
 /// A DDS failure to make `what`, as the bridge's error.
-fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> ConnectError + '_ {
-    move |e| ConnectError::Dds(format!("{what}: {e:?}"))
+fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::Dds(format!("{what}: {e:?}"))
 }
 
 impl Ends {
@@ -234,8 +181,8 @@ impl Ends {
         subscriber: &Subscriber,
         namespace: &str,
         robot: &str,
-    ) -> Result<Ends, ConnectError> {
-        let names = wire::dds_names(namespace, robot).map_err(ConnectError::Dds)?;
+    ) -> Result<Ends, Error> {
+        let names = wire::dds_names(namespace, robot).map_err(Error::Dds)?;
         // A topic's QoS sets how many samples the participant's cache keeps of it (64
         // without resource limits), whatever its readers ask for.
         let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
@@ -243,7 +190,7 @@ impl Ends {
                 .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
                 .map_err(dds(name))
         };
-        let writer = |name: &str, type_name: &str| -> Result<_, ConnectError> {
+        let writer = |name: &str, type_name: &str| -> Result<_, Error> {
             Ok((topic(name, type_name, &request_qos())?, Some(request_qos())))
         };
         let (goal_topic, q) = writer(&names.goal_request, &names.goal_request_type)?;
@@ -258,7 +205,7 @@ impl Ends {
         let cancel = publisher
             .create_datawriter_no_key(&cancel_topic, q)
             .map_err(dds(&names.cancel_request))?;
-        let reader = |name: &str, type_name: &str| -> Result<_, ConnectError> {
+        let reader = |name: &str, type_name: &str| -> Result<_, Error> {
             Ok((topic(name, type_name, &reader_qos())?, Some(reader_qos())))
         };
         let (t, q) = reader(&names.goal_reply, &names.goal_reply_type)?;
@@ -337,20 +284,16 @@ fn prefix_of(guid: GUID) -> [u8; 12] {
 impl Link {
     /// Joins DDS, makes the ends of each of `robots`' actions under `namespace`, waits up
     /// to `wait` for every robot's server to appear, then a moment more for a second
-    /// one: a robot with two servers is an error that names them.
+    /// one: a robot with two servers is an error that names them. Goals are followed on
+    /// `runtime`.
     pub(crate) fn connect(
         namespace: &str,
         robots: &[String],
         wait: Duration,
-    ) -> Result<Link, ConnectError> {
-        let context = wire::context().map_err(ConnectError::Dds)?;
+        runtime: Handle,
+    ) -> Result<Link, Error> {
+        let context = wire::context().map_err(Error::Dds)?;
         let participant = context.domain_participant();
-        let runtime = tokio::runtime::Builder::new_multi_thread()
-            .worker_threads(1)
-            .thread_name("coherent-ros")
-            .enable_time()
-            .build()
-            .map_err(|e| ConnectError::Dds(format!("cannot start a runtime: {e}")))?;
         let qos = request_qos();
         let publisher = participant
             .create_publisher(&qos)
@@ -365,7 +308,7 @@ impl Link {
         let link = Link {
             robots: ends,
             _participant: participant.clone(),
-            runtime: Some(runtime),
+            runtime,
         };
         let mut matches = Matches::default();
         let start = std::time::Instant::now();
@@ -383,7 +326,7 @@ impl Link {
             .map(|(r, _)| r.clone())
             .collect();
         if !missing.is_empty() {
-            return Err(ConnectError::Missing {
+            return Err(Error::Missing {
                 robots: missing,
                 namespace: namespace.to_owned(),
                 waited: wait,
@@ -394,7 +337,7 @@ impl Link {
         for (robot, e) in robots.iter().zip(&link.robots) {
             let servers = e.servers(&matches);
             if servers.len() > 1 {
-                return Err(ConnectError::Several {
+                return Err(Error::Several {
                     robot: robot.clone(),
                     namespace: namespace.to_owned(),
                     servers,
@@ -413,31 +356,18 @@ impl Link {
         silence: Duration,
         cancel: Option<&AtomicBool>,
     ) -> Exchange {
-        self.block(exchange(&self.robots[robot], goal, silence, cancel))
+        self.block(follow_goal(&self.robots[robot], goal, silence, cancel))
     }
 
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that
-    /// the caller may be inside another runtime (an episode's) or in none.
+    /// the caller may be inside a runtime (an episode's) or in none.
     fn block<T: Send>(&self, future: impl Future<Output = T> + Send) -> T {
-        let handle = self
-            .runtime
-            .as_ref()
-            .expect("the runtime lives as long as the link")
-            .handle();
+        let handle = &self.runtime;
         std::thread::scope(|s| {
             s.spawn(|| handle.block_on(future))
                 .join()
                 .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
         })
-    }
-}
-
-impl Drop for Link {
-    /// Stops the runtime without waiting (allowed inside a runtime).
-    fn drop(&mut self) {
-        if let Some(runtime) = self.runtime.take() {
-            runtime.shutdown_background();
-        }
     }
 }
 
@@ -467,7 +397,10 @@ where
         .map_err(|e| format!("cannot send a request: {e:?}"))
 }
 
-async fn exchange(
+/// Sends `goal` to the robot of `ends` and follows it to its end: the result of the
+/// server that took it, a refusal, `silence` without a word from that server, or
+/// `cancel` raised (the goal is then cancelled).
+async fn follow_goal(
     ends: &Ends,
     goal: Goal,
     silence: Duration,

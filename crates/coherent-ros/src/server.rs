@@ -17,6 +17,7 @@ use ros2_client::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus}
 use ros2_client::{NodeName, NodeOptions, ServiceMapping};
 use tokio::time::{Instant, interval, sleep_until, timeout};
 
+use crate::error::Error;
 use crate::faults::Faults;
 use crate::relations;
 use crate::wire::{self, ExecuteResult, Feedback, Goal};
@@ -47,9 +48,9 @@ pub enum World {
 }
 
 impl World {
-    pub fn new(task: &Arc<Task>, physics: bool) -> Result<World, String> {
+    pub fn new(task: &Arc<Task>, physics: bool) -> Result<World, Error> {
         Ok(if physics {
-            let env = PhysicalEnv::new(Arc::clone(task)).map_err(|e| format!("physics: {e}"))?;
+            let env = PhysicalEnv::new(Arc::clone(task)).map_err(Error::Physics)?;
             World::Physics(Box::new(env))
         } else {
             World::Rules(SymbolicEnv::new(Arc::clone(task)))
@@ -112,22 +113,22 @@ pub async fn serve(
     options: ServeOptions,
     log: &(dyn Fn(&str) + Sync),
     stop: impl Future<Output = ()>,
-) -> Result<(), String> {
+) -> Result<(), Error> {
     let names = wire::robot_names(&task);
     options.faults.check(&names)?;
     let world = Arc::new(Mutex::new(World::new(&task, options.physics)?));
-    let context = wire::context()?;
+    let context = wire::context().map_err(Error::Dds)?;
     let node_name = NodeName::new(&options.namespace, "coherent_robots")
-        .map_err(|e| format!("node name: {e:?}"))?;
+        .map_err(|e| Error::Dds(format!("node name: {e:?}")))?;
     let mut node = context
         .new_node(node_name, NodeOptions::new().enable_rosout(false))
-        .map_err(|e| format!("cannot make a node: {e:?}"))?;
+        .map_err(|e| Error::Dds(format!("cannot make a node: {e:?}")))?;
     let mut servers = Vec::new();
     for (r, name) in task.robots.iter().zip(&names) {
         if options.faults.is_absent(name) {
             continue;
         }
-        let action = wire::ros_action_name(&options.namespace, name)?;
+        let action = wire::ros_action_name(&options.namespace, name).map_err(Error::Dds)?;
         let server = node
             .create_action_server::<Goal, ExecuteResult, Feedback>(
                 ServiceMapping::Enhanced,
@@ -135,7 +136,7 @@ pub async fn serve(
                 &wire::action_type(),
                 wire::server_qos(),
             )
-            .map_err(|e| format!("action server {name}: {e:?}"))?;
+            .map_err(|e| Error::Dds(format!("action server {name}: {e:?}")))?;
         let me = Me {
             name: name.clone(),
             node: r.node,

@@ -14,6 +14,8 @@ use serde::{Deserialize, Serialize};
 
 use coherent_core::{Idx, Task};
 
+use crate::error::Error;
+
 /// The package of the interface.
 pub const PACKAGE: &str = "coherent_msgs";
 /// The action type, `coherent_msgs/action/Execute`.
@@ -124,17 +126,17 @@ pub fn robot_names(task: &Task) -> Vec<String> {
 /// A namespace as given (`coherent`, `/coherent`, `/lab/bench_2/`) in its absolute form
 /// without a trailing slash; every token must be a ROS name token (a letter or `_`,
 /// then letters, digits and `_`).
-pub fn namespace(given: &str) -> Result<String, String> {
+pub fn namespace(given: &str) -> Result<String, Error> {
     let tokens: Vec<&str> = given.split('/').filter(|t| !t.is_empty()).collect();
     let valid = |t: &str| {
         t.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
             && t.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
     };
     if tokens.is_empty() || !tokens.iter().all(|t| valid(t)) {
-        return Err(format!(
+        return Err(Error::Invalid(format!(
             "{given:?} is not a ROS namespace (tokens of letters, digits and _, each \
              starting with a letter or _, separated by /)"
-        ));
+        )));
     }
     Ok(format!("/{}", tokens.join("/")))
 }

@@ -18,8 +18,8 @@ use coherent_core::{Idx, State, Task, rules};
 use serde_json::json;
 
 use crate::backends::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, OutputMode, Query,
-    Usage,
+    Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
+    OutputMode, Query, Usage,
 };
 use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot};
 use crate::methods::joint::joint_actions;
@@ -226,12 +226,12 @@ impl Backend for BuiltinBackend {
     fn info(&self) -> BackendInfo {
         match &self.errors {
             None => BackendInfo {
-                kind: "builtin".into(),
+                kind: BackendKind::Builtin,
                 model: "optimal-planner".into(),
                 base_url: None,
             },
             Some((rates, _)) => BackendInfo {
-                kind: "simulated".into(),
+                kind: BackendKind::Simulated,
                 model: format!("optimal-planner with errors {}", rates.label()),
                 base_url: None,
             },

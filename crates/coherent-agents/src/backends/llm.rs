@@ -212,14 +212,60 @@ impl fmt::Display for LlmError {
     }
 }
 
+/// What kind of backend answers, as transcripts and results files name it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BackendKind {
+    /// `builtin`: the optimal planner in every role.
+    Builtin,
+    /// `simulated`: the planner with seeded mistakes.
+    Simulated,
+    /// `openai`: an OpenAI-compatible server.
+    #[serde(rename = "openai")]
+    OpenAi,
+    /// `replay`: the answers recorded in a transcript.
+    Replay,
+    /// `none`: nothing answers; the method asks no backend.
+    None,
+}
+
+impl BackendKind {
+    /// The name transcripts and results files use.
+    pub fn name(self) -> &'static str {
+        match self {
+            BackendKind::Builtin => "builtin",
+            BackendKind::Simulated => "simulated",
+            BackendKind::OpenAi => "openai",
+            BackendKind::Replay => "replay",
+            BackendKind::None => "none",
+        }
+    }
+}
+
+impl fmt::Display for BackendKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// Which backend answers, for the first line of output and the transcript header.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct BackendInfo {
-    /// `builtin`, `openai` or `replay`.
-    pub kind: String,
+    pub kind: BackendKind,
     pub model: String,
     /// The endpoint, for HTTP backends (never with credentials).
     pub base_url: Option<String>,
+}
+
+impl BackendInfo {
+    /// No backend: the method asks none.
+    pub fn none() -> BackendInfo {
+        BackendInfo {
+            kind: BackendKind::None,
+            model: String::new(),
+            base_url: None,
+        }
+    }
 }
 
 /// What a backend gave for one query, and which of its endpoints gave it.

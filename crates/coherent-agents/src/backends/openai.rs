@@ -18,8 +18,8 @@ use coherent_core::text::cut;
 use crate::backends::address::{Address, redacted};
 use crate::backends::endpoints::{Endpoints, Lease};
 use crate::backends::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, Finish, LlmError, LlmErrorKind, MAX_ANSWER_BYTES,
-    Message, OutputMode, Query, Response, Usage,
+    Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
+    MAX_ANSWER_BYTES, Message, OutputMode, Query, Response, Usage,
 };
 use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
@@ -105,16 +105,22 @@ impl fmt::Debug for ApiKey {
     }
 }
 
-/// Settings of the HTTP backend.
-#[derive(Clone, Debug)]
+/// How to reach an OpenAI-compatible endpoint and how patiently: the one set of endpoint
+/// settings, filled by the command line's flags and by Python's `LLM`, completed from the
+/// environment by the session (`OPENAI_BASE_URL`, `OPENAI_API_KEY`, `COHERENT_MODEL` for
+/// what was not given), and used as it is by the client. The defaults are
+/// [`OpenAiConfig::default`]'s.
+#[derive(Clone, Debug, PartialEq)]
 pub struct OpenAiConfig {
     /// Up to and including the version, e.g. `https://api.openai.com/v1`; several when
     /// replicas serve the model: each request goes to the one with the fewest requests in
-    /// flight, and one that fails rests while the others carry on.
+    /// flight, and one that fails rests while the others carry on. Empty until given.
     pub base_urls: Vec<String>,
     pub api_key: Option<ApiKey>,
+    /// Empty until given; the client refuses an empty one.
     pub model: String,
     pub temperature: f32,
+    /// The model's sampling seed, sent to the server.
     pub seed: Option<u64>,
     pub connect_timeout: Duration,
     /// Longest silence while reading a response.
@@ -132,18 +138,16 @@ pub struct OpenAiConfig {
     pub max_response_bytes: usize,
 }
 
-impl OpenAiConfig {
-    /// The default [`OpenAiConfig::max_response_bytes`]: 4 MiB, hundreds of times what a
-    /// chat answer of a few thousand tokens takes.
-    pub const DEFAULT_MAX_RESPONSE_BYTES: usize = 4 << 20;
-}
-
-impl OpenAiConfig {
-    pub fn new(base_url: impl Into<String>, model: impl Into<String>) -> OpenAiConfig {
+impl Default for OpenAiConfig {
+    /// No endpoint or model yet; 10 s to connect, 120 s of silence while reading, 300 s
+    /// for an attempt in all, [`Backoff::default`]'s retries, 4 requests in flight, a
+    /// JSON schema asked for first, responses of at most 4 MiB (hundreds of times what
+    /// a chat answer of a few thousand tokens takes).
+    fn default() -> OpenAiConfig {
         OpenAiConfig {
-            base_urls: vec![base_url.into()],
+            base_urls: Vec::new(),
             api_key: None,
-            model: model.into(),
+            model: String::new(),
             temperature: 0.0,
             seed: None,
             connect_timeout: Duration::from_secs(10),
@@ -152,7 +156,18 @@ impl OpenAiConfig {
             backoff: Backoff::default(),
             concurrency: 4,
             output: OutputMode::JsonSchema,
-            max_response_bytes: OpenAiConfig::DEFAULT_MAX_RESPONSE_BYTES,
+            max_response_bytes: 4 << 20,
+        }
+    }
+}
+
+impl OpenAiConfig {
+    /// The default settings for `model` at `base_url`.
+    pub fn new(base_url: impl Into<String>, model: impl Into<String>) -> OpenAiConfig {
+        OpenAiConfig {
+            base_urls: vec![base_url.into()],
+            model: model.into(),
+            ..OpenAiConfig::default()
         }
     }
 }
@@ -220,6 +235,9 @@ impl OpenAiClient {
             secrets.extend(address.secrets.iter().map(ApiKey::new));
             targets.push(address);
         }
+        // reqwest takes rustls's process-wide crypto provider, `ring` here (Cargo.toml says
+        // why). Installing it a second time fails harmlessly: one is there already.
+        let _ = rustls::crypto::ring::default_provider().install_default();
         // No wait longer than one request may take, whatever a server asks.
         let backoff = Backoff {
             cap: config.backoff.cap.min(config.total_timeout),
@@ -248,6 +266,11 @@ impl OpenAiClient {
             jitter: Mutex::new(Rng::new(seed)),
             config,
         })
+    }
+
+    /// The settings the client was made with.
+    pub fn config(&self) -> &OpenAiConfig {
+        &self.config
     }
 
     /// `text` without the key or any secret of the base URLs.
@@ -282,9 +305,9 @@ impl OpenAiClient {
         body
     }
 
-    /// One HTTP exchange with the endpoint at `address`: the status, `Retry-After` if
-    /// any, and the whole body (for a redirect, where it points).
-    async fn exchange(&self, address: &Address, body: &Value) -> Result<Exchanged, LlmError> {
+    /// One POST of `body` to the endpoint at `address`: the status, `Retry-After` if any,
+    /// and the whole body (for a redirect, where it points).
+    async fn post(&self, address: &Address, body: &Value) -> Result<Exchanged, LlmError> {
         let mut request = self.http.post(address.post.clone()).json(body);
         // One credential: the URL's user and password (basic auth, which the HTTP
         // client takes from the URL), else the key.
@@ -422,7 +445,7 @@ impl OpenAiClient {
     /// worth a retry rests it, any other response counts as an answer.
     async fn attempt(&self, lease: &Lease<'_>, q: &Chat, mode: OutputMode) -> Attempt {
         let (status, retry_after, bytes) =
-            match self.exchange(lease.address(), &self.body(q, mode)).await {
+            match self.post(lease.address(), &self.body(q, mode)).await {
                 Ok(Exchanged::Body(status, retry_after, bytes)) => (status, retry_after, bytes),
                 Ok(Exchanged::Redirect(status, to)) => {
                     lease.answered();
@@ -583,7 +606,7 @@ fn parse_completion(bytes: &[u8]) -> Result<Answer, String> {
 impl Backend for OpenAiClient {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "openai".into(),
+            kind: BackendKind::OpenAi,
             model: self.config.model.clone(),
             base_url: Some(self.endpoints.shown().join(",")),
         }

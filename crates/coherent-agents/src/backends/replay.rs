@@ -7,7 +7,7 @@ use std::collections::VecDeque;
 use std::sync::{Mutex, PoisonError};
 
 use crate::backends::llm::{
-    Answer, Backend, BackendInfo, BoxFuture, LlmError, LlmErrorKind, Query, Response,
+    Answer, Backend, BackendInfo, BackendKind, BoxFuture, LlmError, LlmErrorKind, Query, Response,
 };
 use crate::records::transcript::{Call, Transcript};
 
@@ -90,7 +90,7 @@ impl ReplayBackend {
 impl Backend for ReplayBackend {
     fn info(&self) -> BackendInfo {
         BackendInfo {
-            kind: "replay".into(),
+            kind: BackendKind::Replay,
             model: self.recorded.model.clone(),
             base_url: None,
         }

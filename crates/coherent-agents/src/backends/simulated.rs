@@ -6,6 +6,7 @@
 use coherent_core::text::number;
 use coherent_core::{Idx, Task};
 
+use crate::error::Error;
 use crate::rng::Rng;
 
 /// The kinds of mistakes the simulated backend makes, each with its own rate.
@@ -46,7 +47,11 @@ impl ErrorRates {
 
     /// `hallucinate=0.1,wrong_robot=0.1,malformed=0.05,suboptimal=0.1`; `all=0.1` sets
     /// every kind; kinds not named are 0.
-    pub fn parse(spec: &str) -> Result<ErrorRates, String> {
+    pub fn parse(spec: &str) -> Result<ErrorRates, Error> {
+        ErrorRates::read(spec).map_err(Error::Invalid)
+    }
+
+    fn read(spec: &str) -> Result<ErrorRates, String> {
         let mut rates = ErrorRates::default();
         for part in spec.split(',').map(str::trim).filter(|p| !p.is_empty()) {
             let (key, value) = part

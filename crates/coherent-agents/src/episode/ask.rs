@@ -4,7 +4,7 @@
 
 use crate::backends::llm::{Backend, Finish, LlmError, Query};
 use crate::episode::cancel::Cancel;
-use crate::records::transcript::{Call, Outcome};
+use crate::records::transcript::{Call, RoundOutcome};
 
 /// Why a role's answer gave nothing to act on.
 pub(crate) enum Unusable {
@@ -24,13 +24,13 @@ pub(crate) enum Side {
 }
 
 impl Unusable {
-    pub(crate) fn outcome(self, side: Side) -> Outcome {
+    pub(crate) fn outcome(self, side: Side) -> RoundOutcome {
         match (self, side) {
-            (Unusable::Failed(e), _) => Outcome::BackendError {
+            (Unusable::Failed(e), _) => RoundOutcome::BackendError {
                 message: e.to_string(),
             },
-            (Unusable::Bad(why), Side::Assigner) => Outcome::NoProposal { why },
-            (Unusable::Bad(why), Side::Executor) => Outcome::NoDecision { why },
+            (Unusable::Bad(why), Side::Assigner) => RoundOutcome::NoProposal { why },
+            (Unusable::Bad(why), Side::Executor) => RoundOutcome::NoDecision { why },
         }
     }
 }
@@ -61,9 +61,13 @@ impl Reply {
     }
 }
 
-/// Asks `backend` and records the exchange: the call with its answer or its error, and
+/// Asks `backend` and records the call: what was asked, its answer or its error, and
 /// the endpoint that gave it; `None` when cancelled.
-pub(crate) async fn exchange(backend: &dyn Backend, query: Query, cancel: &Cancel) -> Option<Call> {
+pub(crate) async fn place_call(
+    backend: &dyn Backend,
+    query: Query,
+    cancel: &Cancel,
+) -> Option<Call> {
     let mut call = Call {
         role: query.role,
         robot: query.robot.map(|r| r.0),
@@ -94,7 +98,7 @@ pub(crate) async fn ask(
     cancel: &Cancel,
     calls: &mut Vec<Call>,
 ) -> Option<Result<Reply, Unusable>> {
-    let call = exchange(backend, query, cancel).await?;
+    let call = place_call(backend, query, cancel).await?;
     let reply = match (&call.answer, &call.error) {
         (Some(answer), _) => match &answer.finish {
             Finish::Refusal(words) => Err(format!("the model refused: {words}")),
@@ -112,7 +116,7 @@ pub(crate) async fn ask(
         .map_err(Unusable::Bad),
         (None, Some(e)) if e.ends_episode() => Err(Unusable::Failed(e.clone())),
         (None, Some(e)) => Err(Unusable::Bad(e.to_string())),
-        // An exchange records one or the other; a call read back may have neither.
+        // A call placed records one or the other; a call read back may have neither.
         (None, None) => Err(Unusable::Bad(
             "the call has neither an answer nor an error".into(),
         )),

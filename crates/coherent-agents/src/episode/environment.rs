@@ -3,7 +3,7 @@
 
 use coherent_core::{Environment, NodeId, Task, describe};
 
-use crate::records::transcript::{Outcome, Round};
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// Checks and runs `action` for `robot`: executed, or why not; what a robot outside this
 /// process said about it goes into `round`.
@@ -12,19 +12,19 @@ pub(crate) fn execute(
     round: &mut Round,
     robot: NodeId,
     action: &str,
-) -> Outcome {
+) -> RoundOutcome {
     match env.step(robot, action) {
         Ok(o) => {
             round.robot = o.report;
             match o.infeasible {
-                None => Outcome::Executed,
-                Some(why) => Outcome::Infeasible {
+                None => RoundOutcome::Executed,
+                Some(why) => RoundOutcome::Infeasible {
                     reason: why.reason.name().to_owned(),
                     message: why.message,
                 },
             }
         }
-        Err(e) => Outcome::Infeasible {
+        Err(e) => RoundOutcome::Infeasible {
             reason: "error".into(),
             message: e.to_string(),
         },

@@ -1,12 +1,15 @@
 //! The episode: what every method shares, and the one way to run any of them.
 //!
 //! - [`settings`]: the method names ([`Method`]), a method written outside the crate
-//!   ([`External`]) beside them ([`MethodSpec`]), the settings a transcript records
-//!   ([`Settings`]) and the step budget ([`Budget`]).
+//!   ([`External`]) beside them ([`MethodSpec`]) and the settings a transcript records
+//!   ([`Settings`]).
+//! - [`budget`]: the step budget ([`Budget`]), the paper's 2 x GT rule.
 //! - [`policy`]: what a method written outside the crate answers each step
-//!   ([`Policy`]) and what it is shown ([`View`]).
+//!   ([`Policy`]) and what it is shown ([`StepView`]).
 //! - [`rounds`]: the round loop and its result ([`Episode`]): one round per step until
-//!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires.
+//!   the goal holds, the budget is spent, the backend fails for good or [`Cancel`] fires;
+//!   and the history window ([`HISTORY_WINDOW`]), what a method keeps of its earlier
+//!   rounds ([`History`]).
 //! - `ask`: asking a backend one question and recording the call.
 //! - `environment`: observing the whole team and executing one action.
 //! - [`cancel`]: stopping an episode from outside.
@@ -17,6 +20,7 @@
 //! `cancel` (`methods::external` on `policy` too); only [`run()`] looks at the methods.
 
 pub(crate) mod ask;
+pub mod budget;
 pub mod cancel;
 pub(crate) mod environment;
 pub mod policy;
@@ -26,9 +30,10 @@ pub mod settings;
 
 // For callers that set up a replay piece by piece; `records::replay::Replay` does it in
 // one call.
-pub use crate::records::replay::{check_replay, recorded_settings, recorded_task};
+pub use crate::records::replay::{recorded_settings, recorded_task};
+pub use budget::{Budget, NoPlan};
 pub use cancel::Cancel;
-pub use policy::{Act, Choice, Executed, MakePolicy, Policy, RobotView, View};
-pub use rounds::Episode;
+pub use policy::{Act, Choice, MakePolicy, MethodFailure, PastStep, Policy, RobotView, StepView};
+pub use rounds::{Episode, HISTORY_WINDOW, History};
 pub use run::{run, transcript_path};
-pub use settings::{Budget, External, Method, MethodSpec, Settings};
+pub use settings::{External, Method, MethodSpec, Settings};

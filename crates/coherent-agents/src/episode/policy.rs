@@ -1,6 +1,6 @@
 //! A method written outside the crate (a Python class, say) as the episode loop sees it:
-//! a [`Policy`] that is asked once per step for one decision, given a [`View`] of where
-//! the episode stands. The loop that asks it is [`crate::methods::external`]; everything
+//! a [`Policy`] that is asked once per step for one decision, given a [`StepView`] of
+//! where the episode stands. The loop that asks it is [`crate::methods::external`]; everything
 //! else (the step budget, the feasibility check, the transcript, the benchmark) is the
 //! same as for the built-in methods.
 
@@ -23,9 +23,10 @@ pub struct RobotView {
     pub actions: Vec<String>,
 }
 
-/// One earlier step: who acted, what, whether it ran, and why not.
+/// One earlier step as a method is shown it: who acted, what, whether it ran, and why
+/// not.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Executed {
+pub struct PastStep {
     /// `None` when the method chose no action.
     pub robot: Option<NodeId>,
     pub action: Option<String>,
@@ -34,9 +35,9 @@ pub struct Executed {
     pub reason: Option<String>,
 }
 
-/// Where an episode stands when a method is asked for a step.
+/// What a method is shown when it is asked for a step: where the episode stands.
 #[derive(Clone, Debug)]
-pub struct View {
+pub struct StepView {
     pub task: Arc<Task>,
     /// The step about to be taken, from 1.
     pub step: u32,
@@ -45,20 +46,20 @@ pub struct View {
     /// The team, in the task's order.
     pub robots: Vec<RobotView>,
     /// Every earlier step, oldest first.
-    pub history: Vec<Executed>,
+    pub history: Vec<PastStep>,
     /// The symbolic state, for the observations' text.
     pub state: State,
 }
 
-impl View {
+impl StepView {
     /// Where `env` stands before step `step` of `max_steps`, after `history`.
     pub fn now(
         env: &(dyn Environment + Send),
         task: &Arc<Task>,
         step: u32,
         max_steps: u32,
-        history: &[Executed],
-    ) -> View {
+        history: &[PastStep],
+    ) -> StepView {
         let robots = task
             .robots
             .iter()
@@ -76,7 +77,7 @@ impl View {
                 }
             })
             .collect();
-        View {
+        StepView {
             task: Arc::clone(task),
             step,
             max_steps,
@@ -106,19 +107,43 @@ impl View {
 /// What a method decided for one step: the very record the transcript keeps of it.
 pub use crate::records::transcript::ExternalDecision as Choice;
 
-/// A step's answer: the choice, or why the method failed (which ends the episode with
-/// status `error`), and the calls it made through the project's client meanwhile.
+/// Why a method written outside the crate could not be made or could not decide a step,
+/// in its own words (a Python method's traceback, say), which the transcript keeps as
+/// they are; the episode ends there with status `error`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MethodFailure(pub String);
+
+impl From<String> for MethodFailure {
+    fn from(words: String) -> MethodFailure {
+        MethodFailure(words)
+    }
+}
+
+impl From<&str> for MethodFailure {
+    fn from(words: &str) -> MethodFailure {
+        MethodFailure(words.to_owned())
+    }
+}
+
+impl std::fmt::Display for MethodFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+/// A step's answer: the choice, or why the method failed, and the calls it made through
+/// the project's client meanwhile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Act {
-    pub choice: Result<Choice, String>,
+    pub choice: Result<Choice, MethodFailure>,
     pub calls: Vec<Call>,
 }
 
 /// A method written outside the crate: asked once per step.
 pub trait Policy: Send {
     /// The decision for the step `view` describes (shared, so that a policy may keep it).
-    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act>;
+    fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act>;
 }
 
 /// Makes the policy of one episode, or says why it cannot.
-pub type MakePolicy = dyn Fn(&Arc<Task>) -> Result<Box<dyn Policy>, String> + Send + Sync;
+pub type MakePolicy = dyn Fn(&Arc<Task>) -> Result<Box<dyn Policy>, MethodFailure> + Send + Sync;

@@ -1,5 +1,6 @@
-//! Running one episode end to end: the transcript file, the method, the step budget.
-//! The CLI, Python and the benchmark harness all go through here.
+//! Running one episode's method end to end: the transcript file (header, rounds,
+//! summary) and the method the settings name, within the step budget. The session's
+//! episode runner, under every front end and the benchmark alike, goes through here.
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -10,9 +11,11 @@ use coherent_core::text::file_name_part;
 use coherent_core::{Environment, Task, native};
 
 use crate::backends::llm::{Backend, BackendInfo};
+use crate::episode::budget::Budget;
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::Episode;
-use crate::episode::settings::{Budget, Method, MethodSpec, Settings};
+use crate::episode::settings::{Method, MethodSpec, Settings};
+use crate::error::Error;
 use crate::methods::cmrs::{self, CmrsConfig};
 use crate::methods::dmrs::{self, DmrsConfig};
 use crate::methods::external;
@@ -85,19 +88,15 @@ pub async fn run(
     transcript: &Path,
     cancel: &Cancel,
     progress: &mut (dyn FnMut(&Round) + Send),
-) -> Result<(Episode, Header), String> {
+) -> Result<(Episode, Header), Error> {
     let history = match settings.method {
         MethodSpec::Builtin(Method::PefaNoHistory) => 0,
         _ => settings.history,
     };
-    let backend_info = if settings.method.uses_model() {
+    let backend_info = if settings.method.asks_backend() {
         backend.info()
     } else {
-        BackendInfo {
-            kind: "none".into(),
-            model: String::new(),
-            base_url: None,
-        }
+        BackendInfo::none()
     };
     let header = Header {
         format: transcript::FORMAT.into(),
@@ -110,6 +109,7 @@ pub async fn run(
         max_steps: budget.steps(),
         gt_steps: task.meta.gt_steps,
         physics: settings.physics,
+        robots: settings.robots.clone(),
         backend: backend_info,
         temperature: settings.temperature,
         seed: settings.seed,
@@ -119,7 +119,7 @@ pub async fn run(
             .map_or(0, |d| d.as_millis() as u64),
         external: matches!(settings.method, MethodSpec::External(_)),
     };
-    let io = |e: std::io::Error| format!("{}: {e}", transcript.display());
+    let io = |e: std::io::Error| Error::io(transcript, &e);
     let mut writer = Writer::create(transcript, header.clone()).map_err(io)?;
     let mut on_round = |r: &Round| {
         progress(r);
@@ -187,10 +187,10 @@ fn finish(
     header: Header,
     writer: &mut Writer,
     transcript: &Path,
-) -> Result<(Episode, Header), String> {
+) -> Result<(Episode, Header), Error> {
     writer
         .write(&Record::Summary(episode.summary.clone()))
-        .map_err(|e| format!("{}: {e}", transcript.display()))?;
+        .map_err(|e| Error::io(transcript, &e))?;
     Ok((episode, header))
 }
 

@@ -1,15 +1,17 @@
-//! How an episode is run: the method (built in, or written outside the crate), its
-//! settings as a transcript records them, and the step budget.
+//! How an episode is run: the method (built in, or written outside the crate) and its
+//! settings as a transcript records them. The step budget is apart ([`crate::episode::budget`]).
 
 use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
 
 use coherent_core::Task;
-use coherent_core::planner::{self, Limits};
 
-use crate::episode::policy::{MakePolicy, Policy};
+use crate::episode::policy::{MakePolicy, MethodFailure, Policy};
+use crate::episode::rounds::HISTORY_WINDOW;
+use crate::error::Error;
 use crate::methods::templates::Prompts;
+use crate::records::transcript::RobotsRecord;
 
 /// A planning method.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,8 +59,8 @@ impl Method {
         }
     }
 
-    /// Whether the method asks a model (the backend) at all.
-    pub fn uses_model(self) -> bool {
+    /// Whether the method asks the episode's backend at all.
+    pub fn asks_backend(self) -> bool {
         !matches!(self, Method::Mcts | Method::Optimal)
     }
 
@@ -82,17 +84,17 @@ impl External {
     /// The method `name`, whose episodes get their policy from `make`. The name goes
     /// into results, tables and transcript file names: letters, digits, `-`, `_` and `.`
     /// (not first), and none of the built-in methods' names.
-    pub fn new(name: &str, make: Arc<MakePolicy>) -> Result<External, String> {
+    pub fn new(name: &str, make: Arc<MakePolicy>) -> Result<External, Error> {
         let allowed = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
         if name.is_empty() || !name.chars().all(allowed) || name.starts_with('.') {
-            return Err(format!(
+            return Err(Error::Invalid(format!(
                 "method name {name:?}: use letters, digits, '-', '_' and '.' (not first)"
-            ));
+            )));
         }
         if Method::from_name(name).is_some() {
-            return Err(format!(
+            return Err(Error::Invalid(format!(
                 "method name {name:?} is a built-in method's: give yours another name"
-            ));
+            )));
         }
         Ok(External {
             name: name.to_owned(),
@@ -118,7 +120,7 @@ impl External {
     }
 
     /// The policy of one episode of `task`, or why there is none.
-    pub fn make(&self, task: &Arc<Task>) -> Result<Box<dyn Policy>, String> {
+    pub fn make(&self, task: &Arc<Task>) -> Result<Box<dyn Policy>, MethodFailure> {
         (self.make)(task)
     }
 }
@@ -159,10 +161,11 @@ impl MethodSpec {
     }
 
     /// Whether the episode's backend answers the method's questions (a method written
-    /// outside the crate asks its own models, if any).
-    pub fn uses_model(&self) -> bool {
+    /// outside the crate asks its own models, if any). Whether an episode used a model
+    /// is another question, answered by its calls ([`crate::records::cost::ModelUse`]).
+    pub fn asks_backend(&self) -> bool {
         match self {
-            MethodSpec::Builtin(m) => m.uses_model(),
+            MethodSpec::Builtin(m) => m.asks_backend(),
             MethodSpec::External(_) => false,
         }
     }
@@ -196,6 +199,8 @@ pub struct Settings {
     pub seed: Option<u64>,
     /// Whether the environment is physical (recorded; the caller builds the environment).
     pub physics: bool,
+    /// Who carries the actions out (recorded; the caller builds the environment).
+    pub robots: RobotsRecord,
     /// The templates the method's prompts are rendered from (checked when made).
     pub prompts: Prompts,
 }
@@ -204,51 +209,12 @@ impl Settings {
     pub fn new(method: impl Into<MethodSpec>) -> Settings {
         Settings {
             method: method.into(),
-            history: 5,
+            history: HISTORY_WINDOW,
             temperature: None,
             seed: None,
             physics: false,
+            robots: RobotsRecord::Local,
             prompts: Prompts::builtin(),
-        }
-    }
-}
-
-/// Where a step budget came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Budget {
-    /// 2 x the task's ground truth, the paper's rule.
-    TwiceGroundTruth(u32),
-    /// Set by the caller.
-    Given(u32),
-    /// The task has no ground truth: 2 x the optimum the planner finds.
-    TwiceOptimum(u32),
-}
-
-impl Budget {
-    pub fn steps(self) -> u32 {
-        match self {
-            Budget::TwiceGroundTruth(n) | Budget::Given(n) | Budget::TwiceOptimum(n) => n,
-        }
-    }
-
-    /// The budget of `task`: `max_steps` when given, else 2 x GT, else 2 x the optimum.
-    pub fn of(task: &Task, max_steps: Option<u32>, limits: &Limits) -> Result<Budget, String> {
-        if let Some(n) = max_steps {
-            return Ok(Budget::Given(n));
-        }
-        if let Some(budget) = task.meta.twice_ground_truth() {
-            return budget.map(Budget::TwiceGroundTruth);
-        }
-        let search = planner::search(task, &task.robots, &task.goal, limits);
-        match search.plan {
-            Some(plan) => Ok(Budget::TwiceOptimum(
-                u32::try_from(plan.len().max(1)).map_or(u32::MAX, |n| n.saturating_mul(2)),
-            )),
-            None => Err(
-                "the task has no ground truth and the planner finds no plan to size a budget \
-                 from: pass a step budget (--max-steps)"
-                    .into(),
-            ),
         }
     }
 }

@@ -6,13 +6,47 @@ use std::collections::HashSet;
 use std::fs::{File, OpenOptions};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_core::Task;
 
 use crate::episode::settings::MethodSpec;
-use crate::harness::job::{EpisodeResult, RunTasks};
+use crate::error::Error;
 use crate::harness::results::{
     EpisodeKey, ResultLine, mark_orphans, read_results_within, repair, transcripts_dir,
 };
 use crate::records::lock;
+
+/// What came of one episode, as an executor hands it to the driver.
+#[derive(Debug)]
+pub enum EpisodeResult {
+    /// It ran (to any end): its results line, its transcript written.
+    Line(Box<ResultLine>),
+    /// Cancelled before it started.
+    NotStarted,
+    /// Its task cannot run, and why (no ground truth and no plan to size a budget, or no
+    /// recording to replay).
+    TaskSkipped(String),
+}
+
+/// Every episode of `methods` x `tasks` x seed indices `0..seeds`, task by task, seed by
+/// seed, method by method: the order a run starts them in.
+pub fn episode_keys(tasks: &[Arc<Task>], methods: &[MethodSpec], seeds: u32) -> Vec<EpisodeKey> {
+    let mut keys = Vec::new();
+    for task in tasks {
+        for seed in 0..seeds {
+            for method in methods {
+                keys.push(EpisodeKey {
+                    method: method.name().to_owned(),
+                    scene: task.meta.scene.clone(),
+                    task_id: task.meta.task_id,
+                    seed,
+                });
+            }
+        }
+    }
+    keys
+}
 
 /// What a run did.
 #[derive(Debug, Default)]
@@ -58,10 +92,9 @@ impl Ledger {
     /// Opens the results file `out` (and its folder) for appending: a last line cut off
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
     /// episodes with a final line are known to be done. A results file of more than
-    /// `max_bytes` is refused.
-    /// Another run on the same results file, or on one whose transcripts share the
-    /// folder, is refused naming its process.
-    pub fn open(out: &Path, max_bytes: u64) -> Result<Ledger, String> {
+    /// `max_bytes` is refused. Another run on the same results file, or on one whose
+    /// transcripts share the folder, is refused naming its process.
+    pub fn open(out: &Path, max_bytes: u64) -> Result<Ledger, Error> {
         let lock = take_lock(out)?;
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
@@ -77,13 +110,13 @@ impl Ledger {
             );
             outcome.orphaned = mark_orphans(out, &file.lines)?;
         } else if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, &e))?;
         }
         let file = OpenOptions::new()
             .create(true)
             .append(true)
             .open(out)
-            .map_err(|e| format!("{}: {e}", out.display()))?;
+            .map_err(|e| Error::io(out, &e))?;
         Ok(Ledger {
             out: out.to_owned(),
             _lock: lock,
@@ -96,14 +129,15 @@ impl Ledger {
     }
 
     /// The episodes of `methods` x `tasks` x seed indices `0..seeds` that have no final
-    /// line yet, in the order they are to start; the others count as skipped.
+    /// line yet, in the order they are to start ([`episode_keys`]); the others count as
+    /// skipped.
     pub fn plan(
         &mut self,
-        tasks: &RunTasks,
+        tasks: &[Arc<Task>],
         methods: &[MethodSpec],
         seeds: u32,
     ) -> Vec<EpisodeKey> {
-        let all = tasks.keys(methods, seeds);
+        let all = episode_keys(tasks, methods, seeds);
         self.outcome.total += all.len();
         let pending: Vec<EpisodeKey> = all.into_iter().filter(|k| !self.done.contains(k)).collect();
         self.outcome.skipped = self.outcome.total - pending.len();
@@ -113,7 +147,7 @@ impl Ledger {
     /// Records what came of one episode: a line is appended and flushed, unless this
     /// run already wrote that episode's line (a result delivered twice is written
     /// once). Returns the line written, if one was.
-    pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, String> {
+    pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, Error> {
         let line = match result {
             EpisodeResult::Line(line) => *line,
             EpisodeResult::NotStarted => {
@@ -131,13 +165,15 @@ impl Ledger {
         if !self.written.insert(line.key()) {
             return Ok(None);
         }
-        let mut text = serde_json::to_string(&line)
-            .map_err(|e| format!("cannot encode a results line: {e}"))?;
+        let mut text = serde_json::to_string(&line).map_err(|e| Error::Io {
+            file: self.out.display().to_string(),
+            message: format!("cannot encode a results line: {e}"),
+        })?;
         text.push('\n');
         self.file
             .write_all(text.as_bytes())
             .and_then(|()| self.file.flush())
-            .map_err(|e| format!("{}: {e}", self.out.display()))?;
+            .map_err(|e| Error::io(&self.out, &e))?;
         self.outcome.written += 1;
         if line.is_final() {
             self.done.insert(line.key());
@@ -150,7 +186,7 @@ impl Ledger {
     /// Renames to `*.jsonl.unfinished` the transcripts no line of the results file
     /// points to, as resuming does: a worker that died mid-episode left them, and its
     /// episodes ran again elsewhere. They are added to the outcome's `orphaned`.
-    pub fn mark_orphans(&mut self) -> Result<(), String> {
+    pub fn mark_orphans(&mut self) -> Result<(), Error> {
         let lines = read_results_within(&self.out, self.max_bytes)?.lines;
         let marked = mark_orphans(&self.out, &lines)?;
         self.outcome.orphaned.extend(marked);
@@ -177,9 +213,9 @@ impl Ledger {
 
 /// Locks the run's lock file of `out` ([`Ledger::lock_path`]) and writes this process's
 /// id into it; when another run holds it, an error names that run's process.
-fn take_lock(out: &Path) -> Result<File, String> {
+fn take_lock(out: &Path) -> Result<File, Error> {
     let path = Ledger::lock_path(out);
-    let io = |e: std::io::Error| format!("{}: {e}", path.display());
+    let io = |e: std::io::Error| Error::io(&path, &e);
     if let Some(dir) = path.parent() {
         std::fs::create_dir_all(dir).map_err(io)?;
     }
@@ -199,12 +235,14 @@ fn take_lock(out: &Path) -> Result<File, String> {
         } else {
             format!("process {holder}")
         };
-        return Err(format!(
-            "{}: another benchmark run is using it ({holder} holds {}): wait for it to end, \
-             or give this run another --out",
-            out.display(),
-            path.display()
-        ));
+        return Err(Error::Io {
+            file: out.display().to_string(),
+            message: format!(
+                "another benchmark run is using it ({holder} holds {}): wait for it to end, \
+                 or give this run another --out",
+                path.display()
+            ),
+        });
     }
     file.set_len(0)
         .and_then(|()| writeln!(file, "{}", std::process::id()))

@@ -1,16 +1,23 @@
-//! The benchmark harness: [`bench`](mod@bench) runs methods x tasks x seeds into a results file
-//! ([`results`]) over a [`subset`] of the tasks, reporting [`progress`], each line priced
-//! from a [`prices`] table; [`report`] turns the results into the paper's tables. A run
-//! is made of parts other executors share: [`choice`] (which backend), [`job`] (one
-//! episode by its key) and [`ledger`] (the driver's side: the results file, what is left
-//! to run, each result written once).
+//! The benchmark's bookkeeping, whatever runs its episodes (the session's local
+//! executor, or workers on a cluster): which tasks ([`subset`]), the results file, one
+//! JSON line per finished episode ([`results`]), the driver's side of a run that resumes
+//! it and writes each result once ([`ledger`]), what a run reports as it goes
+//! ([`progress`]), what tokens cost ([`prices`]) and the paper's tables ([`report`]).
+//! The crate root names this module `bench` too, with its main types at hand.
 
-pub mod bench;
-pub mod choice;
-pub mod job;
 pub mod ledger;
 pub mod prices;
 pub mod progress;
 pub mod report;
 pub mod results;
 pub mod subset;
+
+pub use ledger::{BenchOutcome, EpisodeResult, Ledger, episode_keys};
+pub use prices::{ModelUse, PriceTable};
+pub use progress::{Event, Progress};
+pub use results::{DEFAULT_MAX_BYTES as DEFAULT_MAX_RESULTS_BYTES, ERROR_BYTES};
+pub use results::{
+    EpisodeKey, ReadLimits, ResultLine, ResultsFile, mark_orphans, read_results,
+    read_results_within, repair, transcripts_dir,
+};
+pub use subset::{PAPER40, Selection, Subset, same_key_twice, select};

@@ -1,7 +1,8 @@
 //! What model tokens cost: a price table (USD per million input, cached input and output
 //! tokens, by model name), built in (`prices.toml`, each entry with the date and the page
-//! it was read from) and extended or overridden from a JSON or TOML file, and the cost of
-//! a results line from its tokens.
+//! it was read from) and extended or overridden from a JSON or TOML file; and what an
+//! episode's model calls cost ([`ModelUse`]), the one rule `coherent run`,
+//! `coherent.run`, `load_episode` and a results line all price by.
 
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -9,7 +10,9 @@ use std::path::Path;
 use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
-use crate::backends::llm::Usage;
+use crate::backends::llm::{BackendInfo, Usage};
+use crate::error::Error;
+use crate::records::transcript::{Header, Round, Summary};
 
 /// The price of one model, USD per million tokens.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -89,33 +92,41 @@ impl PriceTable {
 
     /// A table in JSON: `{"MODEL": {"input": .., "cached_input": .., "output": ..}, ...}`;
     /// errors name `file`. A model listed twice is refused, as TOML refuses it.
-    pub fn parse_json(text: &str, file: &str) -> Result<PriceTable, String> {
-        let value = coherent_core::json::parse(file, text.as_bytes()).map_err(|e| e.to_string())?;
+    pub fn parse_json(text: &str, file: &str) -> Result<PriceTable, Error> {
+        // The path of a key twice, as in task files: serde_json alone keeps the last.
+        let value = coherent_core::json::parse(file, text.as_bytes()).map_err(|e| match e {
+            coherent_core::Error::Malformed { path, message, .. } => {
+                format_error(file, format!("{path}: {message}"))
+            }
+            other => format_error(file, other.to_string()),
+        })?;
         let table: PriceTable =
-            serde_json::from_value(value).map_err(|e| format!("{file}: {e}"))?;
+            serde_json::from_value(value).map_err(|e| format_error(file, e.to_string()))?;
         table.checked(file)
     }
 
     /// A table in TOML: a `["MODEL"]` table per model with the keys of JSON's objects;
     /// errors name `file`.
-    pub fn parse_toml(text: &str, file: &str) -> Result<PriceTable, String> {
-        let table: PriceTable = toml::from_str(text).map_err(|e| format!("{file}: {e}"))?;
+    pub fn parse_toml(text: &str, file: &str) -> Result<PriceTable, Error> {
+        let table: PriceTable =
+            toml::from_str(text).map_err(|e| format_error(file, e.to_string()))?;
         table.checked(file)
     }
 
-    fn checked(self, file: &str) -> Result<PriceTable, String> {
+    fn checked(self, file: &str) -> Result<PriceTable, Error> {
         for (model, price) in &self.models {
-            price.check(model).map_err(|e| format!("{file}: {e}"))?;
+            price.check(model).map_err(|e| format_error(file, e))?;
         }
         Ok(self)
     }
 
     /// The table in the file at `path`: TOML when its name ends in `.toml`, else JSON; a
     /// file of more than [`FILE_LIMIT`] is refused.
-    pub fn read(path: &Path) -> Result<PriceTable, String> {
+    pub fn read(path: &Path) -> Result<PriceTable, Error> {
         let file = path.display().to_string();
-        let bytes = files::read(path, &FILE_LIMIT).map_err(|e| e.to_string())?;
-        let text = String::from_utf8(bytes).map_err(|e| format!("{file}: not UTF-8: {e}"))?;
+        let bytes = files::read(path, &FILE_LIMIT).map_err(Error::file)?;
+        let text =
+            String::from_utf8(bytes).map_err(|e| format_error(&file, format!("not UTF-8: {e}")))?;
         if path.extension().is_some_and(|e| e == "toml") {
             PriceTable::parse_toml(&text, &file)
         } else {
@@ -143,11 +154,70 @@ impl PriceTable {
     }
 
     /// What an episode's model calls cost, whatever its method: its tokens at `model`'s
-    /// price; 0 for a method that asks no model (`uses_model` false) and used no tokens;
-    /// `None` when the model has no price.
+    /// price; 0 for an episode that used no model (`uses_model` false, [`ModelUse`]) and
+    /// no tokens; `None` when the model has no price.
     pub fn episode_cost(&self, model: &str, uses_model: bool, usage: &Usage) -> Option<f64> {
         let free = !uses_model && *usage == Usage::default();
         self.cost(model, usage).or(free.then_some(0.0))
+    }
+}
+
+/// A [`Error::Format`] about the price file `file`.
+fn format_error(file: &str, message: String) -> Error {
+    Error::Format {
+        file: file.to_owned(),
+        line: None,
+        message,
+    }
+}
+
+/// What an episode's model calls amount to, read from its transcript alone, so that the
+/// same transcript always costs the same: the model that answered, the tokens, and the
+/// calls. An episode uses a model when it made model calls (through its backend, through
+/// the project's client, or through its own clients, as a method written outside the
+/// crate reports them); one that made none costs nothing.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelUse {
+    /// Whose model priced the tokens: the episode's backend for a built-in method (none
+    /// for one that asks no backend); for a method written outside the crate, the client
+    /// its first call through the project's client went through (none without one).
+    pub backend: BackendInfo,
+    pub usage: Usage,
+    /// Model calls made or reported.
+    pub calls: u32,
+}
+
+impl ModelUse {
+    /// The model use of the episode recorded as `header`, `rounds` and `summary`.
+    pub fn of(header: &Header, rounds: &[Round], summary: &Summary) -> ModelUse {
+        let backend = if header.external {
+            rounds
+                .iter()
+                .flat_map(|r| &r.calls)
+                .find_map(|c| c.client.clone())
+                .unwrap_or_else(BackendInfo::none)
+        } else {
+            header.backend.clone()
+        };
+        ModelUse {
+            backend,
+            usage: Usage {
+                prompt_tokens: summary.prompt_tokens,
+                completion_tokens: summary.completion_tokens,
+                cached_tokens: summary.cached_tokens,
+            },
+            calls: summary.llm_calls,
+        }
+    }
+
+    /// Whether the episode used a model: it made model calls.
+    pub fn uses_model(&self) -> bool {
+        self.calls > 0
+    }
+
+    /// What the calls cost at `prices` ([`PriceTable::episode_cost`]).
+    pub fn cost(&self, prices: &PriceTable) -> Option<f64> {
+        prices.episode_cost(&self.backend.model, self.uses_model(), &self.usage)
     }
 }
 
@@ -228,10 +298,12 @@ mod tests {
         let table = PriceTable::builtin().overridden_by(json);
         assert!(table.price("smollm2-135m").is_some() && table.price("gpt-4o").is_some());
         let e = PriceTable::parse_json(r#"{"m": {"input": 1, "outptu": 2}}"#, "p.json")
-            .expect_err("a typo");
+            .expect_err("a typo")
+            .to_string();
         assert!(e.starts_with("p.json: ") && e.contains("outptu"), "{e}");
         let e = PriceTable::parse_toml("[m]\ninput = -1\noutput = 2\n", "p.toml")
-            .expect_err("a negative price");
+            .expect_err("a negative price")
+            .to_string();
         assert!(e.contains("\"m\""), "{e}");
     }
 

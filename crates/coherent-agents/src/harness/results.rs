@@ -11,6 +11,7 @@ use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
+use crate::error::Error;
 use crate::harness::prices::PriceTable;
 use crate::records::lock;
 use crate::records::transcript::Status;
@@ -150,18 +151,18 @@ fn limits(bytes: u64) -> (Limit, Limit) {
 }
 
 /// Reads a results file of at most [`DEFAULT_MAX_BYTES`] ([`read_results_within`]).
-pub fn read_results(path: &Path) -> Result<ResultsFile, String> {
+pub fn read_results(path: &Path) -> Result<ResultsFile, Error> {
     read_results_within(path, DEFAULT_MAX_BYTES)
 }
 
 /// Reads a results file of at most `max_bytes`. A last line without its newline that
 /// does not parse is a write cut short (reported in `truncated_bytes`); any other bad
 /// line is an error naming the file, the line and the JSON path.
-pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, String> {
+pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, Error> {
     let (line_limit, total) = limits(max_bytes);
-    let mut lines = Lines::open(path, line_limit, total).map_err(|e| e.to_string())?;
+    let mut lines = Lines::open(path, line_limit, total).map_err(Error::file)?;
     let mut out = ResultsFile::default();
-    while let Some(line) = lines.next_line().map_err(|e| e.to_string())? {
+    while let Some(line) = lines.next_line().map_err(Error::file)? {
         let parsed = std::str::from_utf8(line.bytes)
             .map_err(|e| e.to_string())
             .and_then(|s| {
@@ -180,9 +181,7 @@ pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, S
             Err(_) if !line.complete() => {
                 out.truncated_bytes = line.bytes.len() as u64;
             }
-            Err(e) => {
-                return Err(format!("{}: line {}: {e}", path.display(), line.number));
-            }
+            Err(e) => return Err(Error::at_line(path, line.number, e)),
         }
     }
     Ok(out)
@@ -237,8 +236,8 @@ fn missing_or_bad_field(value: &serde_json::Value) -> String {
 
 /// Cuts a results file back to its well-formed part and ends it with a newline, so
 /// that appended lines start on their own line.
-pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
-    let io = |e: io::Error| format!("{}: {e}", path.display());
+pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), Error> {
+    let io = |e: io::Error| Error::io(path, &e);
     let mut f = OpenOptions::new()
         .read(true)
         .write(true)
@@ -262,7 +261,7 @@ pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), String> {
 /// and its results line) left it, and the episode runs again. A transcript whose writer
 /// still holds it (an episode running in another process) is left alone. Returns the
 /// new names.
-pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, String> {
+pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, Error> {
     let dir = transcripts_dir(out);
     if !dir.is_dir() {
         return Ok(Vec::new());
@@ -272,7 +271,7 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, St
         .iter()
         .filter_map(|l| Path::new(&l.transcript).canonicalize().ok())
         .collect();
-    let io = |p: &Path, e: io::Error| format!("{}: {e}", p.display());
+    let io = |p: &Path, e: io::Error| Error::io(p, &e);
     let mut marked = Vec::new();
     let mut folders = vec![dir];
     while let Some(folder) = folders.pop() {

@@ -15,6 +15,8 @@ pub const FILE_LIMIT: Limit = Limit {
     raise: None,
 };
 
+use crate::error::Error;
+
 /// The paper's 40-task subset (docs/semantics.md, "Steps, the budget and the scores"): 8 tasks per scene, by the scene's
 /// file name and the task id.
 pub const PAPER40: [(&str, [i64; 8]); 5] = [
@@ -50,27 +52,27 @@ impl Subset {
     }
 
     /// Reads a subset file of at most [`FILE_LIMIT`]; errors name the file and the line.
-    pub fn read_file(path: &Path) -> Result<Subset, String> {
-        let bytes = files::read(path, &FILE_LIMIT).map_err(|e| e.to_string())?;
-        let text =
-            String::from_utf8(bytes).map_err(|e| format!("{}: not UTF-8: {e}", path.display()))?;
+    pub fn read_file(path: &Path) -> Result<Subset, Error> {
+        let bytes = files::read(path, &FILE_LIMIT).map_err(Error::file)?;
+        let text = String::from_utf8(bytes).map_err(|e| Error::Format {
+            file: path.display().to_string(),
+            line: None,
+            message: format!("not UTF-8: {e}"),
+        })?;
         let mut pairs = Vec::new();
         for (i, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();
             if line.is_empty() {
                 continue;
             }
-            let at = || format!("{}: line {}", path.display(), i + 1);
+            let at = |message: String| Error::at_line(path, i + 1, message);
             let mut words = line.split_whitespace();
             let (Some(scene), Some(id), None) = (words.next(), words.next(), words.next()) else {
-                return Err(format!(
-                    "{}: expected `scene task_id`, found {line:?}",
-                    at()
-                ));
+                return Err(at(format!("expected `scene task_id`, found {line:?}")));
             };
             let id: i64 = id
                 .parse()
-                .map_err(|_| format!("{}: task id {id:?} is not an integer", at()))?;
+                .map_err(|_| at(format!("task id {id:?} is not an integer")))?;
             pairs.push((scene.to_owned(), id));
         }
         Ok(Subset::Listed(pairs))
@@ -99,13 +101,13 @@ pub struct Selection {
 
 /// Picks `subset` from `tasks`, in the subset's order (the read order for `All`). Two
 /// tasks with the same scene and id are an error: results are keyed by them.
-pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, String> {
+pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, Error> {
     let mut by_key: HashMap<(String, i64), Arc<Task>> = HashMap::new();
     let mut order = Vec::new();
     for t in tasks {
         let key = (t.meta.scene.clone(), t.meta.task_id);
         if by_key.contains_key(&key) {
-            return Err(same_key_twice(&key));
+            return Err(Error::Invalid(same_key_twice(&key)));
         }
         order.push(key.clone());
         by_key.insert(key, Arc::new(t));
@@ -135,7 +137,7 @@ pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, String> {
 }
 
 /// Why a run refuses two tasks with the same scene and task id (`key`).
-pub(crate) fn same_key_twice((scene, task_id): &(String, i64)) -> String {
+pub fn same_key_twice((scene, task_id): &(String, i64)) -> String {
     format!(
         "two tasks with scene {scene:?} and task_id {task_id}: results could not tell them apart"
     )

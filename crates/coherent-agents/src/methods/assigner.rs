@@ -121,7 +121,7 @@ impl TaskAssigner {
     /// The proposal in an answer: its JSON object's robot (by label, id, or a type the
     /// team has one robot of) and subtask; without an object, the first line that names
     /// a robot by its label, the subtask being what follows the label.
-    pub fn parse(&self, text: &str) -> Result<Proposal, String> {
+    pub(crate) fn parse(&self, text: &str) -> Result<Proposal, String> {
         let task = &self.task;
         if let Some(map) = json_object(text) {
             let robot_text = string_field(&map, "robot").ok_or("the answer has no \"robot\"")?;

@@ -13,9 +13,10 @@ use crate::backends::llm::{Backend, Query, Role, Situation};
 use crate::episode::ask::{Side, ask};
 use crate::episode::cancel::Cancel;
 use crate::episode::environment::team_observation;
-use crate::episode::rounds::{Episode, rounds};
-use crate::methods::joint::{self, Executed, joint_actions};
+use crate::episode::rounds::{Episode, History, rounds};
+use crate::methods::joint::joint_actions;
 use crate::methods::templates::Prompts;
+use crate::methods::{central, decision, feedback};
 use crate::records::transcript::Round;
 
 /// Most tokens of one answer (a line and a little reasoning).
@@ -41,12 +42,21 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let mut executed = Executed::new(config.history);
+    let mut history = History::new(config.history);
     let prompts = &config.prompts;
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, prompts, cancel, &executed.lines(), step).await;
-        if let Some(r) = &r {
-            executed.record(r);
+        let r = round(
+            env,
+            task,
+            backend,
+            prompts,
+            cancel,
+            &history.entries(),
+            step,
+        )
+        .await;
+        if let Some(line) = r.as_ref().and_then(decision::executed_line) {
+            history.push(line);
         }
         Ok(r)
     };
@@ -72,25 +82,19 @@ async fn round(
     let query = Query {
         role: Role::Assigner,
         robot: None,
-        messages: joint::central_messages(
-            prompts,
-            task,
-            &team_observation(env, task),
-            &lines,
-            history,
-        ),
+        messages: central::messages(prompts, task, &team_observation(env, task), &lines, history),
         schema_name: "joint_action",
-        schema: joint::central_schema(&lines),
+        schema: central::schema(&lines),
         max_tokens: MAX_TOKENS,
         situation: Situation::now(task, env, None),
     };
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
-    let chosen = reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text)));
+    let chosen = reply.and_then(|r| r.read(|text| central::choose(task, &lines, text)));
     match chosen {
-        Ok((robot, action)) => joint::act(env, task, &mut round, robot, &action, String::new()),
+        Ok((robot, action)) => decision::act(env, task, &mut round, robot, &action, String::new()),
         Err(e) => {
             round.outcome = e.outcome(Side::Executor);
-            round.feedback = joint::feedback("", &round.outcome);
+            round.feedback = feedback::joint("", &round.outcome);
         }
     }
     round.done = env.goal_satisfied();

@@ -16,13 +16,15 @@ use serde_json::{Value, json};
 use crate::backends::llm::{Backend, Message, Query, Role, Situation};
 use crate::episode::ask::{Side, Unusable, ask};
 use crate::episode::cancel::Cancel;
-use crate::episode::rounds::{Episode, rounds};
+use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::answer::{field_text, json_object};
-use crate::methods::joint::{self, Executed, joint_actions};
+use crate::methods::joint::joint_actions;
 use crate::methods::prompt::{self, robot_label};
 use crate::methods::templates::{self, Prompts, Template};
+use crate::methods::{central, decision, feedback};
 use crate::records::transcript::Round;
 use crate::rng::{Rng, seed_of};
+
 /// Most tokens of one turn (a sentence and a line).
 const MAX_TOKENS: u32 = 200;
 
@@ -50,11 +52,11 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let mut executed = Executed::new(config.history);
+    let mut history = History::new(config.history);
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, config, cancel, &executed.lines(), step).await;
-        if let Some(r) = &r {
-            executed.record(r);
+        let r = round(env, task, backend, config, cancel, &history.entries(), step).await;
+        if let Some(line) = r.as_ref().and_then(decision::executed_line) {
+            history.push(line);
         }
         Ok(r)
     };
@@ -125,7 +127,7 @@ async fn round(
             };
             let reply = ask(backend, query, cancel, &mut round.calls).await?;
             let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());
-            match reply.and_then(|r| r.read(|text| joint::choose(task, &lines, text))) {
+            match reply.and_then(|r| r.read(|text| central::choose(task, &lines, text))) {
                 Ok(p) => proposal = Some(p),
                 Err(Unusable::Failed(e)) => {
                     return Some(close(env, round, Unusable::Failed(e), start));
@@ -140,7 +142,7 @@ async fn round(
         let why = "the last speaker proposed nothing usable".to_owned();
         return Some(close(env, round, Unusable::Bad(why), start));
     };
-    joint::act(env, task, &mut round, robot, &action, dialogue.join("\n"));
+    decision::act(env, task, &mut round, robot, &action, dialogue.join("\n"));
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     Some(round)
@@ -149,7 +151,7 @@ async fn round(
 /// A round that ends without an action.
 fn close(env: &(dyn Environment + Send), mut round: Round, why: Unusable, start: Instant) -> Round {
     round.outcome = why.outcome(Side::Executor);
-    round.feedback = joint::feedback("", &round.outcome);
+    round.feedback = feedback::joint("", &round.outcome);
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     round

@@ -2,14 +2,14 @@
 //! the task assigner proposed, it sees its type's description, its own observation and
 //! its action list from the rules, and picks one action, or none when no action is a
 //! step of the subtask now: the Execution of Proposal-Execution-Feedback-Adjustment
-//! ([`crate::methods::pefa`]). What came of it, in words, is the round's Feedback
-//! ([`feedback`]).
+//! ([`crate::methods::pefa`]).
 //!
 //! Its prompt is one system prompt per robot type (`executor_quadrotor.txt`,
 //! `executor_robot_dog.txt`, `executor_robot_arm.txt`) and `executor_user.txt`, from the
 //! prompt set ([`crate::methods::templates`]); its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
 //! constrained to its list or `none`, read into a [`Decision`] (or, without an object,
-//! from the first action of the list the text names).
+//! from the first action of the list the text names). What the assigner hears of the
+//! round is [`crate::methods::feedback::pefa`]'s.
 
 use std::sync::Arc;
 
@@ -17,10 +17,11 @@ use coherent_core::{Environment, NodeId, RobotKind, Task, describe};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
+use crate::error::Error;
 use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
-use crate::methods::prompt::{fill, robot_label};
+use crate::methods::prompt::fill;
 use crate::methods::templates::{Prompts, Template};
-use crate::records::transcript::{Decision, Outcome, Round};
+use crate::records::transcript::Decision;
 
 /// What one executor is told.
 #[derive(Clone, Debug)]
@@ -50,9 +51,9 @@ impl RobotExecutor {
         robot: NodeId,
         prompts: &Prompts,
         max_tokens: u32,
-    ) -> Result<RobotExecutor, String> {
+    ) -> Result<RobotExecutor, Error> {
         let Ok(r) = task.robot_by_id(robot) else {
-            return Err(format!("robot {robot} is not in the team"));
+            return Err(Error::Invalid(format!("robot {robot} is not in the team")));
         };
         Ok(RobotExecutor {
             task: Arc::clone(task),
@@ -152,8 +153,8 @@ impl RobotExecutor {
         })
     }
 
-    /// The decision in an answer, given the list it chose from.
-    pub fn parse(&self, actions: &[String], text: &str) -> Result<Decision, String> {
+    /// The decision in an answer, given the list it chose from, or why there is none.
+    pub(crate) fn parse(&self, actions: &[String], text: &str) -> Result<Decision, String> {
         parse_decision(actions, text)
     }
 }
@@ -219,71 +220,6 @@ fn match_action(actions: &[String], answer: &str) -> String {
         .find(|a| normal(a) == n)
         .cloned()
         .unwrap_or_else(|| field_text(answer))
-}
-
-/// What the assigner hears about a round, PEFA's Feedback: self-reflection built from
-/// the executor's answer and the checked outcome (or why the round never got that far).
-pub fn feedback(task: &Task, round: &Round, outcome: &Outcome) -> String {
-    let robot = round
-        .proposal
-        .as_ref()
-        .map(|p| robot_label(task, p.robot))
-        .unwrap_or_default();
-    let action = round
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.clone())
-        .unwrap_or_default();
-    let can_do_now = || {
-        if round.actions.is_empty() {
-            format!("{robot} can do nothing now.")
-        } else {
-            format!("{robot} can do now: {}.", round.actions.join("; "))
-        }
-    };
-    match outcome {
-        Outcome::Executed => {
-            let done = round.decision.as_ref().is_some_and(|d| d.subtask_complete);
-            let note = round
-                .decision
-                .as_ref()
-                .map(|d| d.note.trim().to_owned())
-                .unwrap_or_default();
-            if done {
-                format!("{robot} did {action}. The subtask is complete.")
-            } else if note.is_empty() {
-                format!("{robot} did {action}. The subtask is not complete yet.")
-            } else {
-                format!("{robot} did {action}. The subtask is not complete yet: {note}")
-            }
-        }
-        Outcome::Infeasible { message, .. } => {
-            format!(
-                "{robot} tried {action}, which cannot be done: {message}. {}",
-                can_do_now()
-            )
-        }
-        Outcome::Declined => {
-            let note = round
-                .decision
-                .as_ref()
-                .map(|d| d.note.trim().to_owned())
-                .filter(|n| !n.is_empty())
-                .unwrap_or_else(|| "no reason given".into());
-            format!(
-                "{robot} cannot do this subtask now ({note}). {}",
-                can_do_now()
-            )
-        }
-        Outcome::NoProposal { why } => format!(
-            "Your answer could not be used ({why}). Name one robot of the team and one subtask."
-        ),
-        Outcome::NoDecision { why } => {
-            format!("{robot} gave no usable answer ({why}). {}", can_do_now())
-        }
-        Outcome::BackendError { message } => format!("The model could not be reached: {message}"),
-        Outcome::MethodError { message } => format!("The method failed: {message}"),
-    }
 }
 
 #[cfg(test)]

@@ -1,5 +1,5 @@
 //! A method written outside the crate ([`crate::episode::policy`]): each step its
-//! [`Policy`] gets a [`View`] and answers one robot and one action, or none; the action
+//! [`Policy`] gets a [`StepView`] and answers one robot and one action, or none; the action
 //! is checked and run through the same [`Environment`] as every method's, the round is
 //! recorded with the method's decision, note and model calls, and the episode goes on
 //! under the same budget.
@@ -18,10 +18,10 @@ use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::policy::{Act, Choice, Executed, Policy, View};
-use crate::episode::rounds::{Episode, rounds};
-use crate::methods::joint;
-use crate::records::transcript::{Decision, Outcome, Round};
+use crate::episode::policy::{Act, Choice, MethodFailure, PastStep, Policy, StepView};
+use crate::episode::rounds::{Episode, History, rounds};
+use crate::methods::{decision, feedback};
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
 /// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
@@ -29,19 +29,25 @@ use crate::records::transcript::{Decision, Outcome, Round};
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
-    made: Result<Box<dyn Policy>, String>,
+    made: Result<Box<dyn Policy>, MethodFailure>,
     max_steps: u32,
     step_timeout: Option<Duration>,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
     let mut policy = made;
-    let mut history: Vec<Executed> = Vec::new();
+    let mut history = History::whole();
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
         let start = Instant::now();
         let act = match &mut policy {
             Ok(policy) => {
-                let view = Arc::new(View::now(env, task, step, max_steps, &history));
+                let view = Arc::new(StepView::now(
+                    env,
+                    task,
+                    step,
+                    max_steps,
+                    &history.entries(),
+                ));
                 let act = policy.act(view);
                 // Without a limit, a step may take as long as it takes (a sleep of
                 // Duration::MAX would overflow the clock).
@@ -74,24 +80,15 @@ pub async fn run(
                 let action = choice.action.unwrap_or_default();
                 match choice.robot {
                     Some(robot) => take(env, task, &mut round, robot, &action, choice.note),
-                    None => {
-                        round.decision = Some(Decision {
-                            can_do: false,
-                            action: None,
-                            subtask_complete: false,
-                            note: choice.note,
-                        });
-                        round.outcome = Outcome::Declined;
-                        round.feedback = joint::feedback("", &round.outcome);
-                    }
+                    None => decision::no_action(&mut round, choice.note),
                 }
             }
-            Err(message) => {
-                round.outcome = Outcome::MethodError { message };
-                round.feedback = joint::feedback("", &round.outcome);
+            Err(MethodFailure(message)) => {
+                round.outcome = RoundOutcome::MethodError { message };
+                round.feedback = feedback::joint("", &round.outcome);
             }
         }
-        history.push(executed(&round));
+        history.push(past_step(&round));
         round.done = env.goal_satisfied();
         round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(round))
@@ -99,13 +96,13 @@ pub async fn run(
     rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
-/// The error of a step that took longer than `limit`.
-fn out_of_time(limit: Duration) -> String {
-    format!(
+/// The failure of a step that took longer than `limit`.
+fn out_of_time(limit: Duration) -> MethodFailure {
+    MethodFailure(format!(
         "the step took longer than its time limit of {} s (--step-timeout, step_timeout=), \
          and was stopped",
         number(limit.as_secs_f64())
-    )
+    ))
 }
 
 /// The most of a method's note, action or error a round keeps: what a method says is
@@ -114,14 +111,14 @@ pub const MAX_TEXT_BYTES: usize = 64 << 10;
 
 /// `choice` with its texts cut at [`MAX_TEXT_BYTES`]: the note and the action at their
 /// end, an error at its start (a traceback ends with the exception).
-fn bounded(choice: Result<Choice, String>) -> Result<Choice, String> {
+fn bounded(choice: Result<Choice, MethodFailure>) -> Result<Choice, MethodFailure> {
     match choice {
         Ok(mut c) => {
             c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
             c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
             Ok(c)
         }
-        Err(why) => Err(cut_front(&why, MAX_TEXT_BYTES).into_owned()),
+        Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
     }
 }
 
@@ -138,31 +135,33 @@ fn take(
     match task.robot_by_id(robot) {
         Ok(_) => {
             round.actions = env.actions(robot).unwrap_or_default();
-            joint::act(env, task, round, robot, action, note);
+            decision::act(env, task, round, robot, action, note);
         }
         Err(e) => {
-            let outcome = Outcome::Infeasible {
+            let outcome = RoundOutcome::Infeasible {
                 reason: "unknown_robot".into(),
                 message: e.to_string(),
             };
-            joint::decided(task, round, robot, action, outcome, note);
+            decision::decided(task, round, robot, action, outcome, note);
         }
     }
 }
 
 /// The round as the next steps' views show it.
-fn executed(round: &Round) -> Executed {
+fn past_step(round: &Round) -> PastStep {
     let chosen = round.external.as_ref();
     let (ok, reason) = match &round.outcome {
-        Outcome::Executed => (true, None),
-        Outcome::Infeasible { message, .. } => (false, Some(message.clone())),
-        Outcome::Declined => (false, Some("no action was chosen".to_owned())),
-        Outcome::NoProposal { why } | Outcome::NoDecision { why } => (false, Some(why.clone())),
-        Outcome::BackendError { message } | Outcome::MethodError { message } => {
+        RoundOutcome::Executed => (true, None),
+        RoundOutcome::Infeasible { message, .. } => (false, Some(message.clone())),
+        RoundOutcome::Declined => (false, Some("no action was chosen".to_owned())),
+        RoundOutcome::NoProposal { why } | RoundOutcome::NoDecision { why } => {
+            (false, Some(why.clone()))
+        }
+        RoundOutcome::BackendError { message } | RoundOutcome::MethodError { message } => {
             (false, Some(message.clone()))
         }
     };
-    Executed {
+    PastStep {
         robot: chosen.and_then(|c| c.robot),
         action: chosen.and_then(|c| c.action.clone()),
         ok,

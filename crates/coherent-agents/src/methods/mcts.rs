@@ -56,8 +56,8 @@
 //! language model at the root of each real step's tree: it is sampled
 //! [`MctsConfig::samples`] (5) times with a CMRS-like prompt (the instruction, every
 //! robot's observation as facts, the union of the action lists as `<robot>: <action>`
-//! lines, the last 5 executed actions), each answer is matched to the nearest valid
-//! joint action ([`joint::match_line`]; an answer matching none is dropped), and
+//! lines, the last executed actions: [`HISTORY_WINDOW`]), each answer is matched to the nearest valid
+//! joint action ([`match_line`]; an answer matching none is dropped), and
 //! `P = 0.5 x (the empirical distribution of matched samples) + 0.5 x uniform`
 //! ([`mix_prior`]). Below the root the prior is uniform. Asking the model only at the
 //! root is this project's named simplification (LLM-MCTS as published asks its policy
@@ -73,13 +73,15 @@ use std::time::Instant;
 use coherent_core::{Environment, State, Task, rules};
 
 use crate::backends::llm::{Backend, Finish, Query, Role, Situation};
-use crate::episode::ask::exchange;
+use crate::episode::ask::place_call;
 use crate::episode::cancel::Cancel;
 use crate::episode::environment::{execute, team_observation};
-use crate::episode::rounds::{Episode, rounds};
-use crate::methods::joint::{self, Executed, JointAction, joint_actions};
+use crate::episode::rounds::{Episode, HISTORY_WINDOW, History, rounds};
+use crate::methods::answer::{match_line, read_line};
+use crate::methods::joint::{JointAction, joint_actions};
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Decision, Outcome, Round};
+use crate::methods::{central, decision, feedback};
+use crate::records::transcript::{Decision, Round, RoundOutcome};
 use crate::rng::{Rng, seed_of};
 
 /// Settings of one MCTS episode; the default is the authors' (docs/methods.md).
@@ -122,7 +124,7 @@ impl Default for MctsConfig {
             seed: 0,
             samples: 5,
             llm_weight: 0.5,
-            history: 5,
+            history: HISTORY_WINDOW,
             max_tokens: 120,
             prompts: Prompts::builtin(),
         }
@@ -407,11 +409,11 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let mut history = Executed::new(config.history);
+    let mut history = History::new(config.history);
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, config, cancel, &history.lines(), step).await?;
-        if let Some(r) = &r {
-            history.record(r);
+        let r = round(env, task, backend, config, cancel, &history.entries(), step).await?;
+        if let Some(line) = r.as_ref().and_then(decision::executed_line) {
+            history.push(line);
         }
         Ok(r)
     };
@@ -435,7 +437,7 @@ async fn round(
     let mut round = Round::new(step);
     round.actions = lines.clone();
     if actions.is_empty() {
-        round.feedback = "No robot can act now.".into();
+        round.feedback = feedback::mcts(None, &round.outcome);
         return Ok(Some(close(env, round, start)));
     }
 
@@ -443,8 +445,7 @@ async fn round(
     let mut prior = None;
     if let Some(backend) = backend {
         let observation = team_observation(env, task);
-        let messages =
-            joint::central_messages(&config.prompts, task, &observation, &lines, history);
+        let messages = central::messages(&config.prompts, task, &observation, &lines, history);
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {
@@ -452,28 +453,28 @@ async fn round(
                 robot: None,
                 messages: messages.clone(),
                 schema_name: "joint_action",
-                schema: joint::central_schema(&lines),
+                schema: central::schema(&lines),
                 max_tokens: config.max_tokens,
                 situation: Situation::now(task, env, None),
             };
-            let Some(call) = exchange(backend, query, cancel).await else {
+            let Some(call) = place_call(backend, query, cancel).await else {
                 return Ok(None);
             };
             // A refusal, a filtered or an empty answer names nothing.
             if let Some(answer) = &call.answer
                 && matches!(answer.finish, Finish::Stop | Finish::Length)
                 && !answer.text.trim().is_empty()
-                && let Some(i) = joint::match_line(&lines, &joint::read_line(&answer.text))
+                && let Some(i) = match_line(&lines, &read_line(&answer.text))
             {
                 counts[i] += 1;
             }
             let ended = call.error.as_ref().filter(|e| e.ends_episode()).cloned();
             round.calls.push(call);
             if let Some(e) = ended {
-                round.outcome = Outcome::BackendError {
+                round.outcome = RoundOutcome::BackendError {
                     message: e.to_string(),
                 };
-                round.feedback = format!("The model could not be reached: {e}");
+                round.feedback = feedback::joint("", &round.outcome);
                 return Ok(Some(close(env, round, start)));
             }
         }
@@ -499,7 +500,7 @@ async fn round(
         return Ok(None);
     }
     let Some(i) = stats.choice else {
-        round.feedback = "No robot can act now.".into();
+        round.feedback = feedback::mcts(None, &round.outcome);
         return Ok(Some(close(env, round, start)));
     };
     let chosen = stats.actions[i];
@@ -516,12 +517,7 @@ async fn round(
         ),
     });
     round.outcome = execute(env, &mut round, task.id(chosen.robot.node), &action);
-    round.feedback = match &round.outcome {
-        Outcome::Infeasible { message, .. } => {
-            format!("{robot} tried {action}, which cannot be done: {message}")
-        }
-        _ => format!("{robot} did {action}."),
-    };
+    round.feedback = feedback::mcts(Some((&robot, &action)), &round.outcome);
     Ok(Some(close(env, round, start)))
 }
 

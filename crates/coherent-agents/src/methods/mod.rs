@@ -5,20 +5,25 @@
 //!   roles, the [`assigner::TaskAssigner`] and the [`executor::RobotExecutor`].
 //! - The paper's baselines: [`cmrs`] (one central model), [`dmrs`] (decentralised
 //!   dialogue), [`mcts`] (primitive MCTS and LLM-MCTS); [`joint`] is the team's joint
-//!   action space they choose from, as text.
+//!   action space they choose from, [`central`] the central prompt.
 //! - [`optimal`]: the optimal planner's plan, the tables' ground-truth row.
 //! - [`external`]: a method written outside the crate (a Python class, say), asked once
 //!   per step through [`crate::episode::policy::Policy`].
 //!
-//! [`templates`] is the prompt set the methods render their prompts from; [`prompt`] and
-//! `answer` are what the methods' prompts and answer readers share.
+//! What they share: [`templates`], the prompt set their prompts are rendered from, and
+//! [`prompt`], filling it; [`answer`], reading a model's answer; [`decision`], the
+//! record of the action a method chose; [`feedback`], what the next rounds hear of a
+//! round.
 
-pub(crate) mod answer;
+pub mod answer;
 pub mod assigner;
+pub mod central;
 pub mod cmrs;
+pub(crate) mod decision;
 pub mod dmrs;
 pub mod executor;
 pub mod external;
+pub mod feedback;
 pub mod joint;
 pub mod mcts;
 pub mod optimal;

@@ -11,8 +11,8 @@ use coherent_core::{Environment, Task};
 
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, rounds};
-use crate::methods::joint;
-use crate::records::transcript::{Outcome, Round};
+use crate::methods::decision;
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// Runs the shortest plan from the environment's state (found once, by `limits`).
 pub async fn run(
@@ -40,15 +40,15 @@ pub async fn run(
             Ok(Some(s)) => {
                 let robot = task.id(s.robot);
                 let action = s.action.render(task);
-                joint::act(env, task, &mut round, robot, &action, String::new());
+                decision::act(env, task, &mut round, robot, &action, String::new());
             }
             Ok(None) => {
-                round.outcome = Outcome::NoDecision {
+                round.outcome = RoundOutcome::NoDecision {
                     why: "the plan is over".into(),
                 }
             }
             Err(why) => {
-                round.outcome = Outcome::NoDecision {
+                round.outcome = RoundOutcome::NoDecision {
                     why: (*why).to_owned(),
                 }
             }

@@ -1,11 +1,10 @@
 //! PEFA, the paper's loop: Proposal (the [`TaskAssigner`] gives one robot one subtask),
 //! Execution (that robot's [`RobotExecutor`] picks one action from its list; the action
 //! is checked and run through the [`Environment`]), Feedback (what ran and whether the
-//! subtask is done, or why not, with the robot's actions: [`executor::feedback`]),
-//! Adjustment (the feedback joins the history the assigner sees next round). One round
-//! is one step; two model calls per round.
+//! subtask is done, or why not, with the robot's actions: [`feedback::pefa`]),
+//! Adjustment (the feedback joins the [`History`] the assigner sees next round). One
+//! round is one step; two model calls per round.
 
-use std::collections::VecDeque;
 use std::io;
 use std::sync::Arc;
 use std::time::Instant;
@@ -15,12 +14,12 @@ use coherent_core::{Environment, Task};
 use crate::backends::llm::Backend;
 use crate::episode::ask::{Side, ask};
 use crate::episode::environment::execute;
-use crate::episode::rounds::rounds;
+use crate::episode::rounds::{HISTORY_WINDOW, History, rounds};
 use crate::methods::assigner::TaskAssigner;
-use crate::methods::executor::{self, RobotExecutor};
-use crate::methods::prompt::robot_label;
+use crate::methods::executor::RobotExecutor;
+use crate::methods::feedback;
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Outcome, Round};
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// The shared loop's types, where PEFA's callers have always found them.
 pub use crate::episode::cancel::Cancel;
@@ -29,7 +28,7 @@ pub use crate::episode::rounds::Episode;
 /// Settings of one PEFA episode.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PefaConfig {
-    /// Rounds of history the assigner sees (the paper: 5; 0 is "w/o history").
+    /// Rounds of history the assigner sees ([`HISTORY_WINDOW`]; 0 is "w/o history").
     pub history: usize,
     /// Steps before the episode stops as a failure (2 x GT by the paper's rule).
     pub max_steps: u32,
@@ -42,7 +41,7 @@ pub struct PefaConfig {
 impl PefaConfig {
     pub fn new(max_steps: u32) -> PefaConfig {
         PefaConfig {
-            history: 5,
+            history: HISTORY_WINDOW,
             max_steps,
             assigner_max_tokens: 400,
             executor_max_tokens: 200,
@@ -62,17 +61,12 @@ pub async fn run(
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
-    let mut history: VecDeque<String> = VecDeque::new();
+    let mut history = History::new(config.history);
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, config, cancel, &history, step).await;
+        let r = round(env, task, backend, config, cancel, &history.entries(), step).await;
         // Adjustment: the round joins the history the assigner sees next.
-        if let Some(r) = &r
-            && config.history > 0
-        {
-            history.push_back(history_entry(task, r));
-            while history.len() > config.history {
-                history.pop_front();
-            }
+        if let Some(r) = &r {
+            history.push(feedback::assigner_history(task, r));
         }
         Ok(r)
     };
@@ -86,7 +80,7 @@ async fn round(
     backend: &dyn Backend,
     config: &PefaConfig,
     cancel: &Cancel,
-    history: &VecDeque<String>,
+    history: &[String],
     step: u32,
 ) -> Option<Round> {
     let start = Instant::now();
@@ -94,8 +88,7 @@ async fn round(
 
     // Proposal.
     let assigner = TaskAssigner::new(task, &config.prompts, config.assigner_max_tokens);
-    let history: Vec<String> = history.iter().cloned().collect();
-    let query = assigner.query(env, &history);
+    let query = assigner.query(env, history);
     let reply = ask(backend, query, cancel, &mut round.calls).await?;
     let proposal = match reply.and_then(|r| r.read(|text| assigner.parse(text))) {
         Ok(p) => p,
@@ -108,7 +101,10 @@ async fn round(
     let executor = match RobotExecutor::of(task, robot, &config.prompts, config.executor_max_tokens)
     {
         Ok(executor) => executor,
-        Err(why) => return Some(finish(env, round, Outcome::NoProposal { why }, start)),
+        Err(e) => {
+            let why = e.to_string();
+            return Some(finish(env, round, RoundOutcome::NoProposal { why }, start));
+        }
     };
     round.actions = executor.actions(env);
     let query = executor.query(env, &proposal.subtask, &round.actions);
@@ -120,7 +116,7 @@ async fn round(
     round.decision = Some(decision.clone());
     let outcome = match &decision.action {
         Some(action) if decision.can_do => execute(env, &mut round, robot, action),
-        _ => Outcome::Declined,
+        _ => RoundOutcome::Declined,
     };
     Some(finish(env, round, outcome, start))
 }
@@ -129,26 +125,12 @@ async fn round(
 fn finish(
     env: &(dyn Environment + Send),
     mut round: Round,
-    outcome: Outcome,
+    outcome: RoundOutcome,
     start: Instant,
 ) -> Round {
-    round.feedback = executor::feedback(env.task(), &round, &outcome);
+    round.feedback = feedback::pefa(env.task(), &round, &outcome);
     round.outcome = outcome;
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     round
-}
-
-/// The history line of a round, oldest first in the prompt.
-fn history_entry(task: &Task, round: &Round) -> String {
-    match &round.proposal {
-        Some(p) => format!(
-            "Round {}: you asked {} to \"{}\". {}",
-            round.step,
-            robot_label(task, p.robot),
-            p.subtask,
-            round.feedback
-        ),
-        None => format!("Round {}: {}", round.step, round.feedback),
-    }
 }

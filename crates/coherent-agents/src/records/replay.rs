@@ -13,19 +13,22 @@ use coherent_core::{Task, native};
 
 use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
-use crate::episode::policy::{Act, Policy, View};
+use crate::episode::budget::Budget;
+use crate::episode::policy::{Act, MethodFailure, Policy, StepView};
 use crate::episode::rounds::Episode;
-use crate::episode::settings::{Budget, External, Method, MethodSpec, Settings};
+use crate::episode::settings::{External, Method, MethodSpec, Settings};
+use crate::error::Error;
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Outcome, Round, Summary, Transcript};
+use crate::records::transcript::{Round, RoundOutcome, Summary, Transcript};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
-/// `backend` and `budget`, then [`Replay::check`] the episode.
+/// `backend` and `budget`, then look for a [`Replay::difference`] from the recording.
 #[derive(Debug)]
 pub struct Replay {
     /// The task recorded in the transcript's header.
     pub task: Arc<Task>,
-    /// The recorded method, history window, temperature, seed, physics and prompt set.
+    /// The recorded method, history window, temperature, seed, physics, robots and
+    /// prompt set.
     pub settings: Settings,
     /// The recorded budget, as given.
     pub budget: Budget,
@@ -36,7 +39,7 @@ pub struct Replay {
 
 impl Replay {
     /// The replay of `transcript`, read from `file` (which errors name).
-    pub fn prepare(transcript: &Transcript, file: &Path) -> Result<Replay, String> {
+    pub fn prepare(transcript: &Transcript, file: &Path) -> Result<Replay, Error> {
         let task = recorded_task(transcript, file)?;
         let (settings, budget) = recorded_settings(transcript)?;
         Ok(Replay {
@@ -48,32 +51,33 @@ impl Replay {
         })
     }
 
-    /// Whether `replayed` did exactly what the recording did (see [`check_replay`]).
-    pub fn check(&self, replayed: &Episode) -> Result<(), String> {
-        check_replay(&self.recording, replayed)
+    /// Where `replayed` first differs from what the recording did, if it does (see
+    /// [`difference`]).
+    pub fn difference(&self, replayed: &Episode) -> Option<String> {
+        difference(&self.recording, replayed)
     }
 }
 
 /// The settings and budget a transcript was recorded with, to replay it: the prompt set
 /// is the recorded one (or an error when this version cannot render it again), and a
 /// method written outside the crate replays its recorded decisions.
-pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
+pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
     let name = &t.header.method;
     let method = if t.header.external {
         let rounds: Arc<[Round]> = t.rounds.clone().into();
-        let make = move |_: &Arc<Task>| -> Result<Box<dyn Policy>, String> {
-            Ok(Box::new(Recorded {
+        let make = move |_: &Arc<Task>| -> Result<Box<dyn Policy>, MethodFailure> {
+            Ok(Box::new(RecordedDecisions {
                 rounds: rounds.iter().cloned().collect(),
             }))
         };
         MethodSpec::External(External::new(name, Arc::new(make))?)
     } else {
         Method::from_name(name)
-            .ok_or_else(|| format!("unknown method {name:?} in the transcript"))?
+            .ok_or_else(|| Error::Invalid(format!("unknown method {name:?} in the transcript")))?
             .into()
     };
     let prompts = match &t.header.prompts {
-        Some(record) => Prompts::from_record(record).map_err(|e| e.to_string())?,
+        Some(record) => Prompts::from_record(record)?,
         None => Prompts::builtin(),
     };
     let settings = Settings {
@@ -82,19 +86,21 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), String> {
         temperature: t.header.temperature,
         seed: t.header.seed,
         physics: t.header.physics,
+        robots: t.header.robots.clone(),
         prompts,
     };
     Ok((settings, Budget::Given(t.header.max_steps)))
 }
 
 /// The task a transcript was recorded on.
-pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, String> {
-    native::read(&file.display().to_string(), &t.header.task).map_err(|e| e.to_string())
+pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, Error> {
+    Ok(native::read(&file.display().to_string(), &t.header.task)?)
 }
 
-/// Whether `replayed` did exactly what `recorded` did: the same rounds (calls, answers,
-/// decisions, outcomes, feedback) apart from wall-clock time, and the same summary.
-pub fn check_replay(recorded: &Transcript, replayed: &Episode) -> Result<(), String> {
+/// Where `replayed` first differs from what `recorded` did, if it does: a replay must
+/// give the same rounds (calls, answers, decisions, outcomes, feedback) apart from
+/// wall-clock time, and the same summary.
+pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
     // What robots outside the process said is theirs, not the replay's to reproduce.
     let strip = |r: &Round| Round {
         wall_ms: 0.0,
@@ -102,53 +108,56 @@ pub fn check_replay(recorded: &Transcript, replayed: &Episode) -> Result<(), Str
         ..r.clone()
     };
     if recorded.rounds.len() != replayed.rounds.len() {
-        return Err(format!(
+        return Some(format!(
             "the recording has {} rounds, the replay {}",
             recorded.rounds.len(),
             replayed.rounds.len()
         ));
     }
-    for (a, b) in recorded.rounds.iter().zip(&replayed.rounds) {
-        if strip(a) != strip(b) {
-            return Err(format!("round {} differs from the recording", a.step));
-        }
+    if let Some(a) = recorded
+        .rounds
+        .iter()
+        .zip(&replayed.rounds)
+        .find_map(|(a, b)| (strip(a) != strip(b)).then_some(a))
+    {
+        return Some(format!("round {} differs from the recording", a.step));
     }
     let timeless = |s: &Summary| Summary {
         wall_ms: 0.0,
         ..s.clone()
     };
-    if let Some(s) = &recorded.summary
-        && timeless(s) != timeless(&replayed.summary)
-    {
-        return Err("the summary differs from the recording".into());
+    match &recorded.summary {
+        Some(s) if timeless(s) != timeless(&replayed.summary) => {
+            Some("the summary differs from the recording".into())
+        }
+        _ => None,
     }
-    Ok(())
 }
 
 /// The decisions recorded in the rounds of a method written outside the crate, given
 /// back one per step with the calls the method made then.
-struct Recorded {
+struct RecordedDecisions {
     rounds: VecDeque<Round>,
 }
 
-impl Policy for Recorded {
-    fn act(&mut self, view: Arc<View>) -> BoxFuture<'_, Act> {
+impl Policy for RecordedDecisions {
+    fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         let act = match self.rounds.pop_front() {
             None => Act {
-                choice: Err(format!(
+                choice: Err(MethodFailure(format!(
                     "replay diverged: step {} is not in the recording",
                     view.step
-                )),
+                ))),
                 calls: Vec::new(),
             },
             Some(round) => Act {
                 choice: match (round.external, round.outcome) {
                     (Some(decision), _) => Ok(decision),
-                    (None, Outcome::MethodError { message }) => Err(message),
-                    (None, _) => Err(format!(
+                    (None, RoundOutcome::MethodError { message }) => Err(MethodFailure(message)),
+                    (None, _) => Err(MethodFailure(format!(
                         "replay diverged: round {} of the recording holds no decision",
                         round.step
-                    )),
+                    ))),
                 },
                 calls: round.calls,
             },

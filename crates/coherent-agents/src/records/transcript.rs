@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use coherent_core::NodeId;
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
+use crate::error::Error;
 use crate::methods::templates::PromptRecord;
 use crate::records::lock;
 
@@ -37,6 +38,9 @@ pub struct Header {
     pub gt_steps: Option<u32>,
     /// Whether every action was also carried out in physics.
     pub physics: bool,
+    /// Who carried the actions out (local in transcripts written before it was kept).
+    #[serde(default)]
+    pub robots: RobotsRecord,
     pub backend: BackendInfo,
     pub temperature: Option<f32>,
     pub seed: Option<u64>,
@@ -70,6 +74,18 @@ pub struct Call {
     pub endpoint: Option<String>,
 }
 
+/// Who carried an episode's actions out: this process (the rules, and Rapier with
+/// `physics`), or one ROS 2 action server per robot under a namespace.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum RobotsRecord {
+    #[default]
+    Local,
+    Ros2 {
+        namespace: String,
+    },
+}
+
 /// The task assigner's proposal, as read from its answer
 /// ([`crate::methods::assigner::TaskAssigner::parse`]).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -93,10 +109,10 @@ pub struct Decision {
     pub note: String,
 }
 
-/// What came of one round.
+/// What came of one round (of the step it is): whether its action ran, and if not, why.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
-pub enum Outcome {
+pub enum RoundOutcome {
     /// The action ran.
     Executed,
     /// The action was checked and refused (core's feasibility reason; physics when on).
@@ -142,7 +158,7 @@ pub struct Round {
     /// The executor's action list at that moment.
     pub actions: Vec<String>,
     pub decision: Option<Decision>,
-    pub outcome: Outcome,
+    pub outcome: RoundOutcome,
     /// What the assigner is told about this round from the next round on.
     pub feedback: String,
     /// Whether the goal holds after this round.
@@ -167,7 +183,7 @@ impl Round {
             proposal: None,
             actions: Vec::new(),
             decision: None,
-            outcome: Outcome::Declined,
+            outcome: RoundOutcome::Declined,
             feedback: String::new(),
             done: false,
             wall_ms: 0.0,
@@ -274,43 +290,44 @@ pub fn limit(bytes: u64) -> Limit {
 
 /// Reads a transcript of at most [`DEFAULT_MAX_BYTES`]; errors name the file and the
 /// line.
-pub fn read(path: &Path) -> Result<Transcript, String> {
+pub fn read(path: &Path) -> Result<Transcript, Error> {
     read_within(path, DEFAULT_MAX_BYTES)
 }
 
 /// Reads a transcript of at most `max_bytes`; errors name the file and the line.
-pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, String> {
-    let mut lines =
-        Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(|e| e.to_string())?;
+pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
+    let mut lines = Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(Error::file)?;
     let mut header = None;
     let mut rounds = Vec::new();
     let mut summary = None;
-    while let Some(line) = lines.next_line().map_err(|e| e.to_string())? {
+    while let Some(line) = lines.next_line().map_err(Error::file)? {
         let i = line.number - 1;
-        let at = || format!("{}: line {}", path.display(), i + 1);
-        let line = std::str::from_utf8(line.bytes).map_err(|e| format!("{}: {e}", at()))?;
+        let at = |message: String| Error::at_line(path, i + 1, message);
+        let line = std::str::from_utf8(line.bytes).map_err(|e| at(e.to_string()))?;
         if line.trim().is_empty() {
             continue;
         }
-        let record: Record = serde_json::from_str(line).map_err(|e| format!("{}: {e}", at()))?;
+        let record: Record = serde_json::from_str(line).map_err(|e| at(e.to_string()))?;
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {
-                    return Err(format!(
-                        "{}: format {:?} version {} (this is {FORMAT} version {VERSION})",
-                        at(),
-                        h.format,
-                        h.version
-                    ));
+                    return Err(at(format!(
+                        "format {:?} version {} (this is {FORMAT} version {VERSION})",
+                        h.format, h.version
+                    )));
                 }
                 header = Some(*h);
             }
             Record::Round(r) if header.is_some() && summary.is_none() => rounds.push(*r),
             Record::Summary(s) if header.is_some() && summary.is_none() => summary = Some(s),
-            _ => return Err(format!("{}: a line out of order", at())),
+            _ => return Err(at("a line out of order".into())),
         }
     }
-    let header = header.ok_or_else(|| format!("{}: no header line", path.display()))?;
+    let header = header.ok_or_else(|| Error::Format {
+        file: path.display().to_string(),
+        line: None,
+        message: "no header line".into(),
+    })?;
     Ok(Transcript {
         header,
         rounds,

@@ -11,20 +11,22 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 
-use coherent_agents::bench::{
-    self, BackendChoice, BenchConfig, EpisodeSettings, ResultLine, Subset,
+use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
+use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
+use coherent::session::engine::{
+    ApiKey, Backoff, Cancel, DEFAULT_MAX_RESULTS_BYTES, Method, OpenAiConfig, ResultLine, Subset,
+    Task, read_results,
 };
-use coherent_agents::episode::Method;
-use coherent_agents::retry::Backoff;
 use coherent_agents::transcript;
-use coherent_agents::{ApiKey, Cancel, OpenAiClient, OpenAiConfig};
-use coherent_core::Task;
 use tokio::io::AsyncWriteExt;
 use tokio::net::{TcpListener, TcpStream};
 
 mod common;
+// The stub model servers' side of HTTP, which coherent-agents' tests use too.
+#[path = "../crates/coherent-agents/tests/common/http.rs"]
+mod http;
 
-use common::http::{Request, answer, completion, read_request};
+use http::{Request, answer, completion, read_request};
 
 const KEY: &str = "sk-endpoints-0123456789-SECRET";
 
@@ -101,8 +103,9 @@ fn scratch(name: &str) -> PathBuf {
 
 /// The first four tasks of the paper's subset in env0.
 fn tasks() -> Vec<Arc<Task>> {
-    let mut tasks = bench::select(common::scenes(&[0]), &Subset::Paper40)
-        .expect("distinct tasks")
+    let mut tasks = bench::choose(&common::env0(), &Subset::Paper40)
+        .expect("env0 reads")
+        .selection
         .tasks;
     tasks.truncate(4);
     tasks
@@ -125,23 +128,27 @@ async fn bench_over(urls: &[String], seeds: u32, out: &Path) -> Vec<ResultLine> 
         },
         ..OpenAiConfig::new("unused", "stub-model")
     };
-    let client = Arc::new(OpenAiClient::new(config).expect("a client"));
-    let config = BenchConfig {
-        episodes: EpisodeSettings {
-            temperature: Some(0.0),
-            ..EpisodeSettings::new(vec![Method::Pefa.into()], BackendChoice::OpenAi(client))
+    let episodes = EpisodesRequest {
+        backend: BackendRequest {
+            name: BackendName::OpenAi,
+            endpoint: EndpointSource::Given(config),
+            ..BackendRequest::default()
         },
+        ..EpisodesRequest::new(vec![Method::Pefa.into()])
+    };
+    let config = BenchConfig {
+        episodes: episodes.prepare().expect("valid settings"),
         seeds,
         concurrency: 6,
         out: out.join("results.jsonl"),
-        max_results_bytes: bench::DEFAULT_MAX_RESULTS_BYTES,
+        max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
     };
     let outcome = bench::run(&tasks(), &config, &Cancel::default(), &mut |_| {})
         .await
         .expect("the benchmark runs");
     assert_eq!(outcome.written, outcome.total);
     assert_no_key(out);
-    bench::read_results(&config.out).expect("results").lines
+    read_results(&config.out).expect("results").lines
 }
 
 /// No file under `dir` holds the key.

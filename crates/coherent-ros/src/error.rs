@@ -1,0 +1,65 @@
+//! Why the robots over ROS 2 could not be set up or reached: one variant per kind, so
+//! that a caller decides by the kind (an exit status, an exception class).
+
+use std::time::Duration;
+
+/// Why the bridge or the robot servers could not start.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Error {
+    /// A setting that cannot be used: a namespace, a fault naming no robot of the task, a
+    /// failure rate out of range.
+    Invalid(String),
+    /// These robots had no action server within the time given.
+    Missing {
+        robots: Vec<String>,
+        namespace: String,
+        waited: Duration,
+    },
+    /// A robot has more than one action server: each would carry out every goal.
+    Several {
+        robot: String,
+        namespace: String,
+        /// The servers' DDS participants, as `participant 0f1e...`.
+        servers: Vec<String>,
+    },
+    /// DDS could not be set up.
+    Dds(String),
+    /// The robots' physical world cannot be built for the task.
+    Physics(coherent_sim::PhysicsError),
+}
+
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Error::Invalid(why) => f.write_str(why),
+            Error::Missing {
+                robots,
+                namespace,
+                waited,
+            } => write!(
+                f,
+                "no ROS 2 action server for {} under {namespace} within {:.1} s (start the \
+                 robots' servers, e.g. `coherent robots serve TASK --namespace {namespace}`, \
+                 or wait longer with --server-wait)",
+                robots.join(", "),
+                waited.as_secs_f64()
+            ),
+            Error::Several {
+                robot,
+                namespace,
+                servers,
+            } => write!(
+                f,
+                "{} ROS 2 action servers for {robot} under {namespace} ({}): each would carry \
+                 out every goal, and the robot's world and the rules' would part; stop all \
+                 but one",
+                servers.len(),
+                servers.join(", ")
+            ),
+            Error::Dds(why) => write!(f, "ROS 2: {why}"),
+            Error::Physics(e) => write!(f, "physics: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}

@@ -1,0 +1,107 @@
+//! What every episode of a benchmark run shares: the methods, the backend, the prompt set
+//! and the prices, the budget and the robots; as a front end asks for them
+//! ([`EpisodesRequest`]) and as the episodes get them ([`EpisodeSettings`]).
+
+use coherent_agents::episode::HISTORY_WINDOW;
+use coherent_agents::{MethodSpec, PriceTable, Prompts};
+use coherent_core::planner::Limits;
+
+use crate::session::backend::{BackendChoice, BackendRequest};
+use crate::session::error::Error;
+use crate::session::prompts::{PriceSource, PromptSource};
+use crate::session::robots::Robots;
+
+/// What every episode of a benchmark run shares, as a front end asks for it.
+#[derive(Debug)]
+pub struct EpisodesRequest {
+    /// The run's methods; an episode's key names its method.
+    pub methods: Vec<MethodSpec>,
+    /// Who answers the model-using methods.
+    pub backend: BackendRequest,
+    pub prompts: PromptSource,
+    pub prices: PriceSource,
+    /// Rounds of history the methods see.
+    pub history: usize,
+    /// Most states one planner search may visit.
+    pub max_states: usize,
+    /// The step budget of every episode; `None` for the paper's 2 x GT.
+    pub max_steps: Option<u32>,
+    /// Every action in Rapier too.
+    pub physics: bool,
+    /// Who carries the actions out.
+    pub robots: Robots,
+}
+
+impl EpisodesRequest {
+    /// `methods` with the paper's settings: the backend the environment configures, the
+    /// built-in prompts and prices, the history window, the default planner bound,
+    /// 2 x GT steps, local robots without physics.
+    pub fn new(methods: Vec<MethodSpec>) -> EpisodesRequest {
+        EpisodesRequest {
+            methods,
+            backend: BackendRequest::default(),
+            prompts: PromptSource::default(),
+            prices: PriceSource::default(),
+            history: HISTORY_WINDOW,
+            max_states: Limits::DEFAULT_MAX_STATES,
+            max_steps: None,
+            physics: false,
+            robots: Robots::Local,
+        }
+    }
+
+    /// The settings, checked: the prompt set first (a bad template costs nothing), the
+    /// prices, distinct method names, the backend.
+    pub fn prepare(self) -> Result<EpisodeSettings, Error> {
+        let prompts = self.prompts.read()?;
+        let prices = self.prices.read()?;
+        if self.methods.is_empty() {
+            return Err(Error::Invalid("no methods to run".into()));
+        }
+        distinct_names(&self.methods)?;
+        Ok(EpisodeSettings {
+            methods: self.methods,
+            backend: self.backend.choose()?,
+            history: self.history,
+            max_states: self.max_states,
+            max_steps: self.max_steps,
+            prompts,
+            prices,
+            physics: self.physics,
+            robots: self.robots,
+        })
+    }
+}
+
+/// What every episode of a run shares: the methods, the backend and the settings.
+#[derive(Clone, Debug)]
+pub struct EpisodeSettings {
+    pub methods: Vec<MethodSpec>,
+    pub backend: BackendChoice,
+    pub history: usize,
+    pub max_states: usize,
+    pub max_steps: Option<u32>,
+    /// The templates the methods' prompts are rendered from (a replay renders the
+    /// recorded ones).
+    pub prompts: Prompts,
+    /// Prices each line's model calls (`cost_usd`).
+    pub prices: PriceTable,
+    pub physics: bool,
+    pub robots: Robots,
+}
+
+/// Refuses two methods of one name: results are keyed by the method's name, so one
+/// written outside the crate needs its own.
+pub fn distinct_names(methods: &[MethodSpec]) -> Result<(), Error> {
+    let names: Vec<&str> = methods.iter().map(|m| m.name()).collect();
+    match methods
+        .iter()
+        .find(|m| m.builtin().is_none() && names.iter().filter(|&&n| n == m.name()).count() > 1)
+    {
+        Some(m) => Err(Error::Invalid(format!(
+            "two methods are named {:?}: give each its own name",
+            m.name()
+        ))),
+        None => Ok(()),
+    }
+}

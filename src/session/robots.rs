@@ -1,0 +1,119 @@
+//! Who carries an episode's actions out: this process (the rules, and Rapier with
+//! physics) or robots over ROS 2, one action server per robot; and the reference robot
+//! servers (`coherent robots serve`).
+
+use coherent_core::text::number;
+use std::future::Future;
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::time::Duration;
+
+use coherent_agents::transcript::RobotsRecord;
+use coherent_ros::{Faults, ServeOptions};
+
+use crate::session::error::Error;
+use crate::session::tasks;
+
+/// Who carries an episode's actions out.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub enum Robots {
+    /// This process: the rules, and Rapier too with physics.
+    #[default]
+    Local,
+    /// One ROS 2 action server per robot (`coherent robots serve`, or real robots).
+    Ros2(coherent_ros::BridgeOptions),
+}
+
+impl Robots {
+    /// Robots over ROS 2 under `namespace` (made absolute), each allowed `robot_timeout`
+    /// seconds of silence in a step, all awaited `server_wait` seconds before the first.
+    pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, Error> {
+        let seconds = |what: &str, s: f64| {
+            std::time::Duration::try_from_secs_f64(s).map_err(|_| {
+                Error::Invalid(format!(
+                    "{what} must be seconds from 0 to 1.8e19, not {}",
+                    number(s)
+                ))
+            })
+        };
+        let namespace =
+            coherent_ros::wire::namespace(namespace).map_err(|e| Error::Invalid(e.to_string()))?;
+        Ok(Robots::Ros2(coherent_ros::BridgeOptions {
+            namespace,
+            robot_timeout: seconds("the robot timeout", robot_timeout)?,
+            server_wait: seconds("the wait for the servers", server_wait)?,
+        }))
+    }
+
+    /// How a transcript records these robots.
+    pub fn record(&self) -> RobotsRecord {
+        match self {
+            Robots::Local => RobotsRecord::Local,
+            Robots::Ros2(options) => RobotsRecord::Ros2 {
+                namespace: options.namespace.clone(),
+            },
+        }
+    }
+}
+
+/// A `coherent-ros` error as the session's: a setting that cannot be used, a world
+/// that cannot be built, or robots that cannot be reached.
+pub(crate) fn ros_error(e: coherent_ros::Error) -> Error {
+    match e {
+        coherent_ros::Error::Invalid(why) => Error::Invalid(why),
+        coherent_ros::Error::Physics(e) => Error::Physics(e),
+        e => Error::Robots(e),
+    }
+}
+
+/// The reference robot servers of a task, as `coherent robots serve` asks for them.
+#[derive(Debug)]
+pub struct ServeRequest {
+    /// A native task file, or an original env file with `task_id`.
+    pub task_file: PathBuf,
+    pub task_id: Option<i64>,
+    /// The namespace of the robots' actions.
+    pub namespace: String,
+    /// Carry the actions out in Rapier, checked against the rules.
+    pub physics: bool,
+    /// Fault: seconds each action takes, with feedback all along.
+    pub delay: f64,
+    /// Fault: the chance (0 to 1) that a robot reports failure instead of acting.
+    pub fail_rate: f64,
+    /// Seeds the failures of `fail_rate`.
+    pub seed: u64,
+    /// Fault: robots (ROS names) that accept goals and never answer.
+    pub silent: Vec<String>,
+    /// Fault: robots whose server refuses every goal.
+    pub refuse: Vec<String>,
+    /// Fault: robots whose server is not started.
+    pub absent: Vec<String>,
+}
+
+/// Serves every robot of the task `request` names as a ROS 2 action server until `stop`
+/// resolves; `log` gets one line when the servers are up and one per goal.
+pub fn serve(
+    request: ServeRequest,
+    log: &(dyn Fn(&str) + Sync),
+    stop: impl Future<Output = ()>,
+) -> Result<(), Error> {
+    let task = tasks::pick_task(&request.task_file, request.task_id)?;
+    let options = ServeOptions {
+        namespace: coherent_ros::wire::namespace(&request.namespace).map_err(ros_error)?,
+        physics: request.physics,
+        faults: Faults {
+            delay: Duration::try_from_secs_f64(request.delay).map_err(|_| {
+                Error::Invalid(format!(
+                    "--delay must be seconds from 0 to 1.8e19, not {}",
+                    number(request.delay)
+                ))
+            })?,
+            fail_rate: request.fail_rate,
+            seed: request.seed,
+            silent: request.silent,
+            refuse: request.refuse,
+            absent: request.absent,
+        },
+    };
+    super::block_on(coherent_ros::serve(Arc::new(task), options, log, stop))?.map_err(ros_error)
+}
