@@ -14,6 +14,7 @@ Everything the ``coherent`` command line does, from Python::
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
     df = coherent.bench(tasks, ["pefa"], backend=llm, executor="ray")   # on a Ray cluster
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
+    coherent.view(episode)                            # the episode's page (inline in Jupyter)
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
 against cost (``pareto``) and the scene map (matplotlib); ``coherent.gym`` is a Gymnasium
@@ -68,6 +69,7 @@ from ._coherent import (
     validate,
     View,
 )
+from ._view import Page, view
 from .analysis import Report, bench, report, results
 from .executors import RayExecutor
 
@@ -88,6 +90,7 @@ __all__ = [
     "PromptError",
     "RayExecutor",
     "Reply",
+    "Page",
     "ReplayMismatchError",
     "Report",
     "RobotError",
@@ -111,6 +114,7 @@ __all__ = [
     "scene_layout",
     "select",
     "validate",
+    "view",
     "View",
 ]
 

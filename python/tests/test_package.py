@@ -23,7 +23,8 @@ TREE = ast.parse(STUB.read_text())
 # Native functions that the package wraps rather than re-exports (`coherent.bench`,
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks"}
+# `coherent.view` wraps the pages of `coherent view`.
+WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks", "view_page", "results_page", "framed_page"}
 
 
 def _public(name: str) -> bool:
@@ -138,7 +139,7 @@ def test_py_typed_is_installed() -> None:
 
 
 # The names `coherent` defines in Python (the rest of `__all__` is the native module's).
-PYTHON_API = {"RayExecutor", "Report", "bench", "report", "results"}
+PYTHON_API = {"Page", "RayExecutor", "Report", "bench", "report", "results", "view"}
 SUBMODULES = {"analysis", "benchmark", "executors", "gym", "plot"}
 DOCS = REPO / "docs" / "python.md"
 
@@ -148,8 +149,9 @@ def test_all_is_the_stub_less_what_is_wrapped_plus_the_python_api() -> None:
     assert len(coherent.__all__) == len(set(coherent.__all__)), "a name twice in __all__"
     for name in _stub_names() - WRAPPED:
         assert getattr(coherent, name) is getattr(_coherent, name)
-    for name in PYTHON_API - {"RayExecutor"}:
+    for name in PYTHON_API - {"Page", "RayExecutor", "view"}:
         assert getattr(coherent, name) is getattr(coherent.analysis, name)
+    assert coherent.view is coherent._view.view and coherent.Page is coherent._view.Page
     assert coherent.RayExecutor is coherent.executors.RayExecutor
 
 

@@ -18,7 +18,7 @@ use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
     Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, HISTORY_WINDOW, Limits, MIB, MethodSpec, Round,
-    RoundOutcome, Status, Summary, Task, shown,
+    Status, Summary, shown,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -180,7 +180,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     let stop = Stop::watch(&cancel);
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
-    let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
+    let mut progress = |r: &Round| lines.say(&session::lines::step(&task, r, max));
     let result = prepared.run(&cancel, &mut progress).await;
     let ran = result?;
     let s = ran.summary();
@@ -271,46 +271,6 @@ fn replay_line(path: &Path, model: &str) -> String {
         "backend: replay of {} (recorded with model {}; no network)",
         shown(&path.display().to_string()),
         shown(model)
-    )
-}
-
-fn step_line(task: &Task, r: &Round, max: u32) -> String {
-    let robot = r
-        .proposal
-        .as_ref()
-        .and_then(|p| task.idx(p.robot))
-        .map_or("-".to_owned(), |i| {
-            shown(&task.node(i).label()).into_owned()
-        });
-    let action = r
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.as_deref())
-        .map_or("-".to_owned(), |a| shown(a).into_owned());
-    // The subtask in quotes, unless it is the action itself (the built-in backend's).
-    let subtask = r
-        .proposal
-        .as_ref()
-        .filter(|p| shown(&p.subtask) != action)
-        .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
-    let outcome = match &r.outcome {
-        RoundOutcome::Executed if r.done => "ok, goal reached".to_owned(),
-        RoundOutcome::Executed => "ok".to_owned(),
-        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
-        RoundOutcome::Declined => "declined".to_owned(),
-        RoundOutcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
-        RoundOutcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
-        RoundOutcome::BackendError { message } => format!("backend failed: {}", shown(message)),
-        // The last line of the error (a Python traceback ends with the exception).
-        RoundOutcome::MethodError { message } => format!(
-            "the method failed: {}",
-            shown(message.trim_end().lines().last().unwrap_or(""))
-        ),
-    };
-    let width = max.to_string().len();
-    format!(
-        "step {:>width$}/{max}  {robot}  {subtask}{action}  -> {outcome}",
-        r.step
     )
 }
 
