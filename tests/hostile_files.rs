@@ -146,6 +146,19 @@ fn every_other_file_a_command_reads_stops_at_its_limit() {
     ];
     refused(&args, "/dev/zero: not a regular file");
     assert!(!replayed.exists(), "nothing ran");
+    // `coherent view` reads a transcript or a results file within the same limits.
+    refused(
+        &["view", ENDLESS, "-o", utf8(&dir.join("page.html"))],
+        "/dev/zero: more than 64 MiB, the most a transcript may hold (raise it with \
+         --max-transcript-mib)",
+    );
+    let padded = dir.join("padded.jsonl");
+    std::fs::write(&padded, format!("{line}\n{}", "\n".repeat(2 << 20))).expect("written");
+    refused(
+        &["view", utf8(&padded), "--max-results-mib", "1"],
+        "padded.jsonl: more than 1 MiB, the most a results file may hold (raise it with \
+         --max-results-mib)",
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

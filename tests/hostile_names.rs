@@ -136,6 +136,13 @@ fn a_scene_of_300_characters_runs_and_benches_under_a_shortened_file_name() {
     assert_eq!(benched.status.code(), Some(0), "{}", show(&benched));
     let lines = std::fs::read_to_string(&results).expect("the results");
     assert_eq!(lines.lines().count(), 4, "every episode ran: {lines}");
+    let viewed = coherent(&["view", utf8(&results)]);
+    assert_eq!(viewed.status.code(), Some(0), "{}", show(&viewed));
+    assert!(
+        String::from_utf8_lossy(&viewed.stdout).contains("and 4 episode pages"),
+        "{}",
+        show(&viewed)
+    );
     for name in names(&dir) {
         assert!(safe_name(&name), "{name:?}");
     }
