@@ -76,6 +76,7 @@ pub(crate) async fn place_call(
         error: None,
         client: None,
         endpoint: None,
+        shared_prefix: None,
     };
     let response = tokio::select! {
         biased;

@@ -11,6 +11,8 @@
 //!   and the history window ([`HISTORY_WINDOW`]), what a method keeps of its earlier
 //!   rounds ([`History`]).
 //! - `ask`: asking a backend one question and recording the call.
+//! - [`prefix`]: how much of each prompt is the same as the previous one of its role and
+//!   robot ([`prefix::shared_prefix`]), recorded in every call.
 //! - `environment`: observing the whole team and executing one action.
 //! - [`cancel`]: stopping an episode from outside.
 //! - [`run`](mod@run): the front door above the methods: writes the transcript and
@@ -24,6 +26,7 @@ pub mod budget;
 pub mod cancel;
 pub(crate) mod environment;
 pub mod policy;
+pub mod prefix;
 pub mod rounds;
 pub mod run;
 pub mod settings;

@@ -1,26 +1,26 @@
 //! The central prompt (the prompt set's `central.txt`), which CMRS answers once per step
 //! and LLM-MCTS samples for its prior: the team, the rules, the instruction, the team's
-//! observation, the last executed actions and every joint action line
-//! ([`crate::methods::joint`]); and the line an answer chooses.
+//! observation, every joint action line ([`crate::methods::joint`]) and the last
+//! executed actions; and the line an answer chooses.
 
 use coherent_core::{NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::Message;
 use crate::methods::answer::{normal, read_line};
-use crate::methods::prompt;
+use crate::methods::prompt::{self, Sight};
 use crate::methods::templates::{self, Prompts, Template};
 
-/// The central prompt: the team, the rules, the instruction, the team's observation,
-/// the last executed actions and every joint action line (CMRS, LLM-MCTS samples),
-/// rendered from `prompts`.
-pub fn messages(
+/// The central prompt: the team, the rules, the instruction, what `sight` shows the
+/// team, the last executed actions and every joint action line (CMRS, LLM-MCTS
+/// samples), rendered from `prompts`.
+pub(crate) fn messages(
     prompts: &Prompts,
-    task: &Task,
-    observation: &str,
+    sight: &Sight<'_>,
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
+    let task = sight.task;
     let team = prompt::team(task);
     let history = if history.is_empty() {
         "(none yet)".to_owned()
@@ -28,14 +28,16 @@ pub fn messages(
         history.join("\n")
     };
     let actions = lines.join("\n");
-    let values = [
+    let text = prompts.text(Template::Central);
+    let seen = sight.values(text);
+    let mut values = vec![
         ("team", team.as_str()),
         ("instruction", task.meta.instruction.as_str()),
-        ("observation", observation),
         ("history", history.as_str()),
         ("actions", actions.as_str()),
     ];
-    let (system, user) = templates::split(prompts.text(Template::Central));
+    values.extend(seen.iter().map(|(k, v)| (*k, v.as_str())));
+    let (system, user) = templates::split(text);
     let mut messages = Vec::new();
     if !system.trim().is_empty() {
         messages.push(Message::system(
@@ -101,20 +103,21 @@ mod tests {
             .split_once(templates::USER_MARK)
             .expect("a user part");
         assert!(system.contains("{{team}}"));
-        for key in ["instruction", "observation", "history", "actions"] {
+        for key in ["instruction", "scene", "state", "history", "actions"] {
             assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
         }
     }
 
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
-        let task = coherent_core::load_tasks(&path)
-            .expect("the demo")
-            .remove(0);
+        let task = crate::methods::prompt::demo_task();
         let prompts = crate::methods::prompt::every_placeholder(Template::Central);
-        let messages = messages(&prompts, &task, "facts", &["a: b".into()], &[]);
+        let sight = Sight {
+            task: &task,
+            state: &task.init,
+            observations: Vec::new(),
+        };
+        let messages = messages(&prompts, &sight, &["a: b".into()], &[]);
         for m in &messages {
             assert!(!m.content.contains("{{"), "{}", m.content);
         }

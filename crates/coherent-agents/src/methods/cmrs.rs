@@ -12,7 +12,7 @@ use coherent_core::{Environment, Task};
 use crate::backends::llm::{Backend, Query, Role, Situation};
 use crate::episode::ask::{Side, ask};
 use crate::episode::cancel::Cancel;
-use crate::episode::environment::team_observation;
+use crate::episode::environment::team_sight;
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::joint::joint_actions;
 use crate::methods::templates::Prompts;
@@ -82,7 +82,7 @@ async fn round(
     let query = Query {
         role: Role::Assigner,
         robot: None,
-        messages: central::messages(prompts, task, &team_observation(env, task), &lines, history),
+        messages: central::messages(prompts, &team_sight(env, task), &lines, history),
         schema_name: "joint_action",
         schema: central::schema(&lines),
         max_tokens: MAX_TOKENS,

@@ -1,7 +1,7 @@
 //! DMRS, the paper's decentralised dialogue baselines after CoELA (docs/methods.md,
 //! `dmrs-1d` and `dmrs-2d`): each step the robots speak in a random order (seeded); each speaker sees
-//! the task, the last executed actions, its own observation, the action lists of itself
-//! and of the robots who spoke before it, and the step's dialogue so far, and proposes
+//! the task, its own observation, the action lists of itself and of the robots who spoke
+//! before it, the last executed actions and the step's dialogue so far, and proposes
 //! one `<robot>: <action>` line. The last speaker's proposal is checked and run.
 //! DMRS-1D has one dialogue round per step, DMRS-2D two (in the second every robot's
 //! list is known). One model call per robot per dialogue round.
@@ -10,7 +10,7 @@ use std::io;
 use std::sync::Arc;
 use std::time::Instant;
 
-use coherent_core::{Environment, NodeId, Task, describe};
+use coherent_core::{Environment, NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Backend, Message, Query, Role, Situation};
@@ -19,7 +19,7 @@ use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::answer::{field_text, json_object};
 use crate::methods::joint::joint_actions;
-use crate::methods::prompt::{self, robot_label};
+use crate::methods::prompt::{self, Sight, robot_label};
 use crate::methods::templates::{self, Prompts, Template};
 use crate::methods::{central, decision, feedback};
 use crate::records::transcript::Round;
@@ -169,10 +169,12 @@ fn speaker_messages(
     let kind = task
         .robot_by_id(speaker)
         .map_or(String::new(), |r| r.kind.to_string());
-    let observation = env
-        .observe(speaker)
-        .map(|o| describe::facts(task, env.state(), &[&o]))
-        .unwrap_or_default();
+    let text = prompts.text(Template::DmrsSpeaker);
+    let sight = Sight {
+        task,
+        state: env.state(),
+        observations: env.observe(speaker).into_iter().collect(),
+    };
     let or_none = |items: &[String]| {
         if items.is_empty() {
             "(none yet)".to_owned()
@@ -180,18 +182,18 @@ fn speaker_messages(
             items.join("\n")
         }
     };
-    let values = [
+    let mut values = vec![
         ("robot", robot_label(task, speaker)),
         ("kind", kind),
         ("team", prompt::team(task)),
         ("instruction", task.meta.instruction.clone()),
-        ("observation", observation),
         ("history", or_none(history)),
         ("dialogue", or_none(dialogue)),
         ("actions", or_none(lines)),
     ];
+    values.extend(sight.values(text));
     let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
-    let (system, user) = templates::split(prompts.text(Template::DmrsSpeaker));
+    let (system, user) = templates::split(text);
     vec![
         Message::system(prompt::fill(system, &values).trim().to_owned()),
         Message::user(prompt::fill(user, &values).trim().to_owned()),
@@ -226,7 +228,8 @@ mod tests {
         }
         for key in [
             "instruction",
-            "observation",
+            "scene",
+            "state",
             "history",
             "dialogue",
             "actions",

@@ -1,18 +1,88 @@
 //! Feedback: what a method's next rounds hear about a round, in words. PEFA's assigner
-//! hears the executor's self-reflection on the checked outcome ([`pefa`]) and keeps the
-//! last rounds as history lines ([`assigner_history`]); the central and dialogue
-//! baselines hear what ran ([`joint`]); MCTS records what its chosen action did
-//! ([`mcts`]). A transcript keeps each round's feedback, and a replay must give it back
-//! word for word.
+//! hears the executor's self-reflection on the checked outcome ([`pefa`]), with the
+//! engine's reasons when the executor declined or gave no usable answer
+//! ([`obstacles`]), and keeps the last rounds as history lines ([`assigner_history`]);
+//! the central and dialogue baselines hear what ran ([`joint`]); MCTS records what its
+//! chosen action did ([`mcts`]). A transcript keeps each round's feedback, and a replay
+//! must give it back word for word.
 
-use coherent_core::Task;
+use coherent_core::reach::{self, Reach};
+use coherent_core::{NodeId, State, Task};
 
 use crate::methods::prompt::robot_label;
 use crate::records::transcript::{Round, RoundOutcome};
 
+/// The most things of a subtask whose obstacles the feedback lists.
+pub const MAX_OBSTACLES: usize = 6;
+
 /// What the assigner hears about a round, PEFA's Feedback: self-reflection built from
-/// the executor's answer and the checked outcome (or why the round never got that far).
-pub fn pefa(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
+/// the executor's answer and the checked outcome (or why the round never got that far),
+/// in state `s` (where the round left the world). When the executor declined or its
+/// answer could not be used, one line more for each thing the subtask names that its
+/// robot cannot act on now ([`obstacles`]).
+pub fn pefa(task: &Task, s: &State, round: &Round, outcome: &RoundOutcome) -> String {
+    let said = reflection(task, round, outcome);
+    let explained = matches!(
+        outcome,
+        RoundOutcome::Declined | RoundOutcome::NoDecision { .. }
+    );
+    match &round.proposal {
+        Some(p) if explained => {
+            let lines = obstacles(task, s, p.robot, &p.subtask);
+            if lines.is_empty() {
+                said
+            } else {
+                format!("{said}\n{}", lines.join("\n"))
+            }
+        }
+        _ => said,
+    }
+}
+
+/// For each thing `subtask` names (as `<name>(id)`, at most [`MAX_OBSTACLES`]) that
+/// `robot` cannot act on in state `s`, one line: the engine's reason
+/// ([`reach::why_not`]) and which other robots of the team, by type, could get at it
+/// ([`reach::reach`]): now, or after moves of their own.
+pub fn obstacles(task: &Task, s: &State, robot: NodeId, subtask: &str) -> Vec<String> {
+    let Ok(me) = task.robot_by_id(robot) else {
+        return Vec::new();
+    };
+    reach::things_named(task, subtask)
+        .into_iter()
+        .filter_map(|x| {
+            let why = reach::why_not(task, s, me, x)?;
+            let others: Vec<String> = task
+                .robots
+                .iter()
+                .filter(|r| r.node != me.node)
+                .filter_map(|r| {
+                    let who = format!("{} ({})", task.node(r.node).label(), r.kind);
+                    match reach::reach(task, s, *r, x) {
+                        Reach::Now => Some(format!("{who} can get at it now")),
+                        Reach::After(1) => Some(format!("{who} could after 1 move of its own")),
+                        Reach::After(n) => Some(format!("{who} could after {n} moves of its own")),
+                        Reach::Never => None,
+                    }
+                })
+                .collect();
+            let others = if others.is_empty() {
+                "No other robot of the team could get at it.".to_owned()
+            } else {
+                format!("{}.", others.join("; "))
+            };
+            Some(format!(
+                "- {}: {} ({}). {others}",
+                task.node(x).label(),
+                why.message,
+                why.reason.name()
+            ))
+        })
+        .take(MAX_OBSTACLES)
+        .collect()
+}
+
+/// The executor's self-reflection on the round.
+fn reflection(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
     let robot = round
         .proposal
         .as_ref()
