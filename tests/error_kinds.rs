@@ -111,7 +111,7 @@ fn each_kind_of_error_exits_2_and_nothing_runs() {
                 "--out",
                 &out,
             ],
-            "is not an http(s) URL",
+            "is not a URL",
         ),
         // A physical world that cannot be built.
         (

@@ -32,7 +32,12 @@ impl Address {
         let url = reqwest::Url::parse(base.trim())
             .ok()
             .filter(|u| matches!(u.scheme(), "http" | "https") && u.has_host())
-            .ok_or_else(|| format!("base URL {:?} is not an http(s) URL", redacted(base)))?;
+            .ok_or_else(|| {
+                format!(
+                    "base URL {:?} is not a URL (http:// or https://, with a host)",
+                    redacted(base)
+                )
+            })?;
         let mut post = url.clone();
         post.set_fragment(None);
         let path = url.path().trim_end_matches('/');

@@ -227,8 +227,10 @@ fn take_lock(out: &Path) -> Result<File, Error> {
         .open(&path)
         .map_err(io)?;
     if !lock::try_exclusive(&file).map_err(io)? {
+        // A process id is a few digits: read no more than that could be, whatever the
+        // file has become (a link to a device, say).
         let mut holder = String::new();
-        let _ = file.read_to_string(&mut holder);
+        let _ = (&mut file).take(64).read_to_string(&mut holder);
         let holder = holder.trim();
         let holder = if holder.is_empty() || holder.len() > 20 {
             "another process".to_owned()
