@@ -1,246 +1,25 @@
 //! Robots over ROS 2, end to end: `coherent robots serve` and `coherent run --robots ros2`
-//! as separate processes. DDS discovery rides on multicast, which the loopback interface
-//! of a container may lack, so each test makes a network namespace of its own (`unshare
-//! --net`, loopback up with multicast and a multicast route) and starts its processes in
-//! it (`nsenter`); tests running at once never see each other. This needs root (or the
-//! capabilities to make network namespaces); without them every test fails saying so.
+//! as separate processes, in a network namespace of each test's own (`common::netns`).
 //! Hostile robots are here too: two servers for one robot, at the start or mid-episode.
 
-use std::fs::File;
-use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
-use std::process::{Child, ChildStdin, Command, Stdio};
+mod common;
+
+use std::path::Path;
+use std::process::Command;
 use std::time::{Duration, Instant};
 
+use common::netns::{LONG, Netns, actions, report, transcript};
 use serde_json::Value;
 
 const BIN: &str = env!("CARGO_BIN_EXE_coherent");
 
 fn demo() -> String {
-    format!("{}/examples/tasks/demo.json", env!("CARGO_MANIFEST_DIR"))
+    common::demo().display().to_string()
 }
 
-/// The released env0 tasks (`COHERENT_ORIGINAL_ENV`, set in `.cargo/config.toml`).
 fn env0() -> String {
-    format!("{}/env0.json", env!("COHERENT_ORIGINAL_ENV"))
+    common::env0().display().to_string()
 }
-
-/// Sets up the namespace's loopback for DDS, says so, then lives as long as its stdin.
-const SETUP: &str = "ip link set lo up && ip link set lo multicast on && \
-                     ip route add 224.0.0.0/4 dev lo && echo ready && exec cat >/dev/null";
-
-/// A network namespace of its own, held open by a process, and a scratch folder.
-struct Netns {
-    holder: Child,
-    /// Closing it ends the holder, even when the test process dies.
-    _stdin: ChildStdin,
-    dir: PathBuf,
-}
-
-impl Netns {
-    fn new(test: &str) -> Netns {
-        let dir = std::env::temp_dir().join(format!("coherent-ros-{}-{test}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(&dir).expect("a scratch folder can be made");
-        let mut holder = Command::new("unshare")
-            .args(["--net", "sh", "-c", SETUP])
-            .stdin(Stdio::piped())
-            .stdout(Stdio::piped())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap_or_else(|e| {
-                panic!("cannot run `unshare` (util-linux) for a network namespace: {e}")
-            });
-        let mut line = String::new();
-        let stdout = holder.stdout.take().expect("piped");
-        let _ = BufReader::new(stdout).read_line(&mut line);
-        if line.trim() != "ready" {
-            let _ = holder.kill();
-            let out = holder.wait_with_output().expect("unshare ends");
-            panic!(
-                "cannot make a network namespace with multicast on its loopback, which DDS \
-                 discovery needs: `unshare --net` and `ip` need root (or CAP_SYS_ADMIN and \
-                 CAP_NET_ADMIN); they said: {}",
-                String::from_utf8_lossy(&out.stderr).trim()
-            );
-        }
-        let stdin = holder.stdin.take().expect("piped");
-        Netns {
-            holder,
-            _stdin: stdin,
-            dir,
-        }
-    }
-
-    /// `coherent ARGS` inside the namespace; stdout and stderr go to files named `name`.
-    fn spawn(&self, name: &str, args: &[&str]) -> Proc {
-        let out = self.dir.join(format!("{name}.out"));
-        let err = self.dir.join(format!("{name}.err"));
-        let child = Command::new("nsenter")
-            .arg(format!("--net=/proc/{}/ns/net", self.holder.id()))
-            .arg("--")
-            .arg(BIN)
-            .args(args)
-            .stdout(File::create(&out).expect("a log file can be made"))
-            .stderr(File::create(&err).expect("a log file can be made"))
-            .spawn()
-            .unwrap_or_else(|e| panic!("cannot run `nsenter` (util-linux): {e}"));
-        Proc {
-            child,
-            name: name.to_owned(),
-            out,
-            err,
-        }
-    }
-
-    fn path(&self, name: &str) -> String {
-        self.dir.join(name).display().to_string()
-    }
-}
-
-impl Drop for Netns {
-    fn drop(&mut self) {
-        let _ = self.holder.kill();
-        let _ = self.holder.wait();
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
-
-/// A `coherent` process in a namespace; killed when dropped.
-struct Proc {
-    child: Child,
-    name: String,
-    out: PathBuf,
-    err: PathBuf,
-}
-
-impl Proc {
-    fn stdout(&self) -> String {
-        std::fs::read_to_string(&self.out).unwrap_or_default()
-    }
-
-    fn show(&self) -> String {
-        format!(
-            "--- {} stdout\n{}--- {} stderr\n{}",
-            self.name,
-            self.stdout(),
-            self.name,
-            std::fs::read_to_string(&self.err).unwrap_or_default()
-        )
-    }
-
-    /// The exit status, waiting up to `limit`; beyond it the process is killed and the
-    /// test fails.
-    fn wait(&mut self, limit: Duration) -> i32 {
-        let start = Instant::now();
-        loop {
-            if let Some(status) = self.child.try_wait().expect("the process can be waited on") {
-                return status
-                    .code()
-                    .unwrap_or_else(|| panic!("killed by a signal\n{}", self.show()));
-            }
-            if start.elapsed() > limit {
-                let _ = self.child.kill();
-                panic!(
-                    "{} did not end within {limit:?}\n{}",
-                    self.name,
-                    self.show()
-                );
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-
-    /// Waits up to `limit` for a line of stdout that contains `text`.
-    fn wait_for(&mut self, text: &str, limit: Duration) {
-        let start = Instant::now();
-        while !self.stdout().lines().any(|l| l.contains(text)) {
-            if start.elapsed() > limit {
-                panic!("no line with {text:?} within {limit:?}\n{}", self.show());
-            }
-            if let Ok(Some(status)) = self.child.try_wait() {
-                panic!(
-                    "{} ended ({status}) before {text:?}\n{}",
-                    self.name,
-                    self.show()
-                );
-            }
-            std::thread::sleep(Duration::from_millis(20));
-        }
-    }
-
-    fn signal(&self, signal: &str) {
-        let sent = Command::new("kill")
-            .args([&format!("-{signal}"), &self.child.id().to_string()])
-            .status()
-            .expect("kill runs");
-        assert!(sent.success(), "kill -{signal} {}", self.name);
-    }
-}
-
-impl Drop for Proc {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
-
-/// The header, the rounds and the summary of the one transcript in `dir`.
-struct Transcript {
-    header: Value,
-    rounds: Vec<Value>,
-    summary: Value,
-}
-
-fn transcript(dir: &str) -> Transcript {
-    let files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap_or_else(|e| panic!("{dir}: {e}"))
-        .map(|e| e.expect("a folder entry").path())
-        .collect();
-    assert_eq!(files.len(), 1, "one transcript in {dir}: {files:?}");
-    let text = std::fs::read_to_string(&files[0]).expect("the transcript is readable");
-    let lines: Vec<Value> = text
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("each line is JSON"))
-        .collect();
-    assert_eq!(lines[0]["type"], "header", "{}", files[0].display());
-    let (summary, rounds) = lines[1..].split_last().expect("a summary line");
-    assert_eq!(summary["type"], "summary", "the transcript is complete");
-    assert!(rounds.iter().all(|r| r["type"] == "round"));
-    Transcript {
-        header: lines[0].clone(),
-        rounds: rounds.to_vec(),
-        summary: summary.clone(),
-    }
-}
-
-/// Each round's robot and action.
-fn actions(t: &Transcript) -> Vec<(i64, String)> {
-    t.rounds
-        .iter()
-        .map(|r| {
-            (
-                r["proposal"]["robot"].as_i64().expect("a proposal"),
-                r["decision"]["action"]
-                    .as_str()
-                    .expect("an action")
-                    .to_owned(),
-            )
-        })
-        .collect()
-}
-
-/// The round's robot report: which robot over which action, and its message.
-fn report(round: &Value) -> (&str, &str, &str) {
-    let r = &round["robot"];
-    let text = |k: &str| {
-        r[k].as_str()
-            .unwrap_or_else(|| panic!("round {} has no robot report: {round}", round["step"]))
-    };
-    (text("robot"), text("via"), text("message"))
-}
-
-const LONG: Duration = Duration::from_secs(120);
 
 #[test]
 fn the_demo_over_ros2_takes_the_same_22_steps_as_without_it_by_the_rules_and_in_physics() {

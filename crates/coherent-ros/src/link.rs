@@ -2,10 +2,11 @@
 //! requests and replies of its goal, result and cancel services, and its feedback
 //! topic), made on the DDS participant itself rather than through an action client, so
 //! that every reply and feedback sample is seen with the participant that wrote it and
-//! each reader holds a few samples at most; and one goal's exchange (send it, follow its
-//! feedback, take its result; cancel it on Ctrl-C or when the robot falls silent) as a
-//! blocking call on the runtime the caller hands in (the session's, the one place a
-//! runtime is built), which works inside an async runtime as well as outside one.
+//! each reader holds a few samples at most; and the exchange of one step's goals, one
+//! per robot acting, all in flight at once (send each, follow its feedback, take its
+//! result; cancel it on Ctrl-C or when its robot falls silent) as a blocking call on the
+//! runtime the caller hands in (the session's, the one place a runtime is built), which
+//! works inside an async runtime as well as outside one.
 //!
 //! A robot is one server. Two servers for one robot at the start is an error that names
 //! them; during an episode, only the server that accepted a goal is heard about it (its
@@ -71,6 +72,14 @@ pub(crate) enum Exchange {
     /// DDS could not send or receive, or the robot's servers did what one server never
     /// does (two accepted the goal, a result too large to be one).
     Failed(String),
+}
+
+impl Exchange {
+    /// Whether the robot reports the action carried out (what it observes aside).
+    pub(crate) fn succeeded(&self) -> bool {
+        matches!(self, Exchange::Result { status, result }
+            if *status == GoalStatusEnum::Succeeded && result.success)
+    }
 }
 
 /// One robot's ends of its action.
@@ -347,16 +356,20 @@ impl Link {
         Ok(link)
     }
 
-    /// Sends `goal` to robot number `robot` and waits for its end: the result, a refusal,
-    /// `silence` without a word, or `cancel` raised (the goal is then cancelled).
+    /// Sends each goal to its robot (by number) at once and waits for every one's end:
+    /// its result, a refusal, `silence` without a word, or `cancel` raised (then every
+    /// goal still in flight is cancelled). One exchange per goal, in the order given; it
+    /// takes as long as the slowest robot.
     pub(crate) fn exchange(
         &self,
-        robot: usize,
-        goal: Goal,
+        goals: Vec<(usize, Goal)>,
         silence: Duration,
         cancel: Option<&AtomicBool>,
-    ) -> Exchange {
-        self.block(follow_goal(&self.robots[robot], goal, silence, cancel))
+    ) -> Vec<Exchange> {
+        let each = goals
+            .into_iter()
+            .map(|(robot, goal)| follow_goal(&self.robots[robot], goal, silence, cancel));
+        self.block(futures::future::join_all(each))
     }
 
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that
