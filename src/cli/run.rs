@@ -2,9 +2,11 @@
 //! summary, and a transcript. The episode itself is the session layer's
 //! ([`crate::session::episode`]); this file has the flags and the printing.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use clap::Args;
 use serde_json::json;
@@ -18,10 +20,11 @@ use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
     Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, HISTORY_WINDOW, Limits, MIB, MethodSpec, Round,
-    Status, Summary, shown,
+    Status, Summary, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
+use crate::session::waiting::{SLOW, Waiting, waiting_text};
 use crate::session::{self, Error, prompts};
 
 #[derive(Args)]
@@ -151,7 +154,10 @@ fn prepare(
         seed: args.llm.seed,
         max_states: args.max_states,
         out: args.out.clone(),
-        ..RunRequest::new(task, method_spec(&args.method, load, args.step_timeout)?)
+        ..RunRequest::new(
+            task,
+            method_spec(&args.method, load, args.step_timeout, None)?,
+        )
     };
     request.prepare(cancel)
 }
@@ -180,8 +186,21 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     let stop = Stop::watch(&cancel);
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
-    let mut progress = |r: &Round| lines.say(&session::lines::step(&task, r, max));
+    let mut prepared = prepared;
+    let drawn = Arc::new(AtomicBool::new(false));
+    let ticker = tokio::spawn(tell_waiting(prepared.watch(), Arc::clone(&drawn)));
+    let mut progress = |r: &Round| {
+        // A step ends the wait: its line, if drawn in place, goes first.
+        if drawn.swap(false, Ordering::Relaxed) {
+            eprint!("\r\x1b[2K");
+        }
+        lines.say(&session::lines::step(&task, r, max));
+    };
     let result = prepared.run(&cancel, &mut progress).await;
+    ticker.abort();
+    if drawn.swap(false, Ordering::Relaxed) {
+        eprint!("\r\x1b[2K");
+    }
     let ran = result?;
     let s = ran.summary();
     lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
@@ -224,6 +243,31 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         Ending::Interrupted => stop.status(),
         other => status::of_ending(&other),
     })
+}
+
+/// Says on stderr, once a second, which model call the episode waits for once it has
+/// run for [`SLOW`]: on a terminal one line redrawn in place (`drawn` says it is there),
+/// in a log a line after 5, 15 and 30 s, then every minute.
+async fn tell_waiting(waiting: Arc<Waiting>, drawn: Arc<AtomicBool>) {
+    let terminal = std::io::stderr().is_terminal();
+    let mut tick = tokio::time::interval(Duration::from_secs(1));
+    let mut told = 0;
+    loop {
+        tick.tick().await;
+        let Some(longest) = waiting.longest().filter(|l| l.waited >= SLOW) else {
+            told = 0;
+            continue;
+        };
+        let text = waiting_text(&longest);
+        let secs = longest.waited.as_secs();
+        if terminal {
+            eprint!("\r\x1b[2K{text}...");
+            drawn.store(true, Ordering::Relaxed);
+        } else if worth_a_line(secs, told) {
+            eprintln!("{text}...");
+            told = secs;
+        }
+    }
 }
 
 fn task_line(p: &Prepared) -> String {
@@ -295,8 +339,14 @@ fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> Str
     let cost = cost_usd
         .filter(|_| s.llm_calls > 0)
         .map_or(String::new(), |c| format!(" | cost ${c:.6}"));
+    // The cached part, which the cost prices apart, so that it can be checked by hand.
+    let cached = if s.cached_tokens > 0 {
+        format!(" ({} cached)", s.cached_tokens)
+    } else {
+        String::new()
+    };
     format!(
-        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion{cost} | wall {:.2} s",
+        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt{cached} + {} completion{cost} | wall {:.2} s",
         s.steps,
         s.max_steps,
         s.llm_calls,

@@ -86,6 +86,14 @@ pub struct RecordedRun {
 }
 
 impl RecordedRun {
+    /// The names of the methods it recorded, sorted.
+    pub fn methods(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = self.transcripts.keys().map(|k| k.method.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        names
+    }
+
     /// The final episodes of the results file `results`, read within `limits`; every
     /// transcript they name is checked before any episode starts: a transcript that is
     /// gone, no regular file (a device that never ends) or too large would stop the run

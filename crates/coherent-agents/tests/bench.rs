@@ -2,6 +2,7 @@
 //! results file read back, and report numbers worked out by hand. (Runs, resumed and
 //! cancelled: the root package's `tests/bench_runs.rs`.)
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use coherent_agents::PriceTable;
@@ -122,6 +123,7 @@ impl Hand {
             uses_model: self.method != "mcts",
             error: None,
             transcript: "t.jsonl".into(),
+            settings: None,
         }
     }
 
@@ -206,7 +208,7 @@ fn report_numbers_match_a_hand_computation() {
     .concat();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
 
     assert_eq!(r.seeds, [0, 1]);
@@ -336,9 +338,10 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
     assert_eq!(marked, [left.with_extension("jsonl.unfinished")]);
     assert!(live.exists(), "the live transcript keeps its name");
     drop(writer);
-    let ledger = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES).expect("the first");
+    let ledger = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("the first");
     for other in [out.clone(), dir.join("results.json")] {
-        let e = bench::Ledger::open(&other, bench::DEFAULT_MAX_RESULTS_BYTES)
+        let e = bench::Ledger::open(&other, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
             .expect_err("a second run")
             .to_string();
         let pid = std::process::id();
@@ -349,7 +352,8 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
         );
     }
     drop(ledger);
-    bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES).expect("free again");
+    bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("free again");
 }
 
 /// A results line with a key twice is refused, naming the line and the key (serde_json
@@ -455,7 +459,7 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
     std::fs::write(&path, text).expect("write");
     let back = bench::read_results(&path).expect("reads").lines;
     assert_eq!(back, priced, "cost_usd round-trips through the file");
-    let r = report::build(&back);
+    let r = report::build(&back).expect("one run's lines");
     let row = |m: &str| r.costs.iter().find(|c| c.method == m).expect("a row");
     // pefa: 40 calls x 200 tokens-worth = 0.008 USD over 2 tasks, 1 success.
     let pefa = row("pefa");
@@ -504,7 +508,7 @@ fn the_cached_share_and_the_cost_of_cached_tokens_come_from_the_lines() {
         (cost - (400.0 + 150.0 + 1000.0) / 1e6).abs() < 1e-15,
         "{cost}"
     );
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let pefa = r.costs.iter().find(|c| c.method == "pefa").expect("a row");
     assert_eq!((pefa.prompt_tokens, pefa.cached_tokens), (4000, 3300));
     assert_eq!(pefa.cached_share, Some(0.825));

@@ -1,6 +1,7 @@
 //! How an episode is run: the method (built in, or written outside the crate) and its
 //! settings as a transcript records them. The step budget is apart ([`crate::episode::budget`]).
 
+use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
@@ -78,6 +79,8 @@ pub struct External {
     /// The longest one step may take (the policy's `act`, and its making at the first
     /// step); `None` for no limit.
     step_timeout: Option<Duration>,
+    /// What the method declares of its own settings, recorded in each results line.
+    settings: BTreeMap<String, serde_json::Value>,
 }
 
 impl External {
@@ -100,6 +103,7 @@ impl External {
             name: name.to_owned(),
             make,
             step_timeout: None,
+            settings: BTreeMap::new(),
         })
     }
 
@@ -110,6 +114,13 @@ impl External {
         self
     }
 
+    /// The method with its own settings declared (recorded in every results line, so
+    /// that results of other settings are not taken for its own).
+    pub fn with_settings(mut self, settings: BTreeMap<String, serde_json::Value>) -> External {
+        self.settings = settings;
+        self
+    }
+
     pub fn name(&self) -> &str {
         &self.name
     }
@@ -117,6 +128,11 @@ impl External {
     /// The longest one step may take.
     pub fn step_timeout(&self) -> Option<Duration> {
         self.step_timeout
+    }
+
+    /// Its own settings, as declared.
+    pub fn settings(&self) -> &BTreeMap<String, serde_json::Value> {
+        &self.settings
     }
 
     /// The policy of one episode of `task`, or why there is none.
@@ -130,17 +146,19 @@ impl fmt::Debug for External {
         f.debug_struct("External")
             .field("name", &self.name)
             .field("step_timeout", &self.step_timeout)
+            .field("settings", &self.settings)
             .finish_non_exhaustive()
     }
 }
 
 /// Two are the same method when they have the same name, the same maker and the same
-/// step limit.
+/// step limit and settings.
 impl PartialEq for External {
     fn eq(&self, other: &External) -> bool {
         self.name == other.name
             && Arc::ptr_eq(&self.make, &other.make)
             && self.step_timeout == other.step_timeout
+            && self.settings == other.settings
     }
 }
 
@@ -167,6 +185,15 @@ impl MethodSpec {
         match self {
             MethodSpec::Builtin(m) => m.asks_backend(),
             MethodSpec::External(_) => false,
+        }
+    }
+
+    /// The method's own settings: what a method written outside the crate declares;
+    /// none for a built-in one (its settings are the run's).
+    pub fn own_settings(&self) -> BTreeMap<String, serde_json::Value> {
+        match self {
+            MethodSpec::Builtin(_) => BTreeMap::new(),
+            MethodSpec::External(e) => e.settings.clone(),
         }
     }
 

@@ -24,6 +24,8 @@ use std::sync::Arc;
 use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
+use crate::digest;
+
 /// The most a template may hold: the built-in ones are a few KiB, and a prompt of a MiB
 /// is already past any model's context.
 pub const TEMPLATE_LIMIT: Limit = Limit {
@@ -323,7 +325,7 @@ impl Prompts {
     }
 
     fn with(replaced: BTreeMap<Template, String>) -> Prompts {
-        let hash = hash(Template::ALL.map(|t| {
+        let hash = digest::fnv128(Template::ALL.map(|t| {
             let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
             (t.file_name(), text)
         }));
@@ -489,21 +491,6 @@ pub struct PromptRecord {
     pub hash: String,
     /// The files that replaced built-in templates, by name, with their text.
     pub replaced: BTreeMap<String, String>,
-}
-
-/// FNV-1a, 128 bits, of each `(name, text)` with a 0 byte after each part.
-fn hash<'a>(parts: impl IntoIterator<Item = (&'a str, &'a str)>) -> String {
-    const PRIME: u128 = 0x0000_0000_0100_0000_0000_0000_0000_013b;
-    let mut h: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
-    for (name, text) in parts {
-        for bytes in [name.as_bytes(), text.as_bytes()] {
-            for &b in bytes.iter().chain(&[0]) {
-                h ^= u128::from(b);
-                h = h.wrapping_mul(PRIME);
-            }
-        }
-    }
-    format!("{h:032x}")
 }
 
 /// Writes every template of `set` into `dir` (made when missing), one file each; an
