@@ -356,6 +356,57 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
         .expect("free again");
 }
 
+/// A run's one read of an existing results file does both checks, in this order: its
+/// size within the limit first (a file too large is refused for that, whatever its
+/// settings), then its settings, and both only under the lock (a file held by another run
+/// is refused for that); a refused file is left as it was.
+#[test]
+fn resuming_reads_the_file_once_under_the_lock_size_first_then_settings() {
+    let dir = scratch("limits-then-settings");
+    let out = dir.join("results.jsonl");
+    // Written before lines had settings: other settings than any run's now.
+    let text = Hand::default().jsonl();
+    std::fs::write(&out, &text).expect("write");
+    let settings = bench::RunSettings {
+        backend: BackendKind::Builtin,
+        model: None,
+        sim_errors: None,
+        temperature: None,
+        model_seed: None,
+        seeds: 1,
+        prompts: "built-in".into(),
+        history: 5,
+        max_steps: None,
+        max_states: 100_000,
+        physics: false,
+        robots: "local".into(),
+        coherent: "test".into(),
+        method: BTreeMap::new(),
+    };
+    let now = BTreeMap::from([("pefa".to_owned(), settings)]);
+    let small = (text.len() - 1) as u64;
+    let e = bench::Ledger::open(&out, small, &now)
+        .expect_err("too large")
+        .to_string();
+    assert!(
+        e.contains("--max-results-mib") && !e.contains("other settings"),
+        "{e}"
+    );
+    // Another run (of no settings to compare) holds the file: the lock is asked first.
+    let holder = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("the holder");
+    let e = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &now)
+        .expect_err("held")
+        .to_string();
+    assert!(e.contains("another benchmark run is using it"), "{e}");
+    drop(holder);
+    let e = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &now)
+        .expect_err("other settings")
+        .to_string();
+    assert!(e.contains("holds episodes run with other settings"), "{e}");
+    assert_eq!(std::fs::read_to_string(&out).expect("read"), text);
+}
+
 /// A results line with a key twice is refused, naming the line and the key (serde_json
 /// alone keeps the last one, so `"success": true, "success": false` would count as a
 /// failure unseen).
