@@ -578,6 +578,7 @@ def run(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
     ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
@@ -590,8 +591,10 @@ def run(
     :func:`load_episode` gives for the transcript at the same prices). With
     ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
     actions out, as for :class:`Env`. Raises :class:`BackendError` when the server fails
-    for good, :class:`MethodError` when the method raises, :class:`RobotError` when a
-    robot stops answering; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
+    for good, :class:`MethodError` when the method raises or one of its steps (``M(task)``
+    and ``act``) takes longer than ``step_timeout`` seconds, :class:`RobotError` when a
+    robot stops answering; Ctrl-C stops the episode, whatever ``act`` is doing, and raises
+    ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -627,6 +630,7 @@ def run_bench(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""
@@ -685,6 +689,7 @@ class _BenchWorker:
         out: _PathLike,
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],
+        step_timeout: float | None = None,
     ) -> None: ...
     def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
