@@ -101,7 +101,9 @@ class _ParsedAction(TypedDict):
     target: _Mention | None
 
 class CoherentError(Exception):
-    """Base class of every error raised by coherent."""
+    """Base class of every error raised by coherent; raised itself when coherent
+    fails whatever the input (its async runtime cannot start: the process may
+    open no more files or start no more threads; an episode's thread panicked)."""
 
 class ArgumentError(CoherentError, ValueError):
     """An argument of the right type whose value cannot be used: an int out of range, a

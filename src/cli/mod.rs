@@ -45,8 +45,8 @@ enum Command {
     /// Run a planning method on one task: one line per step, a summary, a transcript.
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
     /// 3 when the model's server fails for good or a replay diverges, 4 when a method
-    /// written in Python raised, 5 when a robot over ROS 2 stops answering, 130 on
-    /// Ctrl-C.
+    /// written in Python raised, 5 when a robot over ROS 2 stops answering, 70 when
+    /// coherent itself fails (its async runtime cannot start), 130 on Ctrl-C.
     Run(Box<run::RunArgs>),
     /// Show an episode (its transcript), two side by side, or a benchmark's results as
     /// pages in the browser; `--serve` follows a results file as it grows. Exit 2 on an
@@ -56,7 +56,8 @@ enum Command {
     Robots(robots::RobotsArgs),
     /// Run methods x tasks x seeds concurrently into a resumable results file, then print
     /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
-    /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
+    /// finished (whatever the success rate), 2 on bad input, 70 when coherent itself
+    /// fails, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
     /// no tasks, 0 when clean.
