@@ -105,7 +105,9 @@ enum Command {
         #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
         max_memory: usize,
         /// Also execute each plan in Rapier and check it against the rules after every
-        /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
+        /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms); with
+        /// --parallel, the makespan plan too, after every joint step (adds the same keys
+        /// with makespan_ before them).
         #[arg(long)]
         physics: bool,
         /// Also find the fewest joint steps, robots acting at once (adds makespan,
@@ -285,7 +287,7 @@ fn plan(
             .makespan
             .as_ref()
             .map_or(0.0, |m| m.elapsed.as_secs_f64() * 1e3);
-        physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
+        physics_failed |= planned.physics_failed();
         let line = if as_json {
             planned.to_json(t).to_string()
         } else {
@@ -293,15 +295,7 @@ fn plan(
             if let Some(m) = &planned.makespan {
                 text.push_str(&parallel_text(t, m, limits));
             }
-            if let Some(r) = &planned.physics {
-                text.push_str(&match &r.physics_error {
-                    None => format!(
-                        "\n  physics: ok, {:.1} s simulated in {:.0} ms",
-                        r.sim_seconds, r.wall_ms
-                    ),
-                    Some(e) => format!("\n  physics: failed: {}", shown(e)),
-                });
-            }
+            text.push_str(&planned.physics_text());
             text
         };
         // A closed pipe (e.g. `| head`) ends the listing quietly.
