@@ -9,12 +9,13 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
-use hashbrown::HashTable;
 use rustc_hash::FxBuildHasher;
+use smallvec::SmallVec;
 
 use crate::action::{Action, Verb};
 use crate::graph::{Idx, NodeKind, RobotKind, State};
 use crate::rules;
+use crate::tables::{Info, Tables};
 use crate::task::{GoalPredicate, Robot, Task, predicate_holds};
 use crate::vocab::{PropSet, Relation};
 
@@ -107,111 +108,10 @@ pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Li
     search_from(task, &task.init, robots, goal, limits)
 }
 
-/// What the search knows of one state besides the state itself.
-#[derive(Clone, Copy)]
-struct Info {
-    hash: u64,
-    /// The state it was best reached from, and how.
-    parent: u32,
-    step: Option<Step>,
-    /// Best known cost, and the heuristic.
-    g: u16,
-    h: u16,
-    closed: bool,
-}
-
-/// Every state met, by index (a hash table of indices finds duplicates), and the open
-/// list, a bucket queue on `f`; with the bytes they take.
-struct Tables {
-    states: Vec<State>,
-    info: Vec<Info>,
-    table: HashTable<u32>,
-    buckets: Vec<Vec<u32>>,
-    /// Bytes of the states' own blocks and of the buckets' blocks.
-    state_bytes: usize,
-    bucket_bytes: usize,
-}
-
-/// What the allocator adds to each block, roughly.
-const BLOCK_OVERHEAD: usize = 16;
-
-impl Tables {
-    fn new(start: &State, h: u16) -> Tables {
-        let mut t = Tables {
-            states: Vec::new(),
-            info: Vec::new(),
-            table: HashTable::new(),
-            buckets: Vec::new(),
-            state_bytes: 0,
-            bucket_bytes: 0,
-        };
-        t.insert(start.clone(), FxBuildHasher.hash_one(start), 0, None, 0, h);
-        t
-    }
-
-    fn find(&self, hash: u64, s: &State) -> Option<usize> {
-        self.table
-            .find(hash, |&j| self.states[j as usize] == *s)
-            .map(|&j| j as usize)
-    }
-
-    fn insert(&mut self, s: State, hash: u64, parent: u32, step: Option<Step>, g: u16, h: u16) {
-        let j = self.states.len() as u32;
-        let info = &self.info;
-        self.table
-            .insert_unique(hash, j, |&k| info[k as usize].hash);
-        self.state_bytes += s.heap_bytes() + BLOCK_OVERHEAD;
-        self.states.push(s);
-        self.info.push(Info {
-            hash,
-            parent,
-            step,
-            g,
-            h,
-            closed: false,
-        });
-        self.queue(j);
-    }
-
-    /// Puts state `i` in the bucket of its `f`.
-    fn queue(&mut self, i: u32) {
-        let info = self.info[i as usize];
-        let f = usize::from(info.g) + usize::from(info.h);
-        if self.buckets.len() <= f {
-            self.buckets.resize_with(f + 1, Vec::new);
-        }
-        let bucket = &mut self.buckets[f];
-        let before = bucket.capacity();
-        bucket.push(i);
-        self.bucket_bytes += (bucket.capacity() - before) * size_of::<u32>();
-    }
-
-    /// The estimated bytes of the tables; with `more`, after adding a state whose own
-    /// block takes `more` bytes, counting the doubling of a full vector or table that
-    /// the addition would cause.
-    fn bytes(&self, more: Option<usize>) -> usize {
-        let grown = |len: usize, cap: usize| match more {
-            Some(_) if len == cap => cap.max(4) * 2,
-            _ => cap,
-        };
-        let table = grown(self.table.len(), self.table.capacity()) * (size_of::<u32>() + 1) * 8 / 7;
-        self.state_bytes
-            + more.map_or(0, |b| b + BLOCK_OVERHEAD)
-            + grown(self.states.len(), self.states.capacity()) * size_of::<State>()
-            + grown(self.info.len(), self.info.capacity()) * size_of::<Info>()
-            + table
-            + self.buckets.capacity() * size_of::<Vec<u32>>()
-            + self.bucket_bytes
-    }
-
-    fn unwind(&self, mut at: usize) -> Vec<Step> {
-        let mut plan = Vec::new();
-        while let Some(step) = self.info[at].step {
-            plan.push(step);
-            at = self.info[at].parent as usize;
-        }
-        plan.reverse();
-        plan
+impl Tables<Option<Step>> {
+    /// The steps from the start to state `at`.
+    fn plan_to(&self, at: usize) -> Vec<Step> {
+        self.unwind(at).into_iter().flatten().collect()
     }
 
     fn result(&self, plan: Option<Vec<Step>>, expanded: usize, stop: Option<Stop>) -> Search {
@@ -241,7 +141,7 @@ pub fn search_from(
     limits: &Limits,
 ) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
-    let mut t = Tables::new(start, lower_bound(task, start, goal));
+    let mut t = Tables::new(start, lower_bound(task, start, goal), None);
     if holds(start) {
         return t.result(Some(Vec::new()), 0, None);
     }
@@ -266,7 +166,7 @@ pub fn search_from(
             return t.result(None, expanded, Some(Stop::Cancelled));
         }
         if holds(&t.states[i]) {
-            return t.result(Some(t.unwind(i)), expanded, None);
+            return t.result(Some(t.plan_to(i)), expanded, None);
         }
         let Some(gc) = g.checked_add(1) else {
             too_deep = true;
@@ -306,7 +206,7 @@ pub fn search_from(
                 };
                 // A goal at cost f cannot be beaten: every open state has f' >= f.
                 if usize::from(gc) <= f && t.info[c].h == 0 && holds(&t.states[c]) {
-                    return t.result(Some(t.unwind(c)), expanded, None);
+                    return t.result(Some(t.plan_to(c)), expanded, None);
                 }
                 if t.states.len() >= limits.max_states {
                     return t.result(None, expanded, Some(Stop::States));
@@ -321,13 +221,13 @@ pub fn search_from(
 /// shortest plan never closes anything, grabs only goal subjects and targets and what
 /// holds them, and opens only doors and containers among those (`docs/planner.md`,
 /// "Pruning").
-struct Useful {
+pub(crate) struct Useful {
     /// Goal subjects and targets, and what holds them at the start, transitively.
     things: Vec<bool>,
 }
 
 impl Useful {
-    fn new(task: &Task, start: &State, goal: &[GoalPredicate]) -> Useful {
+    pub fn new(task: &Task, start: &State, goal: &[GoalPredicate]) -> Useful {
         let mut things = vec![false; task.nodes.len()];
         let mut todo: Vec<Idx> = goal.iter().flat_map(|p| [p.subject, p.target]).collect();
         while let Some(n) = todo.pop() {
@@ -339,7 +239,7 @@ impl Useful {
         Useful { things }
     }
 
-    fn allows(&self, task: &Task, a: &Action) -> bool {
+    pub fn allows(&self, task: &Task, a: &Action) -> bool {
         match a.verb {
             Verb::Close => false,
             Verb::Open => task.node(a.object).kind == NodeKind::Door || self.things[a.object.get()],
@@ -356,8 +256,14 @@ impl Useful {
 /// (unless above the target) and a landing; the robot dog a move. Per subject the
 /// largest need counts, and the needs of different subjects add up.
 pub fn lower_bound(task: &Task, s: &State, goal: &[GoalPredicate]) -> u16 {
+    needs(task, s, goal).0
+}
+
+/// The needs of [`lower_bound`]: their sum, and the largest need of one subject (its
+/// actions follow one another, whoever does them).
+pub(crate) fn needs(task: &Task, s: &State, goal: &[GoalPredicate]) -> (u16, u16) {
     // (subject whose actions are counted, need); a basket counts as its quadrotor.
-    let mut needs: Vec<(Idx, u16)> = Vec::new();
+    let mut needs: SmallVec<[(Idx, u16); 8]> = SmallVec::new();
     for p in goal
         .iter()
         .filter(|p| p.count == 1 && !predicate_holds(s, p))
@@ -389,7 +295,9 @@ pub fn lower_bound(task: &Task, s: &State, goal: &[GoalPredicate]) -> u16 {
             None => needs.push((who, need)),
         }
     }
-    needs.iter().map(|(_, n)| n).sum()
+    let sum = needs.iter().map(|(_, n)| n).sum();
+    let most = needs.iter().map(|(_, n)| *n).max().unwrap_or(0);
+    (sum, most)
 }
 
 /// Actions quadrotor `q` needs before predicate `p` (about it or its basket) holds.

@@ -1,0 +1,495 @@
+//! Makespan-optimal plans: the fewest joint steps (docs/planner.md, "Parallel plans").
+//!
+//! A joint step lets every robot act at once, each at most once, when no two of the
+//! actions interfere ([`crate::joint`]). The search is A* over the same states as the
+//! sequential planner, one joint step per edge; a state's successors are enumerated
+//! robot by robot (operator decomposition, Standley 2010): the first robot's choices
+//! (an action, or none), then the second's among the actions that do not interfere with
+//! the first's, and so on, with the state after the actions chosen so far at each level.
+//! A partial step is dropped as soon as no completion of it can beat the best plan
+//! known. The heuristic is admissible and consistent: one joint step of `n` robots does
+//! at most `n` of the actions [`crate::planner::lower_bound`] counts, and at most one of
+//! the actions one goal subject still needs (they follow one another).
+//!
+//! The search starts from an upper bound, the sequential optimum scheduled as soon as
+//! possible ([`schedule`]), and looks only for shorter plans; when it stops at a limit
+//! it still has that plan, and the frontier's `f` is a lower bound.
+
+use std::borrow::Cow;
+use std::ops::ControlFlow;
+use std::time::{Duration, Instant};
+
+use smallvec::SmallVec;
+
+use crate::action::Action;
+use crate::footprint::{self, Footprint};
+use crate::graph::State;
+use crate::planner::{self, Limits, Step, Stop, Useful};
+use crate::rules::{self, Contents, View};
+use crate::tables::Tables;
+use crate::task::{GoalPredicate, Robot, Task, predicate_holds};
+
+/// One joint step: the actions of the robots that act, in team order.
+pub type JointStep = Vec<Step>;
+
+/// The result of a makespan search.
+#[derive(Clone, Debug)]
+pub struct Makespan {
+    /// The best plan known, one joint step at a time; `None` when the goal is out of
+    /// reach, or no plan was found before a limit.
+    pub plan: Option<Vec<JointStep>>,
+    /// Whether no plan has fewer joint steps (or, without a plan, none exists).
+    pub proven: bool,
+    /// No plan has fewer joint steps than this: the plan's length when proven.
+    pub lower: usize,
+    /// The limit that stopped the search, if one did.
+    pub stop: Option<Stop>,
+    pub states_expanded: usize,
+    /// Distinct states met (expanded or queued).
+    pub states_seen: usize,
+    /// The search's tables at the end, in bytes, as for the sequential search.
+    pub memory: usize,
+    pub elapsed: Duration,
+}
+
+impl Makespan {
+    /// The number of joint steps of the plan found.
+    pub fn makespan(&self) -> Option<usize> {
+        self.plan.as_ref().map(Vec::len)
+    }
+}
+
+/// The fewest joint steps reaching `goal` from the task's initial state with `robots`;
+/// see [`search_with`].
+pub fn search(task: &Task, robots: &[Robot], goal: &[GoalPredicate], limits: &Limits) -> Makespan {
+    let sequential = planner::search(task, robots, goal, limits);
+    search_with(
+        task,
+        &task.init,
+        robots,
+        goal,
+        sequential.plan.as_deref(),
+        limits,
+    )
+}
+
+/// The fewest joint steps reaching `goal` from `start` with `robots` acting, A* from
+/// the upper bound that `sequential` (a plan from `start`, the shortest one for the
+/// best bound) gives when scheduled. Stops, with the best plan known and a lower
+/// bound, at the limits of [`Limits`].
+pub fn search_with(
+    task: &Task,
+    start: &State,
+    robots: &[Robot],
+    goal: &[GoalPredicate],
+    sequential: Option<&[Step]>,
+    limits: &Limits,
+) -> Makespan {
+    let clock = Instant::now();
+    let mut search = Search::new(task, start, robots, goal, sequential, limits);
+    let stop = search.run();
+    search.finish(stop, clock.elapsed())
+}
+
+/// `sequential`, a plan from `start`, as joint steps: each action joins the earliest
+/// step at which it is offered, interferes with no other action of that step, and the
+/// rest of the plan still plays after it and reaches `goal`. Never longer than the plan.
+pub fn schedule(
+    task: &Task,
+    start: &State,
+    sequential: &[Step],
+    goal: &[GoalPredicate],
+) -> Vec<JointStep> {
+    let mut s = start.clone();
+    let mut rest: Vec<Step> = sequential.to_vec();
+    let mut steps = Vec::new();
+    while !rest.is_empty() {
+        let mut chosen: Vec<usize> = Vec::new();
+        let mut prints: Vec<Footprint> = Vec::new();
+        for j in 0..rest.len() {
+            let Some(&robot) = task.robot(rest[j].robot) else {
+                continue;
+            };
+            let a = rest[j].action;
+            if chosen.iter().any(|&c| rest[c].robot == robot.node)
+                || !rules::actions(task, &s, robot).contains(&a)
+            {
+                continue;
+            }
+            let print = Footprint::of(task, &s, robot, a);
+            if prints.iter().any(|p| p.conflict(&print).is_some()) {
+                continue;
+            }
+            chosen.push(j);
+            if plays(task, &s, &rest, &chosen, goal) {
+                prints.push(print);
+            } else {
+                chosen.pop();
+            }
+        }
+        if chosen.is_empty() {
+            // The plan does not play from `s`: keep its order, one action a step.
+            steps.extend(rest.drain(..).map(|st| vec![st]));
+            break;
+        }
+        let step: JointStep = chosen.iter().map(|&j| rest[j]).collect();
+        for st in &step {
+            if let Some(&robot) = task.robot(st.robot) {
+                rules::apply(task, &mut s, robot, st.action);
+            }
+        }
+        let mut k = 0;
+        rest.retain(|_| {
+            k += 1;
+            !chosen.contains(&(k - 1))
+        });
+        steps.push(step);
+    }
+    steps
+}
+
+/// Whether, from `s`, the joint step `rest[chosen]` and then the rest of `rest` in its
+/// order are each offered at their turn and end with `goal` holding.
+fn plays(task: &Task, s: &State, rest: &[Step], chosen: &[usize], goal: &[GoalPredicate]) -> bool {
+    let mut t = s.clone();
+    let order = chosen
+        .iter()
+        .copied()
+        .chain((0..rest.len()).filter(|j| !chosen.contains(j)));
+    for j in order {
+        let Some(&robot) = task.robot(rest[j].robot) else {
+            return false;
+        };
+        if !rules::actions(task, &t, robot).contains(&rest[j].action) {
+            return false;
+        }
+        rules::apply(task, &mut t, robot, rest[j].action);
+    }
+    goal.iter().all(|p| predicate_holds(&t, p))
+}
+
+/// A lower bound on the joint steps from `s` to `goal` with a team of `robots`,
+/// admissible and consistent (one joint step lowers it by at most one).
+pub fn lower_bound(task: &Task, s: &State, goal: &[GoalPredicate], robots: usize) -> u16 {
+    bound(planner::needs(task, s, goal), robots as u16, 0)
+}
+
+/// A lower bound on the joint steps from a state with [`planner::needs`] `needs`, with
+/// `robots` robots, when `left` of them may still act in the current step: the actions of
+/// [`planner::lower_bound`] less the `left` these robots can do, `robots` a step; and the
+/// longest chain of actions one subject needs, less one when someone may still act.
+fn bound(needs: (u16, u16), robots: u16, left: u16) -> u16 {
+    let (sum, most) = needs;
+    let chain = if left > 0 {
+        most.saturating_sub(1)
+    } else {
+        most
+    };
+    sum.saturating_sub(left).div_ceil(robots.max(1)).max(chain)
+}
+
+/// Why an expansion ends early: a limit, or the best plan is proven optimal.
+enum Halt {
+    Limit(Stop),
+    Proven,
+}
+
+/// Where one joint step of a stored plan lies in [`Search::arena`].
+#[derive(Clone, Copy)]
+struct Span {
+    at: u32,
+    len: u32,
+}
+
+/// One search: its tables, the best plan known, its counters.
+struct Search<'a> {
+    task: &'a Task,
+    robots: &'a [Robot],
+    goal: &'a [GoalPredicate],
+    limits: &'a Limits,
+    useful: Useful,
+    t: Tables<Span>,
+    /// The actions of every joint step stored, one after the other.
+    arena: Vec<Step>,
+    /// The best plan known, and its length (`usize::MAX` while there is none).
+    best: Option<Vec<JointStep>>,
+    best_len: usize,
+    expanded: usize,
+    /// The lowest `f` still open when the search stopped.
+    frontier: usize,
+}
+
+impl<'a> Search<'a> {
+    fn new(
+        task: &'a Task,
+        start: &State,
+        robots: &'a [Robot],
+        goal: &'a [GoalPredicate],
+        sequential: Option<&[Step]>,
+        limits: &'a Limits,
+    ) -> Search<'a> {
+        let best = sequential.map(|plan| schedule(task, start, plan, goal));
+        let best_len = best.as_ref().map_or(usize::MAX, Vec::len);
+        let n = robots.len() as u16;
+        let h = bound(planner::needs(task, start, goal), n, 0);
+        Search {
+            task,
+            robots,
+            goal,
+            limits,
+            useful: Useful::new(task, start, goal),
+            t: Tables::new(start, h, Span { at: 0, len: 0 }),
+            arena: Vec::new(),
+            best,
+            best_len,
+            expanded: 0,
+            frontier: usize::from(h),
+        }
+    }
+
+    fn holds(&self, s: &State) -> bool {
+        self.goal.iter().all(|p| predicate_holds(s, p))
+    }
+
+    /// The plan to stored state `at`.
+    fn plan_to(&self, at: usize) -> Vec<JointStep> {
+        self.t
+            .unwind(at)
+            .into_iter()
+            .map(|span| self.arena[span.at as usize..(span.at + span.len) as usize].to_vec())
+            .collect()
+    }
+
+    /// A* in order of `f`, below the best plan's length; `Break` with the limit that
+    /// stopped it, or `Continue` when it decided.
+    fn run(&mut self) -> ControlFlow<Stop> {
+        if self.holds(&self.t.states[0]) {
+            self.best = Some(Vec::new());
+            self.best_len = 0;
+            return ControlFlow::Continue(());
+        }
+        let mut f = 0;
+        while f < self.t.buckets.len() && f < self.best_len {
+            self.frontier = f;
+            let Some(i) = self.t.buckets[f].pop() else {
+                f += 1;
+                continue;
+            };
+            let i = i as usize;
+            let info = self.t.info[i];
+            if info.closed || usize::from(info.g) + usize::from(info.h) != f {
+                continue;
+            }
+            self.t.info[i].closed = true;
+            self.expanded += 1;
+            if self.expanded.is_multiple_of(256) && self.limits.cancelled() {
+                return ControlFlow::Break(Stop::Cancelled);
+            }
+            if self.holds(&self.t.states[i]) {
+                self.best = Some(self.plan_to(i));
+                self.best_len = usize::from(info.g);
+                return ControlFlow::Continue(());
+            }
+            let Some(gc) = info.g.checked_add(1) else {
+                return ControlFlow::Break(Stop::Depth);
+            };
+            match self.expand(i, gc, f) {
+                ControlFlow::Break(Halt::Limit(stop)) => return ControlFlow::Break(stop),
+                ControlFlow::Break(Halt::Proven) => return ControlFlow::Continue(()),
+                ControlFlow::Continue(_) => {}
+            }
+        }
+        self.frontier = self.frontier.max(f);
+        ControlFlow::Continue(())
+    }
+
+    /// Every joint step from state `i` whose result may still beat the best plan.
+    fn expand(&mut self, i: usize, gc: u16, f: usize) -> ControlFlow<Halt, usize> {
+        let s = self.t.states[i].clone();
+        let contents = Contents::new(self.task, &s);
+        let lists: Vec<Vec<(Action, Footprint)>> = self
+            .robots
+            .iter()
+            .map(|&robot| {
+                let view = View::with(self.task, &s, robot, Cow::Borrowed(&contents));
+                view.actions()
+                    .into_iter()
+                    .filter(|a| self.useful.allows(self.task, a))
+                    .map(|a| (a, footprint::in_view(&view, a)))
+                    .collect()
+            })
+            .collect();
+        let needs = planner::needs(self.task, &s, self.goal);
+        let mut walk = Walk {
+            task: self.task,
+            goal: self.goal,
+            robots: self.robots,
+            lists: &lists,
+            levels: vec![(s, needs); self.robots.len() + 1],
+            chosen: SmallVec::new(),
+            cost: usize::from(gc),
+            limit: self.best_len,
+        };
+        walk.level(0, &mut |state, step| self.child(i, gc, f, state, step))
+    }
+
+    /// Records the state a joint step leads to, unless it cannot beat the best plan or
+    /// is known at no greater cost.
+    /// Returns the length a plan must now beat.
+    fn child(
+        &mut self,
+        parent: usize,
+        gc: u16,
+        f: usize,
+        child: &State,
+        step: &[Step],
+    ) -> ControlFlow<Halt, usize> {
+        let h = lower_bound(self.task, child, self.goal, self.robots.len());
+        if usize::from(gc) + usize::from(h) >= self.best_len {
+            return ControlFlow::Continue(self.best_len);
+        }
+        let span = Span {
+            at: self.arena.len() as u32,
+            len: step.len() as u32,
+        };
+        let hash = std::hash::BuildHasher::hash_one(&rustc_hash::FxBuildHasher, child);
+        let c = match self.t.find(hash, child) {
+            Some(j) => {
+                let seen = &mut self.t.info[j];
+                if seen.closed || seen.g <= gc {
+                    return ControlFlow::Continue(self.best_len);
+                }
+                (seen.g, seen.parent, seen.step) = (gc, parent as u32, span);
+                self.arena.extend_from_slice(step);
+                self.t.queue(j as u32);
+                j
+            }
+            None => {
+                let kept = child.clone();
+                let arena = (self.arena.capacity() + step.len()) * size_of::<Step>();
+                if self.t.bytes(Some(kept.heap_bytes())) + arena > self.limits.max_memory {
+                    return ControlFlow::Break(Halt::Limit(Stop::Memory));
+                }
+                self.arena.extend_from_slice(step);
+                self.t.insert(kept, hash, parent as u32, span, gc, h);
+                self.t.states.len() - 1
+            }
+        };
+        if h == 0 && self.holds(child) {
+            self.best = Some(self.plan_to(c));
+            self.best_len = usize::from(gc);
+        }
+        // A goal at cost f cannot be beaten: every open state has f' >= f.
+        if self.best_len <= f {
+            return ControlFlow::Break(Halt::Proven);
+        }
+        if self.t.states.len() >= self.limits.max_states {
+            return ControlFlow::Break(Halt::Limit(Stop::States));
+        }
+        ControlFlow::Continue(self.best_len)
+    }
+
+    fn finish(self, stop: ControlFlow<Stop>, elapsed: Duration) -> Makespan {
+        let stop = match stop {
+            ControlFlow::Break(s) => Some(s),
+            ControlFlow::Continue(()) => None,
+        };
+        let proven = stop.is_none();
+        let lower = match (proven, self.best.as_ref()) {
+            (true, Some(plan)) => plan.len(),
+            _ => self.frontier.min(self.best_len),
+        };
+        Makespan {
+            proven,
+            lower,
+            stop,
+            states_expanded: self.expanded,
+            states_seen: self.t.states.len(),
+            memory: self.t.bytes(None) + self.arena.capacity() * size_of::<Step>(),
+            plan: self.best,
+            elapsed,
+        }
+    }
+}
+
+/// Takes a joint step and the state it leads to; answers the plan length to beat.
+type Emit<'e> = dyn FnMut(&State, &[Step]) -> ControlFlow<Halt, usize> + 'e;
+
+/// The robot-by-robot enumeration of one state's joint steps.
+struct Walk<'w> {
+    task: &'w Task,
+    goal: &'w [GoalPredicate],
+    robots: &'w [Robot],
+    /// Each robot's actions worth trying, with their footprints in the state expanded.
+    lists: &'w [Vec<(Action, Footprint)>],
+    /// `levels[k]`: the state after the actions chosen for robots `0..k`, and its
+    /// [`planner::needs`].
+    levels: Vec<(State, (u16, u16))>,
+    /// `(robot, action index)` of the actions chosen so far.
+    chosen: SmallVec<[(usize, usize); 4]>,
+    /// The cost of the states the steps lead to, and the plan length they must beat.
+    cost: usize,
+    limit: usize,
+}
+
+impl Walk<'_> {
+    /// Whether a step completed from level `k` (its state and needs in `levels[k]`,
+    /// robots `k..` still free) could still lead to a plan shorter than the limit.
+    fn promising(&self, k: usize) -> bool {
+        let left = (self.robots.len() - k) as u16;
+        let h = bound(self.levels[k].1, self.robots.len() as u16, left);
+        self.cost + usize::from(h) < self.limit
+    }
+
+    /// Chooses for robot `k` and those after it; `emit` gets each complete, non-empty
+    /// joint step with the state it leads to, and answers the length to beat.
+    fn level(
+        &mut self,
+        k: usize,
+        emit: &mut Emit<'_>,
+    ) -> ControlFlow<Halt, usize> {
+        if k == self.robots.len() {
+            if !self.chosen.is_empty() {
+                let step: SmallVec<[Step; 4]> = self
+                    .chosen
+                    .iter()
+                    .map(|&(r, j)| Step {
+                        robot: self.robots[r].node,
+                        action: self.lists[r][j].0,
+                    })
+                    .collect();
+                self.limit = emit(&self.levels[k].0, &step)?;
+            }
+            return ControlFlow::Continue(self.limit);
+        }
+        // Robot k does nothing.
+        let (done, next) = self.levels.split_at_mut(k + 1);
+        next[0].0.clone_from(&done[k].0);
+        next[0].1 = done[k].1;
+        if self.promising(k + 1) {
+            self.level(k + 1, emit)?;
+        }
+        for j in 0..self.lists[k].len() {
+            let (a, ref print) = self.lists[k][j];
+            if self
+                .chosen
+                .iter()
+                .any(|&(r, i)| self.lists[r][i].1.conflict(print).is_some())
+            {
+                continue;
+            }
+            let (done, next) = self.levels.split_at_mut(k + 1);
+            next[0].0.clone_from(&done[k].0);
+            rules::apply(self.task, &mut next[0].0, self.robots[k], a);
+            next[0].1 = planner::needs(self.task, &next[0].0, self.goal);
+            if !self.promising(k + 1) {
+                continue;
+            }
+            self.chosen.push((k, j));
+            let flow = self.level(k + 1, emit);
+            self.chosen.pop();
+            flow?;
+        }
+        ControlFlow::Continue(self.limit)
+    }
+}

@@ -1,0 +1,290 @@
+//! Makespan-optimal plans (docs/planner.md, "Parallel plans"):
+//! - every plan's joint steps are valid: their actions apply in every order through the
+//!   sequential rules, each offered at its turn, all orders ending alike, and the last
+//!   step reaches the goal; no plan is longer than the sequential optimum, and the
+//!   proven makespans agree with a breadth-first search over every joint step on the
+//!   tasks small enough for it;
+//! - the heuristic never overestimates along each plan and one joint step lowers it by
+//!   at most one;
+//! - a search stopped at a limit says so, keeps the scheduled sequential optimum and a
+//!   lower bound below it.
+
+use std::collections::{HashMap, VecDeque};
+
+use coherent_core::footprint::Footprint;
+use coherent_core::joint::{self, Part};
+use coherent_core::makespan::{self, JointStep};
+use coherent_core::planner::{self, Limits, Step, Stop};
+use coherent_core::{State, Task, benchmark, feasibility, rules};
+
+mod common;
+
+/// The released tasks, and tasks 0 to 4 of each scene of our benchmark.
+fn tasks() -> Vec<Task> {
+    let mut all = common::released_tasks();
+    all.extend(
+        benchmark::tasks()
+            .expect("the benchmark reads")
+            .into_iter()
+            .filter(|t| t.meta.task_id < 5),
+    );
+    all
+}
+
+fn parts(task: &Task, step: &[Step]) -> Vec<Part> {
+    step.iter()
+        .map(|st| (*task.robot(st.robot).expect("a plan's robot"), st.action))
+        .collect()
+}
+
+/// Every permutation of `0..n`.
+fn orders(n: usize) -> Vec<Vec<usize>> {
+    if n == 0 {
+        return vec![Vec::new()];
+    }
+    let mut out = Vec::new();
+    for rest in orders(n - 1) {
+        for at in 0..=rest.len() {
+            let mut o = rest.clone();
+            o.insert(at, n - 1);
+            out.push(o);
+        }
+    }
+    out
+}
+
+/// Plays a joint plan from the start, each step in every order through the sequential
+/// rules (the actions as text, as an episode sends them); the state at the end.
+fn play(task: &Task, plan: &[JointStep]) -> State {
+    let name = common::name(task);
+    let mut s = task.init.clone();
+    for (k, step) in plan.iter().enumerate() {
+        assert!(!step.is_empty(), "{name}: joint step {k} is empty");
+        let mut ends: Vec<State> = Vec::new();
+        for order in orders(step.len()) {
+            let mut t = s.clone();
+            for &i in &order {
+                let robot = *task.robot(step[i].robot).expect("a plan's robot");
+                let text = step[i].action.render(task);
+                let a = feasibility::check(task, &t, robot, &text).unwrap_or_else(|e| {
+                    panic!(
+                        "{name}: joint step {k}, order {order:?}: {text}: {}",
+                        e.message
+                    )
+                });
+                rules::apply(task, &mut t, robot, a);
+            }
+            ends.push(t);
+        }
+        assert!(
+            ends.iter().all(|e| *e == ends[0]),
+            "{name}: joint step {k} ends differently by order"
+        );
+        assert_eq!(
+            joint::check(task, &s, &parts(task, step)),
+            Ok(()),
+            "{name}: step {k}"
+        );
+        s = ends.swap_remove(0);
+    }
+    s
+}
+
+#[test]
+fn parallel_plans_are_valid_in_every_order_and_never_longer_than_the_sequential_optimum() {
+    let mut shorter = 0;
+    for task in tasks() {
+        let name = common::name(&task);
+        let sequential = planner::search(&task, &task.robots, &task.goal, &Limits::default());
+        let found = makespan::search_with(
+            &task,
+            &task.init,
+            &task.robots,
+            &task.goal,
+            sequential.plan.as_deref(),
+            &Limits::default(),
+        );
+        let Some(seq) = sequential.plan else {
+            assert!(
+                found.plan.is_none(),
+                "{name}: a parallel plan without a sequential one"
+            );
+            continue;
+        };
+        assert!(found.proven, "{name}: not proven within the default limits");
+        let plan = found
+            .plan
+            .expect("a plan when the sequential search has one");
+        assert!(
+            plan.len() <= seq.len(),
+            "{name}: {} joint steps, {} sequential",
+            plan.len(),
+            seq.len()
+        );
+        assert_eq!(
+            found.lower,
+            plan.len(),
+            "{name}: proven, so the bound is the makespan"
+        );
+        let end = play(&task, &plan);
+        assert!(
+            task.goal_satisfied(&end),
+            "{name}: the plan does not reach the goal"
+        );
+        let scheduled = makespan::schedule(&task, &task.init, &seq, &task.goal);
+        assert!(
+            task.goal_satisfied(&play(&task, &scheduled)),
+            "{name}: the schedule"
+        );
+        assert!(plan.len() <= scheduled.len());
+        shorter += usize::from(plan.len() < seq.len());
+    }
+    // Robots that act at once finish some tasks sooner, not all.
+    assert!(shorter > 20, "only {shorter} tasks are faster in parallel");
+}
+
+/// Breadth-first over every joint step (every offered action, each set of robots whose
+/// actions pairwise do not interfere): the fewest joint steps, or none within `max`
+/// states.
+fn breadth_first(task: &Task, max: usize) -> Option<usize> {
+    let mut depth: HashMap<State, usize> = HashMap::from([(task.init.clone(), 0)]);
+    let mut queue = VecDeque::from([task.init.clone()]);
+    while let Some(s) = queue.pop_front() {
+        let d = depth[&s];
+        if task.goal_satisfied(&s) {
+            return Some(d);
+        }
+        let lists = rules::team_actions(task, &s, &task.robots);
+        // Every choice of at most one action per robot, as (part, footprint) lists.
+        let mut steps: Vec<Vec<(Part, Footprint)>> = vec![Vec::new()];
+        for (&robot, actions) in task.robots.iter().zip(&lists) {
+            let mut more = Vec::new();
+            for &a in actions {
+                let print = Footprint::of(task, &s, robot, a);
+                for step in &steps {
+                    if step.iter().all(|(_, p)| p.conflict(&print).is_none()) {
+                        let mut bigger = step.clone();
+                        bigger.push(((robot, a), print.clone()));
+                        more.push(bigger);
+                    }
+                }
+            }
+            steps.extend(more);
+        }
+        for step in steps.iter().filter(|st| !st.is_empty()) {
+            let parts: Vec<Part> = step.iter().map(|(p, _)| *p).collect();
+            let mut next = s.clone();
+            joint::apply(task, &mut next, &parts);
+            if !depth.contains_key(&next) {
+                if depth.len() >= max {
+                    return None;
+                }
+                depth.insert(next.clone(), d + 1);
+                queue.push_back(next);
+            }
+        }
+    }
+    None
+}
+
+#[test]
+fn proven_makespans_agree_with_a_breadth_first_search_over_every_joint_step() {
+    let mut compared = 0;
+    for task in tasks() {
+        // The short tasks: a breadth-first search over every joint step stays small.
+        let sequential = planner::search(&task, &task.robots, &task.goal, &Limits::default());
+        if sequential.plan.is_none_or(|p| p.len() > 5) {
+            continue;
+        }
+        let Some(bfs) = breadth_first(&task, 20_000) else {
+            continue;
+        };
+        let found = makespan::search(&task, &task.robots, &task.goal, &Limits::default());
+        assert_eq!(found.makespan(), Some(bfs), "{}", common::name(&task));
+        compared += 1;
+    }
+    assert!(compared >= 4, "only {compared} tasks small enough");
+}
+
+#[test]
+fn the_makespan_heuristic_is_admissible_and_consistent_along_parallel_plans() {
+    let mut checked = 0;
+    for task in tasks().into_iter().filter(|t| t.meta.task_id % 4 == 0) {
+        let name = common::name(&task);
+        let n = task.robots.len();
+        let Some(plan) = makespan::search(&task, &task.robots, &task.goal, &Limits::default()).plan
+        else {
+            continue;
+        };
+        let mut s = task.init.clone();
+        for (k, step) in plan.iter().enumerate() {
+            let h = makespan::lower_bound(&task, &s, &task.goal, n);
+            assert!(
+                usize::from(h) <= plan.len() - k,
+                "{name}: h = {h}, {} steps left",
+                plan.len() - k
+            );
+            // One joint step lowers it by at most one: every pair of robots' actions here.
+            let lists = rules::team_actions(&task, &s, &task.robots);
+            for (i, (&r1, l1)) in task.robots.iter().zip(&lists).enumerate() {
+                for (&r2, l2) in task.robots.iter().zip(&lists).skip(i + 1) {
+                    for &a in l1 {
+                        for &b in l2 {
+                            let pair = [(r1, a), (r2, b)];
+                            if joint::check(&task, &s, &pair).is_ok() {
+                                let mut next = s.clone();
+                                joint::apply(&task, &mut next, &pair);
+                                let h2 = makespan::lower_bound(&task, &next, &task.goal, n);
+                                assert!(
+                                    h <= h2 + 1,
+                                    "{name}: a joint step drops h from {h} to {h2}"
+                                );
+                                checked += 1;
+                            }
+                        }
+                    }
+                }
+            }
+            joint::apply(&task, &mut s, &parts(&task, step));
+        }
+        assert_eq!(makespan::lower_bound(&task, &s, &task.goal, n), 0, "{name}");
+    }
+    assert!(checked > 10_000, "only {checked} joint steps checked");
+}
+
+#[test]
+fn a_search_stopped_at_a_limit_keeps_the_scheduled_plan_and_a_lower_bound() {
+    let task = common::released_tasks()
+        .into_iter()
+        .find(|t| common::name(t) == "env1 task 14")
+        .expect("env1 task 14");
+    let sequential = planner::search(&task, &task.robots, &task.goal, &Limits::default())
+        .plan
+        .expect("solvable");
+    let full = makespan::search_with(
+        &task,
+        &task.init,
+        &task.robots,
+        &task.goal,
+        Some(&sequential),
+        &Limits::default(),
+    );
+    let stopped = makespan::search_with(
+        &task,
+        &task.init,
+        &task.robots,
+        &task.goal,
+        Some(&sequential),
+        &Limits::max_states(50),
+    );
+    assert_eq!(stopped.stop, Some(Stop::States));
+    assert!(!stopped.proven);
+    let plan = stopped.plan.expect("the scheduled sequential optimum");
+    let best = full.makespan().expect("a plan");
+    assert!(stopped.lower <= best && best <= plan.len() && plan.len() <= sequential.len());
+    assert!(
+        stopped.lower < plan.len(),
+        "the bounds meet: it would be proven"
+    );
+    assert!(task.goal_satisfied(&play(&task, &plan)));
+}
