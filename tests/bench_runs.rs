@@ -10,9 +10,9 @@ use std::sync::Arc;
 use coherent::session::backend::{BackendName, BackendRequest};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
-    Act, BenchOutcome, BoxFuture, Cancel, Choice, ErrorRates, Event, External, MakePolicy, Method,
-    MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task,
-    Transcript, read_results, transcripts_dir,
+    Act, BenchOutcome, BoxFuture, Cancel, Choice, ErrorRates, Event, Execution, External,
+    MakePolicy, Method, MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView,
+    Subset, Task, Transcript, read_results, transcripts_dir,
 };
 use coherent::session::episode;
 use coherent_agents::BackendKind;
@@ -84,6 +84,7 @@ fn lines(out: &Path) -> Vec<ResultLine> {
 fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
     ResultLine {
         method: "pefa".into(),
+        execution: Execution::Sequential,
         scene: task.meta.scene.clone(),
         task_id: task.meta.task_id,
         task_type: Some("mono".into()),
@@ -95,12 +96,16 @@ fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
         gt_steps: task.meta.gt_steps,
         optimal_steps: None,
         max_steps: 99,
+        makespan: None,
+        optimal_makespan: None,
+        actions: None,
         llm_calls: 0,
         prompt_tokens: 0,
         completion_tokens: 0,
         cached_tokens: 0,
         cost_usd: None,
         wall_ms: 0.0,
+        sim_seconds: None,
         backend: BackendInfo {
             kind: BackendKind::Builtin,
             model: "optimal-planner".into(),
@@ -287,7 +292,7 @@ impl Policy for FollowPlan {
         };
         Box::pin(async move {
             Act {
-                choice: Ok(choice),
+                choices: Ok(vec![choice]),
                 calls: Vec::new(),
             }
         })

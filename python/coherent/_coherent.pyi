@@ -7,7 +7,7 @@ import asyncio
 import os
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
-from typing import Any, Literal, TypeAlias, TypedDict
+from typing import Any, Literal, NotRequired, TypeAlias, TypedDict, overload
 
 __version__: str
 
@@ -207,6 +207,9 @@ class Env:
     when a robot stays silent for ``robot_timeout`` seconds, and every later step is
     refused.
 
+    With ``execution="parallel"`` the robots act in joint steps: ``step`` takes every
+    acting robot's action at once (see :meth:`step`).
+
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
     for an id that is not one of the task's robots; an action str with a lone surrogate
     raises :class:`ActionParseError`.
@@ -217,6 +220,7 @@ class Env:
         task: Task,
         physics: bool = False,
         *,
+        execution: Literal["sequential", "parallel"] = "sequential",
         robots: Literal["local", "ros2"] = "local",
         namespace: str | None = None,
         robot_timeout: float = 10.0,
@@ -227,6 +231,11 @@ class Env:
     @property
     def physics(self) -> bool: ...
     @property
+    def execution(self) -> Literal["sequential", "parallel"]: ...
+    @property
+    def sim_seconds(self) -> float | None:
+        """Simulated seconds since the start, with physics; None otherwise."""
+    @property
     def namespace(self) -> str | None:
         """The namespace of the robots' ROS 2 actions; None when they act in this process."""
     @property
@@ -236,9 +245,18 @@ class Env:
     def why_not(self, robot: int, action: str) -> str | None:
         """Why ``robot`` cannot do ``action`` now, by the rules, without doing it; None when
         it can."""
+    @overload
     def step(self, robot: int, action: str) -> tuple[bool, str | None, bool]:
         """Tries ``action``: ``(ok, reason, done)``; an infeasible action gives ``ok`` False
         and the reason, and changes nothing."""
+    @overload
+    def step(
+        self, robot: Mapping[int, str] | Sequence[tuple[int, str]]
+    ) -> tuple[list[bool], list[str | None], bool]:
+        """With ``execution="parallel"``: tries one joint step, ``{robot: action}`` or
+        ``[(robot, action), ...]`` (at most one action a robot); ``(oks, reasons, done)``
+        in the order given. A step the rules refuse (an action not offered, two that
+        interfere) changes nothing, each reason saying what it means for that robot."""
     def goal_satisfied(self) -> bool: ...
     def graph(self) -> _Graph: ...
     def reset(self) -> None: ...
@@ -284,6 +302,7 @@ class _Summary(TypedDict):
     cached_tokens: int
     wall_ms: float
     error: str | None
+    sim_seconds: NotRequired[float]
 
 class _BenchOutcome(TypedDict):
     total: int
@@ -404,7 +423,11 @@ class View:
         """The step about to be taken, from 1."""
     @property
     def max_steps(self) -> int:
-        """The step budget (2 x GT unless set)."""
+        """The step budget (2 x GT unless set; 2 x the fewest joint steps in parallel)."""
+    @property
+    def execution(self) -> Literal["sequential", "parallel"]:
+        """``"parallel"``: ``act`` answers a list, one decision per robot that acts, all
+        carried out at once as one joint step."""
     @property
     def robots(self) -> list[int]:
         """Node ids of the robots."""
@@ -416,7 +439,8 @@ class View:
     @property
     def history(self) -> list[_History]:
         """Every earlier step, oldest first: ``(robot, action, ok, reason)``; robot and
-        action None for a step without an action, reason None when it ran."""
+        action None for a step without an action, reason None when it ran; of a parallel
+        step, one for each robot given an action in it."""
     def observation(self, robot: int) -> _Observation:
         """What ``robot`` sees, as :meth:`Env.observe` gives it."""
     def observation_text(self, robot: int | None = None) -> str:
@@ -490,6 +514,17 @@ class Episode:
     @property
     def wall_ms(self) -> float: ...
     @property
+    def execution(self) -> Literal["sequential", "parallel"]: ...
+    @property
+    def makespan(self) -> int | None:
+        """The joint steps it took to reach the goal (its steps); None when it did not."""
+    @property
+    def actions(self) -> int:
+        """The actions carried out (several a step in a parallel episode)."""
+    @property
+    def sim_seconds(self) -> float | None:
+        """The simulated seconds it took, with physics; None otherwise."""
+    @property
     def error(self) -> str | None: ...
     @property
     def backend(self) -> _Backend: ...
@@ -513,6 +548,7 @@ def run(
     task: Task,
     method: str | _MethodFactory = "pefa",
     *,
+    execution: Literal["sequential", "parallel"] = "sequential",
     llm: LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
     history: int = 5,
@@ -538,7 +574,9 @@ def run(
     runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``, the same as
     :func:`load_episode` gives for the transcript at the same prices). With
     ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
-    actions out, as for :class:`Env`. Raises :class:`BackendError` when the server fails
+    actions out, as for :class:`Env`. ``execution="parallel"`` runs the robots in joint
+    steps (the budget is 2 x the fewest joint steps; MCTS and LLM-MCTS are sequential
+    only and raise :class:`ArgumentError`). Raises :class:`BackendError` when the server fails
     for good, :class:`MethodError` when the method raises, :class:`RobotError` when a
     robot stops answering; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
 
@@ -559,6 +597,7 @@ def run_bench(
     tasks: Sequence[Task],
     methods: Sequence[str | _MethodFactory],
     *,
+    execution: str | Sequence[str] = "sequential",
     backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
     replay_from: _PathLike | None = None,
@@ -592,6 +631,7 @@ class _BenchLedger:
         *,
         seeds: int,
         out: _PathLike,
+        execution: str | Sequence[str] = "sequential",
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
@@ -599,8 +639,8 @@ class _BenchLedger:
         prompts: _PathLike | Mapping[str, str] | None = None,
         prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None: ...
-    def pending(self) -> list[tuple[str, str, int, int]]:
-        """The episodes to run: ``(method, scene, task_id, seed)``."""
+    def pending(self) -> list[tuple[str, str, int, int, str]]:
+        """The episodes to run: ``(method, scene, task_id, seed, execution)``."""
     def worker_settings(self) -> dict[str, Any]:
         """``prompts`` (the replaced templates by file name) and ``prices`` (the whole
         table) as data, for the workers."""
@@ -617,6 +657,7 @@ class _BenchWorker:
         tasks: Sequence[str],
         methods: Sequence[str | _MethodFactory],
         *,
+        execution: str | Sequence[str] = "sequential",
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
@@ -628,7 +669,7 @@ class _BenchWorker:
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],
     ) -> None: ...
-    def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
+    def run(self, key: tuple[str, str, int, int, str]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
 
 def read_results(path: _PathLike) -> list[dict[str, Any]]:

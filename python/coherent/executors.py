@@ -25,8 +25,8 @@ from ._coherent import LLM, CoherentError, Task
 if TYPE_CHECKING:
     from ._ray_worker import NodeEndpoints
 
-# An episode's key: (method, scene, task_id, seed index).
-Key = tuple[str, str, int, int]
+# An episode's key: (method, scene, task_id, seed index, execution).
+Key = tuple[str, str, int, int, str]
 
 
 def _import_ray() -> Any:
@@ -83,6 +83,7 @@ class RayExecutor:
         prompts: str | os.PathLike[str] | Mapping[str, str] | None,
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
         physics: bool = False,
+        execution: str | Sequence[str] = "sequential",
     ) -> dict[str, Any]:
         """Runs the benchmark as :func:`coherent.bench` describes; returns its outcome,
         with ``resubmitted``: the episodes run again after their worker died."""
@@ -97,6 +98,7 @@ class RayExecutor:
             list(methods),
             seeds=seeds,
             out=out,
+            execution=execution,
             backend=backend,
             sim_errors=sim_errors,
             replay_from=replay_from,
@@ -123,6 +125,7 @@ class RayExecutor:
             "max_states": max_states,
             "max_steps": max_steps,
             "physics": physics,
+            "execution": execution,
             "out": out,
             # A folder or a price file of this machine's, as data: the workers' machines
             # may not have them.

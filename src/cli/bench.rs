@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{
-    LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec, sim_errors,
+    ExecutionFlag, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
+    sim_errors,
 };
 use super::status;
 use crate::session::backend::{BackendName, BackendRequest};
@@ -37,6 +38,11 @@ pub struct BenchArgs {
     /// file, and its class; from the Python package's `coherent` only).
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,
+    /// Comma-separated: sequential (one robot's action a step, the paper's), parallel
+    /// (joint steps, every robot at once), or both: each method runs in each, and the
+    /// tables compare them.
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "sequential")]
+    execution: Vec<ExecutionFlag>,
     /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
     /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
     /// `replay`: the transcripts of --replay-from.
@@ -178,6 +184,7 @@ fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesR
         max_steps: args.max_steps,
         physics: args.physics,
         robots: args.robots.robots()?,
+        executions: args.execution.iter().map(|&e| e.into()).collect(),
         ..EpisodesRequest::new(methods)
     })
 }
@@ -240,7 +247,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         info.model,
         info.base_url.map_or(String::new(), |u| format!(" at {u}"))
     );
-    if let Some(line) = prompts::describe(&config.episodes.prompts) {
+    if let Some(line) = prompts::describe(&config.episodes.prompts, &config.episodes.executions) {
         println!("{line}");
     }
     if let Some(note) = config.concurrency_note() {

@@ -10,14 +10,14 @@ use clap::Args;
 use serde_json::json;
 
 use super::args::{
-    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
-    sim_errors,
+    AnswerFormat, ExecutionFlag, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name,
+    method_spec, sim_errors,
 };
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
-    Budget, Cancel, HISTORY_WINDOW, Limits, MethodSpec, Round, RoundOutcome, Status, Summary, Task,
-    shown,
+    Budget, Cancel, Execution, HISTORY_WINDOW, Limits, MethodSpec, NodeId, RobotPart, Round,
+    RoundOutcome, Status, Summary, Task, executed_actions, shown,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -36,6 +36,11 @@ pub(crate) struct RunArgs {
     /// .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
+    /// sequential: one robot's action a step, as in the paper; parallel: joint steps, every
+    /// robot at most one action, all at once (the budget is then 2 x the fewest joint
+    /// steps).
+    #[arg(long, value_enum, default_value_t = ExecutionFlag::Sequential)]
+    execution: ExecutionFlag,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = HISTORY_WINDOW)]
     history: usize,
@@ -117,6 +122,11 @@ fn prepare(
     });
     if let Some(transcript) = &args.replay {
         args.inputs.no_prompts_for_a_replay("--replay")?;
+        if args.execution != ExecutionFlag::Sequential {
+            return Err(Error::Invalid(
+                "--replay runs the episode as recorded: --execution does not go with it".into(),
+            ));
+        }
         let request = ReplayRequest {
             transcript: transcript.clone(),
             task,
@@ -142,6 +152,7 @@ fn prepare(
         seed: args.llm.seed,
         max_states: args.max_states,
         out: args.out.clone(),
+        execution: args.execution.into(),
         ..RunRequest::new(task, method_spec(&args.method, load)?)
     };
     request.prepare(cancel)
@@ -160,7 +171,8 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         MethodSpec::Builtin(_) => format!("backend: none ({} asks no model)", method.name()),
     });
     lines.say(&task_line(&prepared));
-    if let Some(line) = prompts::describe(&prepared.settings().prompts) {
+    let settings = prepared.settings();
+    if let Some(line) = prompts::describe(&settings.prompts, &[settings.execution]) {
         lines.say(&line);
     }
     let ctrl_c = {
@@ -173,12 +185,24 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     };
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
-    let mut progress = |r: &Round| lines.say(&step_line(&task, r, max));
+    let execution = prepared.settings().execution;
+    let mut progress = |r: &Round| {
+        for line in step_lines(&task, r, max, execution) {
+            lines.say(&line);
+        }
+    };
     let result = prepared.run(&cancel, &mut progress).await;
     ctrl_c.abort();
     let ran = result?;
     let s = ran.summary();
-    lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
+    let actions = executed_actions(&ran.transcript.rounds);
+    lines.say(&summary_line(
+        s,
+        execution,
+        actions,
+        ran.goal_satisfied,
+        ran.cost_usd,
+    ));
     lines.say(&format!("transcript: {}", ran.path.display()));
     let ending = ran.ending();
     match &ending {
@@ -195,7 +219,10 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             json!({
                 "success": s.success,
                 "status": s.status,
+                "execution": execution,
                 "steps": s.steps,
+                "makespan": s.success.then_some(s.steps),
+                "actions": actions,
                 "gt_steps": s.gt_steps,
                 "max_steps": s.max_steps,
                 "llm_calls": s.llm_calls,
@@ -204,6 +231,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
                 "cached_tokens": s.cached_tokens,
                 "cost_usd": ran.cost_usd,
                 "wall_ms": s.wall_ms,
+                "sim_seconds": s.sim_seconds,
                 "error": s.error,
                 "backend": info,
                 "transcript": ran.path.display().to_string(),
@@ -226,9 +254,17 @@ fn task_line(p: &Prepared) -> String {
         Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
         Budget::Given(n) => format!("{n} steps"),
         Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
+        Budget::TwiceMakespan(n) => format!("{n} joint steps (2 x the optimal makespan)"),
+        Budget::TwiceMakespanBound(n) => format!(
+            "{n} joint steps (2 x the best makespan found; the search stopped before proving it)"
+        ),
+    };
+    let execution = match p.settings().execution {
+        Execution::Sequential => String::new(),
+        Execution::Parallel => " | execution parallel".to_owned(),
     };
     format!(
-        "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
+        "task: {} task {} \"{}\" | method {}{execution} | GT {gt} | budget {budget_note}",
         shown(&task.meta.scene),
         task.meta.task_id,
         shown(&task.meta.instruction),
@@ -264,27 +300,70 @@ fn replay_line(path: &Path, model: &str) -> String {
     )
 }
 
-fn step_line(task: &Task, r: &Round, max: u32) -> String {
-    let robot = r
-        .proposal
-        .as_ref()
-        .and_then(|p| task.idx(p.robot))
-        .map_or("-".to_owned(), |i| {
-            shown(&task.node(i).label()).into_owned()
-        });
-    let action = r
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.as_deref())
-        .map_or("-".to_owned(), |a| shown(a).into_owned());
-    // The subtask in quotes, unless it is the action itself (the built-in backend's).
-    let subtask = r
-        .proposal
-        .as_ref()
-        .filter(|p| shown(&p.subtask) != action)
-        .map_or(String::new(), |p| format!("{:?}  ", p.subtask));
-    let outcome = match &r.outcome {
-        RoundOutcome::Executed if r.done => "ok, goal reached".to_owned(),
+/// The lines of a step: one for a sequential round (robot, subtask, action, outcome); for
+/// a parallel one, a line for the step (how many robots acted, what the step came to)
+/// and an indented line per robot's part.
+fn step_lines(task: &Task, r: &Round, max: u32, execution: Execution) -> Vec<String> {
+    let width = max.to_string().len();
+    let head = format!("step {:>width$}/{max}", r.step);
+    if execution == Execution::Sequential {
+        let robot = r.proposal.as_ref().map(|p| p.robot);
+        let action = r.decision.as_ref().and_then(|d| d.action.as_deref());
+        let subtask = r.proposal.as_ref().map(|p| p.subtask.as_str());
+        let said = part_text(
+            task,
+            robot,
+            subtask,
+            action,
+            &outcome_text(&r.outcome, r.done),
+        );
+        return vec![format!("{head}  {said}")];
+    }
+    let acting = r.parts.iter().filter(|p| p.action().is_some()).count();
+    let robots = if acting == 1 { "robot" } else { "robots" };
+    let mut out = vec![format!(
+        "{head}  joint step, {acting} {robots}  -> {}",
+        outcome_text(&r.outcome, r.done)
+    )];
+    out.extend(r.parts.iter().map(|p| format!("  {}", part_line(task, p))));
+    out
+}
+
+fn part_line(task: &Task, p: &RobotPart) -> String {
+    let subtask = p.proposal.as_ref().map(|proposal| {
+        if p.kept {
+            format!("{} (kept)", proposal.subtask)
+        } else {
+            proposal.subtask.clone()
+        }
+    });
+    let action = p.decision.as_ref().and_then(|d| d.action.as_deref());
+    let outcome = outcome_text(&p.outcome, false);
+    part_text(task, Some(p.robot), subtask.as_deref(), action, &outcome)
+}
+
+/// `<robot>  "subtask"  action  -> outcome`, the subtask left out when it is the action
+/// itself (the built-in backend's).
+fn part_text(
+    task: &Task,
+    robot: Option<NodeId>,
+    subtask: Option<&str>,
+    action: Option<&str>,
+    outcome: &str,
+) -> String {
+    let robot = robot.and_then(|r| task.idx(r)).map_or("-".to_owned(), |i| {
+        shown(&task.node(i).label()).into_owned()
+    });
+    let action = action.map_or("-".to_owned(), |a| shown(a).into_owned());
+    let subtask = subtask
+        .filter(|s| shown(s) != action)
+        .map_or(String::new(), |s| format!("{s:?}  "));
+    format!("{robot}  {subtask}{action}  -> {outcome}")
+}
+
+fn outcome_text(outcome: &RoundOutcome, done: bool) -> String {
+    match outcome {
+        RoundOutcome::Executed if done => "ok, goal reached".to_owned(),
         RoundOutcome::Executed => "ok".to_owned(),
         RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
         RoundOutcome::Declined => "declined".to_owned(),
@@ -296,15 +375,16 @@ fn step_line(task: &Task, r: &Round, max: u32) -> String {
             "the method failed: {}",
             shown(message.trim_end().lines().last().unwrap_or(""))
         ),
-    };
-    let width = max.to_string().len();
-    format!(
-        "step {:>width$}/{max}  {robot}  {subtask}{action}  -> {outcome}",
-        r.step
-    )
+    }
 }
 
-fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {
+fn summary_line(
+    s: &Summary,
+    execution: Execution,
+    actions: u32,
+    goal_satisfied: bool,
+    cost_usd: Option<f64>,
+) -> String {
     let result = match s.status {
         Status::Success => "success",
         Status::Failure => "failure: step budget spent",
@@ -322,10 +402,18 @@ fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> Str
     let cost = cost_usd
         .filter(|_| s.llm_calls > 0)
         .map_or(String::new(), |c| format!(" | cost ${c:.6}"));
+    let steps = match execution {
+        Execution::Sequential => format!("steps {} (GT {gt}, budget {})", s.steps, s.max_steps),
+        Execution::Parallel => format!(
+            "makespan {} joint steps, {actions} actions (GT {gt} sequential steps, budget {})",
+            s.steps, s.max_steps
+        ),
+    };
+    let sim = s
+        .sim_seconds
+        .map_or(String::new(), |t| format!(" | simulated {t:.2} s"));
     format!(
-        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt + {} completion{cost} | wall {:.2} s",
-        s.steps,
-        s.max_steps,
+        "{result} | goal {goal} | {steps} | LLM calls {} | tokens {} prompt + {} completion{cost}{sim} | wall {:.2} s",
         s.llm_calls,
         s.prompt_tokens,
         s.completion_tokens,

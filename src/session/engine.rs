@@ -14,8 +14,10 @@ pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task}
 pub use coherent_core::{feasibility, native, original};
 
 // What a run records: the transcript, its rounds and summary, the step budget.
-pub use coherent_agents::episode::{Budget, HISTORY_WINDOW};
-pub use coherent_agents::transcript::{Round, RoundOutcome, Status, Summary, Transcript};
+pub use coherent_agents::episode::{Budget, Execution, HISTORY_WINDOW};
+pub use coherent_agents::transcript::{
+    RobotPart, Round, RoundOutcome, Status, Summary, Transcript, actions as executed_actions,
+};
 
 // Which method runs: a built-in one, or one written outside the crates (Python), with
 // what it is shown each step and what it answers.

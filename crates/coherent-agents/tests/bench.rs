@@ -4,11 +4,11 @@
 
 use std::path::PathBuf;
 
-use coherent_agents::PriceTable;
 use coherent_agents::bench::{self, ResultLine, Subset};
 use coherent_agents::llm::{BackendInfo, BackendKind};
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
+use coherent_agents::{Execution, PriceTable};
 
 mod common;
 
@@ -72,6 +72,7 @@ fn line(
 ) -> String {
     let mut l = ResultLine {
         method: method.into(),
+        execution: Execution::Sequential,
         scene: scene.into(),
         task_id,
         task_type: kind.map(Into::into),
@@ -83,12 +84,16 @@ fn line(
         gt_steps: Some(gt),
         optimal_steps: Some(gt),
         max_steps: gt.saturating_mul(2),
+        makespan: (status == Status::Success).then_some(steps),
+        optimal_makespan: None,
+        actions: Some(steps),
         llm_calls: calls,
         prompt_tokens: u64::from(calls) * 100,
         completion_tokens: u64::from(calls) * 10,
         cached_tokens: 0,
         cost_usd: None,
         wall_ms: 1.0,
+        sim_seconds: None,
         backend: BackendInfo {
             kind: BackendKind::Simulated,
             model:

@@ -132,6 +132,13 @@ pub trait Environment {
         self.task().goal_satisfied(self.state())
     }
 
+    /// Simulated seconds since the task started, where the environment simulates time
+    /// (the physical world: a step takes as long as its motions, a joint step as long
+    /// as its slowest robot's); `None` where it does not (the rules alone).
+    fn sim_seconds(&self) -> Option<f64> {
+        None
+    }
+
     /// Why no further step can be trusted, once the environment has stopped (a robot
     /// that no longer answers, a world that disagrees with the rules); an episode ends
     /// with the round in which it stops. The rules and physics never stop.

@@ -11,8 +11,8 @@ use std::sync::Arc;
 
 use coherent::session::bench::{EpisodesRequest, RunTasks, Worker};
 use coherent::session::engine::{
-    Cancel, EpisodeKey, EpisodeResult, Event, HISTORY_WINDOW, Ledger, Limits, PriceTable, Progress,
-    ResultLine, native,
+    Cancel, EpisodeKey, EpisodeResult, Event, Execution, HISTORY_WINDOW, Ledger, Limits,
+    PriceTable, Progress, ResultLine, native,
 };
 use coherent::session::prompts::{PriceSource, PromptSource};
 use pyo3::exceptions::PyValueError;
@@ -26,20 +26,23 @@ use crate::prompts::{price_source, prompt_source};
 use crate::task::PyTask;
 use crate::{args, errors};
 
-/// An episode's key as Python holds it: `(method, scene, task_id, seed)`.
-type Key = (String, String, i64, u32);
+/// An episode's key as Python holds it: `(method, scene, task_id, seed, execution)`.
+type Key = (String, String, i64, u32, String);
 
 /// What a worker hands the driver: `("line", <results line as JSON>)`,
 /// `("skipped", <why the task cannot run>)` or `("not_started", None)`.
 type Handed = (String, Option<String>);
 
-fn key_of((method, scene, task_id, seed): Key) -> EpisodeKey {
-    EpisodeKey {
+fn key_of(py: Python<'_>, (method, scene, task_id, seed, execution): Key) -> PyResult<EpisodeKey> {
+    let execution = Execution::from_name(&execution)
+        .ok_or_else(|| errors::invalid(py, format!("an episode's key: execution {execution:?}")))?;
+    Ok(EpisodeKey {
         method,
         scene,
         task_id,
         seed,
-    }
+        execution,
+    })
 }
 
 /// The driver's side of a run: checks the run's settings as `coherent.bench` does (the
@@ -68,8 +71,8 @@ impl PyLedger {
 impl PyLedger {
     #[new]
     #[pyo3(signature = (
-        tasks, methods, *, seeds, out, backend = None, sim_errors = None, replay_from = None,
-        progress = false, prompts = None, prices = None
+        tasks, methods, *, seeds, out, execution = vec![Execution::Sequential], backend = None,
+        sim_errors = None, replay_from = None, progress = false, prompts = None, prices = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -78,6 +81,7 @@ impl PyLedger {
         #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
         #[pyo3(from_py_with = args::seeds)] seeds: u32,
         #[pyo3(from_py_with = args::out)] out: PathBuf,
+        #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
         backend: Option<&Bound<'_, PyAny>>,
         sim_errors: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -90,6 +94,7 @@ impl PyLedger {
             prompts: prompt_source(prompts)?,
             prices: price_source(prices)?,
             backend: run_backend(backend, sim_errors, replay_from, prompts_given)?,
+            executions: execution,
             ..EpisodesRequest::new(Vec::new())
         };
         // The methods written in Python are only named here; the workers run them.
@@ -106,7 +111,7 @@ impl PyLedger {
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
         RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
         let mut ledger = Ledger::open(&out).map_err(|e| errors::session_err(py, e.into()))?;
-        let pending = ledger.plan(&tasks, &settings.methods, seeds);
+        let pending = ledger.plan(&tasks, &settings.methods, &settings.executions, seeds);
         let mut progress = progress.then(|| Progress::new(false));
         if let Some(p) = progress.as_mut() {
             let start = Event::Start {
@@ -119,7 +124,7 @@ impl PyLedger {
             ledger: Some(ledger),
             pending,
             progress,
-            prompts: settings.prompts.record().replaced,
+            prompts: settings.prompts.replaced_texts(),
             prices: settings.prices,
         })
     }
@@ -133,11 +138,20 @@ impl PyLedger {
         Ok(d)
     }
 
-    /// The episodes to run, in order: `(method, scene, task_id, seed)`.
+    /// The episodes to run, in order: `(method, scene, task_id, seed, execution)`.
     fn pending(&self) -> Vec<Key> {
         self.pending
             .iter()
-            .map(|k| (k.method.clone(), k.scene.clone(), k.task_id, k.seed))
+            .map(|k| {
+                let execution = k.execution.name().to_owned();
+                (
+                    k.method.clone(),
+                    k.scene.clone(),
+                    k.task_id,
+                    k.seed,
+                    execution,
+                )
+            })
             .collect()
     }
 
@@ -212,15 +226,17 @@ pub(crate) struct PyWorker {
 impl PyWorker {
     #[new]
     #[pyo3(signature = (
-        tasks, methods, *, backend = None, sim_errors = None, replay_from = None,
-        history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-        physics = false, out, prompts, prices
+        tasks, methods, *, execution = vec![Execution::Sequential], backend = None,
+        sim_errors = None, replay_from = None, history = HISTORY_WINDOW,
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, physics = false, out,
+        prompts, prices
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         tasks: Vec<String>,
         #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
+        #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
         backend: Option<&Bound<'_, PyAny>>,
         sim_errors: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -265,6 +281,7 @@ impl PyWorker {
             max_states,
             max_steps,
             physics,
+            executions: execution,
             ..EpisodesRequest::new(methods)
         }
         .prepare()
@@ -276,10 +293,10 @@ impl PyWorker {
         })
     }
 
-    /// Runs the episode `(method, scene, task_id, seed)` with the GIL released (other
-    /// threads may run theirs meanwhile); returns what the driver records.
+    /// Runs the episode `(method, scene, task_id, seed, execution)` with the GIL released
+    /// (other threads may run theirs meanwhile); returns what the driver records.
     fn run(&self, py: Python<'_>, key: Key) -> PyResult<Handed> {
-        let key = key_of(key);
+        let key = key_of(py, key)?;
         let result = py
             .detach(|| self.worker.run(&key, &Cancel::default()))
             .map_err(|e| errors::session_err(py, e))?;

@@ -1,7 +1,8 @@
 //! Methods written in Python: a class (or any callable) `M` becomes a method of the
 //! engine (an `External` method of the session's engine): `M(task)` once per episode, then
 //! `act(view)` once per step, given a `View` and answering a `Decision` or a
-//! `(robot, action)` tuple. A plain `act` runs on the episode's thread with the GIL held
+//! `(robot, action)` tuple (in a parallel episode, a list of them, one per robot that
+//! acts). A plain `act` runs on the episode's thread with the GIL held
 //! for the call only; a coroutine that `act` returns runs on the run's event loop
 //! (`coherent._methods.Loop`), where those of concurrent episodes overlap, while the
 //! episode waits without the GIL.
@@ -83,10 +84,17 @@ impl PyView {
         self.view.step
     }
 
-    /// The step budget (2 x GT unless set).
+    /// The step budget (2 x GT unless set; 2 x the fewest joint steps in parallel).
     #[getter]
     fn max_steps(&self) -> u32 {
         self.view.max_steps
+    }
+
+    /// `"sequential"` (`act` answers one decision a step) or `"parallel"` (a list: one
+    /// decision per robot that acts, all carried out at once).
+    #[getter]
+    fn execution(&self) -> &'static str {
+        self.view.execution.name()
     }
 
     /// Node ids of the robots, in the task's order.
@@ -116,7 +124,8 @@ impl PyView {
     }
 
     /// Every earlier step, oldest first: `(robot, action, ok, reason)`, robot and action
-    /// None for a step without an action, reason None when it ran.
+    /// None for a step without an action, reason None when it ran; of a parallel step,
+    /// one for each robot given an action in it, in team order.
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let list = PyList::empty(py);
@@ -231,7 +240,16 @@ impl PyDecision {
     }
 }
 
-/// What `act` returned, as a choice; anything else is the method's error.
+/// What `act` returned, as its choices: a list of decisions (several robots' in a
+/// parallel episode), or one; anything else is the method's error.
+fn choices_of(answer: &Bound<'_, PyAny>) -> Result<Vec<Choice>, String> {
+    match answer.cast::<PyList>() {
+        Ok(list) => list.iter().map(|item| choice_of(&item)).collect(),
+        Err(_) => choice_of(answer).map(|c| vec![c]),
+    }
+}
+
+/// One decision `act` returned, as a choice; anything else is the method's error.
 fn choice_of(answer: &Bound<'_, PyAny>) -> Result<Choice, String> {
     if let Ok(d) = answer.cast::<PyDecision>() {
         let d = d.get();
@@ -257,7 +275,7 @@ fn choice_of(answer: &Bound<'_, PyAny>) -> Result<Choice, String> {
         }),
         _ => Err(format!(
             "act returned {}: expected a coherent.Decision or a (robot, action) tuple of an \
-             int (or None) and a str",
+             int (or None) and a str (or, in a parallel episode, a list of them)",
             answer
                 .repr()
                 .map_or_else(|_| "an object".into(), |r| r.to_string())
@@ -388,8 +406,8 @@ struct PythonPolicy {
 
 /// A step's answer: at once, or from the event loop.
 enum Started {
-    Now(Result<Choice, String>),
-    Later(oneshot::Receiver<Result<Choice, String>>, Py<PyAny>),
+    Now(Result<Vec<Choice>, String>),
+    Later(oneshot::Receiver<Result<Vec<Choice>, String>>, Py<PyAny>),
 }
 
 impl PythonPolicy {
@@ -411,7 +429,7 @@ impl PythonPolicy {
             Err(e) => return Ok(Started::Now(Err(self.method.failed(py, e)))),
         };
         if !answer.hasattr("__await__")? {
-            return Ok(Started::Now(choice_of(&answer)));
+            return Ok(Started::Now(choices_of(&answer)));
         }
         let (tx, rx) = oneshot::channel();
         let done = Done {
@@ -450,7 +468,7 @@ impl Policy for PythonPolicy {
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
             Act {
-                choice: choice.map_err(MethodFailure),
+                choices: choice.map_err(MethodFailure),
                 calls,
             }
         })
@@ -474,7 +492,7 @@ impl Drop for CancelOnDrop {
 /// exception, goes to the waiting episode.
 #[pyclass(module = "coherent._coherent", frozen)]
 struct Done {
-    tx: Mutex<Option<oneshot::Sender<Result<Choice, String>>>>,
+    tx: Mutex<Option<oneshot::Sender<Result<Vec<Choice>, String>>>>,
     method: Arc<PythonMethod>,
 }
 
@@ -483,7 +501,7 @@ impl Done {
     fn __call__(&self, future: &Bound<'_, PyAny>) {
         let py = future.py();
         let choice = match future.call_method0("result") {
-            Ok(answer) => choice_of(&answer),
+            Ok(answer) => choices_of(&answer),
             Err(e) => Err(self.method.failed(py, e)),
         };
         if let Some(tx) = self

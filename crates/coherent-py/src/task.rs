@@ -5,17 +5,16 @@ use std::sync::{Arc, OnceLock};
 
 use coherent::session::check;
 use coherent::session::engine::{
-    Cancel, DEFAULT_NAMESPACE, Environment, Limits, NodeId, RawGraph, Task, TaskError, feasibility,
-    native, original,
+    Cancel, DEFAULT_NAMESPACE, Environment, Execution, Limits, NodeId, RawGraph, Task, TaskError,
+    feasibility, native, original,
 };
 use coherent::session::episode::environment;
 use coherent::session::robots::Robots;
-use pyo3::exceptions::PyOverflowError;
+use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
-
+use crate::convert::{self, action_text, interruptible, json_to_py, py_repr, to_py};
 use crate::errors::{self, core_err, short_repr};
 
 /// A task: the scene graph at the start, the robots, the goal and the ground truth.
@@ -199,14 +198,15 @@ fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
     dict.set_item("edges", to_py(dict.py(), &graph.edges)?)
 }
 
-/// A task's environment: robots observe and act one action at a time, by the rules, and
-/// with `physics=True` also in Rapier; with `robots="ros2"` robots behind ROS 2 action
-/// servers carry the actions out.
+/// A task's environment: robots observe and act one action at a time (with
+/// `execution="parallel"`, in joint steps), by the rules, and with `physics=True` also in
+/// Rapier; with `robots="ros2"` robots behind ROS 2 action servers carry the actions out.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 pub(crate) struct PyEnv {
     env: Box<dyn Environment + Send + Sync>,
     task: Py<PyTask>,
     physics: bool,
+    execution: Execution,
     /// The namespace of the robots' actions over ROS 2; None when local.
     namespace: Option<String>,
 }
@@ -215,13 +215,15 @@ pub(crate) struct PyEnv {
 impl PyEnv {
     #[new]
     #[pyo3(signature = (
-        task, physics = false, *, robots = "local", namespace = None, robot_timeout = 10.0,
-        server_wait = 10.0
+        task, physics = false, *, execution = Execution::Sequential, robots = "local",
+        namespace = None, robot_timeout = 10.0, server_wait = 10.0
     ))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         task: Bound<'_, PyTask>,
         physics: bool,
+        #[pyo3(from_py_with = execution_arg)] execution: Execution,
         robots: &str,
         namespace: Option<&str>,
         robot_timeout: f64,
@@ -239,8 +241,16 @@ impl PyEnv {
             env,
             task: task.unbind(),
             physics,
+            execution,
             namespace,
         })
+    }
+
+    /// `"sequential"` (`step(robot, action)`) or `"parallel"` (`step(actions)`, joint
+    /// steps).
+    #[getter]
+    fn execution(&self) -> &'static str {
+        self.execution.name()
     }
 
     /// Whether actions are also carried out in physics.
@@ -314,13 +324,38 @@ impl PyEnv {
     /// Tries `action` for `robot`: `(ok, reason, done)`. An infeasible or unparsable
     /// action is not an error: `ok` is False and `reason` says why. A str that is not text
     /// (a lone surrogate) cannot be tried and raises `ActionParseError`.
-    fn step(
+    ///
+    /// With `execution="parallel"`, `step(actions)` tries one joint step: `actions` is a
+    /// dict `{robot: action}` or a list of `(robot, action)` pairs, at most one action a
+    /// robot; it gives `(oks, reasons, done)`, a list each in the order given. A step the
+    /// rules refuse (an action not offered, two that interfere, a robot given two)
+    /// carries out nothing, each reason saying what it means for that robot.
+    #[pyo3(signature = (robot, action = None))]
+    fn step<'py>(
         &mut self,
-        py: Python<'_>,
-        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
-        #[pyo3(from_py_with = action_text)] action: String,
-    ) -> PyResult<(bool, Option<String>, bool)> {
-        let robot = node_id(py, self.env.task(), robot)?;
+        py: Python<'py>,
+        robot: &Bound<'py, PyAny>,
+        action: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let parallel = self.execution == Execution::Parallel;
+        let one = match (action, parallel) {
+            (Some(action), false) => (robot, action),
+            (None, true) => return self.step_joint(py, robot),
+            (None, false) => {
+                return Err(PyTypeError::new_err(
+                    "step(robot, action): a joint step of several robots needs \
+                     Env(task, execution=\"parallel\")",
+                ));
+            }
+            (Some(_), true) => {
+                return Err(PyTypeError::new_err(
+                    "step(actions): an Env of execution=\"parallel\" takes one joint step, \
+                     {robot: action, ...} or [(robot, action), ...]",
+                ));
+            }
+        };
+        let robot = node_id(py, self.env.task(), robot_arg(one.0)?)?;
+        let action = action_text(one.1)?;
         let outcome = if self.physics || self.namespace.is_some() {
             let env = &mut self.env;
             py.detach(|| env.step(robot, &action))
@@ -328,15 +363,18 @@ impl PyEnv {
             self.env.step(robot, &action)
         }
         .map_err(|e| core_err(py, e))?;
-        Ok((
-            outcome.executed(),
-            outcome.infeasible.map(|i| i.message),
-            outcome.done,
-        ))
+        let reason = outcome.infeasible.map(|i| i.message);
+        (outcome.executed(), reason, outcome.done).into_pyobject(py)
     }
 
     fn goal_satisfied(&self) -> bool {
         self.env.goal_satisfied()
+    }
+
+    /// The simulated seconds since the start, with physics; None otherwise.
+    #[getter]
+    fn sim_seconds(&self) -> Option<f64> {
+        self.env.sim_seconds()
     }
 
     /// The whole current graph: `{"nodes": [...], "edges": [...]}`.
@@ -355,14 +393,56 @@ impl PyEnv {
         let meta = &self.env.task().meta;
         let flag = |b: bool| if b { "True" } else { "False" };
         format!(
-            "Env(scene={}, task_id={}, robots={:?}, physics={}, goal_satisfied={})",
+            "Env(scene={}, task_id={}, robots={:?}, physics={}, execution={}, goal_satisfied={})",
             py_repr(py, &meta.scene),
             meta.task_id,
             self.robots(),
             flag(self.physics),
+            py_repr(py, self.execution.name()),
             flag(self.env.goal_satisfied())
         )
     }
+}
+
+impl PyEnv {
+    /// `step(actions)` of a parallel environment: one joint step.
+    fn step_joint<'py>(
+        &mut self,
+        py: Python<'py>,
+        actions: &Bound<'py, PyAny>,
+    ) -> PyResult<Bound<'py, PyTuple>> {
+        let pairs: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)> = match actions.cast::<PyDict>() {
+            Ok(d) => d.iter().collect(),
+            Err(_) => actions.extract()?,
+        };
+        let mut step = Vec::with_capacity(pairs.len());
+        for (robot, action) in &pairs {
+            step.push((
+                node_id(py, self.env.task(), robot_arg(robot)?)?,
+                action_text(action)?,
+            ));
+        }
+        let refs: Vec<(NodeId, &str)> = step.iter().map(|(r, a)| (*r, a.as_str())).collect();
+        let outcome = if self.physics || self.namespace.is_some() {
+            let env = &mut self.env;
+            py.detach(|| env.step_joint(&refs))
+        } else {
+            self.env.step_joint(&refs)
+        }
+        .map_err(|e| core_err(py, e))?;
+        let oks: Vec<bool> = outcome.parts.iter().map(|p| p.executed()).collect();
+        let reasons: Vec<Option<String>> = outcome
+            .parts
+            .into_iter()
+            .map(|p| p.infeasible.map(|i| i.message))
+            .collect();
+        (oks, reasons, outcome.done).into_pyobject(py)
+    }
+}
+
+/// `execution` of `Env`.
+fn execution_arg(obj: &Bound<'_, PyAny>) -> PyResult<Execution> {
+    convert::execution(obj, "execution")
 }
 
 /// The robots of `robots=` (`"local"` or `"ros2"`), with `namespace`, `robot_timeout`

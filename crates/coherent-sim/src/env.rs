@@ -310,6 +310,10 @@ impl Environment for PhysicalEnv {
         })
     }
 
+    fn sim_seconds(&self) -> Option<f64> {
+        Some(self.world.sim_time)
+    }
+
     /// Rebuilds the world from the layout (deterministic: the same bodies in the same order).
     fn reset(&mut self) {
         self.state = self.task.init.clone();

@@ -119,7 +119,8 @@ pub async fn run(
     }
     let run_tasks = Arc::new(RunTasks::new(tasks)?);
     let mut ledger = Ledger::open(&config.out)?;
-    let keys = ledger.plan(tasks, &config.episodes.methods, config.seeds);
+    let episodes = &config.episodes;
+    let keys = ledger.plan(tasks, &episodes.methods, &episodes.executions, config.seeds);
     progress(Event::Start {
         to_run: keys.len(),
         skipped: ledger.outcome().skipped,

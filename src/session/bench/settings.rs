@@ -3,7 +3,7 @@
 //! ([`EpisodesRequest`]) and as the episodes get them ([`EpisodeSettings`]).
 
 use coherent_agents::episode::HISTORY_WINDOW;
-use coherent_agents::{MethodSpec, PriceTable, Prompts};
+use coherent_agents::{Execution, MethodSpec, PriceTable, Prompts};
 use coherent_core::planner::Limits;
 
 use crate::session::backend::{BackendChoice, BackendRequest};
@@ -16,6 +16,9 @@ use crate::session::robots::Robots;
 pub struct EpisodesRequest {
     /// The run's methods; an episode's key names its method.
     pub methods: Vec<MethodSpec>,
+    /// How the robots take their steps, each method run in each (an episode's key names
+    /// it).
+    pub executions: Vec<Execution>,
     /// Who answers the model-using methods.
     pub backend: BackendRequest,
     pub prompts: PromptSource,
@@ -33,12 +36,13 @@ pub struct EpisodesRequest {
 }
 
 impl EpisodesRequest {
-    /// `methods` with the paper's settings: the backend the environment configures, the
-    /// built-in prompts and prices, the history window, the default planner bound,
-    /// 2 x GT steps, local robots without physics.
+    /// `methods` with the paper's settings: sequential, the backend the environment
+    /// configures, the built-in prompts and prices, the history window, the default
+    /// planner bound, 2 x GT steps, local robots without physics.
     pub fn new(methods: Vec<MethodSpec>) -> EpisodesRequest {
         EpisodesRequest {
             methods,
+            executions: vec![Execution::Sequential],
             backend: BackendRequest::default(),
             prompts: PromptSource::default(),
             prices: PriceSource::default(),
@@ -51,7 +55,8 @@ impl EpisodesRequest {
     }
 
     /// The settings, checked: the prompt set first (a bad template costs nothing), the
-    /// prices, distinct method names, the backend.
+    /// prices, distinct method names, the executions (each method must run each), the
+    /// backend.
     pub fn prepare(self) -> Result<EpisodeSettings, Error> {
         let prompts = self.prompts.read()?;
         let prices = self.prices.read()?;
@@ -59,8 +64,20 @@ impl EpisodesRequest {
             return Err(Error::Invalid("no methods to run".into()));
         }
         distinct_names(&self.methods)?;
+        let mut executions = self.executions;
+        executions.sort();
+        executions.dedup();
+        if executions.is_empty() {
+            return Err(Error::Invalid("no execution to run the methods in".into()));
+        }
+        for method in &self.methods {
+            for &execution in &executions {
+                method.check_runs(execution)?;
+            }
+        }
         Ok(EpisodeSettings {
             methods: self.methods,
+            executions,
             backend: self.backend.choose()?,
             history: self.history,
             max_states: self.max_states,
@@ -77,6 +94,8 @@ impl EpisodesRequest {
 #[derive(Clone, Debug)]
 pub struct EpisodeSettings {
     pub methods: Vec<MethodSpec>,
+    /// Sequential, parallel or both, in that order.
+    pub executions: Vec<Execution>,
     pub backend: BackendChoice,
     pub history: usize,
     pub max_states: usize,

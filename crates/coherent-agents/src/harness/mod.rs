@@ -2,7 +2,8 @@
 //! executor, or workers on a cluster): which tasks ([`subset`]), the results file, one
 //! JSON line per finished episode ([`results`]), the driver's side of a run that resumes
 //! it and writes each result once ([`ledger`]), what a run reports as it goes
-//! ([`progress`]), what tokens cost ([`prices`]) and the paper's tables ([`report`]).
+//! ([`progress`]), what tokens cost ([`prices`]) and the paper's tables ([`report`]),
+//! with the makespan table of runs with parallel episodes ([`speedup`]).
 //! The crate root names this module `bench` too, with its main types at hand.
 
 pub mod ledger;
@@ -10,6 +11,7 @@ pub mod prices;
 pub mod progress;
 pub mod report;
 pub mod results;
+pub mod speedup;
 pub mod subset;
 
 pub use ledger::{BenchOutcome, EpisodeResult, Ledger, episode_keys};

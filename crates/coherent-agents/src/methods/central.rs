@@ -1,21 +1,38 @@
 //! The central prompt (the prompt set's `central.txt`), which CMRS answers once per step
 //! and LLM-MCTS samples for its prior: the team, the rules, the instruction, the team's
-//! observation, the last executed actions and every joint action line
-//! ([`crate::methods::joint`]); and the line an answer chooses.
+//! observation, the last executed actions and every team action line
+//! ([`crate::methods::team_actions`]); and the line an answer chooses.
 
 use coherent_core::{NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::Message;
-use crate::methods::answer::{normal, read_line};
+use crate::methods::answer::{field_text, json_object, normal, read_line};
 use crate::methods::prompt;
 use crate::methods::templates::{self, Prompts, Template};
 
 /// The central prompt: the team, the rules, the instruction, the team's observation,
-/// the last executed actions and every joint action line (CMRS, LLM-MCTS samples),
+/// the last executed actions and every team action line (CMRS, LLM-MCTS samples),
 /// rendered from `prompts`.
 pub fn messages(
     prompts: &Prompts,
+    task: &Task,
+    observation: &str,
+    lines: &[String],
+    history: &[String],
+) -> Vec<Message> {
+    render(
+        prompts.text(Template::Central),
+        task,
+        observation,
+        lines,
+        history,
+    )
+}
+
+/// `template` (a system part, the user mark, a user part) filled.
+fn render(
+    template: &str,
     task: &Task,
     observation: &str,
     lines: &[String],
@@ -35,7 +52,7 @@ pub fn messages(
         ("history", history.as_str()),
         ("actions", actions.as_str()),
     ];
-    let (system, user) = templates::split(prompts.text(Template::Central));
+    let (system, user) = templates::split(template);
     let mut messages = Vec::new();
     if !system.trim().is_empty() {
         messages.push(Message::system(
@@ -46,7 +63,7 @@ pub fn messages(
     messages
 }
 
-/// The answer: one of the joint action lines.
+/// The answer: one of the team action lines.
 pub fn schema(lines: &[String]) -> Value {
     json!({
         "type": "object",
@@ -54,6 +71,75 @@ pub fn schema(lines: &[String]) -> Value {
         "required": ["action"],
         "additionalProperties": false,
     })
+}
+
+/// The central prompt of a parallel episode (CMRS in joint steps): as [`messages`], the
+/// model choosing at most one line per robot for the step.
+pub fn messages_parallel(
+    prompts: &Prompts,
+    task: &Task,
+    observation: &str,
+    lines: &[String],
+    history: &[String],
+) -> Vec<Message> {
+    render(
+        prompts.text(Template::CentralParallel),
+        task,
+        observation,
+        lines,
+        history,
+    )
+}
+
+/// The answer of a parallel episode: a list of the team action lines.
+pub fn schema_parallel(lines: &[String]) -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "actions": {"type": "array", "items": {"type": "string", "enum": lines}},
+        },
+        "required": ["actions"],
+        "additionalProperties": false,
+    })
+}
+
+/// The robots and actions a parallel answer chooses, at most one per robot (a robot's
+/// later lines are left out and said so), each read as [`choose`] reads one line: the
+/// `actions` list of its JSON object, else (an answer in the sequential form) the one
+/// line it names. Returns the choices in the answer's order and what was left out; an
+/// error when no line is usable.
+pub(crate) fn choose_several(
+    task: &Task,
+    lines: &[String],
+    text: &str,
+) -> Result<(Vec<(NodeId, String)>, Vec<String>), String> {
+    let said: Vec<String> = match json_object(text)
+        .as_ref()
+        .and_then(|m| m.get("actions"))
+        .and_then(Value::as_array)
+    {
+        Some(items) => items
+            .iter()
+            .map(|v| v.as_str().map(field_text).unwrap_or_default())
+            .collect(),
+        None => vec![read_line(text)],
+    };
+    let mut chosen: Vec<(NodeId, String)> = Vec::new();
+    let mut unused = Vec::new();
+    for line in said {
+        match choose(task, lines, &line) {
+            Ok((robot, _)) if chosen.iter().any(|(r, _)| *r == robot) => unused.push(format!(
+                "{} was given two actions: the first counts",
+                prompt::robot_label(task, robot)
+            )),
+            Ok(pick) => chosen.push(pick),
+            Err(why) => unused.push(why),
+        }
+    }
+    if chosen.is_empty() && !unused.is_empty() {
+        return Err(unused.join("; "));
+    }
+    Ok((chosen, unused))
 }
 
 /// The robot and action an answer chooses: one of `lines` (matched ignoring case and

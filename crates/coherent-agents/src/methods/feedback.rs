@@ -1,41 +1,39 @@
 //! Feedback: what a method's next rounds hear about a round, in words. PEFA's assigner
 //! hears the executor's self-reflection on the checked outcome ([`pefa`]) and keeps the
 //! last rounds as history lines ([`assigner_history`]); the central and dialogue
-//! baselines hear what ran ([`joint`]); MCTS records what its chosen action did
+//! baselines hear what ran ([`team`]); MCTS records what its chosen action did
 //! ([`mcts`]). A transcript keeps each round's feedback, and a replay must give it back
 //! word for word.
 
-use coherent_core::Task;
+use coherent_core::{NodeId, Task};
 
 use crate::methods::prompt::robot_label;
-use crate::records::transcript::{Round, RoundOutcome};
+use crate::records::transcript::{Decision, RobotPart, Round, RoundOutcome};
 
 /// What the assigner hears about a round, PEFA's Feedback: self-reflection built from
 /// the executor's answer and the checked outcome (or why the round never got that far).
-pub fn pefa(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
-    let robot = round
-        .proposal
-        .as_ref()
-        .map(|p| robot_label(task, p.robot))
-        .unwrap_or_default();
-    let action = round
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.clone())
-        .unwrap_or_default();
+/// `robot` is the one the proposal named, `actions` its list, `decision` its executor's;
+/// in a parallel round, a robot's part ([`pefa_part`]).
+pub fn pefa(
+    task: &Task,
+    robot: Option<NodeId>,
+    actions: &[String],
+    decision: Option<&Decision>,
+    outcome: &RoundOutcome,
+) -> String {
+    let robot = robot.map(|r| robot_label(task, r)).unwrap_or_default();
+    let action = decision.and_then(|d| d.action.clone()).unwrap_or_default();
     let can_do_now = || {
-        if round.actions.is_empty() {
+        if actions.is_empty() {
             format!("{robot} can do nothing now.")
         } else {
-            format!("{robot} can do now: {}.", round.actions.join("; "))
+            format!("{robot} can do now: {}.", actions.join("; "))
         }
     };
     match outcome {
         RoundOutcome::Executed => {
-            let done = round.decision.as_ref().is_some_and(|d| d.subtask_complete);
-            let note = round
-                .decision
-                .as_ref()
+            let done = decision.is_some_and(|d| d.subtask_complete);
+            let note = decision
                 .map(|d| d.note.trim().to_owned())
                 .unwrap_or_default();
             if done {
@@ -53,9 +51,7 @@ pub fn pefa(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
             )
         }
         RoundOutcome::Declined => {
-            let note = round
-                .decision
-                .as_ref()
+            let note = decision
                 .map(|d| d.note.trim().to_owned())
                 .filter(|n| !n.is_empty())
                 .unwrap_or_else(|| "no reason given".into());
@@ -77,8 +73,23 @@ pub fn pefa(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
     }
 }
 
-/// The line PEFA's assigner reads about a round in its history (the Adjustment).
+/// What the assigner hears about one robot's part of a parallel round ([`pefa`]).
+pub fn pefa_part(task: &Task, part: &RobotPart) -> String {
+    pefa(
+        task,
+        Some(part.robot),
+        &part.actions,
+        part.decision.as_ref(),
+        &part.outcome,
+    )
+}
+
+/// The line PEFA's assigner reads about a round in its history (the Adjustment); of a
+/// parallel round, what became of each robot's subtask.
 pub fn assigner_history(task: &Task, round: &Round) -> String {
+    if !round.parts.is_empty() {
+        return format!("Round {}: {}", round.step, round.feedback);
+    }
     match &round.proposal {
         Some(p) => format!(
             "Round {}: you asked {} to \"{}\". {}",
@@ -93,7 +104,7 @@ pub fn assigner_history(task: &Task, round: &Round) -> String {
 
 /// What a round of a central or dialogue method did (`line` is its `<robot>: <action>`),
 /// in a sentence.
-pub fn joint(line: &str, outcome: &RoundOutcome) -> String {
+pub fn team(line: &str, outcome: &RoundOutcome) -> String {
     match outcome {
         RoundOutcome::Executed => format!("{line} ran."),
         RoundOutcome::Infeasible { message, .. } => format!("{line} could not run: {message}"),

@@ -128,7 +128,13 @@ fn finish(
     outcome: RoundOutcome,
     start: Instant,
 ) -> Round {
-    round.feedback = feedback::pefa(env.task(), &round, &outcome);
+    round.feedback = feedback::pefa(
+        env.task(),
+        round.proposal.as_ref().map(|p| p.robot),
+        &round.actions,
+        round.decision.as_ref(),
+        &outcome,
+    );
     round.outcome = outcome;
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -1,12 +1,14 @@
-//! The prompt set: the eight templates the methods render their prompts from, each the
-//! built-in one (`prompts/*.txt`, compiled in) or a file of the same name from a folder
+//! The prompt set: the twelve templates the methods render their prompts from (four of
+//! them for parallel episodes only), each the built-in one (`prompts/*.txt`, compiled in) or a file of the same name from a folder
 //! given at run time. A set is one value, passed down to the methods with the episode's
 //! settings; it is checked when it is made, so that a template naming a placeholder its
 //! method does not fill is refused before any model call.
 //!
-//! A transcript's header records the set ([`PromptRecord`]): a hash of every template's
-//! text and the text of each file that replaced a built-in template, so that two runs
-//! can be told apart and a replay renders the very prompts that were recorded.
+//! A transcript's header records the set ([`PromptRecord`]): a hash of the text of every
+//! template its execution's methods render (a sequential episode's leaves the parallel
+//! templates out, so that it is what it was before they existed) and the text of each
+//! file that replaced a built-in template, so that two runs can be told apart and a
+//! replay renders the very prompts that were recorded.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -14,6 +16,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
+
+use crate::episode::execution::Execution;
 
 /// The line of a two-part template ([`Template::Central`], [`Template::DmrsSpeaker`])
 /// that separates its system part from its user part.
@@ -34,14 +38,22 @@ pub enum Template {
     ExecutorRobotArm,
     /// Every executor, each round: the subtask, its observation, its action list.
     ExecutorUser,
-    /// CMRS and LLM-MCTS: one central model choosing a line of the joint action space.
+    /// CMRS and LLM-MCTS: one central model choosing a line of the team action space.
     Central,
     /// DMRS: one robot's turn in the team's dialogue.
     DmrsSpeaker,
+    /// PEFA in joint steps: the task assigner's system prompt.
+    AssignerParallelSystem,
+    /// PEFA in joint steps: each round, subtasks for any of the idle robots.
+    AssignerParallelUser,
+    /// CMRS in joint steps: one central model choosing at most one line per robot.
+    CentralParallel,
+    /// DMRS in joint steps: one robot's turn, proposing its own action.
+    DmrsSpeakerParallel,
 }
 
 impl Template {
-    pub const ALL: [Template; 8] = [
+    pub const ALL: [Template; 12] = [
         Template::AssignerSystem,
         Template::AssignerUser,
         Template::ExecutorQuadrotor,
@@ -50,7 +62,27 @@ impl Template {
         Template::ExecutorUser,
         Template::Central,
         Template::DmrsSpeaker,
+        Template::AssignerParallelSystem,
+        Template::AssignerParallelUser,
+        Template::CentralParallel,
+        Template::DmrsSpeakerParallel,
     ];
+
+    /// Whether only parallel episodes render it.
+    pub fn parallel_only(self) -> bool {
+        matches!(
+            self,
+            Template::AssignerParallelSystem
+                | Template::AssignerParallelUser
+                | Template::CentralParallel
+                | Template::DmrsSpeakerParallel
+        )
+    }
+
+    /// Whether the methods of `execution` may render it.
+    pub fn used_in(self, execution: Execution) -> bool {
+        execution == Execution::Parallel || !self.parallel_only()
+    }
 
     /// Its file's name, in `prompts/` and in a prompt folder.
     pub fn file_name(self) -> &'static str {
@@ -63,6 +95,10 @@ impl Template {
             Template::ExecutorUser => "executor_user.txt",
             Template::Central => "central.txt",
             Template::DmrsSpeaker => "dmrs_speaker.txt",
+            Template::AssignerParallelSystem => "assigner_parallel_system.txt",
+            Template::AssignerParallelUser => "assigner_parallel_user.txt",
+            Template::CentralParallel => "central_parallel.txt",
+            Template::DmrsSpeakerParallel => "dmrs_speaker_parallel.txt",
         }
     }
 
@@ -82,20 +118,40 @@ impl Template {
             Template::ExecutorUser => include_str!("../../prompts/executor_user.txt"),
             Template::Central => include_str!("../../prompts/central.txt"),
             Template::DmrsSpeaker => include_str!("../../prompts/dmrs_speaker.txt"),
+            Template::AssignerParallelSystem => {
+                include_str!("../../prompts/assigner_parallel_system.txt")
+            }
+            Template::AssignerParallelUser => {
+                include_str!("../../prompts/assigner_parallel_user.txt")
+            }
+            Template::CentralParallel => include_str!("../../prompts/central_parallel.txt"),
+            Template::DmrsSpeakerParallel => {
+                include_str!("../../prompts/dmrs_speaker_parallel.txt")
+            }
         }
     }
 
     /// The placeholders its method fills (`{{name}}` in the text); any other is refused.
     pub fn placeholders(self) -> &'static [&'static str] {
         match self {
-            Template::AssignerSystem => &["team"],
+            Template::AssignerSystem | Template::AssignerParallelSystem => &["team"],
             Template::AssignerUser => &["instruction", "robots", "observation", "history"],
+            Template::AssignerParallelUser => &[
+                "instruction",
+                "robots",
+                "observation",
+                "history",
+                "busy",
+                "idle",
+            ],
             Template::ExecutorQuadrotor
             | Template::ExecutorRobotDog
             | Template::ExecutorRobotArm => &["robot"],
             Template::ExecutorUser => &["subtask", "observation", "actions"],
-            Template::Central => &["team", "instruction", "observation", "history", "actions"],
-            Template::DmrsSpeaker => &[
+            Template::Central | Template::CentralParallel => {
+                &["team", "instruction", "observation", "history", "actions"]
+            }
+            Template::DmrsSpeaker | Template::DmrsSpeakerParallel => &[
                 "robot",
                 "kind",
                 "team",
@@ -211,7 +267,8 @@ pub struct Prompts(Arc<Set>);
 struct Set {
     /// The templates that replace built-in ones, with their text.
     replaced: BTreeMap<Template, String>,
-    hash: String,
+    /// [`Prompts::hash`] of each execution: sequential, parallel.
+    hashes: [String; 2],
 }
 
 impl Default for Prompts {
@@ -223,7 +280,7 @@ impl Default for Prompts {
 impl fmt::Debug for Prompts {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Prompts")
-            .field("hash", &self.0.hash)
+            .field("hashes", &self.0.hashes)
             .field("replaced", &self.replaced_names())
             .finish()
     }
@@ -236,11 +293,18 @@ impl Prompts {
     }
 
     fn with(replaced: BTreeMap<Template, String>) -> Prompts {
-        let hash = hash(Template::ALL.map(|t| {
-            let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
-            (t.file_name(), text)
-        }));
-        Prompts(Arc::new(Set { replaced, hash }))
+        let hashes = Execution::ALL.map(|execution| {
+            hash(
+                Template::ALL
+                    .into_iter()
+                    .filter(|t| t.used_in(execution))
+                    .map(|t| {
+                        let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
+                        (t.file_name(), text)
+                    }),
+            )
+        });
+        Prompts(Arc::new(Set { replaced, hashes }))
     }
 
     /// The built-in templates, with those of `files` (`(name, text)`, the name a
@@ -291,14 +355,17 @@ impl Prompts {
     /// The set a transcript recorded: the built-in templates with the recorded
     /// replacements, which must hash as recorded (else the built-in templates changed
     /// since, and the recorded prompts cannot be rendered again).
-    pub fn from_record(record: &PromptRecord) -> Result<Prompts, PromptError> {
+    pub fn from_record(
+        record: &PromptRecord,
+        execution: Execution,
+    ) -> Result<Prompts, PromptError> {
         let files = record
             .replaced
             .iter()
             .map(|(name, text)| (name.clone(), text.clone()))
             .collect();
         let prompts = Prompts::from_texts(Path::new("(recorded)"), files)?;
-        if prompts.hash() != record.hash {
+        if prompts.hash(execution) != record.hash {
             return Err(PromptError::Recorded(format!(
                 "the transcript was recorded with prompt set {}, but its replaced templates \
                  ({}) with this version's built-in ones give {}: the built-in templates \
@@ -314,7 +381,7 @@ impl Prompts {
                         .collect::<Vec<_>>()
                         .join(", ")
                 },
-                prompts.hash()
+                prompts.hash(execution)
             )));
         }
         Ok(prompts)
@@ -328,10 +395,10 @@ impl Prompts {
             .map_or(template.builtin(), String::as_str)
     }
 
-    /// 32 hex digits: FNV-1a (128 bits) of every template's file name and text, in
-    /// [`Template::ALL`] order.
-    pub fn hash(&self) -> &str {
-        &self.0.hash
+    /// 32 hex digits: FNV-1a (128 bits) of the file name and text of every template the
+    /// methods of `execution` render, in [`Template::ALL`] order.
+    pub fn hash(&self, execution: Execution) -> &str {
+        &self.0.hashes[execution as usize]
     }
 
     /// The file names of the templates that replace built-in ones.
@@ -339,16 +406,20 @@ impl Prompts {
         self.0.replaced.keys().map(|t| t.file_name()).collect()
     }
 
-    /// What a transcript's header records of the set.
-    pub fn record(&self) -> PromptRecord {
+    /// The templates that replace built-in ones, by file name, with their text.
+    pub fn replaced_texts(&self) -> BTreeMap<String, String> {
+        self.0
+            .replaced
+            .iter()
+            .map(|(t, text)| (t.file_name().to_owned(), text.clone()))
+            .collect()
+    }
+
+    /// What the header of a transcript of `execution` records of the set.
+    pub fn record(&self, execution: Execution) -> PromptRecord {
         PromptRecord {
-            hash: self.0.hash.clone(),
-            replaced: self
-                .0
-                .replaced
-                .iter()
-                .map(|(t, text)| (t.file_name().to_owned(), text.clone()))
-                .collect(),
+            hash: self.hash(execution).to_owned(),
+            replaced: self.replaced_texts(),
         }
     }
 }
@@ -447,8 +518,11 @@ mod tests {
             Template::AssignerSystem.builtin()
         );
         assert_eq!(set.replaced_names(), ["assigner_user.txt"]);
-        assert_ne!(set.hash(), Prompts::builtin().hash());
-        assert_eq!(set.hash().len(), 32);
+        assert_ne!(
+            set.hash(Execution::Sequential),
+            Prompts::builtin().hash(Execution::Sequential)
+        );
+        assert_eq!(set.hash(Execution::Sequential).len(), 32);
         // The same texts, the same hash; a file that repeats the built-in text replaces
         // nothing.
         let same = Prompts::from_texts(
@@ -462,7 +536,10 @@ mod tests {
             vec![("central.txt".into(), Template::Central.builtin().to_owned())],
         )
         .expect("a set");
-        assert_eq!(copy.hash(), Prompts::builtin().hash());
+        assert_eq!(
+            copy.hash(Execution::Sequential),
+            Prompts::builtin().hash(Execution::Sequential)
+        );
         assert!(copy.replaced_names().is_empty());
         let unknown =
             Prompts::from_texts(Path::new("d"), vec![("asigner.txt".into(), String::new())]);
@@ -476,14 +553,45 @@ mod tests {
             vec![("executor_user.txt".into(), "{{subtask}} {{actions}}".into())],
         )
         .expect("a set");
-        let record = set.record();
-        assert_eq!(Prompts::from_record(&record).expect("rebuilt"), set);
+        let record = set.record(Execution::Sequential);
+        assert_eq!(
+            Prompts::from_record(&record, Execution::Sequential).expect("rebuilt"),
+            set
+        );
         let changed = PromptRecord {
             hash: "0".repeat(32),
             ..record
         };
-        let e = Prompts::from_record(&changed).expect_err("refused");
+        let e = Prompts::from_record(&changed, Execution::Sequential).expect_err("refused");
         assert!(e.to_string().contains("executor_user.txt"), "{e}");
+    }
+
+    #[test]
+    fn a_parallel_template_changes_the_parallel_hash_alone() {
+        let set = Prompts::from_texts(
+            Path::new("d"),
+            vec![("central_parallel.txt".into(), "{{actions}}".into())],
+        )
+        .expect("a set");
+        let builtin = Prompts::builtin();
+        assert_eq!(
+            set.hash(Execution::Sequential),
+            builtin.hash(Execution::Sequential)
+        );
+        assert_ne!(
+            set.hash(Execution::Parallel),
+            builtin.hash(Execution::Parallel)
+        );
+        // The hash of the eight templates a sequential episode renders, as recorded before
+        // parallel templates existed: old transcripts replay.
+        assert_eq!(
+            builtin.hash(Execution::Sequential),
+            hash(
+                Template::ALL[..8]
+                    .iter()
+                    .map(|t| (t.file_name(), t.builtin()))
+            )
+        );
     }
 
     #[test]
@@ -499,8 +607,10 @@ mod tests {
         let written = export(&dir, false).expect("exported");
         assert_eq!(written.len(), Template::ALL.len());
         assert_eq!(
-            Prompts::read_dir(&dir).expect("reads back").hash(),
-            Prompts::builtin().hash()
+            Prompts::read_dir(&dir)
+                .expect("reads back")
+                .hash(Execution::Parallel),
+            Prompts::builtin().hash(Execution::Parallel)
         );
         assert!(export(&dir, false).is_err(), "no silent overwrite");
         export(&dir, true).expect("overwritten on request");
