@@ -363,8 +363,9 @@ impl PyEnv {
             self.env.step(robot, &action)
         }
         .map_err(|e| core_err(py, e))?;
+        let ok = outcome.executed();
         let reason = outcome.infeasible.map(|i| i.message);
-        (outcome.executed(), reason, outcome.done).into_pyobject(py)
+        (ok, reason, outcome.done).into_pyobject(py)
     }
 
     fn goal_satisfied(&self) -> bool {
