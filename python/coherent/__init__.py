@@ -14,6 +14,7 @@ Everything the ``coherent`` command line does, from Python::
     df = coherent.bench(tasks, ["pefa", "cmrs"], backend="simulated", sim_errors="all=0.1", seeds=3)
     df = coherent.bench(tasks, ["pefa"], backend=llm, executor="ray")   # on a Ray cluster
     coherent.report(df).table1                        # the paper's Table I as a DataFrame
+    coherent.view(episode)                            # the episode's page (inline in Jupyter)
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
 against cost (``pareto``) and the scene map (matplotlib); ``coherent.gym`` is a Gymnasium
@@ -26,10 +27,10 @@ matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasi
 ``pip install 'coherent[gym]'``.
 """
 
-from __future__ import annotations
-
-import importlib
-from typing import Any
+# The imports the package needs for itself are bound to underscored names, so that the
+# namespace holds the API (`__all__`), the submodules and nothing else.
+import importlib as _importlib
+from typing import Any as _Any
 
 from ._coherent import (
     DEFAULT_MAX_STATES,
@@ -68,6 +69,7 @@ from ._coherent import (
     validate,
     View,
 )
+from ._view import Page, view
 from .analysis import Report, bench, report, results
 from .executors import RayExecutor
 
@@ -88,6 +90,7 @@ __all__ = [
     "PromptError",
     "RayExecutor",
     "Reply",
+    "Page",
     "ReplayMismatchError",
     "Report",
     "RobotError",
@@ -111,15 +114,23 @@ __all__ = [
     "scene_layout",
     "select",
     "validate",
+    "view",
     "View",
 ]
 
-# Submodules load on first use: `coherent.plot` imports matplotlib (slow to import; the
-# extra `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
-_SUBMODULES = ("analysis", "benchmark", "gym", "plot")
+# The public submodules. `analysis` and `executors` are imported above; the others load on
+# first use: `coherent.plot` imports matplotlib (slow to import; the extra
+# `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
+_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "plot")
 
 
-def __getattr__(name: str) -> Any:
+def __getattr__(name: str) -> _Any:
     if name in _SUBMODULES:
-        return importlib.import_module(f"{__name__}.{name}")
+        return _importlib.import_module(f"{__name__}.{name}")
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    # What `dir(coherent)` and completion show: the API and the submodules, not the
+    # private modules (`_coherent`, `_methods`, ...) that importing the package loads.
+    return sorted([*__all__, *_SUBMODULES])

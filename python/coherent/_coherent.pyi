@@ -692,3 +692,13 @@ def robot_paths(source: Task | Episode) -> dict[int, list[tuple[float, float, fl
 
 def render_svg(source: Task | Episode, *, paths: bool = True) -> str:
     """The scene from above as SVG (``coherent render``), with the robots' paths."""
+
+def view_page(source_: Episode | _PathLike, other: Episode | _PathLike | None = None) -> str:
+    """The HTML page of an episode (an :class:`Episode` or a transcript's path), of two
+    side by side, or of a results file's index (``coherent.view`` wraps it)."""
+
+def results_page(lines: list[dict[str, Any]], name: str) -> str:
+    """The HTML index page of results lines, titled ``name``."""
+
+def framed_page(html: str) -> str:
+    """A page in a sandboxed ``<iframe srcdoc>``, as a notebook shows it inline."""

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Literal, Union
 
-from . import _coherent
+from . import _coherent, _view
 from ._coherent import LLM, Episode, Task
 from ._extras import needs
 from .executors import RayExecutor, resolve
@@ -42,7 +42,9 @@ def results(path: PathLike) -> pd.DataFrame:
     one row per line; the ``backend`` object is spread over ``backend_kind``,
     ``backend_model`` and ``backend_base_url``."""
     pandas = _pandas("coherent.results's DataFrame")
-    return _frame(pandas, _coherent.read_results(path))
+    frame = _frame(pandas, _coherent.read_results(path))
+    frame.attrs["path"] = os.fspath(path)
+    return frame
 
 
 def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
@@ -52,6 +54,8 @@ def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
         for name in _BACKEND_FIELDS:
             row[f"backend_{name}"] = line["backend"][name]
         rows.append(row)
+    # `df.coherent` shows the results page in Jupyter (coherent.view).
+    _view.register(pandas)
     return pandas.DataFrame(rows)
 
 
@@ -193,6 +197,7 @@ def bench(
     frame = _frame(pandas, _coherent.read_results(out))
     frame.attrs["outcome"] = outcome
     frame.attrs["malformed"] = [str(e) for e in malformed]
+    frame.attrs["path"] = os.fspath(out)
     return frame
 
 

@@ -421,7 +421,7 @@ def test_llm_api_key_hidden(key: str, why: str) -> None:
 
 
 @pytest.mark.parametrize(("value", "why"), [("\ud800", LONE.format(0)), ("yaml", 'expected "json_schema", "json_object" or "text"')])
-def test_llm_format(value: str, why: str) -> None:
+def test_an_unknown_llm_format_is_an_argument_error_naming_the_formats(value: str, why: str) -> None:
     with pytest.raises(coherent.ArgumentError) as info:
         coherent.LLM(base_url=LOCAL, model="m", format=value)  # type: ignore[arg-type]
     assert str(info.value) == f"format={value!r}: {why}"
@@ -441,7 +441,7 @@ def test_benchmark_subset(value: str, why: str) -> None:
     assert str(info.value) == f"subset={value!r}: {why}"
 
 
-def test_run_method(demo: coherent.Task, tmp_path: Path) -> None:
+def test_a_method_name_that_is_no_text_is_refused_by_run(demo: coherent.Task, tmp_path: Path) -> None:
     # A UnicodeEncodeError.
     with pytest.raises(coherent.ArgumentError) as info:
         coherent.run(demo, "pefa\ud800", out=tmp_path)
@@ -459,7 +459,7 @@ def test_run_method(demo: coherent.Task, tmp_path: Path) -> None:
     ],
     ids=["method", "llm and sim_errors"],
 )
-def test_run_refused(kwargs: dict[str, Any], message: str, demo: coherent.Task, tmp_path: Path) -> None:
+def test_run_refuses_unusable_arguments_before_writing(kwargs: dict[str, Any], message: str, demo: coherent.Task, tmp_path: Path) -> None:
     if kwargs.get("llm"):
         kwargs = {**kwargs, "llm": coherent.LLM(base_url=LOCAL, model="m")}
     with pytest.raises(coherent.ArgumentError) as info:
@@ -468,7 +468,7 @@ def test_run_refused(kwargs: dict[str, Any], message: str, demo: coherent.Task, 
     assert list(tmp_path.iterdir()) == []
 
 
-def test_bench_methods(demo: coherent.Task, tmp_path: Path) -> None:
+def test_a_method_name_that_is_no_text_is_refused_by_bench_before_writing(demo: coherent.Task, tmp_path: Path) -> None:
     # A UnicodeEncodeError.
     with pytest.raises(coherent.ArgumentError) as info:
         coherent.bench([demo], ["pefa", "cmrs\ud800"], out=tmp_path / "r.jsonl")
@@ -479,7 +479,7 @@ def test_bench_methods(demo: coherent.Task, tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("backend", ["\ud800", "openai", 3], ids=repr)
-def test_bench_backend(backend: Any, demo: coherent.Task, tmp_path: Path) -> None:
+def test_an_unknown_bench_backend_names_the_backends(backend: Any, demo: coherent.Task, tmp_path: Path) -> None:
     # ValueErrors that were no CoherentError.
     with pytest.raises(coherent.ArgumentError) as info:
         coherent.bench([demo], ["pefa"], backend=backend, out=tmp_path / "r.jsonl")
@@ -500,7 +500,7 @@ def test_bench_backend(backend: Any, demo: coherent.Task, tmp_path: Path) -> Non
     ],
     ids=["unknown method", "no methods", "no seeds", "no tasks", "sim_errors", "replay", "replay_from"],
 )
-def test_bench_refused(kwargs: dict[str, Any], message: str, demo: coherent.Task, tmp_path: Path) -> None:
+def test_bench_refuses_unusable_arguments_before_writing(kwargs: dict[str, Any], message: str, demo: coherent.Task, tmp_path: Path) -> None:
     arguments = {"tasks": [demo], "methods": ["pefa"], **kwargs}
     with pytest.raises(coherent.ArgumentError) as info:
         coherent.bench(**arguments, out=tmp_path / "r.jsonl")

@@ -116,7 +116,7 @@ def test_bench_in_physics_runs_every_action_in_rapier_too(tmp_path: Path) -> Non
         assert episode.header["robots"] == {"kind": "local"}
 
 
-def test_bench_errors(few: list[coherent.Task], tmp_path: Path) -> None:
+def test_bench_refuses_unusable_methods_seeds_backends_and_task_lists(few: list[coherent.Task], tmp_path: Path) -> None:
     out = tmp_path / "r.jsonl"
     with pytest.raises(ValueError, match="unknown method"):
         coherent.bench(few, ["pefa", "nope"], out=out)
@@ -135,7 +135,7 @@ def test_bench_errors(few: list[coherent.Task], tmp_path: Path) -> None:
     assert not out.exists()
 
 
-def test_results_errors(tmp_path: Path) -> None:
+def test_results_names_a_missing_file_and_a_line_missing_a_field(tmp_path: Path) -> None:
     with pytest.raises(coherent.CoherentError, match="missing.jsonl"):
         coherent.results(tmp_path / "missing.jsonl")
     bad = tmp_path / "bad.jsonl"
@@ -152,7 +152,7 @@ def seeded(env0_tasks: list[coherent.Task], tmp_path_factory: pytest.TempPathFac
     return out
 
 
-def test_report_tables(seeded: Path) -> None:
+def test_report_tables_have_the_papers_rows_columns_and_task_counts(seeded: Path) -> None:
     report = coherent.report(seeded)
     t1 = report.table1
     assert list(t1.index) == ["pefa", "cmrs", "ground truth"]

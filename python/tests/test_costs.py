@@ -266,7 +266,8 @@ def test_bench_prices_lines_and_the_report_has_cost_per_task_and_per_success(
         coherent.bench(tasks[:1], ["pefa"], out=tmp_path / "x.jsonl", prices={"m": {"input": 1, "outptu": 2}})
 
 
-def _line(method: str, model: str, task_id: int, success: bool, cost: float | None) -> dict[str, Any]:
+def _line(*, method: str, model: str, task_id: int, success: bool, cost: float | None) -> dict[str, Any]:
+    """A results line written by hand: env0, mono, seed 0, 5 steps, 10 calls."""
     return {
         "method": method,
         "scene": "env0",
@@ -292,18 +293,18 @@ def _line(method: str, model: str, task_id: int, success: bool, cost: float | No
 def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path) -> None:
     lines = [
         # pefa on a cheap model: SR 0.5 at 0.02 per task; on a dear one: SR 1.0 at 0.3.
-        _line("pefa", "cheap", 0, True, 0.01),
-        _line("pefa", "cheap", 1, False, 0.03),
-        _line("pefa", "dear", 0, True, 0.2),
-        _line("pefa", "dear", 1, True, 0.4),
+        _line(method="pefa", model="cheap", task_id=0, success=True, cost=0.01),
+        _line(method="pefa", model="cheap", task_id=1, success=False, cost=0.03),
+        _line(method="pefa", model="dear", task_id=0, success=True, cost=0.2),
+        _line(method="pefa", model="dear", task_id=1, success=True, cost=0.4),
         # cmrs on the dear model: SR 0.5 at 0.1, beaten by pefa on the cheap one.
-        _line("cmrs", "dear", 0, True, 0.1),
-        _line("cmrs", "dear", 1, False, 0.1),
+        _line(method="cmrs", model="dear", task_id=0, success=True, cost=0.1),
+        _line(method="cmrs", model="dear", task_id=1, success=False, cost=0.1),
         # The optimal plan asks no model: one point whatever the backend, at no cost.
-        _line("optimal", "dear", 0, False, 0.0),
-        _line("optimal", "cheap", 1, False, 0.0),
+        _line(method="optimal", model="dear", task_id=0, success=False, cost=0.0),
+        _line(method="optimal", model="cheap", task_id=1, success=False, cost=0.0),
         # A model without a price is left out and named.
-        _line("dmrs-1d", "unpriced", 0, True, None),
+        _line(method="dmrs-1d", model="unpriced", task_id=0, success=True, cost=None),
     ]
     frame = pd.DataFrame(
         [
@@ -331,4 +332,4 @@ def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path)
     ax.figure.savefig(tmp_path / "pareto.png")
     assert (tmp_path / "pareto.png").stat().st_size > 5_000
     with pytest.raises(ValueError, match="prices="):
-        plot.pareto([_line("pefa", "unpriced", 0, True, None)])
+        plot.pareto([_line(method="pefa", model="unpriced", task_id=0, success=True, cost=None)])

@@ -14,7 +14,7 @@ NODE_KEYS = {"id", "category", "class_name", "prefab_name", "properties", "state
 EDGE_KEYS = {"from_id", "to_id", "relation_type"}
 
 
-def test_env_basics(task0: coherent.Task) -> None:
+def test_an_env_names_its_robots_and_task_and_starts_short_of_the_goal(task0: coherent.Task) -> None:
     env = coherent.Env(task0)
     assert env.robots == [22, 23, 24, 50]
     assert env.task.task_id == 0
@@ -22,7 +22,7 @@ def test_env_basics(task0: coherent.Task) -> None:
     assert repr(env) == "Env(scene='env0', task_id=0, robots=[22, 23, 24, 50], physics=False, goal_satisfied=False)"
 
 
-def test_observe(task0: coherent.Task) -> None:
+def test_an_observation_holds_the_room_and_only_nodes_and_edges_the_robot_sees(task0: coherent.Task) -> None:
     env = coherent.Env(task0)
     obs = env.observe(22)
     assert set(obs) == {"room", "nodes", "edges"}
@@ -37,7 +37,7 @@ def test_observe(task0: coherent.Task) -> None:
     assert room["category"] == "Rooms"
 
 
-def test_actions(task0: coherent.Task) -> None:
+def test_a_landed_quadrotor_may_only_take_off(task0: coherent.Task) -> None:
     env = coherent.Env(task0)
     assert env.actions(22) == ["[takeoff_from] <childroom floor>(3)"]
     assert all(isinstance(a, str) for a in env.actions(23))
@@ -110,7 +110,7 @@ def test_episode_replays_the_optimal_plan(task0: coherent.Task) -> None:
     assert "LAND" in quadrotor["states"]
 
 
-def test_reset(task1: coherent.Task) -> None:
+def test_reset_brings_back_the_initial_graph_after_the_goal_is_reached(task1: coherent.Task) -> None:
     env = coherent.Env(task1)
     start = env.graph()
     for step in coherent.plan(task1)["plan"]:

@@ -67,7 +67,7 @@ def test_unknown_robot(task0: coherent.Task) -> None:
         env.step((35, "[grab] <apple>(3)"))
 
 
-def test_robot_space(task0: coherent.Task) -> None:
+def test_robot_space_samples_and_contains_only_the_tasks_robots(task0: coherent.Task) -> None:
     space = RobotSpace(task0.robots, seed=3)
     assert {space.sample() for _ in range(50)} == set(task0.robots)
     assert space.contains(22) and not space.contains(35) and not space.contains("22")

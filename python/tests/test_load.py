@@ -19,7 +19,7 @@ def test_load_original_file_str_and_pathlike(env0_path: Path) -> None:
     assert all(isinstance(t, coherent.Task) for t in by_path)
 
 
-def test_task_attributes(task0: coherent.Task) -> None:
+def test_a_task_shows_the_files_scene_id_name_instruction_goal_and_robots(task0: coherent.Task) -> None:
     assert task0.scene == "env0"
     assert task0.task_id == 0
     assert task0.name == "MultiAgent_0"
@@ -35,7 +35,7 @@ def test_task_is_read_only(task0: coherent.Task) -> None:
         task0.task_id = 3  # type: ignore[misc]
 
 
-def test_task_repr(task0: coherent.Task) -> None:
+def test_a_tasks_repr_names_scene_id_and_robots(task0: coherent.Task) -> None:
     text = repr(task0)
     assert text.startswith("Task(scene='env0', task_id=0, name='MultiAgent_0'")
     assert "robots=[22, 23, 24, 50]" in text
@@ -83,7 +83,7 @@ def test_bad_path_names_the_path(tmp_path: Path) -> None:
     assert isinstance(info.value, ValueError)
 
 
-def test_empty_folder(tmp_path: Path) -> None:
+def test_a_folder_without_task_files_is_a_task_format_error(tmp_path: Path) -> None:
     with pytest.raises(coherent.TaskFormatError, match="no .json task files"):
         coherent.load_tasks(tmp_path)
 
@@ -113,7 +113,7 @@ def test_wrong_type_names_json_path(tmp_path: Path, env0_path: Path) -> None:
     assert "seven" in str(info.value)
 
 
-def test_invalid_json(tmp_path: Path) -> None:
+def test_cut_json_is_a_task_format_error_at_the_root_naming_the_line(tmp_path: Path) -> None:
     path = tmp_path / "cut.json"
     path.write_text('[{"task_id": 0,')
     with pytest.raises(coherent.TaskFormatError, match="invalid JSON at line 1") as info:
@@ -121,7 +121,7 @@ def test_invalid_json(tmp_path: Path) -> None:
     assert info.value.json_path == "$"
 
 
-def test_not_a_path() -> None:
+def test_a_number_is_no_path() -> None:
     with pytest.raises(TypeError):
         coherent.load_tasks(42)  # type: ignore[arg-type]
 

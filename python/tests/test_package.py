@@ -7,6 +7,7 @@ from __future__ import annotations
 import ast
 import importlib.metadata
 import inspect
+import re
 import types
 from pathlib import Path
 from typing import Any
@@ -15,13 +16,15 @@ import pytest
 
 import coherent
 from coherent import _coherent
+from conftest import REPO
 
 STUB = Path(coherent.__file__).with_name("_coherent.pyi")
 TREE = ast.parse(STUB.read_text())
 # Native functions that the package wraps rather than re-exports (`coherent.bench`,
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks"}
+# `coherent.view` wraps the pages of `coherent view`.
+WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks", "view_page", "results_page", "framed_page"}
 
 
 def _public(name: str) -> bool:
@@ -135,16 +138,44 @@ def test_py_typed_is_installed() -> None:
     assert Path(coherent.__file__).with_name("py.typed").is_file()
 
 
-def test_all_is_the_public_api() -> None:
-    native = _module_names() - WRAPPED
-    assert native <= set(coherent.__all__)
-    for name in native:
+# The names `coherent` defines in Python (the rest of `__all__` is the native module's).
+PYTHON_API = {"Page", "RayExecutor", "Report", "bench", "report", "results", "view"}
+SUBMODULES = {"analysis", "benchmark", "executors", "gym", "plot"}
+DOCS = REPO / "docs" / "python.md"
+
+
+def test_all_is_the_stub_less_what_is_wrapped_plus_the_python_api() -> None:
+    assert set(coherent.__all__) == (_stub_names() - WRAPPED) | PYTHON_API
+    assert len(coherent.__all__) == len(set(coherent.__all__)), "a name twice in __all__"
+    for name in _stub_names() - WRAPPED:
         assert getattr(coherent, name) is getattr(_coherent, name)
-    python = set(coherent.__all__) - native
-    assert python == {"RayExecutor", "Report", "bench", "report", "results"}
-    for name in python - {"RayExecutor"}:
+    for name in PYTHON_API - {"Page", "RayExecutor", "view"}:
         assert getattr(coherent, name) is getattr(coherent.analysis, name)
+    assert coherent.view is coherent._view.view and coherent.Page is coherent._view.Page
     assert coherent.RayExecutor is coherent.executors.RayExecutor
+
+
+def test_the_namespace_holds_the_api_and_the_submodules_and_nothing_else() -> None:
+    for name in SUBMODULES:
+        importlib.import_module(f"coherent.{name}")
+    assert dir(coherent) == sorted([*coherent.__all__, *SUBMODULES])
+    # The module's own dict, not only what `dir` shows: no helper of the package's own
+    # (`importlib`, `Any`, the `annotations` of a __future__ import) under a public name.
+    public = {n for n in vars(coherent) if not n.startswith("_")}
+    assert public == (set(coherent.__all__) | SUBMODULES) - {"__version__"}
+
+
+def _documented_names() -> set[str]:
+    """The names in the first column of docs/python.md's table "The package's names"."""
+    section = DOCS.read_text().split("## The package's names", 1)[1].split("\n## ", 1)[0]
+    rows = [line for line in section.splitlines() if line.startswith("| `")]
+    return {name for row in rows for name in re.findall(r"`([A-Za-z_][A-Za-z_0-9]*)`", row.split(" | ")[0])}
+
+
+def test_the_docs_table_of_names_is_all_and_the_submodules() -> None:
+    documented = _documented_names()
+    assert documented - set(coherent.__all__) - SUBMODULES == set(), "in docs/python.md but not in the package"
+    assert (set(coherent.__all__) | SUBMODULES) - documented == set(), "in the package but not in docs/python.md"
 
 
 def test_submodules_load_on_first_use() -> None:
@@ -157,7 +188,7 @@ def test_submodules_load_on_first_use() -> None:
         _ = coherent.no_such_thing  # type: ignore[attr-defined]
 
 
-def test_version() -> None:
+def test_version_is_the_installed_distributions() -> None:
     assert coherent.__version__ == importlib.metadata.version("coherent")
 
 

@@ -23,7 +23,7 @@ PLAN_KEYS = {
 }  # fmt: skip
 
 
-def test_plan(task0: coherent.Task) -> None:
+def test_plan_gives_the_shortest_plan_with_the_documented_keys(task0: coherent.Task) -> None:
     result = coherent.plan(task0)
     assert set(result) == PLAN_KEYS
     assert result["scene"] == "env0" and result["task_id"] == 0

@@ -38,7 +38,7 @@ def close_figures() -> None:
 
 
 @pytest.mark.parametrize(("by", "columns"), [("type", ["Mono", "Dual", "Trio", "Average"]), ("scene", ["env0", "Average"])])
-def test_table(results: coherent.Report, tmp_path: Path, by: str, columns: list[str]) -> None:
+def test_table_draws_a_bar_with_error_bars_per_method_and_column(results: coherent.Report, tmp_path: Path, by: str, columns: list[str]) -> None:
     fig = plot.table(results, by=by)  # type: ignore[arg-type]
     sr, avg = fig.axes
     assert [t.get_text().split("\n")[0] for t in sr.get_xticklabels()] == columns
@@ -63,7 +63,7 @@ def test_table_from_a_frame_and_its_errors(results: coherent.Report) -> None:
         plot.table(results, by="robot")  # type: ignore[arg-type]
 
 
-def test_timeline(episode: coherent.Episode) -> None:
+def test_timeline_marks_each_step_and_failed_ones_and_the_success(episode: coherent.Episode) -> None:
     ax = plot.timeline(episode)
     frame = episode.to_dataframe()
     labels = [t.get_text() for t in ax.get_yticklabels()]
@@ -92,7 +92,7 @@ def test_tokens_of_a_model(model_episode: coherent.Episode) -> None:
     assert "smollm2-135m" in ax.get_title()
 
 
-def test_scene_map(episode: coherent.Episode) -> None:
+def test_scene_map_draws_each_robots_path_and_names_the_rooms(episode: coherent.Episode) -> None:
     (ax,) = plot.scene(episode)
     names = [t.get_text() for t in ax.get_legend().get_texts()]
     assert names[:3] == ["robot arm (6)", "quadrotor (11)", "robot dog (13)"]

@@ -1,5 +1,5 @@
 //! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
-//! `prompts`. One implementation serves the `coherent` binary and the console script
+//! `view`, `prompts`. One implementation serves the `coherent` binary and the console script
 //! that `pip install` puts on the PATH (which also loads methods written in Python,
 //! [`LoadMethod`]).
 
@@ -10,6 +10,7 @@ mod render;
 mod robots;
 mod run;
 mod status;
+mod view;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -43,6 +44,10 @@ enum Command {
     /// written in Python raised, 5 when a robot over ROS 2 stops answering, 130 on
     /// Ctrl-C.
     Run(Box<run::RunArgs>),
+    /// Show an episode (its transcript), two side by side, or a benchmark's results as
+    /// pages in the browser; `--serve` follows a results file as it grows. Exit 2 on an
+    /// error.
+    View(view::ViewArgs),
     /// Robots over ROS 2: `serve` starts a task's reference robot servers.
     Robots(robots::RobotsArgs),
     /// Run methods x tasks x seeds concurrently into a resumable results file, then print
@@ -128,6 +133,7 @@ where
     let result = match cli.command {
         Command::Render(args) => render::render(&args),
         Command::Run(args) => run::run(*args, load),
+        Command::View(args) => view::view(&args).map_err(Error::Invalid),
         Command::Robots(args) => robots::robots(args),
         Command::Bench(args) => bench::bench(*args, load),
         Command::Prompts(args) => prompts::prompts(&args),

@@ -16,8 +16,8 @@ use super::args::{
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
-    Budget, Cancel, Execution, HISTORY_WINDOW, Limits, MethodSpec, NodeId, RobotPart, Round,
-    RoundOutcome, Status, Summary, Task, executed_actions, shown,
+    Budget, Cancel, Execution, HISTORY_WINDOW, Limits, MethodSpec, Round, Status, Summary,
+    executed_actions, shown,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -187,7 +187,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     let max = prepared.budget().steps();
     let execution = prepared.settings().execution;
     let mut progress = |r: &Round| {
-        for line in step_lines(&task, r, max, execution) {
+        for line in session::lines::round(&task, r, max, execution) {
             lines.say(&line);
         }
     };
@@ -298,84 +298,6 @@ fn replay_line(path: &Path, model: &str) -> String {
         shown(&path.display().to_string()),
         shown(model)
     )
-}
-
-/// The lines of a step: one for a sequential round (robot, subtask, action, outcome); for
-/// a parallel one, a line for the step (how many robots acted, what the step came to)
-/// and an indented line per robot's part.
-fn step_lines(task: &Task, r: &Round, max: u32, execution: Execution) -> Vec<String> {
-    let width = max.to_string().len();
-    let head = format!("step {:>width$}/{max}", r.step);
-    if execution == Execution::Sequential {
-        let robot = r.proposal.as_ref().map(|p| p.robot);
-        let action = r.decision.as_ref().and_then(|d| d.action.as_deref());
-        let subtask = r.proposal.as_ref().map(|p| p.subtask.as_str());
-        let said = part_text(
-            task,
-            robot,
-            subtask,
-            action,
-            &outcome_text(&r.outcome, r.done),
-        );
-        return vec![format!("{head}  {said}")];
-    }
-    let acting = r.parts.iter().filter(|p| p.action().is_some()).count();
-    let robots = if acting == 1 { "robot" } else { "robots" };
-    let mut out = vec![format!(
-        "{head}  joint step, {acting} {robots}  -> {}",
-        outcome_text(&r.outcome, r.done)
-    )];
-    out.extend(r.parts.iter().map(|p| format!("  {}", part_line(task, p))));
-    out
-}
-
-fn part_line(task: &Task, p: &RobotPart) -> String {
-    let subtask = p.proposal.as_ref().map(|proposal| {
-        if p.kept {
-            format!("{} (kept)", proposal.subtask)
-        } else {
-            proposal.subtask.clone()
-        }
-    });
-    let action = p.decision.as_ref().and_then(|d| d.action.as_deref());
-    let outcome = outcome_text(&p.outcome, false);
-    part_text(task, Some(p.robot), subtask.as_deref(), action, &outcome)
-}
-
-/// `<robot>  "subtask"  action  -> outcome`, the subtask left out when it is the action
-/// itself (the built-in backend's).
-fn part_text(
-    task: &Task,
-    robot: Option<NodeId>,
-    subtask: Option<&str>,
-    action: Option<&str>,
-    outcome: &str,
-) -> String {
-    let robot = robot.and_then(|r| task.idx(r)).map_or("-".to_owned(), |i| {
-        shown(&task.node(i).label()).into_owned()
-    });
-    let action = action.map_or("-".to_owned(), |a| shown(a).into_owned());
-    let subtask = subtask
-        .filter(|s| shown(s) != action)
-        .map_or(String::new(), |s| format!("{s:?}  "));
-    format!("{robot}  {subtask}{action}  -> {outcome}")
-}
-
-fn outcome_text(outcome: &RoundOutcome, done: bool) -> String {
-    match outcome {
-        RoundOutcome::Executed if done => "ok, goal reached".to_owned(),
-        RoundOutcome::Executed => "ok".to_owned(),
-        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
-        RoundOutcome::Declined => "declined".to_owned(),
-        RoundOutcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
-        RoundOutcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),
-        RoundOutcome::BackendError { message } => format!("backend failed: {}", shown(message)),
-        // The last line of the error (a Python traceback ends with the exception).
-        RoundOutcome::MethodError { message } => format!(
-            "the method failed: {}",
-            shown(message.trim_end().lines().last().unwrap_or(""))
-        ),
-    }
 }
 
 fn summary_line(

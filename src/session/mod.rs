@@ -16,6 +16,8 @@
 //! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
 //! - [`render`]: the scene from above and the robots' paths;
+//! - [`lines`]: the line `coherent run` prints for each step;
+//! - [`view`]: episodes and results as pages in the browser;
 //! - [`error`]: what goes wrong, by kind;
 //! - [`engine`]: the types of the crates below that front ends use on purpose
 //!   (`docs/architecture.md`, "What the session re-exports").
@@ -28,10 +30,12 @@ pub mod check;
 pub mod engine;
 pub mod episode;
 pub mod error;
+pub mod lines;
 pub mod prompts;
 pub mod render;
 pub mod robots;
 pub mod tasks;
+pub mod view;
 
 use std::future::Future;
 use std::sync::OnceLock;

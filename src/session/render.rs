@@ -3,7 +3,7 @@
 
 use std::sync::Arc;
 
-use coherent_agents::transcript::{RoundOutcome, Transcript};
+use coherent_agents::transcript::Transcript;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Environment, Task};
 use coherent_sim::{PhysicalEnv, layout, render};
@@ -61,13 +61,10 @@ pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
     let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
     for round in &t.rounds {
-        let (RoundOutcome::Executed, Some(p), Some(d)) =
-            (&round.outcome, &round.proposal, &round.decision)
-        else {
+        let Some((robot, action)) = round.executed(task) else {
             continue;
         };
-        let Some(action) = &d.action else { continue };
-        let outcome = env.step(p.robot, action)?;
+        let outcome = env.step(robot, action)?;
         if let Some(why) = outcome.infeasible {
             warning = Some(format!(
                 "round {}: {action} failed in physics, paths drawn up to there: {why}",

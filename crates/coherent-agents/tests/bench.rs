@@ -58,78 +58,156 @@ fn a_subset_file_picks_its_pairs_and_reports_absent_ones() {
     assert!(e.contains("subset.txt: line 2"), "{e}");
 }
 
-#[allow(clippy::too_many_arguments)]
-fn line(
-    method: &str,
-    scene: &str,
+/// A results line written by hand, field by field; what a test leaves out is the
+/// default: pefa on env0 task 1 (mono, ground truth 5), seed 0, a success in 5 steps with
+/// 10 model calls of 100 prompt and 10 completion tokens each, on the simulated backend.
+#[derive(Clone, Copy)]
+struct Hand {
+    method: &'static str,
+    scene: &'static str,
     task_id: i64,
-    kind: Option<&str>,
+    task_type: &'static str,
     gt: u32,
     seed: u32,
     status: Status,
     steps: u32,
     calls: u32,
-) -> String {
-    let mut l = ResultLine {
-        method: method.into(),
-        execution: Execution::Sequential,
-        scene: scene.into(),
-        task_id,
-        task_type: kind.map(Into::into),
-        seed,
-        episode_seed: 0,
-        success: status == Status::Success,
-        status,
-        steps,
-        gt_steps: Some(gt),
-        optimal_steps: Some(gt),
-        max_steps: gt.saturating_mul(2),
-        makespan: (status == Status::Success).then_some(steps),
-        optimal_makespan: None,
-        actions: Some(steps),
-        llm_calls: calls,
-        prompt_tokens: u64::from(calls) * 100,
-        completion_tokens: u64::from(calls) * 10,
-        cached_tokens: 0,
-        cost_usd: None,
-        wall_ms: 1.0,
-        sim_seconds: None,
-        backend: BackendInfo {
-            kind: BackendKind::Simulated,
-            model:
-                "optimal-planner with errors hallucinate=0.1,wrong_robot=0,malformed=0,suboptimal=0"
-                    .into(),
-            base_url: None,
-        },
-        uses_model: true,
-        error: None,
-        transcript: "t.jsonl".into(),
-    };
-    if method == "mcts" {
-        l.uses_model = false;
+}
+
+impl Default for Hand {
+    fn default() -> Hand {
+        Hand {
+            method: "pefa",
+            scene: "env0",
+            task_id: 1,
+            task_type: "mono",
+            gt: 5,
+            seed: 0,
+            status: Status::Success,
+            steps: 5,
+            calls: 10,
+        }
     }
-    serde_json::to_string(&l).expect("encodes") + "\n"
+}
+
+impl Hand {
+    fn line(self) -> ResultLine {
+        ResultLine {
+            method: self.method.into(),
+            execution: Execution::Sequential,
+            scene: self.scene.into(),
+            task_id: self.task_id,
+            task_type: Some(self.task_type.into()),
+            seed: self.seed,
+            episode_seed: 0,
+            success: self.status == Status::Success,
+            status: self.status,
+            steps: self.steps,
+            gt_steps: Some(self.gt),
+            optimal_steps: Some(self.gt),
+            max_steps: self.gt.saturating_mul(2),
+            makespan: (self.status == Status::Success).then_some(self.steps),
+            optimal_makespan: None,
+            actions: Some(self.steps),
+            llm_calls: self.calls,
+            prompt_tokens: u64::from(self.calls) * 100,
+            completion_tokens: u64::from(self.calls) * 10,
+            cached_tokens: 0,
+            cost_usd: None,
+            wall_ms: 1.0,
+            sim_seconds: None,
+            backend: BackendInfo {
+                kind: BackendKind::Simulated,
+                model:
+                    "optimal-planner with errors hallucinate=0.1,wrong_robot=0,malformed=0,suboptimal=0"
+                        .into(),
+                base_url: None,
+            },
+            // MCTS plans without a model.
+            uses_model: self.method != "mcts",
+            error: None,
+            transcript: "t.jsonl".into(),
+        }
+    }
+
+    /// The line as the results file holds it.
+    fn jsonl(self) -> String {
+        serde_json::to_string(&self.line()).expect("encodes") + "\n"
+    }
 }
 
 #[test]
 fn report_numbers_match_a_hand_computation() {
-    use Status::{BackendError, Failure, Interrupted, Success};
+    use Status::{BackendError, Failure, Interrupted};
     let dir = scratch("report");
     let path = dir.join("r.jsonl");
+    // Task A: env0 task 1 (mono, GT 5); task B: env1 task 2 (dual, GT 10).
+    let a = Hand::default();
+    let b = Hand {
+        scene: "env1",
+        task_id: 2,
+        task_type: "dual",
+        gt: 10,
+        ..a
+    };
+    let mcts = |task: Hand| Hand {
+        method: "mcts",
+        calls: 0,
+        ..task
+    };
     let text = [
-        // pefa, seed 0: A (mono, GT 5) in 5; B (dual, GT 10) fails: counts 21.
-        line("pefa", "env0", 1, Some("mono"), 5, 0, Success, 5, 10),
-        line("pefa", "env1", 2, Some("dual"), 10, 0, Failure, 20, 40),
+        // pefa, seed 0: A in 5; B fails: counts 21.
+        Hand { steps: 5, ..a },
+        Hand {
+            status: Failure,
+            steps: 20,
+            calls: 40,
+            ..b
+        },
         // pefa, seed 1: A in 6; B first hit a backend error, then ran again in 10.
-        line("pefa", "env0", 1, Some("mono"), 5, 1, Success, 6, 12),
-        line("pefa", "env1", 2, Some("dual"), 10, 1, BackendError, 3, 6),
-        line("pefa", "env1", 2, Some("dual"), 10, 1, Success, 10, 20),
-        // An episode that never finished: left out, counted as unfinished.
-        line("pefa", "env1", 3, Some("trio"), 12, 0, Interrupted, 2, 4),
+        Hand {
+            seed: 1,
+            steps: 6,
+            calls: 12,
+            ..a
+        },
+        Hand {
+            seed: 1,
+            status: BackendError,
+            steps: 3,
+            calls: 6,
+            ..b
+        },
+        Hand {
+            seed: 1,
+            steps: 10,
+            calls: 20,
+            ..b
+        },
+        // An episode that never finished (env1 task 3, trio, GT 12): left out, counted as
+        // unfinished.
+        Hand {
+            task_id: 3,
+            task_type: "trio",
+            gt: 12,
+            status: Interrupted,
+            steps: 2,
+            calls: 4,
+            ..b
+        },
         // mcts, one seed: A fails (11), B fails (21).
-        line("mcts", "env0", 1, Some("mono"), 5, 0, Failure, 10, 0),
-        line("mcts", "env1", 2, Some("dual"), 10, 0, Failure, 20, 0),
+        Hand {
+            status: Failure,
+            steps: 10,
+            ..mcts(a)
+        },
+        Hand {
+            status: Failure,
+            steps: 20,
+            ..mcts(b)
+        },
     ]
+    .map(Hand::jsonl)
     .concat();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
@@ -212,17 +290,7 @@ fn report_numbers_match_a_hand_computation() {
 fn a_bad_line_in_the_middle_is_an_error_naming_the_file_line_and_field() {
     let dir = scratch("badline");
     let path = dir.join("r.jsonl");
-    let good = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        5,
-        0,
-        Status::Success,
-        5,
-        10,
-    );
+    let good = Hand::default().jsonl();
     let bad = good.replace("\"steps\":5", "\"steps\":\"five\"");
     std::fs::write(&path, format!("{good}{bad}{good}")).expect("write");
     let e = bench::read_results(&path)
@@ -239,17 +307,7 @@ fn a_bad_line_in_the_middle_is_an_error_naming_the_file_line_and_field() {
 fn a_results_line_with_a_key_twice_is_refused() {
     let dir = scratch("duplicate-key");
     let path = dir.join("r.jsonl");
-    let good = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        5,
-        0,
-        Status::Success,
-        5,
-        10,
-    );
+    let good = Hand::default().jsonl();
     let twice = good.replacen('{', "{\"success\":false,", 1);
     std::fs::write(&path, format!("{good}{twice}")).expect("write");
     let e = bench::read_results(&path)
@@ -267,17 +325,12 @@ fn a_results_line_with_a_key_twice_is_refused() {
 fn a_huge_ground_truth_counts_without_wrapping() {
     let dir = scratch("huge-gt");
     let path = dir.join("r.jsonl");
-    let text = line(
-        "pefa",
-        "env0",
-        1,
-        Some("mono"),
-        u32::MAX,
-        0,
-        Status::Failure,
-        5,
-        10,
-    );
+    let text = Hand {
+        gt: u32::MAX,
+        status: Status::Failure,
+        ..Hand::default()
+    }
+    .jsonl();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
     assert_eq!(
@@ -297,56 +350,33 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
         "p.json",
     )
     .expect("a table");
-    let on_m = |text: String| {
-        let mut l: ResultLine = serde_json::from_str(&text).expect("a line");
+    let on_m = |hand: Hand| {
+        let mut l = hand.line();
         l.backend.model = "m".into();
         l
     };
     let lines = vec![
-        on_m(line(
-            "pefa",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            10,
-        )),
-        on_m(line(
-            "pefa",
-            "env1",
-            2,
-            Some("dual"),
-            10,
-            0,
-            Status::Failure,
-            20,
-            30,
-        )),
-        on_m(line(
-            "mcts",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            0,
-        )),
-        on_m(line(
-            "cmrs",
-            "env0",
-            1,
-            Some("mono"),
-            5,
-            0,
-            Status::Success,
-            5,
-            4,
-        )),
+        on_m(Hand::default()),
+        on_m(Hand {
+            scene: "env1",
+            task_id: 2,
+            task_type: "dual",
+            gt: 10,
+            status: Status::Failure,
+            steps: 20,
+            calls: 30,
+            ..Hand::default()
+        }),
+        on_m(Hand {
+            method: "mcts",
+            calls: 0,
+            ..Hand::default()
+        }),
+        on_m(Hand {
+            method: "cmrs",
+            calls: 4,
+            ..Hand::default()
+        }),
     ];
     let mut priced: Vec<ResultLine> = lines.into_iter().map(|l| l.priced(&prices)).collect();
     let close = |a: f64, b: f64| (a - b).abs() < 1e-12;

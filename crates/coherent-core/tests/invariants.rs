@@ -241,20 +241,42 @@ fn mention(task: &Task, n: Idx, naming: Naming) -> String {
     }
 }
 
-/// Checks one candidate `(verb, object, target)` for `robot`: Ok iff offered, and when
-/// refused, a reason that explains it.
-#[allow(clippy::too_many_arguments)]
-fn check_candidate(
-    task: &Task,
-    s: &State,
-    robot: Robot,
-    offered: &[Action],
+/// An action text to try, `[verb] object` or `[verb] object prep target`, with the
+/// target (or the sole object) named as `naming` says.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
     verb: Verb,
     object: Idx,
     target: Idx,
     naming: Naming,
-    context: &str,
-) -> Result<(), TestCaseError> {
+}
+
+/// Where candidates are checked: a state of a task, a robot, what the rules offer it
+/// there, and the walk that led there for messages.
+struct Checked<'a> {
+    task: &'a Task,
+    s: &'a State,
+    robot: Robot,
+    offered: &'a [Action],
+    context: &'a str,
+}
+
+/// Checks one candidate for the robot: Ok iff offered, and when refused, a reason that
+/// explains it.
+fn check_candidate(at: &Checked, candidate: Candidate) -> Result<(), TestCaseError> {
+    let Checked {
+        task,
+        s,
+        robot,
+        offered,
+        context,
+    } = *at;
+    let Candidate {
+        verb,
+        object,
+        target,
+        naming,
+    } = candidate;
     let text = match verb.preposition() {
         Some(prep) => format!(
             "[{verb}] {} {prep} {}",
@@ -342,24 +364,27 @@ fn check_all_candidates(
     let nodes: Vec<Idx> = (0..task.nodes.len()).map(|i| Idx(i as u16)).collect();
     let mut objects = objects.to_vec();
     objects.extend(holding.filter(|h| !objects.contains(h)));
+    let at = Checked {
+        task,
+        s,
+        robot,
+        offered: &offered,
+        context,
+    };
     for verb in Verb::ALL {
         for &n in &nodes {
+            let candidate = |object| Candidate {
+                verb,
+                object,
+                target: n,
+                naming: Naming::Right,
+            };
             if verb.preposition().is_some() {
                 for &object in &objects {
-                    check_candidate(
-                        task,
-                        s,
-                        robot,
-                        &offered,
-                        verb,
-                        object,
-                        n,
-                        Naming::Right,
-                        context,
-                    )?;
+                    check_candidate(&at, candidate(object))?;
                 }
             } else {
-                check_candidate(task, s, robot, &offered, verb, n, n, Naming::Right, context)?;
+                check_candidate(&at, candidate(n))?;
             }
         }
     }
@@ -424,23 +449,26 @@ fn run_walk(walk: Walk) -> Result<(), TestCaseError> {
         for &r in &task.robots {
             let offered = rules::actions(task, &s, r);
             check_offered(task, &s, r, &offered, &context)?;
+            let at = Checked {
+                task,
+                s: &s,
+                robot: r,
+                offered: &offered,
+                context: &context,
+            };
             for &(verb, object, target, naming) in &candidates {
                 let naming = match naming {
                     0 => Naming::WrongName,
                     1 => Naming::UnknownId,
                     _ => Naming::Right,
                 };
-                check_candidate(
-                    task,
-                    &s,
-                    r,
-                    &offered,
-                    *verb.get(&Verb::ALL),
-                    *object.get(&nodes),
-                    *target.get(&nodes),
+                let candidate = Candidate {
+                    verb: *verb.get(&Verb::ALL),
+                    object: *object.get(&nodes),
+                    target: *target.get(&nodes),
                     naming,
-                    &context,
-                )?;
+                };
+                check_candidate(&at, candidate)?;
             }
         }
     }

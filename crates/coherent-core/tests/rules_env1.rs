@@ -6,6 +6,8 @@
 
 mod common;
 
+use std::sync::LazyLock;
+
 use coherent_core::Reason;
 use common::Scene;
 
@@ -66,9 +68,12 @@ const KITCHEN_7_EDGES: &[(i64, &str, i64)] = &[
     (47, "ON", 3),
 ];
 
+/// The start of task 7, built once (`common`).
+static TASK7: LazyLock<Scene> = LazyLock::new(|| Scene::load("env1", 7));
+
 #[test]
-fn task7_start() {
-    let s = Scene::load("env1", 7);
+fn task7_starts_with_each_robot_seeing_its_room_and_offered_what_it_reaches() {
+    let s = TASK7.clone();
     for robot in [DOG, QUAD] {
         s.expect_view(robot, LIVINGROOM_7);
         s.expect_edges(robot, LIVINGROOM_7_EDGES);
@@ -101,8 +106,8 @@ fn task7_start() {
 }
 
 #[test]
-fn task7_cookbook_flies_to_the_kitchen_table() {
-    let mut s = Scene::load("env1", 7);
+fn the_cookbook_rides_the_basket_to_the_kitchen_table_and_landing_there_completes_task7() {
+    let mut s = TASK7.clone();
 
     // The dog moves to the bookshelf (a surface): the cookbook ON it becomes CLOSE.
     s.act(DOG, "[movetowards] <low bookshelf>(36)");
@@ -277,8 +282,8 @@ fn task7_cookbook_flies_to_the_kitchen_table() {
 }
 
 #[test]
-fn task7_dog_opens_the_utility_room_door() {
-    let mut s = Scene::load("env1", 7);
+fn the_dog_opens_the_closed_utility_room_door_and_carries_the_beer_glass_through_it() {
+    let mut s = TASK7.clone();
     s.refused(DOG, "[movetowards] <utility room>(34)", Reason::DoorClosed);
     s.refused(DOG, "[open] <door>(35)", Reason::NotClose);
 
@@ -438,8 +443,8 @@ fn task7_dog_opens_the_utility_room_door() {
 }
 
 #[test]
-fn task7_open_forever_door_and_other_refusals() {
-    let mut s = Scene::load("env1", 7);
+fn an_open_forever_door_offers_neither_open_nor_close_and_each_refusal_gives_its_reason() {
+    let mut s = TASK7.clone();
     s.refused(DOG, "[grab] <cookbook>(28)", Reason::NotClose);
     s.refused(
         ARM_DINING,

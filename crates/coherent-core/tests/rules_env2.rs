@@ -5,6 +5,8 @@
 
 mod common;
 
+use std::sync::LazyLock;
+
 use coherent_core::Reason;
 use common::Scene;
 
@@ -55,9 +57,12 @@ const ALL_16_EDGES: &[(i64, &str, i64)] = &[
     (44, "INSIDE", 26),
 ];
 
+/// The start of task 16, built once (`common`).
+static TASK16: LazyLock<Scene> = LazyLock::new(|| Scene::load("env2", 16));
+
 #[test]
-fn task16_start() {
-    let s = Scene::load("env2", 16);
+fn task16_starts_with_every_robot_seeing_the_whole_grocery_store() {
+    let s = TASK16.clone();
     for robot in [ARM_DISPLAY, ARM_CHECKOUT, DOG, QUAD] {
         s.expect_view(robot, ALL_16);
         s.expect_edges(robot, ALL_16_EDGES);
@@ -89,8 +94,8 @@ fn task16_start() {
 }
 
 #[test]
-fn task16_arm_opens_the_cash_register() {
-    let mut s = Scene::load("env2", 16);
+fn the_checkout_arm_opens_and_closes_the_cash_register_but_not_twice() {
+    let mut s = TASK16.clone();
     s.act(ARM_CHECKOUT, "[open] <cash register>(24)");
     assert_eq!(s.states(24), ["OPEN"]);
     s.expect_actions(ARM_CHECKOUT, &["[close] <cash register>(24)"]);
@@ -105,8 +110,8 @@ fn task16_arm_opens_the_cash_register() {
 }
 
 #[test]
-fn task16_apple_rides_the_basket_to_the_display_bin() {
-    let mut s = Scene::load("env2", 16);
+fn the_apple_rides_the_basket_to_the_display_bin_and_the_bread_to_the_pedestal_completes_task16() {
+    let mut s = TASK16.clone();
 
     // The dog moves to the apple INSIDE the open carton: close to both.
     s.act(DOG, "[movetowards] <apple>(44)");
@@ -303,8 +308,8 @@ fn task16_apple_rides_the_basket_to_the_display_bin() {
 }
 
 #[test]
-fn task16_infeasibility_reasons() {
-    let mut s = Scene::load("env2", 16);
+fn each_refusal_in_the_grocery_store_gives_its_own_reason() {
+    let mut s = TASK16.clone();
     s.refused(DOG, "[grab] <apple>(44)", Reason::NotClose);
     s.refused(DOG, "[movetowards] <display table>(5)", Reason::TooHigh);
     s.refused(DOG, "[movetowards] <display bin>(2)", Reason::TooHigh);

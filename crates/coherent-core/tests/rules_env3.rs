@@ -5,8 +5,10 @@
 
 mod common;
 
+use std::sync::LazyLock;
+
 use coherent_core::Reason;
-use common::Scene;
+use common::{Scene, with};
 
 // Robots of env3.
 const ARM_10: i64 = 18; // on bar counter 10
@@ -28,17 +30,6 @@ const DOG_BASE: &[&str] = &[
     "[movetowards] <ottoman>(9)",
     "[movetowards] <paper money>(16)",
 ];
-
-/// `DOG_BASE` with `more` added and `less` removed.
-fn dog_list(more: &[&'static str], less: &[&str]) -> Vec<&'static str> {
-    let mut list: Vec<&'static str> = DOG_BASE
-        .iter()
-        .copied()
-        .filter(|a| !less.contains(a))
-        .collect();
-    list.extend_from_slice(more);
-    list
-}
 
 /// Task 17: everything but the coffee cup 12, which is INSIDE the CLOSED coffee maker.
 const VIEW_17: &[i64] = &[
@@ -77,15 +68,18 @@ const VIEW_17_EDGES: &[(i64, &str, i64)] = &[
     (24, "ON", 11),
 ];
 
+/// The start of task 17, built once (`common`).
+static TASK17: LazyLock<Scene> = LazyLock::new(|| Scene::load("env3", 17));
+
 #[test]
-fn task17_start() {
-    let s = Scene::load("env3", 17);
+fn task17_starts_with_every_robot_seeing_all_but_the_cup_in_the_closed_coffee_maker() {
+    let s = TASK17.clone();
     for robot in [ARM_10, ARM_11, DOG, QUAD] {
         s.expect_view(robot, VIEW_17);
         s.expect_edges(robot, VIEW_17_EDGES);
     }
     s.expect_actions(QUAD, &["[takeoff_from] <bar counter>(10)"]);
-    s.expect_actions(DOG, &dog_list(&["[movetowards] <cookie>(23)"], &[]));
+    s.expect_actions(DOG, &with(DOG_BASE, &["[movetowards] <cookie>(23)"], &[]));
     // ON bar counter 10: the coffee maker (CLOSED), the quadrotor and its basket
     // (OPEN_FOREVER, empty). The cup inside the coffee maker is not observed.
     s.expect_actions(ARM_10, &["[open] <coffee maker>(13)"]);
@@ -102,8 +96,8 @@ fn task17_start() {
 }
 
 #[test]
-fn task17_cookie_goes_down_and_up_in_the_basket() {
-    let mut s = Scene::load("env3", 17);
+fn the_cookie_rides_the_basket_down_to_the_dog_and_back_up_to_the_arm() {
+    let mut s = TASK17.clone();
     // The basket starts ON_HIGH_SURFACE (in the file) on the HIGH bar counter.
     s.expect_high(&[22], true);
 
@@ -141,7 +135,8 @@ fn task17_cookie_goes_down_and_up_in_the_basket() {
     s.expect_actions(QUAD, &["[takeoff_from] <restaurant floor>(1)"]);
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &["[movetowards] <basket>(22)", "[movetowards] <cookie>(23)"],
             &[],
         ),
@@ -152,7 +147,8 @@ fn task17_cookie_goes_down_and_up_in_the_basket() {
     s.expect_seen_edges(DOG, &[(20, "CLOSE", 5), (20, "CLOSE", 23)]);
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &["[grab] <cookie>(23)", "[movetowards] <basket>(22)"],
             &["[movetowards] <coffee table>(5)"],
         ),
@@ -160,7 +156,8 @@ fn task17_cookie_goes_down_and_up_in_the_basket() {
     s.act(DOG, "[grab] <cookie>(23)");
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &[
                 "[puton] <cookie>(23) on <coffee table>(5)",
                 "[movetowards] <basket>(22)",
@@ -171,14 +168,14 @@ fn task17_cookie_goes_down_and_up_in_the_basket() {
     s.act(DOG, "[movetowards] <basket>(22)");
     s.expect_actions(
         DOG,
-        &dog_list(&["[putinto] <cookie>(23) into <basket>(22)"], &[]),
+        &with(DOG_BASE, &["[putinto] <cookie>(23) into <basket>(22)"], &[]),
     );
     s.act(DOG, "[putinto] <cookie>(23) into <basket>(22)");
     s.expect_seen_edges(
         DOG,
         &[(23, "INSIDE", 22), (20, "CLOSE", 22), (20, "CLOSE", 23)],
     );
-    s.expect_actions(DOG, &dog_list(&["[grab] <cookie>(23)"], &[]));
+    s.expect_actions(DOG, &with(DOG_BASE, &["[grab] <cookie>(23)"], &[]));
 
     // Up again: basket and cookie ON_HIGH_SURFACE, the dog's CLOSE edges to them gone.
     s.act(QUAD, "[takeoff_from] <restaurant floor>(1)");
@@ -242,8 +239,8 @@ fn task17_cookie_goes_down_and_up_in_the_basket() {
 }
 
 #[test]
-fn task17_coffee_cup_comes_down_to_the_dog() {
-    let mut s = Scene::load("env3", 17);
+fn the_coffee_cup_comes_out_of_the_coffee_maker_and_down_to_the_dog_in_the_basket() {
+    let mut s = TASK17.clone();
     s.act(ARM_10, "[open] <coffee maker>(13)");
     assert_eq!(s.states(13), ["OPEN"]);
     let mut all = VIEW_17.to_vec();
@@ -251,7 +248,7 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
     s.expect_view(DOG, &all);
     s.expect_seen_edges(DOG, &[(12, "INSIDE", 13)]);
     // The cup is ON_HIGH_SURFACE (in the file): nothing new for the dog.
-    s.expect_actions(DOG, &dog_list(&["[movetowards] <cookie>(23)"], &[]));
+    s.expect_actions(DOG, &with(DOG_BASE, &["[movetowards] <cookie>(23)"], &[]));
     s.expect_actions(
         ARM_10,
         &["[close] <coffee maker>(13)", "[grab] <coffee cup>(12)"],
@@ -284,7 +281,8 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
     s.expect_seen_edges(DOG, &[(12, "INSIDE", 22), (22, "ON", 1), (21, "ON", 1)]);
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &[
                 "[movetowards] <coffee cup>(12)",
                 "[movetowards] <basket>(22)",
@@ -299,7 +297,8 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
     s.expect_seen_edges(DOG, &[(20, "CLOSE", 12), (20, "CLOSE", 22)]);
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &["[grab] <coffee cup>(12)", "[movetowards] <cookie>(23)"],
             &[],
         ),
@@ -307,7 +306,8 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
     s.act(DOG, "[grab] <coffee cup>(12)");
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &[
                 "[putinto] <coffee cup>(12) into <basket>(22)",
                 "[movetowards] <cookie>(23)",
@@ -324,7 +324,8 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
     s.expect_unseen_edges(DOG, &[(20, "CLOSE", 22), (20, "CLOSE", 1)]);
     s.expect_actions(
         DOG,
-        &dog_list(
+        &with(
+            DOG_BASE,
             &[
                 "[puton] <coffee cup>(12) on <sofa>(6)",
                 "[movetowards] <basket>(22)",
@@ -340,7 +341,8 @@ fn task17_coffee_cup_comes_down_to_the_dog() {
 
 /// Task 2: the quadrotor waits on bar counter 11 for milk and bread in its basket.
 #[test]
-fn task2_arm_fills_the_landed_basket() {
+fn filling_the_basket_landed_on_the_arms_counter_completes_task2_and_the_flight_takes_it_to_the_other_arm()
+ {
     let mut s = Scene::load("env3", 2);
     // Everything but the coffee cup 12, hidden in the CLOSED coffee maker.
     let view: Vec<i64> = (0..=24).filter(|&n| n != 12).collect();
@@ -444,8 +446,8 @@ fn task2_arm_fills_the_landed_basket() {
 }
 
 #[test]
-fn task17_infeasibility_reasons() {
-    let mut s = Scene::load("env3", 17);
+fn each_refusal_in_the_restaurant_gives_its_own_reason() {
+    let mut s = TASK17.clone();
     s.refused(DOG, "[grab] <cookie>(23)", Reason::NotClose);
     s.refused(DOG, "[movetowards] <bar counter>(10)", Reason::TooHigh);
     s.refused(DOG, "[movetowards] <plastic bag>(24)", Reason::TooHigh);

@@ -301,7 +301,7 @@ pub(crate) fn read_results(
 
 /// Results lines (dicts with the results file's fields) as the harness's type; errors
 /// name the line and the field.
-fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine>> {
+pub(crate) fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine>> {
     lines
         .iter()
         .enumerate()

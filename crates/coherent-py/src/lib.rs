@@ -18,6 +18,7 @@ mod prompts;
 mod run;
 mod scene;
 mod task;
+mod view;
 
 use std::ffi::OsString;
 use std::io::Write;
@@ -243,5 +244,8 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(scene::scene_layout, m)?)?;
     m.add_function(wrap_pyfunction!(scene::robot_paths, m)?)?;
     m.add_function(wrap_pyfunction!(scene::render_svg, m)?)?;
+    m.add_function(wrap_pyfunction!(view::view_page, m)?)?;
+    m.add_function(wrap_pyfunction!(view::results_page, m)?)?;
+    m.add_function(wrap_pyfunction!(view::framed_page, m)?)?;
     Ok(())
 }

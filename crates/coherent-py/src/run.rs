@@ -11,6 +11,7 @@ use coherent::session::engine::{
 };
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
 use coherent::session::tasks::TaskSource;
+use coherent::session::view;
 use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -31,7 +32,7 @@ pub(crate) struct PyEpisode {
     summary: Summary,
     path: PathBuf,
     pub task: Py<PyTask>,
-    cost_usd: Option<f64>,
+    pub cost_usd: Option<f64>,
 }
 
 impl PyEpisode {
@@ -68,6 +69,19 @@ impl PyEpisode {
 
 #[pymethods]
 impl PyEpisode {
+    /// The episode's page (`coherent.view`) in a frame, as a notebook shows it inline.
+    fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
+        let shown = view::Shown {
+            task: &self.task.get().task,
+            transcript: &self.transcript,
+            cost_usd: self.cost_usd,
+        };
+        let html = py
+            .detach(|| view::episode_html(&shown))
+            .map_err(|e| errors::error(py, errors::Kind::Coherent, e, None))?;
+        Ok(view::page::framed(&html))
+    }
+
     /// The task the episode ran (for a loaded transcript, as recorded in it).
     #[getter]
     fn task(&self, py: Python<'_>) -> Py<PyTask> {

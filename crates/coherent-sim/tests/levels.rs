@@ -25,8 +25,14 @@ fn edge(from: i64, rel: &str, to: i64) -> Value {
     json!({"from_id": from, "to_id": to, "relation_type": rel})
 }
 
-fn item(id: i64, pos: [f32; 3], size: [f32; 3], dynamic: bool) -> Value {
-    json!({"id": id, "pos": pos, "size": size, "container": false, "lid": "none", "dynamic": dynamic})
+/// A piece of furniture of the layout: it stays where it is put.
+fn fixed(id: i64, pos: [f32; 3], size: [f32; 3]) -> Value {
+    json!({"id": id, "pos": pos, "size": size, "container": false, "lid": "none", "dynamic": false})
+}
+
+/// An object of the layout that physics moves (a rigid body robots carry).
+fn loose(id: i64, pos: [f32; 3], size: [f32; 3]) -> Value {
+    json!({"id": id, "pos": pos, "size": size, "container": false, "lid": "none", "dynamic": true})
 }
 
 /// The two-storey scene as a native task file with `goal`, under the geometric rules.
@@ -101,12 +107,12 @@ fn house(goal: Value) -> Value {
             {"id": 7, "rooms": [0, 4], "foot": [0.65, 7.8], "head": [0.65, 3.6], "width": 1.1},
         ],
         "items": [
-            item(8, [3.0, 0.0, 7.0], [1.2, 0.45, 0.6], false),
-            item(9, [7.5, 0.0, 3.0], [1.4, 0.75, 1.0], false),
-            item(10, [3.6, 3.0, 0.9], [1.2, 0.5, 0.6], false),
-            item(11, [1.6, 3.0, 0.9], [1.2, 0.8, 1.1], false),
-            item(12, [3.0, 0.452, 7.0], [0.2, 0.05, 0.15], true),
-            item(13, [7.1, 0.752, 2.8], [0.08, 0.1, 0.08], true),
+            fixed(8, [3.0, 0.0, 7.0], [1.2, 0.45, 0.6]),
+            fixed(9, [7.5, 0.0, 3.0], [1.4, 0.75, 1.0]),
+            fixed(10, [3.6, 3.0, 0.9], [1.2, 0.5, 0.6]),
+            fixed(11, [1.6, 3.0, 0.9], [1.2, 0.8, 1.1]),
+            loose(12, [3.0, 0.452, 7.0], [0.2, 0.05, 0.15]),
+            loose(13, [7.1, 0.752, 2.8], [0.08, 0.1, 0.08]),
         ],
         "robots": [
             {"id": 14, "pos": [7.88, 0.75, 2.9]},

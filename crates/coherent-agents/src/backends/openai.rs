@@ -233,6 +233,9 @@ impl OpenAiClient {
             }
             targets.push((url, shown_url(base, config.api_key.as_ref())));
         }
+        // reqwest takes rustls's process-wide crypto provider, `ring` here (Cargo.toml says
+        // why). Installing it a second time fails harmlessly: one is there already.
+        let _ = rustls::crypto::ring::default_provider().install_default();
         let http = reqwest::Client::builder()
             .connect_timeout(config.connect_timeout)
             .read_timeout(config.read_timeout)

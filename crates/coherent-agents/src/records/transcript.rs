@@ -11,7 +11,7 @@ use std::path::Path;
 use coherent_core::RobotReport;
 use serde::{Deserialize, Serialize};
 
-use coherent_core::NodeId;
+use coherent_core::{NodeId, Task};
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
 pub use crate::episode::execution::Execution;
@@ -249,6 +249,37 @@ pub struct Round {
 }
 
 impl Round {
+    /// The robot the round chose and the action it chose for it, whatever came of it:
+    /// the proposal's robot and the decision's action (PEFA), or the robot a decision
+    /// `<robot label>: <action>` names (the central and dialogue methods, and methods
+    /// written outside the crate, record their choice so), else a method's own robot.
+    pub fn chosen<'r>(&'r self, task: &Task) -> (Option<NodeId>, Option<&'r str>) {
+        let action = self.decision.as_ref().and_then(|d| d.action.as_deref());
+        if let Some(p) = &self.proposal {
+            return (Some(p.robot), action);
+        }
+        if let Some(line) = action {
+            for r in &task.robots {
+                let label = task.node(r.node).label();
+                if let Some(rest) = line
+                    .strip_prefix(label.as_str())
+                    .and_then(|rest| rest.strip_prefix(": "))
+                {
+                    return (Some(task.id(r.node)), Some(rest));
+                }
+            }
+        }
+        (self.external.as_ref().and_then(|e| e.robot), action)
+    }
+
+    /// The robot and the action the round carried out, if it carried one out.
+    pub fn executed<'r>(&'r self, task: &Task) -> Option<(NodeId, &'r str)> {
+        match (&self.outcome, self.chosen(task)) {
+            (RoundOutcome::Executed, (Some(robot), Some(action))) => Some((robot, action)),
+            _ => None,
+        }
+    }
+
     /// Round `step` before anything happened in it.
     pub fn new(step: u32) -> Round {
         Round {

@@ -4,6 +4,11 @@
 //! Every expectation in the rule tests was derived by hand from the task's JSON and
 //! `docs/semantics.md`; these helpers only drive a [`SymbolicEnv`] and compare, reporting
 //! what is missing and what is unexpected when a list differs.
+//!
+//! A rule test starts from an opening: a task's initial state, or the state some moves
+//! lead to ([`Scene::after`]). Each opening is a `static LazyLock<Scene>` of its test
+//! file, built once per test binary and cloned by every test that starts there, so that
+//! the moves that lead to it are written and played once.
 
 #![allow(dead_code)]
 
@@ -53,8 +58,19 @@ pub fn name(t: &coherent_core::Task) -> String {
     format!("{} task {}", t.meta.scene, t.meta.task_id)
 }
 
+/// A move of a rule test: the robot, and the action it must be allowed.
+pub type Move = (i64, &'static str);
+
+/// `base` with `more` added and `less` taken out: an action list that differs from a
+/// familiar one in a few entries.
+pub fn with(base: &[&'static str], more: &[&'static str], less: &[&str]) -> Vec<&'static str> {
+    let mut list: Vec<&'static str> = base.iter().copied().filter(|a| !less.contains(a)).collect();
+    list.extend_from_slice(more);
+    list
+}
+
 /// A task being played, step by step.
-#[derive(Debug)]
+#[derive(Clone, Debug)]
 pub struct Scene {
     pub env: SymbolicEnv,
     name: String,
@@ -78,6 +94,30 @@ impl Scene {
             env: SymbolicEnv::new(Arc::new(task)),
             name: format!("{scene}/{task_id}"),
         }
+    }
+
+    /// A copy of this scene after `moves`, each of which must be executed; `label` names
+    /// the state reached in failure messages.
+    #[track_caller]
+    pub fn after(&self, label: &str, moves: &[Move]) -> Scene {
+        let mut next = self.clone();
+        next.name = format!("{} after {label}", self.name);
+        for &(robot, action) in moves {
+            next.act(robot, action);
+        }
+        next
+    }
+
+    /// This scene is in the state `opening` starts from: a story that ends where another
+    /// test's opening begins has played the same moves.
+    #[track_caller]
+    pub fn expect_state_of(&self, opening: &Scene) {
+        assert!(
+            self.env.state() == opening.env.state(),
+            "{}: the state differs from that of {}",
+            self.name,
+            opening.name
+        );
     }
 
     /// Robot `robot` does `action`, which must be executed.

@@ -8,16 +8,17 @@ mod frame;
 mod items;
 mod labels;
 mod legend;
+mod picture;
 mod plan;
 mod robots;
-
-use std::fmt::Write as _;
+mod stage;
 
 use coherent_core::{State, Task};
 
+use self::frame::Frame;
 pub use self::frame::Paths;
-use self::frame::{Frame, MARGIN, esc};
-use self::labels::Labels;
+use self::picture::{Movers, draw};
+pub use self::stage::{Stage, robot_colour};
 use crate::layout::Layout;
 
 /// A top-down SVG picture of the scene (x to the right, z down): room outlines with
@@ -31,46 +32,5 @@ use crate::layout::Layout;
 /// storey.
 pub fn svg(task: &Task, layout: &Layout, state: &State, paths: Option<&Paths>) -> String {
     let frame = Frame::new(task, layout);
-    let (width, height) = (frame.width, frame.height);
-    let mut out = String::new();
-    let _ = writeln!(
-        out,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{height:.0}" viewBox="0 0 {width:.0} {height:.0}" font-family="DejaVu Sans, Arial, sans-serif">"#
-    );
-    let _ = writeln!(
-        out,
-        r##"<rect x="0" y="0" width="{width:.0}" height="{height:.0}" fill="#ffffff"/>"##
-    );
-    let _ = writeln!(
-        out,
-        r#"<title>{} task {}</title>"#,
-        esc(&task.meta.scene),
-        task.meta.task_id
-    );
-    let mut labels = Labels {
-        canvas: [2.0, 2.0, MARGIN + frame.total_w + 15.0, height - 2.0],
-        placed: Vec::new(),
-        out: String::new(),
-    };
-
-    plan::storeys(&mut out, &mut labels, &frame);
-    plan::rooms(&mut out, &mut labels, &frame);
-    plan::doors(&mut out, &mut labels, &frame, state);
-    plan::stairs(&mut out, &mut labels, &frame);
-    items::furniture(&mut out, &mut labels, &frame, state);
-    // Robots before the objects' labels are placed, so that those avoid them.
-    robots::robots(&mut out, &mut labels, &frame);
-    items::objects(&mut out, &mut labels, &frame);
-    if let Some(paths) = paths {
-        robots::paths(&mut out, &frame, paths);
-    }
-
-    out.push_str(r#"<g class="labels">"#);
-    out.push('\n');
-    out.push_str(&labels.out);
-    out.push_str("</g>\n");
-
-    legend::legend(&mut out, &frame, paths.is_some());
-    out.push_str("</svg>\n");
-    out
+    draw(&frame, state, Movers::Drawn(paths))
 }

@@ -7,6 +7,7 @@ use coherent_core::RobotKind;
 
 use super::frame::{FONT_ITEM, Frame, Paths, SCALE, name, robot_style};
 use super::labels::{Labels, around};
+use crate::layout::Layout;
 
 /// Each robot's symbol at its start pose, then their names (the marks are placed
 /// first, so that no name covers another robot).
@@ -24,61 +25,7 @@ pub(super) fn robots(out: &mut String, labels: &mut Labels, frame: &Frame) {
             continue;
         };
         let (cx, cy) = (frame.px(x, k), frame.pz(z));
-        let (colour, _) = robot_style(r.kind);
-        match r.kind {
-            RobotKind::Quadrotor => {
-                let s = layout.specs.quad_half * SCALE;
-                let _ = writeln!(
-                    out,
-                    r#"<g stroke="{colour}" stroke-width="3" fill="none"><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/></g>"#,
-                    cx - s,
-                    cy - s,
-                    cx + s,
-                    cy + s,
-                    cx - s,
-                    cy + s,
-                    cx + s,
-                    cy - s,
-                    cx - s,
-                    cy - s,
-                    s * 0.45,
-                    cx + s,
-                    cy - s,
-                    s * 0.45,
-                    cx - s,
-                    cy + s,
-                    s * 0.45,
-                    cx + s,
-                    cy + s,
-                    s * 0.45
-                );
-            }
-            RobotKind::RobotDog => {
-                let s = layout.specs.dog_half[0].max(layout.specs.dog_half[2]) * SCALE;
-                let _ = writeln!(
-                    out,
-                    r##"<polygon points="{:.1},{:.1} {:.1},{:.1} {:.1},{:.1}" fill="{colour}" stroke="#333" stroke-width="1.5"/>"##,
-                    cx,
-                    cy - s,
-                    cx + s,
-                    cy + s,
-                    cx - s,
-                    cy + s
-                );
-            }
-            RobotKind::RobotArm => {
-                let s = 9.0;
-                let reach = layout.specs.arm_reach() * SCALE;
-                let _ = writeln!(
-                    out,
-                    r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{reach:.1}" fill="none" stroke="{colour}" stroke-width="1" stroke-dasharray="3 4" opacity="0.6"/><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{colour}" stroke="#333" stroke-width="1.5"/>"##,
-                    cx - s,
-                    cy - s,
-                    2.0 * s,
-                    2.0 * s
-                );
-            }
-        }
+        symbol(out, layout, r.kind, cx, cy);
         robot_marks.push((r.node, r.kind, cx, cy));
     }
     let _ = writeln!(out, "</g>");
@@ -114,14 +61,79 @@ pub(super) fn robots(out: &mut String, labels: &mut Labels, frame: &Frame) {
     }
 }
 
-/// Each robot's path: one polyline per stretch on a storey, from a dot at the start to
-/// an arrow at the end.
-pub(super) fn paths(out: &mut String, frame: &Frame, paths: &Paths) {
-    let task = frame.task;
+/// A robot kind's symbol centred on `(cx, cy)`: a quadrotor's cross of rotors, a legged
+/// robot's triangle, a fixed arm's square with its reach dashed around it.
+pub(super) fn symbol(out: &mut String, layout: &Layout, kind: RobotKind, cx: f32, cy: f32) {
+    let (colour, _) = robot_style(kind);
+    match kind {
+        RobotKind::Quadrotor => {
+            let s = layout.specs.quad_half * SCALE;
+            let _ = writeln!(
+                out,
+                r#"<g stroke="{colour}" stroke-width="3" fill="none"><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><line x1="{:.1}" y1="{:.1}" x2="{:.1}" y2="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/><circle cx="{:.1}" cy="{:.1}" r="{:.1}"/></g>"#,
+                cx - s,
+                cy - s,
+                cx + s,
+                cy + s,
+                cx - s,
+                cy + s,
+                cx + s,
+                cy - s,
+                cx - s,
+                cy - s,
+                s * 0.45,
+                cx + s,
+                cy - s,
+                s * 0.45,
+                cx - s,
+                cy + s,
+                s * 0.45,
+                cx + s,
+                cy + s,
+                s * 0.45
+            );
+        }
+        RobotKind::RobotDog => {
+            let s = layout.specs.dog_half[0].max(layout.specs.dog_half[2]) * SCALE;
+            let _ = writeln!(
+                out,
+                r##"<polygon points="{:.1},{:.1} {:.1},{:.1} {:.1},{:.1}" fill="{colour}" stroke="#333" stroke-width="1.5"/>"##,
+                cx,
+                cy - s,
+                cx + s,
+                cy + s,
+                cx - s,
+                cy + s
+            );
+        }
+        RobotKind::RobotArm => {
+            let s = 9.0;
+            let reach = layout.specs.arm_reach() * SCALE;
+            let _ = writeln!(
+                out,
+                r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{reach:.1}" fill="none" stroke="{colour}" stroke-width="1" stroke-dasharray="3 4" opacity="0.6"/><rect x="{:.1}" y="{:.1}" width="{:.1}" height="{:.1}" fill="{colour}" stroke="#333" stroke-width="1.5"/>"##,
+                cx - s,
+                cy - s,
+                2.0 * s,
+                2.0 * s
+            );
+        }
+    }
+}
+
+/// The arrowhead that ends a path (`url(#arrow)`).
+pub(super) fn arrow(out: &mut String) {
     let _ = writeln!(
         out,
         r#"<defs><marker id="arrow" viewBox="0 0 10 10" refX="8" refY="5" markerWidth="7" markerHeight="7" orient="auto-start-reverse"><path d="M 0 0 L 10 5 L 0 10 z" fill="context-stroke"/></marker></defs>"#
     );
+}
+
+/// Each robot's path: one polyline per stretch on a storey, from a dot at the start to
+/// an arrow at the end.
+pub(super) fn paths(out: &mut String, frame: &Frame, paths: &Paths) {
+    let task = frame.task;
+    arrow(out);
     let _ = writeln!(out, r#"<g class="paths">"#);
     for (id, pts) in paths {
         if pts.len() < 2 {

@@ -1,0 +1,305 @@
+"""`coherent view` in a real browser: an episode's page stepped with the keys, two
+episodes side by side, a hostile transcript, and `coherent.view` from Python.
+
+The browser is Debian's chromium-headless-shell driven by Playwright (`make browser`
+installs it as root); each page is watched for console errors and for any request that
+is not the page's own file."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import subprocess
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from browser import Watched, chromium, watch
+from conftest import DEMO
+
+import coherent
+
+# Where the tests leave the screenshots of the pages (docs/figures when refreshing the
+# documentation's pictures); a scratch folder by default.
+SCREENSHOTS = os.environ.get("COHERENT_SCREENSHOTS")
+
+
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
+    with chromium() as b:
+        yield b
+
+
+def run_episode(exe: str, out: Path, *args: str) -> tuple[list[str], Path]:
+    """`coherent run` on the demo task: the step lines it printed, and its transcript."""
+    done = subprocess.run([exe, "run", str(DEMO), "--out", str(out), *args], capture_output=True, text=True, check=False)
+    assert done.returncode in (0, 1), done.stderr
+    lines = done.stdout.splitlines()
+    steps = [line for line in lines if line.startswith("step ")]
+    transcript = Path(next(line for line in lines if line.startswith("transcript: ")).split(": ", 1)[1])
+    return steps, transcript
+
+
+def view(exe: str, *args: str) -> str:
+    done = subprocess.run([exe, "view", *args], capture_output=True, text=True, check=False)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def rounds(transcript: Path) -> list[dict[str, Any]]:
+    records = [json.loads(line) for line in transcript.read_text(encoding="utf-8").splitlines() if line.strip()]
+    return [r for r in records if r["type"] == "round"]
+
+
+def drawn(page: Any) -> dict[int, tuple[float, float]]:
+    """Where the page draws each robot now, in picture coordinates."""
+    marks = page.eval_on_selector_all(
+        ".scene use.robot", "us => us.map(u => [u.dataset.robot, u.dataset.x, u.dataset.y])"
+    )
+    return {int(r): (float(x), float(y)) for r, x, y in marks}
+
+
+def rooms_by_the_rules(env: coherent.Env) -> dict[int, int]:
+    """Each robot's room in the environment's graph (its INSIDE edge to a room)."""
+    graph = env.graph()
+    rooms = {n["id"] for n in graph["nodes"] if n["category"] == "Rooms"}
+    robots = set(env.robots)
+    return {
+        e["from_id"]: e["to_id"]
+        for e in graph["edges"]
+        if e["relation_type"] == "INSIDE" and e["from_id"] in robots and e["to_id"] in rooms
+    }
+
+
+def room_rects(page: Any, task: coherent.Task) -> dict[int, tuple[float, float, float, float]]:
+    """The drawn rectangle of each room: the picture draws the layout's rooms in order."""
+    rects = page.eval_on_selector_all(
+        ".scene svg g.rooms rect",
+        "rs => rs.map(r => ['x', 'y', 'width', 'height'].map(a => Number(r.getAttribute(a))))",
+    )
+    ids = [room["id"] for room in coherent.scene_layout(task)["rooms"]]
+    assert len(rects) == len(ids)
+    return {i: (x, y, x + w, y + h) for i, (x, y, w, h) in zip(ids, rects)}
+
+
+def test_the_demo_page_shows_each_step_as_run_printed_it_and_moves_the_robots_by_the_rules(
+    coherent_exe: str, tmp_path: Path, browser: Any
+) -> None:
+    printed, transcript = run_episode(coherent_exe, tmp_path / "runs")
+    page_file = tmp_path / "demo.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    page = w.page
+    task = coherent.load_tasks(DEMO)[0]
+    env = coherent.Env(task)
+    rects = room_rects(page, task)
+    recorded = rounds(transcript)
+    assert len(printed) == len(recorded) > 0
+
+    def check_rooms() -> None:
+        expected = rooms_by_the_rules(env)
+        listed = dict(page.eval_on_selector_all(".scene li[data-robot]", "ls => ls.map(l => [Number(l.dataset.robot), Number(l.dataset.room)])"))
+        assert listed == expected
+        for robot, (x, y) in drawn(page).items():
+            x0, y0, x1, y1 = rects[expected[robot]]
+            assert x0 <= x <= x1 and y0 <= y <= y1, (robot, expected[robot])
+
+    before = drawn(page)
+    check_rooms()
+    for k, (line, rnd) in enumerate(zip(printed, recorded), start=1):
+        page.keyboard.press("ArrowRight")
+        assert page.text_content(".detail pre.line") == line
+        assert page.text_content(".steps li.current") == line
+        assert page.evaluate("location.hash") == f"#step={k}"
+        acting = rnd["proposal"]["robot"] if rnd["proposal"] else None
+        action = (rnd["decision"] or {}).get("action")
+        executed = rnd["outcome"]["kind"] == "executed"
+        if executed:
+            env.step(acting, action)
+        now = drawn(page)
+        for robot, (x, y) in now.items():
+            moved = math.dist(before[robot], (x, y)) > 0.5
+            its_own = executed and robot == acting
+            # A robot's own move takes it elsewhere; a landing may shift it onto the
+            # surface below; nothing else moves a robot on the floor plan.
+            if its_own and action.startswith("[movetowards]"):
+                assert moved, (k, robot, action)
+            if moved:
+                assert its_own and action.startswith(("[movetowards]", "[land_on]")), (k, robot, action)
+        check_rooms()
+        before = now
+    page.keyboard.press("Home")
+    assert page.text_content(".steps li.current") == "start"
+    page.keyboard.press("End")
+    assert page.text_content(".detail pre.line") == printed[-1]
+    # A link to a step opens the page there.
+    page.goto(page_file.as_uri() + "#step=3")
+    page.wait_for_selector(".steps li.current")
+    assert page.text_content(".steps li.current") == printed[2]
+    if SCREENSHOTS:
+        page.keyboard.press("Home")
+        for _ in range(9):
+            page.keyboard.press("ArrowRight")
+        page.screenshot(path=str(Path(SCREENSHOTS) / "view-episode.png"), full_page=False)
+    w.assert_quiet()
+
+
+def test_refused_steps_are_marked_with_the_engines_reason(coherent_exe: str, tmp_path: Path, browser: Any) -> None:
+    printed, transcript = run_episode(coherent_exe, tmp_path / "runs", "--sim-errors", "hallucinate=0.5", "--seed", "3")
+    refused = [(i, r) for i, r in enumerate(rounds(transcript), start=1) if r["outcome"]["kind"] == "infeasible"]
+    assert refused, "the simulated mistakes refuse some step"
+    page_file = tmp_path / "refused.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    for k, r in refused:
+        w.page.goto(f"{page_file.as_uri()}#step={k}")
+        w.page.wait_for_selector(f".steps li.current[data-step='{k}']")
+        assert w.page.get_attribute(f".steps li[data-step='{k}']", "class") == "refused current"
+        assert w.page.get_attribute(".detail .refusal", "data-reason") == r["outcome"]["reason"]
+        assert w.page.text_content(".detail pre.line") == printed[k - 1]
+    w.assert_quiet()
+
+
+def first_differing_round(a: Path, b: Path) -> int | None:
+    """Where two transcripts' decisions (robot and action) first differ, read here."""
+
+    def decided(r: dict[str, Any]) -> tuple[Any, Any]:
+        return ((r["proposal"] or {}).get("robot"), (r["decision"] or {}).get("action"))
+
+    ra, rb = rounds(a), rounds(b)
+    for x, y in zip(ra, rb):
+        if decided(x) != decided(y):
+            return int(x["step"])
+    return None if len(ra) == len(rb) else min(len(ra), len(rb)) + 1
+
+
+def test_side_by_side_marks_the_first_round_whose_decisions_differ(coherent_exe: str, tmp_path: Path, browser: Any) -> None:
+    _, a = run_episode(coherent_exe, tmp_path / "a", "--sim-errors", "all=0.3", "--seed", "1")
+    _, b = run_episode(coherent_exe, tmp_path / "b", "--sim-errors", "all=0.3", "--seed", "2")
+    expected = first_differing_round(a, b)
+    assert expected is not None
+    page_file = tmp_path / "both.html"
+    view(coherent_exe, str(a), str(b), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    page = w.page
+    assert page.get_attribute("#first-difference", "data-step") == str(expected)
+    assert page.eval_on_selector_all("tr.differs", "rs => rs.map(r => Number(r.dataset.step))") == [expected]
+    # Both sides step together.
+    page.click("#first-difference a")
+    assert page.evaluate("location.hash") == f"#step={expected}"
+    details = page.query_selector_all(".detail")
+    assert len(details) == 2
+    for detail, t in zip(details, (a, b)):
+        if expected <= len(rounds(t)):
+            assert detail.query_selector("pre.line").text_content().split()[1] == f"{expected}/{_budget(t)}"
+    page.keyboard.press("ArrowRight")
+    assert page.evaluate("document.body.dataset.step") == str(expected + 1)
+    w.assert_quiet()
+
+
+def _budget(transcript: Path) -> int:
+    return int(json.loads(transcript.read_text(encoding="utf-8").splitlines()[0])["max_steps"])
+
+
+HOSTILE = [
+    "</script><script>window.__pwned = 'script'</script>",
+    "<img src=x onerror=\"window.__pwned = 'img'\"> and <b>bold</b> & &amp;",
+    "colour \x1b[31mred\x1b[0m and a bell \x07 and a right-to-left \u202e mark",
+]
+
+
+def hostile_transcript(source: Path, out: Path) -> tuple[Path, list[str]]:
+    """`source` with hostile text as the model's answers, the task's name and instruction,
+    a feedback line, and one 64 KiB answer; returns it and the texts put in."""
+    records = [json.loads(line) for line in source.read_text(encoding="utf-8").splitlines() if line.strip()]
+    header = records[0]
+    header["task_name"] = HOSTILE[0]
+    header["task"]["name"] = HOSTILE[0]
+    header["task"]["instruction"] = HOSTILE[1] + " " + header["task"]["instruction"]
+    # A name in the scene's picture too: the sofa, which no action names.
+    sofa = next(n for n in header["task"]["graph"]["nodes"] if n["id"] == 14)
+    sofa["class_name"] = HOSTILE[0]
+    long = ("<i>" + "y" * 56 + "</i>\n") * 1024  # 64 KiB
+    texts = [*HOSTILE, long]
+    calls = [c for r in records if r.get("type") == "round" for c in r["calls"] if c["answer"]]
+    assert len(calls) >= len(texts)
+    for call, text in zip(calls, texts):
+        call["answer"]["text"] = text
+    rnd = next(r for r in records if r.get("type") == "round")
+    rnd["feedback"] = HOSTILE[0]
+    out.write_text("".join(json.dumps(r) + "\n" for r in records), encoding="utf-8")
+    return out, texts
+
+
+def as_shown(text: str) -> str:
+    """What the page shows for `text`: as a terminal shows it (coherent_core::text),
+    line breaks kept, other control characters and direction marks as \\u{..}."""
+    out = []
+    for c in text:
+        if c == "\n":
+            out.append(c)
+        elif c == "\r":
+            out.append("\\r")
+        elif c == "\t":
+            out.append("\\t")
+        elif ord(c) < 0x20 or 0x7F <= ord(c) < 0xA0 or c in "\u061c\u200e\u200f" or 0x202A <= ord(c) <= 0x202E or 0x2066 <= ord(c) <= 0x2069:
+            out.append("\\u{%x}" % ord(c))
+        else:
+            out.append(c)
+    return "".join(out)
+
+
+def test_a_hostile_transcript_runs_nothing_and_shows_its_text_as_written(coherent_exe: str, tmp_path: Path, browser: Any) -> None:
+    # The simulated backend answers the roles: every round has calls with answers.
+    _, source = run_episode(coherent_exe, tmp_path / "runs", "--sim-errors", "all=0.0")
+    transcript, texts = hostile_transcript(source, tmp_path / "hostile.jsonl")
+    page_file = tmp_path / "hostile.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    html = page_file.read_text(encoding="utf-8")
+    # Nothing of the data can close the data's element or open one.
+    assert html.count("</script>") == 2 and "<img" not in html
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    page = w.page
+    assert page.evaluate("window.__pwned") is None
+    assert page.evaluate("document.scripts.length") == 2
+    assert page.query_selector_all("img") == []
+    assert page.text_content(".header h1").startswith("demo-apartment task 0 · " + HOSTILE[0])
+    assert page.text_content(".header .instruction").startswith(HOSTILE[1])
+    labels = page.eval_on_selector_all(".scene svg text", "ts => ts.map(t => t.textContent)")
+    assert any(label.startswith(f"{HOSTILE[0]} 14") for label in labels)  # then its height
+    answers: list[str] = []
+    for k in range(1, len(rounds(transcript)) + 1):
+        page.keyboard.press("ArrowRight")
+        answers += page.eval_on_selector_all(".detail pre.answer", "ps => ps.map(p => p.textContent)")
+        if k == 1:
+            assert page.text_content(".detail [data-field=feedback]") == HOSTILE[0]
+    for text in texts:
+        assert as_shown(text) in answers
+    assert page.evaluate("window.__pwned") is None
+    w.assert_quiet()
+
+
+def test_coherent_view_in_python_gives_the_page_and_a_frame_for_jupyter(tmp_path: Path, browser: Any) -> None:
+    task = coherent.load_tasks(DEMO)[0]
+    episode = coherent.run(task, out=tmp_path / "runs")
+    page = coherent.view(episode)
+    assert isinstance(page, coherent.Page)
+    assert coherent.view(episode.path).html == page.html
+    frame = episode._repr_html_()
+    assert frame.startswith('<iframe sandbox="allow-scripts"') and "srcdoc=" in frame
+    w = watch(browser)
+    w.page.set_content(frame)
+    inner = w.page.frame_locator("iframe")
+    inner.locator(".steps li.current").wait_for()
+    assert inner.locator(".steps li").count() == episode.steps + 1
+    saved = page.save(tmp_path / "episode.html")
+    w.open(saved.as_uri())
+    w.page.keyboard.press("End")
+    assert w.page.text_content(".steps li.current").startswith(f"step {episode.steps}/")
+    w.assert_quiet("about:")

@@ -1,0 +1,139 @@
+//! A benchmark's results as a page: the report's tables (`coherent_agents::report`, the
+//! numbers `coherent bench --report` and `coherent.report` give), the figures the page
+//! draws from them, and every episode with a link to its own page.
+
+use std::path::{Path, PathBuf};
+
+use coherent_agents::bench::{ResultLine, transcripts_dir};
+use coherent_agents::report::{self, Report};
+use coherent_core::text::shown;
+use serde::Serialize;
+
+/// The index page's data.
+#[derive(Debug, Serialize)]
+pub struct ResultsView {
+    pub kind: &'static str,
+    /// The results file, as named.
+    pub file: String,
+    pub report: Report,
+    pub episodes: Vec<Row>,
+    /// Served on loopback: the file's length when read, which the page compares with
+    /// the server's to follow the file as it grows; none for a page on disk.
+    pub live: Option<u64>,
+}
+
+/// One episode (a results line).
+#[derive(Debug, Serialize)]
+pub struct Row {
+    pub method: String,
+    pub scene: String,
+    pub task_id: i64,
+    pub task_type: Option<String>,
+    pub seed: u32,
+    pub status: String,
+    pub success: bool,
+    pub steps: u32,
+    pub gt_steps: Option<u32>,
+    pub max_steps: u32,
+    pub llm_calls: u32,
+    pub tokens: u64,
+    pub cost_usd: Option<f64>,
+    pub wall_ms: f64,
+    pub error: Option<String>,
+    /// Its page, relative to the index; none when its transcript is not at hand.
+    pub link: Option<String>,
+}
+
+/// The lines with every name from the file shown as on a terminal, so that the tables
+/// group and name them as the page shows them.
+fn shown_lines(lines: &[ResultLine]) -> Vec<ResultLine> {
+    lines
+        .iter()
+        .map(|l| ResultLine {
+            method: shown(&l.method).into_owned(),
+            scene: shown(&l.scene).into_owned(),
+            task_type: l.task_type.as_deref().map(|t| shown(t).into_owned()),
+            ..l.clone()
+        })
+        .collect()
+}
+
+/// The page's data for `lines` of the results file `file`; `links[i]` is line i's
+/// episode page, when it has one.
+pub fn view(
+    file: &Path,
+    lines: &[ResultLine],
+    links: &[Option<String>],
+    live: Option<u64>,
+) -> ResultsView {
+    let named = shown_lines(lines);
+    let episodes = named
+        .iter()
+        .enumerate()
+        .map(|(i, l)| Row {
+            method: l.method.clone(),
+            scene: l.scene.clone(),
+            task_id: l.task_id,
+            task_type: l.task_type.clone(),
+            seed: l.seed,
+            status: serde_json::to_value(l.status)
+                .ok()
+                .and_then(|v| v.as_str().map(str::to_owned))
+                .unwrap_or_default(),
+            success: l.success,
+            steps: l.steps,
+            gt_steps: l.gt_steps,
+            max_steps: l.max_steps,
+            llm_calls: l.llm_calls,
+            tokens: l.prompt_tokens + l.completion_tokens,
+            cost_usd: l.cost_usd,
+            wall_ms: l.wall_ms,
+            error: l.error.as_deref().map(|e| shown(e).into_owned()),
+            link: links.get(i).cloned().flatten(),
+        })
+        .collect();
+    ResultsView {
+        kind: "results",
+        file: shown(&file.display().to_string()).into_owned(),
+        report: report::build(&named),
+        episodes,
+        live,
+    }
+}
+
+/// Where the transcript of `line` is: as the line names it, else in the transcripts
+/// folder beside `results` (a results folder moved or viewed from elsewhere).
+pub fn transcript_of(results: &Path, line: &ResultLine) -> Option<PathBuf> {
+    let named = PathBuf::from(&line.transcript);
+    if named.is_file() {
+        return Some(named);
+    }
+    let file = named.file_name()?;
+    let seed = named.parent().and_then(Path::file_name)?;
+    let beside = transcripts_dir(results).join(seed).join(file);
+    beside.is_file().then_some(beside)
+}
+
+/// The page of `line`'s episode, relative to the index: `episodes/<seed folder>/<the
+/// transcript's name>.html`, with any character that is not a letter, a digit, `-`,
+/// `_` or `.` made `_` (a name from the file never leaves the folder).
+pub fn page_name(line: &ResultLine) -> String {
+    let named = Path::new(&line.transcript);
+    let safe = |s: &str| -> String {
+        let s: String = s
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        s.trim_start_matches('.').to_owned()
+    };
+    let stem = named
+        .file_stem()
+        .map_or_else(String::new, |s| safe(&s.to_string_lossy()));
+    format!("episodes/seed{}/{stem}.html", line.seed)
+}
