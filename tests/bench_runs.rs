@@ -439,11 +439,14 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
                 l.transcript
             );
         }
+        // Physics times each episode; the rules alone do not.
+        assert!(got.iter().all(|l| l.sim_seconds.is_some() == physics));
         got = got
             .into_iter()
             .map(|l| ResultLine {
                 wall_ms: 0.0,
                 transcript: String::new(),
+                sim_seconds: None,
                 ..l
             })
             .collect();

@@ -41,7 +41,10 @@ fn run_parallel_prints_each_robots_part_reports_the_makespan_and_replays() {
     assert_eq!(code(&out), 0, "{}", show(&out));
     let text = stdout(&out);
     let printed: Vec<&str> = text.lines().collect();
-    assert!(printed[1].contains("| method pefa | execution parallel |"), "{text}");
+    assert!(
+        printed[1].contains("| method pefa | execution parallel |"),
+        "{text}"
+    );
     assert!(
         printed[1].ends_with("budget 26 joint steps (2 x the optimal makespan)"),
         "{text}"
@@ -52,7 +55,10 @@ fn run_parallel_prints_each_robots_part_reports_the_makespan_and_replays() {
         printed[4],
         "  <quadrotor>(11)  [takeoff_from] <living room floor>(3)  -> ok"
     );
-    assert_eq!(printed[5], "  <robot dog>(13)  [movetowards] <door>(4)  -> ok");
+    assert_eq!(
+        printed[5],
+        "  <robot dog>(13)  [movetowards] <door>(4)  -> ok"
+    );
     assert!(
         text.contains("step 13/26  joint step, 1 robot  -> ok, goal reached"),
         "{text}"
@@ -86,7 +92,10 @@ fn run_parallel_prints_each_robots_part_reports_the_makespan_and_replays() {
     let first = &records[1];
     assert_eq!(first["parts"].as_array().map(Vec::len), Some(3));
     assert_eq!(first["parts"][0]["robot"], json!(6));
-    assert_eq!(first["parts"][0]["decision"]["action"], json!("[grab] <mug>(7)"));
+    assert_eq!(
+        first["parts"][0]["decision"]["action"],
+        json!("[grab] <mug>(7)")
+    );
     assert_eq!(first["parts"][0]["outcome"], json!({"kind": "executed"}));
 
     let again = coherent(&["run", "--replay", transcript, "--out", utf8(&dir)]);
@@ -124,7 +133,10 @@ fn the_tree_searches_refuse_parallel_execution() {
         ]);
         assert_eq!(code(&out), 2, "{}", show(&out));
         let err = String::from_utf8_lossy(&out.stderr);
-        assert!(err.contains(&format!("{method} is sequential only")), "{err}");
+        assert!(
+            err.contains(&format!("{method} is sequential only")),
+            "{err}"
+        );
     }
     let out = coherent(&[
         "bench",
@@ -160,7 +172,10 @@ fn bench_runs_each_method_both_ways_resumes_by_execution_and_compares_them() {
     };
     let out = bench("sequential");
     assert_eq!(code(&out), 0, "{}", show(&out));
-    assert!(!stdout(&out).contains("Makespan"), "no parallel episode, no makespan table");
+    assert!(
+        !stdout(&out).contains("Makespan"),
+        "no parallel episode, no makespan table"
+    );
     let out = bench("sequential,parallel");
     assert_eq!(code(&out), 0, "{}", show(&out));
     assert!(
@@ -175,25 +190,47 @@ fn bench_runs_each_method_both_ways_resumes_by_execution_and_compares_them() {
         assert_eq!(l["success"], json!(true), "{l}");
         assert_eq!(l["makespan"], json!(if parallel { 13 } else { 22 }), "{l}");
         assert_eq!(l["actions"], json!(22), "{l}");
-        assert_eq!(l["optimal_makespan"], if parallel { json!(13) } else { Value::Null });
+        assert_eq!(
+            l["optimal_makespan"],
+            if parallel { json!(13) } else { Value::Null }
+        );
         assert_eq!(l["max_steps"], json!(if parallel { 26 } else { 44 }), "{l}");
     }
     // The second run's sequential lines count no makespan search: the first run had
     // none. Its tables: a row per method and execution, and the makespan table.
     let report = coherent(&["bench", "--report", utf8(&results)]);
     let text = stdout(&report);
-    assert!(text.contains("| pefa (parallel) | - | - | 1.000 / 13.0 | 1.000 / 13.0 |"), "{text}");
-    assert!(text.contains("### Makespan: steps to the goal with robots acting at once"));
     assert!(
-        text.contains("| pefa (parallel) | Trio | 1 | 1.000 | 13.0 | 13.0 | 22.0 | 1.59 | - | 1.69x (n=1) |"),
+        text.contains("| pefa (parallel) | - | - | 1.000 / 13.0 | 1.000 / 13.0 |"),
         "{text}"
     );
-    let csv = stdout(&coherent(&["bench", "--report", utf8(&results), "--format", "csv"]));
+    assert!(text.contains("### Makespan: steps to the goal with robots acting at once"));
+    assert!(
+        text.contains(
+            "| pefa (parallel) | Trio | 1 | 1.000 | 13.0 | 13.0 | 22.0 | 1.59 | - | 1.69x (n=1) |"
+        ),
+        "{text}"
+    );
+    let csv = stdout(&coherent(&[
+        "bench",
+        "--report",
+        utf8(&results),
+        "--format",
+        "csv",
+    ]));
     let header = csv.lines().next().expect("a header");
-    assert!(header.ends_with(",execution,makespan,optimal_makespan,actions,calls_per_action,sim_seconds,speedup"));
+    assert!(header.ends_with(
+        ",execution,makespan,optimal_makespan,actions,calls_per_action,sim_seconds,speedup"
+    ));
     let columns = header.split(',').count();
-    assert!(csv.lines().all(|l| l.split(',').count() == columns), "{csv}");
-    assert!(csv.lines().any(|l| l.starts_with("makespan,optimal (parallel),trio,")));
+    assert!(
+        csv.lines().all(|l| l.split(',').count() == columns),
+        "{csv}"
+    );
+    assert!(
+        csv.lines()
+            .any(|l| l.starts_with("makespan,optimal (parallel),trio,"))
+    );
     let json: Value = serde_json::from_str(&stdout(&coherent(&[
         "bench",
         "--report",

@@ -60,17 +60,16 @@ pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, Error> {
 pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
     let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
-    for round in &t.rounds {
-        let Some((robot, action)) = round.executed(task) else {
-            continue;
-        };
-        let outcome = env.step(robot, action)?;
-        if let Some(why) = outcome.infeasible {
-            warning = Some(format!(
-                "round {}: {action} failed in physics, paths drawn up to there: {why}",
-                round.step
-            ));
-            break;
+    'rounds: for round in &t.rounds {
+        for (robot, action) in round.carried_out(task) {
+            let outcome = env.step(robot, action)?;
+            if let Some(why) = outcome.infeasible {
+                warning = Some(format!(
+                    "round {}: {action} failed in physics, paths drawn up to there: {why}",
+                    round.step
+                ));
+                break 'rounds;
+            }
         }
     }
     Ok(Paths {

@@ -443,11 +443,7 @@ impl Walk<'_> {
 
     /// Chooses for robot `k` and those after it; `emit` gets each complete, non-empty
     /// joint step with the state it leads to, and answers the length to beat.
-    fn level(
-        &mut self,
-        k: usize,
-        emit: &mut Emit<'_>,
-    ) -> ControlFlow<Halt, usize> {
+    fn level(&mut self, k: usize, emit: &mut Emit<'_>) -> ControlFlow<Halt, usize> {
         if k == self.robots.len() {
             if !self.chosen.is_empty() {
                 let step: SmallVec<[Step; 4]> = self

@@ -100,7 +100,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
         Err(e) => {
             let mut moments = vec![moment(task, rules.state(), 0, None, None)];
             for round in &t.rounds {
-                if let Some((robot, action)) = round.executed(task) {
+                for (robot, action) in round.carried_out(task) {
                     let _ = rules.step(robot, action);
                 }
                 moments.push(moment(task, rules.state(), 0, None, None));
@@ -127,30 +127,32 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
     let first = pictures.of(&stage, rules.state(), ids);
     let mut moments = vec![moment(task, rules.state(), first, Some(&drawn), None)];
     for round in &t.rounds {
-        let mut sim_seconds = None;
-        if let Some((robot, action)) = round.executed(task) {
+        // A joint step lasts as long as its slowest robot.
+        let mut sim_seconds: Option<f64> = None;
+        for (robot, action) in round.carried_out(task) {
             let _ = rules.step(robot, action);
-            if let Ok(env) = &mut physics {
-                let stopped = match env.step_physical(robot, action) {
-                    Ok(Ok(report)) => {
-                        sim_seconds = Some(report.sim_seconds);
-                        drawn.update(&stage, env);
-                        None
-                    }
-                    Ok(Err(why)) => Some(format!(
-                        "the rules refuse {} in physics: {why}",
-                        shown(action)
-                    )),
-                    Err(e) => Some(e.message),
-                };
-                if let Some(why) = stopped {
-                    drawn.finish(&stage, env);
-                    physics = Err(format!(
-                        "from round {} on, the robots are drawn where physics left them: {}",
-                        round.step,
-                        shown(&why)
-                    ));
+            let Ok(env) = &mut physics else { continue };
+            let stopped = match env.step_physical(robot, action) {
+                Ok(Ok(report)) => {
+                    let longest =
+                        sim_seconds.map_or(report.sim_seconds, |s| s.max(report.sim_seconds));
+                    sim_seconds = Some(longest);
+                    drawn.update(&stage, env);
+                    None
                 }
+                Ok(Err(why)) => Some(format!(
+                    "the rules refuse {} in physics: {why}",
+                    shown(action)
+                )),
+                Err(e) => Some(e.message),
+            };
+            if let Some(why) = stopped {
+                drawn.finish(&stage, env);
+                physics = Err(format!(
+                    "from round {} on, the robots are drawn where physics left them: {}",
+                    round.step,
+                    shown(&why)
+                ));
             }
         }
         let picture = pictures.of(&stage, rules.state(), ids);

@@ -280,6 +280,21 @@ impl Round {
         }
     }
 
+    /// Every robot's action the round carried out, in team order: [`Round::executed`]'s
+    /// one in a sequential round, each executed part's in a parallel one (a joint step's
+    /// actions do not interfere, so carried out one after another in this order they
+    /// give the step's state).
+    pub fn carried_out<'r>(&'r self, task: &Task) -> Vec<(NodeId, &'r str)> {
+        if self.parts.is_empty() {
+            return self.executed(task).into_iter().collect();
+        }
+        self.parts
+            .iter()
+            .filter(|p| p.outcome == RoundOutcome::Executed)
+            .filter_map(|p| p.action().map(|a| (p.robot, a)))
+            .collect()
+    }
+
     /// Round `step` before anything happened in it.
     pub fn new(step: u32) -> Round {
         Round {
