@@ -240,9 +240,13 @@ impl PyDecision {
     }
 }
 
+/// What `act` answered: its decisions, one per robot that acts, or why none could be
+/// read (the method's own words).
+type Answered = Result<Vec<Choice>, String>;
+
 /// What `act` returned, as its choices: a list of decisions (several robots' in a
 /// parallel episode), or one; anything else is the method's error.
-fn choices_of(answer: &Bound<'_, PyAny>) -> Result<Vec<Choice>, String> {
+fn choices_of(answer: &Bound<'_, PyAny>) -> Answered {
     match answer.cast::<PyList>() {
         Ok(list) => list.iter().map(|item| choice_of(&item)).collect(),
         Err(_) => choice_of(answer).map(|c| vec![c]),
@@ -406,8 +410,8 @@ struct PythonPolicy {
 
 /// A step's answer: at once, or from the event loop.
 enum Started {
-    Now(Result<Vec<Choice>, String>),
-    Later(oneshot::Receiver<Result<Vec<Choice>, String>>, Py<PyAny>),
+    Now(Answered),
+    Later(oneshot::Receiver<Answered>, Py<PyAny>),
 }
 
 impl PythonPolicy {
@@ -492,7 +496,7 @@ impl Drop for CancelOnDrop {
 /// exception, goes to the waiting episode.
 #[pyclass(module = "coherent._coherent", frozen)]
 struct Done {
-    tx: Mutex<Option<oneshot::Sender<Result<Vec<Choice>, String>>>>,
+    tx: Mutex<Option<oneshot::Sender<Answered>>>,
     method: Arc<PythonMethod>,
 }
 

@@ -103,16 +103,16 @@ pub fn schema_parallel(lines: &[String]) -> Value {
     })
 }
 
+/// What a parallel answer chose, `(robot, action)` in its order, and the reasons for
+/// the lines that were left out.
+pub(crate) type Choices = (Vec<(NodeId, String)>, Vec<String>);
+
 /// The robots and actions a parallel answer chooses, at most one per robot (a robot's
 /// later lines are left out and said so), each read as [`choose`] reads one line: the
 /// `actions` list of its JSON object, else (an answer in the sequential form) the one
 /// line it names. Returns the choices in the answer's order and what was left out; an
 /// error when no line is usable.
-pub(crate) fn choose_several(
-    task: &Task,
-    lines: &[String],
-    text: &str,
-) -> Result<(Vec<(NodeId, String)>, Vec<String>), String> {
+pub(crate) fn choose_several(task: &Task, lines: &[String], text: &str) -> Result<Choices, String> {
     let said: Vec<String> = match json_object(text)
         .as_ref()
         .and_then(|m| m.get("actions"))

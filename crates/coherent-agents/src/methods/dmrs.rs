@@ -201,7 +201,7 @@ async fn parallel(
     let mut heard: Vec<NodeId> = Vec::new();
     // Each speaker's last word: its own action (or none) and its message; `None` while
     // its last answer gave nothing usable.
-    let mut last: Vec<(NodeId, Option<(Option<String>, String)>)> = Vec::new();
+    let mut last: Vec<(NodeId, Option<Word>)> = Vec::new();
     for _ in 0..config.dialogue_rounds.max(1) {
         for &speaker in &order {
             if !heard.contains(&speaker) {
@@ -275,12 +275,10 @@ async fn parallel(
 /// it is one of them, else as written for the feasibility check to judge; `none` for
 /// none, its own label in front allowed), and its message; an error when the answer
 /// names no action.
-fn own_action(
-    task: &Task,
-    speaker: NodeId,
-    own: &[String],
-    text: &str,
-) -> Result<(Option<String>, String), String> {
+/// A speaker's word in a parallel dialogue: its own action (or none), and its message.
+type Word = (Option<String>, String);
+
+fn own_action(task: &Task, speaker: NodeId, own: &[String], text: &str) -> Result<Word, String> {
     let message = json_object(text)
         .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
         .unwrap_or_default();
