@@ -266,3 +266,34 @@ fn a_parallel_episode_in_physics_reports_its_simulated_seconds() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains(&format!("simulated {seconds:.2} s")), "{err}");
 }
+
+#[test]
+fn a_task_no_plan_solves_runs_in_parallel_within_twice_its_ground_truth_and_fails() {
+    // env3 task 0 cannot be solved: the makespan search finds no plan to size the budget
+    // from, so the episode gets the sequential rule's, and spends it.
+    let dir = scratch("run-parallel-unsolvable");
+    let env3 = common::released().join("env3.json");
+    let out = coherent(&[
+        "run",
+        utf8(&env3),
+        "--task",
+        "0",
+        "--execution",
+        "parallel",
+        "--json",
+        "--out",
+        utf8(&dir),
+    ]);
+    assert_eq!(code(&out), 1, "{}", show(&out));
+    let summary: Value = serde_json::from_str(
+        stdout(&out)
+            .lines()
+            .last()
+            .expect("the --json summary"),
+    )
+    .expect("JSON");
+    let gt = summary["gt_steps"].as_u64().expect("the task's GT");
+    assert_eq!(summary["max_steps"].as_u64(), Some(2 * gt));
+    assert_eq!(summary["status"], "failure");
+    assert_eq!(summary["makespan"], Value::Null);
+}

@@ -96,7 +96,8 @@ async fn builtin_methods_solve_every_released_task_in_the_makespan_of_the_search
         let Some(makespan) = search.makespan() else {
             continue;
         };
-        let budget = Budget::parallel(None, || PlannedMakespan::of(&search)).expect("a budget");
+        let budget =
+            Budget::parallel(&task, None, || PlannedMakespan::of(&search)).expect("a budget");
         let task = Arc::new(task);
         // One backend for the task's episodes: it plans once and follows the plan.
         let backend = BuiltinBackend::new(Limits::default());

@@ -134,7 +134,7 @@ pub async fn run_one(
     let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
     let budget = match key.execution {
         Execution::Sequential => Budget::of(task, settings.max_steps, || info.optimal.clone()),
-        Execution::Parallel => Budget::parallel(settings.max_steps, || {
+        Execution::Parallel => Budget::parallel(task, settings.max_steps, || {
             let unsearched = || Err(NoPlan("the makespan was not searched".into()));
             info.makespan.clone().unwrap_or_else(unsearched)
         }),

@@ -2,7 +2,8 @@
 //! unless the caller sets one; a task without a GT gets 2 x the optimum the planner
 //! finds. A parallel episode gets 2 x the fewest joint steps the makespan search finds
 //! (2 x the best plan's when the search stops before proving it optimal), since its GT
-//! counts one action a step. Every episode, run alone or in a benchmark, is sized here.
+//! counts one action a step; when that search finds no plan, the sequential rule (2 x GT).
+//! Every episode, run alone or in a benchmark, is sized here.
 
 use coherent_core::planner::{self, Limits};
 use coherent_core::{Task, makespan};
@@ -87,9 +88,13 @@ impl Budget {
         }
     }
 
-    /// The budget of a parallel episode: `max_steps` when given, else 2 x the makespan
-    /// that `makespan` gives, asked only then (2 x its best plan's when not proven).
+    /// The budget of a parallel episode of `task`: `max_steps` when given, else 2 x the
+    /// makespan that `makespan` gives, asked only then (2 x its best plan's when not
+    /// proven). When it finds no plan (a task that cannot be solved fails within the
+    /// budget a sequential episode has), 2 x GT: a plan of GT actions is one of at most GT
+    /// joint steps.
     pub fn parallel(
+        task: &Task,
         max_steps: Option<u32>,
         makespan: impl FnOnce() -> Result<PlannedMakespan, NoPlan>,
     ) -> Result<Budget, Error> {
@@ -105,10 +110,16 @@ impl Budget {
                     Budget::TwiceMakespanBound(n)
                 })
             }
-            Err(NoPlan(why)) => Err(Error::NoBudget(format!(
-                "the makespan search finds no plan to size a parallel episode's budget from \
-                 ({why}): pass a step budget (--max-steps, max_steps=)"
-            ))),
+            Err(NoPlan(why)) => match task.meta.twice_ground_truth() {
+                Some(budget) => budget
+                    .map(Budget::TwiceGroundTruth)
+                    .map_err(Error::NoBudget),
+                None => Err(Error::NoBudget(format!(
+                    "the task has no ground truth and the makespan search finds no plan to \
+                     size a parallel episode's budget from ({why}): pass a step budget \
+                     (--max-steps, max_steps=)"
+                ))),
+            },
         }
     }
 
@@ -129,7 +140,7 @@ impl Budget {
                     None => Err(NoPlan("no plan reaches the goal".into())),
                 }
             }),
-            Execution::Parallel => Budget::parallel(max_steps, || {
+            Execution::Parallel => Budget::parallel(task, max_steps, || {
                 PlannedMakespan::of(&makespan::search(task, &task.robots, &task.goal, limits))
             }),
         }
