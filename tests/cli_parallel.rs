@@ -285,13 +285,9 @@ fn a_task_no_plan_solves_runs_in_parallel_within_twice_its_ground_truth_and_fail
         utf8(&dir),
     ]);
     assert_eq!(code(&out), 1, "{}", show(&out));
-    let summary: Value = serde_json::from_str(
-        stdout(&out)
-            .lines()
-            .last()
-            .expect("the --json summary"),
-    )
-    .expect("JSON");
+    let summary: Value =
+        serde_json::from_str(stdout(&out).lines().last().expect("the --json summary"))
+            .expect("JSON");
     let gt = summary["gt_steps"].as_u64().expect("the task's GT");
     assert_eq!(summary["max_steps"].as_u64(), Some(2 * gt));
     assert_eq!(summary["status"], "failure");
