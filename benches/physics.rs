@@ -8,6 +8,11 @@
 //!   action outside the measurement. (No optimal plan closes anything; a dog closing
 //!   the fridge it just opened fails in physics, the handle out of reach.)
 //!
+//! - `physics/joint/four_robots`: one joint step of env0 task 9, its four robots at once
+//!   (both arms grab, the quadrotor takes off, the dog walks to the fridge), and
+//!   `physics/joint/four_robots_in_turn`, the same four actions one after the other;
+//!   each iteration builds the world outside the measurement.
+//!
 //! Each bench prints the simulated seconds it covers, for the ratio to wall time.
 
 use std::hint::black_box;
@@ -15,7 +20,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use coherent_core::planner::{self, Limits, Step};
-use coherent_core::{NodeKind, RobotKind, Task, Verb};
+use coherent_core::{NodeId, NodeKind, RobotKind, Task, Verb};
 use coherent_sim::PhysicalEnv;
 use criterion::{
     BatchSize, BenchmarkGroup, Criterion, SamplingMode, criterion_group, criterion_main,
@@ -173,5 +178,66 @@ fn actions(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, plans, actions);
+/// env0 task 9's robots, each with its first action.
+const FOUR_ROBOTS: [(i64, &str); 4] = [
+    (24, "[grab] <plate>(51)"),
+    (50, "[grab] <battery>(39)"),
+    (22, "[takeoff_from] <livingroom floor>(5)"),
+    (23, "[movetowards] <fridge>(14)"),
+];
+
+/// Plays actions on a world; their simulated seconds.
+type Play = fn(&mut PhysicalEnv) -> Result<f64, String>;
+
+/// The four actions as one joint step; its simulated seconds.
+fn at_once(env: &mut PhysicalEnv) -> Result<f64, String> {
+    let step: Vec<(NodeId, &str)> = FOUR_ROBOTS.iter().map(|&(r, a)| (NodeId(r), a)).collect();
+    match env.step_joint_physical(&step) {
+        Ok(Ok(report)) => Ok(report.sim_seconds),
+        Ok(Err(refused)) => Err(refused.to_string()),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The four actions one after the other; their simulated seconds.
+fn in_turn(env: &mut PhysicalEnv) -> Result<f64, String> {
+    let mut total = 0.0;
+    for (r, a) in FOUR_ROBOTS {
+        match env.step_physical(NodeId(r), a) {
+            Ok(Ok(report)) => total += report.sim_seconds,
+            Ok(Err(why)) => return Err(why.to_string()),
+            Err(e) => return Err(e.to_string()),
+        }
+    }
+    Ok(total)
+}
+
+fn joint(c: &mut Criterion) {
+    let mut group = c.benchmark_group("physics");
+    group
+        .sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2));
+    let task = Arc::new(common::task(0, 9));
+    let fresh = || PhysicalEnv::new(task.clone()).expect("the world builds");
+    let cases: [(&str, Play); 2] = [("four_robots", at_once), ("four_robots_in_turn", in_turn)];
+    for (name, run) in cases {
+        let sim = run(&mut fresh()).expect("the actions play");
+        eprintln!("physics/joint/{name}: env0 task 9, {sim:.2} s simulated");
+        group.bench_function(format!("joint/{name}"), |b| {
+            b.iter_batched(
+                fresh,
+                |mut env| {
+                    let out = run(&mut env);
+                    (env, out)
+                },
+                BatchSize::PerIteration,
+            )
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, plans, actions, joint);
 criterion_main!(benches);

@@ -60,16 +60,33 @@ pub fn plan_paths(task: &Arc<Task>, limits: &Limits) -> Result<Paths, Error> {
 pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
     let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
-    'rounds: for round in &t.rounds {
-        for (robot, action) in round.carried_out(task) {
-            let outcome = env.step(robot, action)?;
-            if let Some(why) = outcome.infeasible {
-                warning = Some(format!(
-                    "round {}: {action} failed in physics, paths drawn up to there: {why}",
-                    round.step
-                ));
-                break 'rounds;
+    for round in &t.rounds {
+        let actions = round.carried_out(task);
+        // A joint step's robots move at once; a sequential round's one action alone.
+        let failed = if round.parts.is_empty() {
+            match actions.first() {
+                Some(&(robot, action)) => env
+                    .step(robot, action)?
+                    .infeasible
+                    .map(|why| (action.to_owned(), why)),
+                None => None,
             }
+        } else if actions.is_empty() {
+            None
+        } else {
+            let outcome = env.step_joint(&actions)?;
+            outcome
+                .parts
+                .into_iter()
+                .find_map(|p| p.infeasible)
+                .map(|why| ("its joint step".to_owned(), why))
+        };
+        if let Some((what, why)) = failed {
+            warning = Some(format!(
+                "round {}: {what} failed in physics, paths drawn up to there: {why}",
+                round.step
+            ));
+            break;
         }
     }
     Ok(Paths {

@@ -170,7 +170,7 @@ pub fn resolve_joint(
 }
 
 /// The outcome of a refused joint step: nothing executed, each part told why.
-fn refused_outcome(done: bool, actions: &[(NodeId, &str)], refused: Refusal) -> JointOutcome {
+pub fn refused_outcome(done: bool, actions: &[(NodeId, &str)], refused: Refusal) -> JointOutcome {
     JointOutcome {
         parts: actions
             .iter()

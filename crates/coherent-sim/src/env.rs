@@ -4,12 +4,14 @@
 use std::sync::Arc;
 use std::time::Instant;
 
+use coherent_core::env;
 use coherent_core::feasibility::{self, Infeasible, Reason};
+use coherent_core::joint::{self, Refusal};
 use coherent_core::planner::Step;
 use coherent_core::rules;
 use coherent_core::{
-    Action, Edge, Environment, Idx, NodeId, NodeKind, Outcome, PropSet, Relation, RobotKind, State,
-    StateSet, Task,
+    Action, Edge, Environment, Idx, JointOutcome, NodeId, NodeKind, Outcome, PartOutcome, PropSet,
+    Relation, Robot, RobotKind, State, StateSet, Task,
 };
 
 use crate::layout::{self, Layout};
@@ -29,6 +31,18 @@ pub struct PhysicalEnv {
 #[derive(Clone, Debug, PartialEq)]
 pub struct StepReport {
     pub action: String,
+    pub sim_seconds: f64,
+    pub done: bool,
+}
+
+/// What one physically executed joint step did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointReport {
+    /// Each robot's action as the rules print it, in the order given.
+    pub actions: Vec<(NodeId, String)>,
+    /// Each action's simulated seconds from the step's start, in the same order.
+    pub action_seconds: Vec<f64>,
+    /// The step's simulated seconds: its slowest action's.
     pub sim_seconds: f64,
     pub done: bool,
 }
@@ -72,10 +86,6 @@ impl PhysicalEnv {
         self.last_error.as_ref()
     }
 
-    pub fn sim_seconds(&self) -> f64 {
-        self.world.sim_time
-    }
-
     /// Checks `text` with the rules, executes it physically, applies it symbolically and
     /// compares the two. A rules refusal is `Ok(Err(infeasible))`; a physical failure or
     /// a disagreement is `Err`.
@@ -84,18 +94,8 @@ impl PhysicalEnv {
         robot: NodeId,
         text: &str,
     ) -> Result<Result<StepReport, Infeasible>, PhysicsError> {
-        if let Some(e) = &self.last_error {
-            return Err(PhysicsError {
-                kind: e.kind,
-                message: format!(
-                    "the world is inconsistent after an earlier failure ({e}); reset it"
-                ),
-            });
-        }
-        let r = self.task.robot_by_id(robot).map_err(|e| PhysicsError {
-            kind: FailureKind::Layout,
-            message: e.to_string(),
-        })?;
+        self.consistent()?;
+        let r = self.robot(robot)?;
         let a = match feasibility::check(&self.task, &self.state, r, text) {
             Ok(a) => a,
             Err(why) => return Ok(Err(why)),
@@ -123,13 +123,83 @@ impl PhysicalEnv {
         }
     }
 
+    /// Checks a joint step (at most one action per robot) with the rules
+    /// ([`coherent_core::joint::check`]), executes its actions physically at once,
+    /// applies them symbolically and compares the two. A refusal by the rules is
+    /// `Ok(Err(refusal))`; a physical failure (robots of the step touching each other
+    /// among them) or a disagreement is `Err`, with the numbers.
+    pub fn step_joint_physical(
+        &mut self,
+        actions: &[(NodeId, &str)],
+    ) -> Result<Result<JointReport, Refusal>, PhysicsError> {
+        self.consistent()?;
+        let step = match env::resolve_joint(&self.task, &self.state, actions) {
+            Ok(Ok(step)) => step,
+            Ok(Err(refused)) => return Ok(Err(refused)),
+            Err(e) => return fail(FailureKind::Layout, e.to_string()),
+        };
+        let pairs: Vec<(Idx, Action)> = step.iter().map(|&(r, a)| (r.node, a)).collect();
+        let outcome = self.world.execute_joint(&pairs).and_then(|seconds| {
+            joint::apply(&self.task, &mut self.state, &step);
+            self.compare().map_err(|e| PhysicsError {
+                kind: e.kind,
+                message: format!(
+                    "after the joint step [{}]: {}",
+                    pairs
+                        .iter()
+                        .map(|&(r, a)| format!(
+                            "{} {}",
+                            self.task.node(r).label(),
+                            a.render(&self.task)
+                        ))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    e.message
+                ),
+            })?;
+            Ok(seconds)
+        });
+        match outcome {
+            Ok(action_seconds) => Ok(Ok(JointReport {
+                actions: pairs
+                    .iter()
+                    .map(|&(r, a)| (self.task.id(r), a.render(&self.task)))
+                    .collect(),
+                sim_seconds: action_seconds.iter().copied().fold(0.0, f64::max),
+                action_seconds,
+                done: self.task.goal_satisfied(&self.state),
+            })),
+            Err(e) => {
+                self.last_error = Some(e.clone());
+                Err(e)
+            }
+        }
+    }
+
+    /// No earlier failure left the world inconsistent.
+    fn consistent(&self) -> Result<(), PhysicsError> {
+        match &self.last_error {
+            Some(e) => Err(PhysicsError {
+                kind: e.kind,
+                message: format!(
+                    "the world is inconsistent after an earlier failure ({e}); reset it"
+                ),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    fn robot(&self, robot: NodeId) -> Result<Robot, PhysicsError> {
+        self.task.robot_by_id(robot).map_err(|e| PhysicsError {
+            kind: FailureKind::Layout,
+            message: e.to_string(),
+        })
+    }
+
     /// Executes `a` physically without asking the rules (for tests of physical limits);
     /// the symbolic state is left as it is.
     pub fn execute_unchecked(&mut self, robot: NodeId, a: Action) -> Result<(), PhysicsError> {
-        let r = self.task.robot_by_id(robot).map_err(|e| PhysicsError {
-            kind: FailureKind::Layout,
-            message: e.to_string(),
-        })?;
+        let r = self.robot(robot)?;
         let out = self.world.execute(r.node, a);
         if let Err(e) = &out {
             self.last_error = Some(e.clone());
@@ -310,6 +380,43 @@ impl Environment for PhysicalEnv {
         })
     }
 
+    /// The robots of the step move at once; a physical failure (robots that touched each
+    /// other among them) makes every part infeasible with the numbers, as
+    /// [`Environment::step`] does for one action.
+    fn step_joint(&mut self, actions: &[(NodeId, &str)]) -> coherent_core::Result<JointOutcome> {
+        for &(robot, _) in actions {
+            self.task.robot_by_id(robot)?;
+        }
+        let failed = match self.step_joint_physical(actions) {
+            Ok(Ok(_)) => None,
+            Ok(Err(refused)) => {
+                return Ok(env::refused_outcome(
+                    self.goal_satisfied(),
+                    actions,
+                    refused,
+                ));
+            }
+            Err(e) => Some(Infeasible {
+                reason: Reason::Physics,
+                message: format!("physics: {}", e.message),
+            }),
+        };
+        Ok(JointOutcome {
+            parts: actions
+                .iter()
+                .map(|&(robot, _)| PartOutcome {
+                    robot,
+                    infeasible: failed.clone(),
+                    report: None,
+                })
+                .collect(),
+            refused: None,
+            done: self.goal_satisfied(),
+        })
+    }
+
+    /// From the world's building on: it settles for up to a second before the first
+    /// action.
     fn sim_seconds(&self) -> Option<f64> {
         Some(self.world.sim_time)
     }
@@ -343,6 +450,41 @@ pub struct PlanReport {
 /// Executes `plan` (e.g. `planner::analyse(..).plan`) in Rapier with the task's layout,
 /// checking the relations after every step.
 pub fn execute_plan(task: &Arc<Task>, plan: &[Step]) -> PlanReport {
+    run_plan(task, plan.len(), |env, i| {
+        let text = plan[i].action.render(task);
+        match env.step_physical(task.id(plan[i].robot), &text) {
+            Ok(Ok(_)) => Ok(()),
+            Ok(Err(why)) => Err(format!("step {i}: the rules refuse {text}: {why}")),
+            Err(e) => Err(format!("step {i}: {e}")),
+        }
+    })
+}
+
+/// Executes a plan of joint steps (each the actions of several robots at once) in Rapier
+/// with the task's layout, checking the relations after every joint step; its
+/// `steps_done` counts joint steps.
+pub fn execute_joint_plan(task: &Arc<Task>, plan: &[Vec<Step>]) -> PlanReport {
+    run_plan(task, plan.len(), |env, i| {
+        let texts: Vec<(NodeId, String)> = plan[i]
+            .iter()
+            .map(|s| (task.id(s.robot), s.action.render(task)))
+            .collect();
+        let step: Vec<(NodeId, &str)> = texts.iter().map(|(r, t)| (*r, t.as_str())).collect();
+        match env.step_joint_physical(&step) {
+            Ok(Ok(_)) => Ok(()),
+            Ok(Err(refused)) => Err(format!("joint step {i}: the rules refuse it: {refused}")),
+            Err(e) => Err(format!("joint step {i}: {e}")),
+        }
+    })
+}
+
+/// Builds the world, runs `steps` steps with `step` (its error says which and why) until
+/// the end or the first failure, and reports.
+fn run_plan(
+    task: &Arc<Task>,
+    steps: usize,
+    mut step: impl FnMut(&mut PhysicalEnv, usize) -> Result<(), String>,
+) -> PlanReport {
     let start = Instant::now();
     let mut report = PlanReport {
         physics_ok: false,
@@ -361,24 +503,15 @@ pub fn execute_plan(task: &Arc<Task>, plan: &[Step]) -> PlanReport {
             return report;
         }
     };
-    let mut error = None;
-    for (i, step) in plan.iter().enumerate() {
-        let text = step.action.render(task);
-        match env.step_physical(task.id(step.robot), &text) {
-            Ok(Ok(_)) => report.steps_done = i + 1,
-            Ok(Err(why)) => {
-                error = Some(format!("step {i}: the rules refuse {text}: {why}"));
-                break;
-            }
-            Err(e) => {
-                error = Some(format!("step {i}: {e}"));
-                break;
-            }
+    for i in 0..steps {
+        if let Err(e) = step(&mut env, i) {
+            report.physics_error = Some(e);
+            break;
         }
+        report.steps_done = i + 1;
     }
-    report.physics_ok = error.is_none();
-    report.physics_error = error;
-    report.sim_seconds = env.sim_seconds();
+    report.physics_ok = report.physics_error.is_none();
+    report.sim_seconds = env.world.sim_time;
     report.final_poses = env.world.poses();
     report.paths = env.world.paths.clone();
     report.wall_ms = start.elapsed().as_secs_f64() * 1e3;

@@ -10,6 +10,9 @@ mod path;
 pub mod render;
 pub mod world;
 
-pub use env::{PhysicalEnv, PlanReport, StepReport, disagreements, execute_plan};
+pub use env::{
+    JointReport, PhysicalEnv, PlanReport, StepReport, disagreements, execute_joint_plan,
+    execute_plan,
+};
 pub use layout::{Layout, LayoutError, RobotSpecs};
 pub use world::{FailureKind, PhysicsError, Placement, World};

@@ -1,18 +1,15 @@
 //! Explicit geometry: a native task file's `geometry` object is the layout the world is
 //! built from, instead of the generated one, and a bad one is refused with its JSON path.
 
-use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits};
-use coherent_core::{Task, load_tasks, native};
+use coherent_core::{Task, native};
 use coherent_sim::{PhysicalEnv, execute_plan, layout};
 use serde_json::Value;
 
-fn demo() -> Task {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
-    load_tasks(&path).expect("the demo task loads").remove(0)
-}
+mod common;
+use common::demo;
 
 /// `task` with `geometry` in its native file, read back.
 fn with_geometry(task: &Task, geometry: Value) -> coherent_core::Result<Task> {

@@ -8,6 +8,7 @@ use coherent_core::{Idx, RobotKind};
 use rapier3d::na::DVector;
 use rapier3d::prelude::*;
 
+use super::motion::{ArmMove, Stage, Tick};
 use super::{Arm, DT, FailureKind, PhysicsError, World, fail};
 
 /// The joint angles (yaw, shoulder, elbow) an arm rests at, folded up.
@@ -146,51 +147,61 @@ impl World {
         Ok(q)
     }
 
-    /// Moves an arm to `q` at a bounded joint speed, simulating as it goes.
-    fn move_arm(&mut self, ai: usize, q: [f32; 3]) {
-        let mut arm = self.arms[ai].clone();
-        let from = [arm.q[0], arm.q[1], arm.q[2]];
-        let mut dq = [0.0; 3];
-        for k in 0..3 {
-            dq[k] = q[k] - from[k];
-            if k == 0 {
-                dq[k] = wrap(dq[k]);
+    /// The next step of an arm's move: every joint at most 1.5 rad/s, in at least ten
+    /// steps.
+    pub(super) fn arm_tick(&mut self, m: &mut ArmMove) -> Tick {
+        let (ai, q) = (m.arm, m.to);
+        let (from, dq, steps) = *m.plan.get_or_insert_with(|| {
+            let a = &self.arms[ai];
+            let from = [a.q[0], a.q[1], a.q[2]];
+            let mut dq = [0.0; 3];
+            for k in 0..3 {
+                dq[k] = q[k] - from[k];
+                if k == 0 {
+                    dq[k] = wrap(dq[k]);
+                }
             }
+            let biggest = dq.iter().fold(0.0f32, |m, d| m.max(d.abs()));
+            let steps = ((biggest / 1.5 / DT).ceil() as usize).max(10);
+            (from, dq, steps)
+        });
+        if m.taken >= steps {
+            return Tick::Done;
         }
-        let biggest = dq.iter().fold(0.0f32, |m, d| m.max(d.abs()));
-        let steps = ((biggest / 1.5 / DT).ceil() as usize).max(10);
-        for s in 1..=steps {
-            let f = s as f32 / steps as f32;
-            let qs = [
-                from[0] + dq[0] * f,
-                from[1] + dq[1] * f,
-                from[2] + dq[2] * f,
-            ];
-            self.set_arm(&mut arm, qs);
-            self.arms[ai] = arm.clone();
-            self.step();
-        }
+        m.taken += 1;
+        let f = m.taken as f32 / steps as f32;
+        let qs = [
+            from[0] + dq[0] * f,
+            from[1] + dq[1] * f,
+            from[2] + dq[2] * f,
+        ];
+        let mut arm = self.arms[ai].clone();
+        self.set_arm(&mut arm, qs);
+        self.arms[ai] = arm;
+        Tick::Step
     }
 
-    /// Moves the hand of `robot` to `target`, or says why it cannot.
+    /// Moving the hand of `robot` to `target`: the joint angles that put it there now,
+    /// then the move, then the hand must be within 3 cm of it. An error says why it
+    /// cannot.
     pub(super) fn reach(
-        &mut self,
+        &self,
         robot: Idx,
         target: Vector,
         what: &str,
-    ) -> Result<(), PhysicsError> {
+    ) -> Result<Vec<Stage>, PhysicsError> {
         let Some(ai) = self.arm_index(robot) else {
             return fail(
                 FailureKind::Reach,
                 format!("{} has no arm", self.label(robot)),
             );
         };
-        let arm = self.arms[ai].clone();
+        let arm = &self.arms[ai];
         if self.task.robot(robot).map(|r| r.kind) == Some(RobotKind::RobotDog) {
             // Relative to the floor the robot stands on (its body walks 2 cm above it).
             let stand = self.pw.bodies[arm.root].translation().y - 0.02;
             let top = stand + self.layout.specs.dog_max_height();
-            let shoulder = self.shoulder(&arm);
+            let shoulder = self.shoulder(arm);
             let top_here = shoulder.y + arm.reach;
             if target.y > top_here.max(top) + 0.01 {
                 return fail(
@@ -202,10 +213,28 @@ impl World {
                 );
             }
         }
-        let q = self.solve_ik(&arm, target, what)?;
-        self.move_arm(ai, q);
-        let hand = self.hand_pos(&self.arms[ai]);
-        let miss = (hand - target).length();
+        let q = self.solve_ik(arm, target, what)?;
+        Ok(vec![
+            ArmMove::stage(ai, q),
+            Stage::HandAt {
+                robot,
+                target,
+                what: what.to_owned(),
+            },
+        ])
+    }
+
+    /// The hand of `robot` is within 3 cm of `target`.
+    pub(super) fn check_hand_at(
+        &self,
+        robot: Idx,
+        target: Vector,
+        what: &str,
+    ) -> Result<(), PhysicsError> {
+        let Some(ai) = self.arm_index(robot) else {
+            return Ok(());
+        };
+        let miss = (self.hand_pos(&self.arms[ai]) - target).length();
         if miss > 0.03 {
             return fail(
                 FailureKind::Reach,
@@ -218,9 +247,8 @@ impl World {
         Ok(())
     }
 
-    pub(super) fn arm_home(&mut self, robot: Idx) {
-        if let Some(ai) = self.arm_index(robot) {
-            self.move_arm(ai, ARM_HOME);
-        }
+    /// Folding the arm of `robot` back to its rest angles.
+    pub(super) fn arm_home(&self, robot: Idx) -> Option<Stage> {
+        self.arm_index(robot).map(|ai| ArmMove::stage(ai, ARM_HOME))
     }
 }

@@ -7,7 +7,8 @@ use std::f32::consts::PI;
 use coherent_core::{Idx, NodeKind};
 use rapier3d::prelude::*;
 
-use super::{DT, Dog, FailureKind, PhysicsError, Placement, World, fail, solid, v3};
+use super::motion::{Stage, Tick, Turn, Walk};
+use super::{DT, FailureKind, PhysicsError, Placement, World, fail, solid, v3};
 use crate::layout::{self, Flight};
 use crate::path;
 
@@ -98,9 +99,9 @@ impl World {
         Some(legs)
     }
 
-    /// Walks the dog to `goal` (body origin, on the storey its height says) along a
-    /// planned way, then turns it to face `face`.
-    pub(super) fn walk(&mut self, goal: Vector, face: Vector) -> Result<(), PhysicsError> {
+    /// The way of the dog to `goal` (body origin, on the storey its height says), as
+    /// walks along the floor and the flights, then a turn to face `face`.
+    pub(super) fn walk(&self, goal: Vector, face: Vector) -> Result<Vec<Stage>, PhysicsError> {
         let Some(dog) = self.dog.clone() else {
             return fail(FailureKind::Layout, "no legged robot".into());
         };
@@ -115,105 +116,117 @@ impl World {
                 ),
             );
         };
+        let mut stages = Vec::new();
         for leg in legs {
             match leg {
-                Leg::Floor(route) => self.walk_along(&dog, &route[1..], false)?,
+                Leg::Floor(route) => {
+                    stages.push(Walk::stage(dog.robot, dog.body, route[1..].to_vec(), false));
+                }
                 Leg::Flight(f, there) => {
-                    self.walk_along(&dog, &[there], true)?;
-                    let y = self.pw.bodies[dog.body].translation().y;
-                    if (y - there.y).abs() > 0.03 {
-                        return fail(
-                            FailureKind::Blocked,
-                            format!(
-                                "the legged robot on stairs {} stopped at height {y:.2} m, not on the floor at {:.2} m",
-                                f.id,
-                                there.y - 0.02
-                            ),
-                        );
-                    }
+                    stages.push(Walk::stage(dog.robot, dog.body, vec![there], true));
+                    stages.push(Stage::OffStairs(f, there));
                 }
             }
         }
-        let pos = self.pw.bodies[dog.body].translation();
-        let yaw = (face.x - pos.x).atan2(face.z - pos.z);
-        self.pw.bodies[dog.body]
-            .set_next_kinematic_position(Pose::from_parts(pos, Rotation::from_rotation_y(yaw)));
-        self.step();
-        self.step();
-        if let Some(d) = self.dog.as_mut() {
-            d.yaw = yaw;
+        stages.push(Stage::Turn(Turn {
+            face,
+            steps: 0,
+            yaw: 0.0,
+        }));
+        Ok(stages)
+    }
+
+    /// Off a flight, the dog stands on the floor at the far end.
+    pub(super) fn check_off_stairs(&self, f: &Flight, there: Vector) -> Result<(), PhysicsError> {
+        let Some(dog) = &self.dog else {
+            return fail(FailureKind::Layout, "no legged robot".into());
+        };
+        let y = self.pw.bodies[dog.body].translation().y;
+        if (y - there.y).abs() > 0.03 {
+            return fail(
+                FailureKind::Blocked,
+                format!(
+                    "the legged robot on stairs {} stopped at height {y:.2} m, not on the floor at {:.2} m",
+                    f.id,
+                    there.y - 0.02
+                ),
+            );
         }
         Ok(())
     }
 
-    /// Moves the dog through `waypoints` on the floor plan with the character
+    /// Turning on the spot: the pose set, two steps, and its heading kept.
+    pub(super) fn turn_tick(&mut self, t: &mut Turn) -> Tick {
+        let Some(body) = self.dog.as_ref().map(|d| d.body) else {
+            return Tick::Done;
+        };
+        t.steps += 1;
+        match t.steps {
+            1 => {
+                let pos = self.pw.bodies[body].translation();
+                t.yaw = (t.face.x - pos.x).atan2(t.face.z - pos.z);
+                self.pw.bodies[body].set_next_kinematic_position(Pose::from_parts(
+                    pos,
+                    Rotation::from_rotation_y(t.yaw),
+                ));
+                Tick::Step
+            }
+            2 => Tick::Step,
+            _ => {
+                if let Some(d) = self.dog.as_mut() {
+                    d.yaw = t.yaw;
+                }
+                Tick::Done
+            }
+        }
+    }
+
+    /// The next step of a walk through waypoints on the floor plan with the character
     /// controller: at its height on a floor, or (`on_flight`) climbing and descending
-    /// the flight's slope with the controller's vertical motion.
-    fn walk_along(
-        &mut self,
-        dog: &Dog,
-        waypoints: &[Vector],
-        on_flight: bool,
-    ) -> Result<(), PhysicsError> {
+    /// the flight's slope with the controller's vertical motion. Each waypoint gets
+    /// three times the steps its straight distance takes, and 120 more; it must end
+    /// within 5 cm of it.
+    pub(super) fn walk_tick(&mut self, w: &mut Walk) -> Result<Tick, PhysicsError> {
         let speed = self.layout.specs.dog_speed;
         let h = self.layout.specs.dog_half;
         // A cylinder: turning the robot never makes it collide.
         let shape = Cylinder::new(h[1], h[0].max(h[2]));
         let shape_off = Vector::new(0.0, h[1], 0.0);
-        let kcc = if on_flight { self.stairs_kcc } else { self.kcc };
-        let mut last_hit: Option<(ColliderHandle, Vector)> = None;
-        for &wp in waypoints {
-            let mut stuck = 0;
-            let from = self.pw.bodies[dog.body].translation();
-            let budget = ((wp - from).length() / (speed * DT) * 3.0) as usize + 120;
-            for _ in 0..budget {
-                let pos = self.pw.bodies[dog.body].translation();
-                let d = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z);
-                if d.length() < 0.01 {
-                    break;
-                }
+        let kcc = if w.on_flight {
+            self.stairs_kcc
+        } else {
+            self.kcc
+        };
+        while let Some(&wp) = w.waypoints.get(w.next) {
+            let budget = *w.budget.get_or_insert_with(|| {
+                let from = self.pw.bodies[w.body].translation();
+                ((wp - from).length() / (speed * DT) * 3.0) as usize + 120
+            });
+            let pos = self.pw.bodies[w.body].translation();
+            let d = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z);
+            if w.taken < budget && d.length() >= 0.01 {
                 let want = d.normalize_or_zero() * (speed * DT).min(d.length());
                 let yaw = d.x.atan2(d.z);
+                let last_hit = &mut w.last_hit;
                 let moved = {
-                    let filter = solid().exclude_rigid_body(dog.body);
+                    let filter = solid().exclude_rigid_body(w.body);
                     let qp = self.pw.query_pipeline_with_filter(filter);
                     let cpose = Pose::from_translation(pos + shape_off);
                     kcc.move_shape(DT, &qp, &shape, &cpose, want, |c| {
-                        last_hit = Some((c.handle, c.hit.witness1));
+                        *last_hit = Some((c.handle, c.hit.witness1));
                     })
                     .translation
                 };
-                let rise = if on_flight { moved.y } else { 0.0 };
-                let rb = &mut self.pw.bodies[dog.body];
-                rb.set_next_kinematic_position(Pose::from_parts(
+                let rise = if w.on_flight { moved.y } else { 0.0 };
+                self.pw.bodies[w.body].set_next_kinematic_position(Pose::from_parts(
                     pos + Vector::new(moved.x, rise, moved.z),
                     Rotation::from_rotation_y(yaw),
                 ));
-                self.step();
-                self.record_path(dog.robot);
-                let horizontal = Vector::new(moved.x, 0.0, moved.z).length();
-                if horizontal < 0.2 * want.length() {
-                    stuck += 1;
-                    if stuck > 30 {
-                        return fail(
-                            FailureKind::Blocked,
-                            format!(
-                                "the legged robot is blocked at ({:.2}, {:.2}, {:.2}) on its way to ({:.2}, {:.2}){}",
-                                pos.x,
-                                pos.y,
-                                pos.z,
-                                wp.x,
-                                wp.z,
-                                self.hit_name(last_hit)
-                            ),
-                        );
-                    }
-                } else {
-                    stuck = 0;
-                }
+                w.taken += 1;
+                w.last_move = (pos, moved, want);
+                return Ok(Tick::Step);
             }
-            let pos = self.pw.bodies[dog.body].translation();
-            let off = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z).length();
+            let off = d.length();
             if off > 0.05 {
                 return fail(
                     FailureKind::Blocked,
@@ -223,10 +236,43 @@ impl World {
                         wp.z,
                         pos.x,
                         pos.z,
-                        self.hit_name(last_hit)
+                        self.hit_name(w.last_hit)
                     ),
                 );
             }
+            w.next += 1;
+            w.budget = None;
+            w.taken = 0;
+            w.stuck = 0;
+        }
+        Ok(Tick::Done)
+    }
+
+    /// After a step of a walk: the track recorded; blocked after more than 30 steps in
+    /// a row that moved it less than a fifth of the way it wanted to go.
+    pub(super) fn walk_after(&mut self, w: &mut Walk) -> Result<(), PhysicsError> {
+        self.record_path(w.dog);
+        let (pos, moved, want) = w.last_move;
+        let horizontal = Vector::new(moved.x, 0.0, moved.z).length();
+        if horizontal >= 0.2 * want.length() {
+            w.stuck = 0;
+            return Ok(());
+        }
+        w.stuck += 1;
+        if w.stuck > 30 {
+            let wp = w.waypoints[w.next];
+            return fail(
+                FailureKind::Blocked,
+                format!(
+                    "the legged robot is blocked at ({:.2}, {:.2}, {:.2}) on its way to ({:.2}, {:.2}){}",
+                    pos.x,
+                    pos.y,
+                    pos.z,
+                    wp.x,
+                    wp.z,
+                    self.hit_name(w.last_hit)
+                ),
+            );
         }
         Ok(())
     }
@@ -364,7 +410,7 @@ impl World {
         )
     }
 
-    pub(super) fn dog_to_room(&mut self, room: Idx) -> Result<(), PhysicsError> {
+    pub(super) fn dog_to_room(&self, room: Idx) -> Result<Vec<Stage>, PhysicsError> {
         let Some(dog) = self.dog.clone() else {
             return fail(FailureKind::Layout, "no legged robot".into());
         };

@@ -7,6 +7,7 @@ use std::f32::consts::FRAC_PI_2;
 use coherent_core::{Idx, NodeKind};
 use rapier3d::prelude::*;
 
+use super::motion::{HingeTurn, Settle, Stage, Tick};
 use super::{
     FailureKind, G_OBJECT, Grasp, PhysicsError, Placement, World, fail, groups, hinge_pose, solid,
 };
@@ -147,7 +148,8 @@ impl World {
         }
     }
 
-    pub(super) fn grasp(&mut self, robot: Idx, x: Idx) -> Result<(), PhysicsError> {
+    /// Reaching the middle of the top of `x`, taking hold of it, folding back.
+    pub(super) fn grasp(&self, robot: Idx, x: Idx) -> Result<Vec<Stage>, PhysicsError> {
         let Some(xb) = self.body[x.get()] else {
             return fail(
                 FailureKind::Layout,
@@ -166,12 +168,19 @@ impl World {
                 .position()
                 .transform_point(Vector::new(0.0, size[1], 0.0)),
         };
-        self.reach(robot, top + Vector::new(0.0, 0.01, 0.0), &self.label(x))?;
-        let Some(ai) = self.arm_index(robot) else {
-            return Ok(());
+        let mut stages = self.reach(robot, top + Vector::new(0.0, 0.01, 0.0), &self.label(x))?;
+        stages.push(Stage::Fasten { robot, object: x });
+        stages.extend(self.arm_home(robot));
+        Ok(stages)
+    }
+
+    /// The hand of `robot` holds `x`: fixed joints to the hand hold it and what rides on
+    /// or in it (fastened: no sloshing in transport), none of them colliding meanwhile.
+    pub(super) fn fasten(&mut self, robot: Idx, x: Idx) {
+        let (Some(ai), Some(xb)) = (self.arm_index(robot), self.body[x.get()]) else {
+            return;
         };
         let hand = self.arms[ai].hand;
-        // What rides on or in it comes along, fastened (no sloshing in transport).
         let mut carried = vec![xb];
         let mut riders = vec![x];
         let mut i = 0;
@@ -214,8 +223,6 @@ impl World {
             joints,
             carried,
         });
-        self.arm_home(robot);
-        Ok(())
     }
 
     fn set_body_groups(&mut self, b: RigidBodyHandle, g: InteractionGroups) {
@@ -227,23 +234,22 @@ impl World {
         }
     }
 
+    /// Putting `h` on `holder` (into it when `inside`): over a free spot within reach,
+    /// letting go, a wait for it to rest, folding back, a wait again.
     pub(super) fn release(
-        &mut self,
+        &self,
         robot: Idx,
         h: Idx,
         holder: Idx,
         inside: bool,
-    ) -> Result<(), PhysicsError> {
-        let Some(gi) = self
+    ) -> Result<Vec<Stage>, PhysicsError> {
+        if !self
             .grasps
             .iter()
-            .position(|g| g.robot == robot && g.object == h)
-        else {
-            return fail(
-                FailureKind::Disagreement,
-                format!("{} does not hold {}", self.label(robot), self.label(h)),
-            );
-        };
+            .any(|g| g.robot == robot && g.object == h)
+        {
+            return self.not_held(robot, h);
+        }
         if inside {
             self.check_open(holder)?;
         }
@@ -254,7 +260,7 @@ impl World {
             .map(|it| it.size)
             .unwrap_or([0.12; 3]);
         let Some(ai) = self.arm_index(robot) else {
-            return Ok(());
+            return Ok(Vec::new());
         };
         // Hand target: where the middle of the object's underside is 1 cm above the
         // spot (its lowest point, whichever way up it is held).
@@ -270,7 +276,31 @@ impl World {
             if inside { "in" } else { "on" },
             self.label(holder)
         );
-        self.reach(robot, target, &what)?;
+        let mut stages = self.reach(robot, target, &what)?;
+        stages.push(Stage::Unfasten { robot, object: h });
+        stages.push(Stage::Settle(Settle::new(0.5)));
+        stages.extend(self.arm_home(robot));
+        stages.push(Stage::Settle(Settle::new(1.0)));
+        Ok(stages)
+    }
+
+    fn not_held<T>(&self, robot: Idx, h: Idx) -> Result<T, PhysicsError> {
+        fail(
+            FailureKind::Disagreement,
+            format!("{} does not hold {}", self.label(robot), self.label(h)),
+        )
+    }
+
+    /// The hand of `robot` lets go of `h`: its joints removed, what it carried at rest
+    /// and colliding again.
+    pub(super) fn unfasten(&mut self, robot: Idx, h: Idx) -> Result<(), PhysicsError> {
+        let Some(gi) = self
+            .grasps
+            .iter()
+            .position(|g| g.robot == robot && g.object == h)
+        else {
+            return self.not_held(robot, h);
+        };
         let g = self.grasps.remove(gi);
         for j in g.joints {
             self.pw.impulse_joints.remove(j, true);
@@ -281,9 +311,6 @@ impl World {
             rb.set_linvel(Vector::ZERO, true);
             rb.set_angvel(Vector::ZERO, true);
         }
-        self.settle(0.5);
-        self.arm_home(robot);
-        self.settle(1.0);
         Ok(())
     }
 
@@ -303,12 +330,14 @@ impl World {
         Ok(())
     }
 
+    /// Opening or closing `n` by its handle: the hand to the handle, the panel turned
+    /// over 60 steps, the arm folded back.
     pub(super) fn drive_hinge(
         &mut self,
         robot: Idx,
         n: Idx,
         open: bool,
-    ) -> Result<(), PhysicsError> {
+    ) -> Result<Vec<Stage>, PhysicsError> {
         let Some(hi) = self.hinges.iter().position(|h| h.node == n) else {
             return fail(
                 FailureKind::Blocked,
@@ -335,20 +364,36 @@ impl World {
         }
         let h = self.hinges[hi].clone();
         let handle_world = self.pw.bodies[h.body].position().transform_point(h.handle);
-        self.reach(
+        let mut stages = self.reach(
             robot,
             handle_world,
             &format!("the handle of {}", self.label(n)),
         )?;
-        let from = self.hinge_angle(n).unwrap_or(0.0);
         let to = if open { h.open_angle } else { 0.0 };
-        let steps = 60;
-        for s in 1..=steps {
-            let a = from + (to - from) * s as f32 / steps as f32;
-            self.pw.bodies[h.body].set_next_kinematic_position(hinge_pose(&h, a));
-            self.step();
+        stages.push(Stage::Hinge(HingeTurn {
+            hinge: h,
+            to,
+            from: None,
+            taken: 0,
+        }));
+        stages.extend(self.arm_home(robot));
+        Ok(stages)
+    }
+
+    /// The next of the 60 steps that turn a panel from the angle it had when it
+    /// started.
+    pub(super) fn hinge_tick(&mut self, t: &mut HingeTurn) -> Tick {
+        const STEPS: usize = 60;
+        let from = match t.from {
+            Some(a) => a,
+            None => *t.from.insert(self.hinge_angle(t.hinge.node).unwrap_or(0.0)),
+        };
+        if t.taken >= STEPS {
+            return Tick::Done;
         }
-        self.arm_home(robot);
-        Ok(())
+        t.taken += 1;
+        let a = from + (t.to - from) * t.taken as f32 / STEPS as f32;
+        self.pw.bodies[t.hinge.body].set_next_kinematic_position(hinge_pose(&t.hinge, a));
+        Tick::Step
     }
 }

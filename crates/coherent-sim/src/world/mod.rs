@@ -1,8 +1,10 @@
 //! The physical world of one task: Rapier bodies built from a [`Layout`], the three
-//! robot models, physical execution of one action, and the relations read back from the
-//! bodies. This file holds the [`World`] itself, what its robot models and panels keep
+//! robot models, physical execution of one action or of several robots' actions at
+//! once, and the relations read back from the bodies. This file holds the [`World`] itself, what its robot models and panels keep
 //! beside the bodies, the errors, and the lookups every job shares; the jobs are one
 //! file each, each using only this one and those above it in this list:
+//! - `motion.rs`: an action in progress, as stages advanced one simulation step at a
+//!   time (what each stage keeps; the files below advance them);
 //! - `step.rs`: one simulation step and the controllers it runs (the quadrotor's
 //!   thrust controller, the arm chains following their roots);
 //! - `arm.rs`: inverse kinematics and arm motion;
@@ -12,13 +14,17 @@
 //! - `quadrotor.rs`: take-off, flights between rooms and storeys, landing;
 //! - `legged.rs`: the legged robot's routes and walking;
 //! - `manipulation.rs`: grasping, putting down, opening and closing;
-//! - `execute.rs`: one action, dispatched to the three above.
+//! - `contact.rs`: robots acting at once that touch each other or what another handles;
+//! - `execute.rs`: one action, or a joint step's actions at once, dispatched to the
+//!   jobs above.
 
 mod arm;
 mod build;
+mod contact;
 mod execute;
 mod legged;
 mod manipulation;
+mod motion;
 mod quadrotor;
 mod relations;
 mod step;
@@ -54,6 +60,8 @@ pub enum FailureKind {
     Disagreement,
     /// The world could not be built.
     Layout,
+    /// Robots acting at once touched each other, or what another of them handles.
+    Collision,
 }
 
 impl std::fmt::Display for PhysicsError {

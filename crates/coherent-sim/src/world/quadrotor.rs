@@ -6,52 +6,87 @@
 use coherent_core::{Idx, NodeKind, Relation};
 use rapier3d::prelude::*;
 
+use super::motion::{Descend, Fly, Hover, Settle, Stage, Tick};
 use super::{DT, FailureKind, PhysicsError, World, fail, solid, v3};
 
 impl World {
-    /// Flies the quadrotor along `waypoints` (body origin) and hovers at the last one.
-    fn fly(&mut self, waypoints: &[Vector]) -> Result<(), PhysicsError> {
-        let Some(q) = self.quad.clone() else {
+    /// The next step of a flight: the set point moves towards the next waypoint at
+    /// flight speed; at the last one the craft hovers there.
+    pub(super) fn fly_tick(&mut self, f: &mut Fly) -> Result<Tick, PhysicsError> {
+        let Some(body) = self.quad.as_ref().map(|q| q.body) else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
+        let (mut setpoint, com_off) = *f.at.get_or_insert_with(|| {
+            let rb = &self.pw.bodies[body];
+            (rb.translation(), rb.center_of_mass() - rb.translation())
+        });
         let speed = self.layout.specs.flight_speed;
-        let com_off = {
-            let rb = &self.pw.bodies[q.body];
-            rb.center_of_mass() - rb.translation()
-        };
-        let mut setpoint = self.pw.bodies[q.body].translation();
-        for &wp in waypoints {
-            while (wp - setpoint).length() > 1e-4 {
+        while let Some(&wp) = f.waypoints.get(f.next) {
+            if (wp - setpoint).length() > 1e-4 {
                 let d = wp - setpoint;
                 let stepv = d.normalize_or_zero() * (speed * DT).min(d.length());
                 setpoint += stepv;
+                f.at = Some((setpoint, com_off));
                 self.quad_target = (setpoint + com_off, stepv / DT);
-                self.step();
-                self.check_quad_hits()?;
-                self.record_path(q.robot);
+                return Ok(Tick::Step);
             }
+            f.next += 1;
         }
-        let end = setpoint;
-        self.quad_target = (end + com_off, Vector::ZERO);
-        for i in 0..600 {
-            self.step();
-            self.check_quad_hits()?;
+        Ok(Tick::Then(vec![Stage::Hover(Hover {
+            end: setpoint,
+            com_off,
+            steps: 0,
+            still: false,
+        })]))
+    }
+
+    /// After a step of a flight: no crash, and the track recorded.
+    pub(super) fn fly_after(&mut self) -> Result<(), PhysicsError> {
+        self.check_quad_hits()?;
+        if let Some(robot) = self.quad.as_ref().map(|q| q.robot) {
+            self.record_path(robot);
+        }
+        Ok(())
+    }
+
+    /// Holding the end of a flight, for at most 600 steps.
+    pub(super) fn hover_tick(&mut self, h: &mut Hover) -> Result<Tick, PhysicsError> {
+        if h.still {
+            return Ok(Tick::Done);
+        }
+        if h.steps >= 600 {
+            let at = self.quad_pos().unwrap_or(h.end);
+            let end = h.end;
+            return fail(
+                FailureKind::Timeout,
+                format!(
+                    "the quadrotor did not settle at ({:.2}, {:.2}, {:.2}); it is {:.2} m away",
+                    end.x,
+                    end.y,
+                    end.z,
+                    (at - end).length()
+                ),
+            );
+        }
+        self.quad_target = (h.end + h.com_off, Vector::ZERO);
+        Ok(Tick::Step)
+    }
+
+    /// After a step of hovering: no crash; still once it is within 5 cm of the end and
+    /// slower than 8 cm/s (not in the first 21 steps).
+    pub(super) fn hover_after(&mut self, h: &mut Hover) -> Result<(), PhysicsError> {
+        self.check_quad_hits()?;
+        if let Some(q) = &self.quad {
             let rb = &self.pw.bodies[q.body];
-            if i > 20 && (rb.translation() - end).length() < 0.05 && rb.linvel().length() < 0.08 {
-                return Ok(());
+            if h.steps > 20
+                && (rb.translation() - h.end).length() < 0.05
+                && rb.linvel().length() < 0.08
+            {
+                h.still = true;
             }
         }
-        let at = self.pw.bodies[q.body].translation();
-        fail(
-            FailureKind::Timeout,
-            format!(
-                "the quadrotor did not settle at ({:.2}, {:.2}, {:.2}); it is {:.2} m away",
-                end.x,
-                end.y,
-                end.z,
-                (at - end).length()
-            ),
-        )
+        h.steps += 1;
+        Ok(())
     }
 
     /// A flying quadrotor touching a door panel or a wall has crashed.
@@ -183,7 +218,11 @@ impl World {
     /// of a storey, or up or down the stairwell between storeys (over the flight's first
     /// 0.6 m, where nothing is above it, then along the run through the opening in the
     /// upper room's wall).
-    pub(super) fn quad_fly_to(&mut self, dest: Vector, hover_y: f32) -> Result<(), PhysicsError> {
+    pub(super) fn quad_fly_to(
+        &self,
+        dest: Vector,
+        hover_y: f32,
+    ) -> Result<Vec<Stage>, PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
@@ -266,53 +305,79 @@ impl World {
         let there = to_room.map_or(here, |r| self.room_level(r) + cruise);
         wps.push(Vector::new(dest.x, there, dest.z));
         wps.push(Vector::new(dest.x, hover_y, dest.z));
-        self.fly(&wps)
+        Ok(vec![Fly::stage(wps)])
     }
 
-    pub(super) fn quad_takeoff(&mut self) -> Result<(), PhysicsError> {
+    /// Motors on, then straight up 0.7 m.
+    pub(super) fn quad_takeoff(&self) -> Result<Vec<Stage>, PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
-        if let Some(q) = self.quad.as_mut() {
-            q.motors_on = true;
-            q.integral = Vector::ZERO;
-        }
-        self.fly(&[p + Vector::new(0.0, 0.7, 0.0)])
+        Ok(vec![
+            Stage::Motors(true),
+            Fly::stage(vec![p + Vector::new(0.0, 0.7, 0.0)]),
+        ])
     }
 
-    pub(super) fn quad_land(&mut self, s: Idx) -> Result<(), PhysicsError> {
+    /// Over a free spot on `s`, down to 25 cm above it, then slowly down until the
+    /// basket touches it; the motors cut, it must rest there.
+    pub(super) fn quad_land(&self, s: Idx) -> Result<Vec<Stage>, PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
         let spot = self.landing_spot(s, p)?;
-        self.fly(&[
-            Vector::new(spot.x, p.y.max(spot.y + 0.5), spot.z),
-            spot + Vector::new(0.0, 0.25, 0.0),
-        ])?;
-        // Descend slowly until the basket touches the surface, then cut the motors.
-        let Some(q) = self.quad.clone() else {
-            return Ok(());
+        Ok(vec![
+            Fly::stage(vec![
+                Vector::new(spot.x, p.y.max(spot.y + 0.5), spot.z),
+                spot + Vector::new(0.0, 0.25, 0.0),
+            ]),
+            Stage::Descend(Descend {
+                surface: s,
+                spot,
+                at: None,
+                steps: 0,
+                touches: false,
+            }),
+        ])
+    }
+
+    /// The next step of the descent (at 0.3 m/s, for at most 600 steps); once the craft
+    /// touches, the motors are cut and it settles.
+    pub(super) fn descend_tick(&mut self, d: &mut Descend) -> Result<Tick, PhysicsError> {
+        let Some(body) = self.quad.as_ref().map(|q| q.body) else {
+            return fail(FailureKind::Layout, "no quadrotor".into());
         };
-        let com_off = {
-            let rb = &self.pw.bodies[q.body];
-            rb.center_of_mass() - rb.translation()
-        };
-        let mut y = spot.y + 0.25;
-        for _ in 0..600 {
-            y -= 0.3 * DT;
-            self.quad_target = (
-                Vector::new(spot.x, y, spot.z) + com_off,
-                Vector::new(0.0, -0.3, 0.0),
-            );
-            self.step();
-            if self.quad_touches(s) {
-                break;
+        let (y, com_off) = d.at.get_or_insert_with(|| {
+            let rb = &self.pw.bodies[body];
+            (d.spot.y + 0.25, rb.center_of_mass() - rb.translation())
+        });
+        if d.touches || d.steps >= 600 {
+            return Ok(Tick::Then(vec![
+                Stage::Motors(false),
+                Stage::Settle(Settle::new(1.5)),
+                Stage::Landed(d.surface),
+            ]));
+        }
+        *y -= 0.3 * DT;
+        self.quad_target = (
+            Vector::new(d.spot.x, *y, d.spot.z) + *com_off,
+            Vector::new(0.0, -0.3, 0.0),
+        );
+        Ok(Tick::Step)
+    }
+
+    /// Motors on (the position controller starts afresh) or off.
+    pub(super) fn set_motors(&mut self, on: bool) {
+        if let Some(q) = self.quad.as_mut() {
+            q.motors_on = on;
+            if on {
+                q.integral = Vector::ZERO;
             }
         }
-        if let Some(q) = self.quad.as_mut() {
-            q.motors_on = false;
-        }
-        self.settle(1.5);
+    }
+
+    /// The landed quadrotor rests on `s`.
+    pub(super) fn check_landed(&self, s: Idx) -> Result<(), PhysicsError> {
         if !self.quad_touches(s) {
             return fail(
                 FailureKind::Blocked,
@@ -323,7 +388,7 @@ impl World {
     }
 
     /// Whether a collider of the quadrotor is in contact with one of `s`.
-    fn quad_touches(&self, s: Idx) -> bool {
+    pub(super) fn quad_touches(&self, s: Idx) -> bool {
         self.quad
             .as_ref()
             .is_some_and(|q| self.body_touches(q.body, s))

@@ -6,6 +6,7 @@
 use coherent_core::NodeId;
 use rapier3d::prelude::*;
 
+use super::motion::{Settle, Tick};
 use super::{DT, World};
 
 impl World {
@@ -35,13 +36,27 @@ impl World {
 
     /// Steps until loose things rest (or `max_s` simulated seconds).
     pub(super) fn settle(&mut self, max_s: f32) {
-        let steps = (max_s / DT) as usize;
-        for i in 0..steps {
+        let mut s = Settle::new(max_s);
+        while let Tick::Step = self.settle_tick(&mut s) {
             self.step();
-            if i >= 10 && self.resting() {
-                break;
-            }
+            self.settle_after(&mut s);
         }
+    }
+
+    pub(super) fn settle_tick(&mut self, s: &mut Settle) -> Tick {
+        if s.resting || s.taken >= s.steps {
+            Tick::Done
+        } else {
+            Tick::Step
+        }
+    }
+
+    /// Loose things count as resting only after the first ten steps.
+    pub(super) fn settle_after(&mut self, s: &mut Settle) {
+        if s.taken >= 10 && self.resting() {
+            s.resting = true;
+        }
+        s.taken += 1;
     }
 
     fn resting(&self) -> bool {

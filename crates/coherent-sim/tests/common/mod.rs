@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_core::planner::{self, Limits, Step};
-use coherent_core::{Task, read_tasks};
+use coherent_core::{Task, load_tasks, read_tasks};
 
 /// The original benchmark files, from `COHERENT_ORIGINAL_ENV` (`.cargo/config.toml`:
 /// beside the checkout).
@@ -46,4 +46,21 @@ pub fn optimal_plan(task: &Task) -> Option<Vec<Step>> {
 
 pub fn name(t: &Task) -> String {
     format!("{} task {}", t.meta.scene, t.meta.task_id)
+}
+
+/// The bundled demo task (examples/tasks/demo.json).
+pub fn demo() -> Task {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
+    load_tasks(&path).expect("the demo task loads").remove(0)
+}
+
+/// Task `id` of scene `scene` of our own benchmark (compiled in).
+pub fn native_task(scene: &str, id: i64) -> Arc<Task> {
+    coherent_core::benchmark::tasks()
+        .expect("the benchmark loads")
+        .into_iter()
+        .find(|t| t.meta.scene == scene && t.meta.task_id == id)
+        .map(Arc::new)
+        .expect("task exists")
 }
