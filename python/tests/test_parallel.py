@@ -171,7 +171,9 @@ def test_the_small_model_runs_parallel_pefa_with_its_executors_asked_at_once(
 ) -> None:
     # env1 task 16: four robots, so that several have subtasks at once.
     task = next(t for t in coherent.load_tasks(ENV_DIR / "env1.json") if t.task_id == 16)
-    llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m")
+    # The server answers one request at a time, so a round's executors wait in its queue
+    # behind each other: on a loaded machine the last may wait minutes.
+    llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", read_timeout=900.0, timeout=900.0)
     episode = coherent.run(task, llm=llm, execution="parallel", max_steps=3, out=tmp_path)
     assert episode.status in ("success", "failure")
     rounds = episode.transcript
