@@ -321,7 +321,7 @@ fn an_unknown_placeholder_exits_2_naming_file_line_and_placeholder_before_any_ca
         assert_eq!(out.status.code(), Some(2), "{}", show(&out));
         let expected = format!(
             "{}:{line}: unknown placeholder {{{{no_such_thing}}}}; the placeholders of this \
-             template: subtask, observation, actions",
+             template: subtask, observation, scene, state, actions",
             user.display()
         );
         assert!(

@@ -24,7 +24,8 @@ _TaskType: TypeAlias = Literal["mono", "dual", "trio"]
 _Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted", "error"]
 _PathLike: TypeAlias = str | os.PathLike[str]
 _Prompts: TypeAlias = _PathLike | Mapping[str, str]
-"""A folder of prompt templates, or ``{file name: text}`` (docs/prompts.md)."""
+"""A folder of prompt templates, ``"paper-layout"`` (the built-in templates in the paper's
+layout), or ``{file name: text}`` (docs/prompts.md)."""
 
 class _Price(TypedDict, total=False):
     input: float
@@ -444,8 +445,9 @@ class View:
     def observation(self, robot: int) -> _Observation:
         """What ``robot`` sees, as :meth:`Env.observe` gives it."""
     def observation_text(self, robot: int | None = None) -> str:
-        """The observation of ``robot`` as the executors' prompts write it (facts, one per
-        line); with no robot, every robot's merged, as the assigner's and CMRS's prompts."""
+        """The observation of ``robot`` as facts, one per line, in one block (the paper's
+        layout of the executors' prompts); with no robot, every robot's merged, as the
+        assigner's and CMRS's prompts have it."""
 
 class Decision:
     """A method's decision for one step; a ``(robot, action)`` tuple will do as well."""

@@ -1,5 +1,5 @@
 """Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps
-(``pip install 'coherent[analysis]'`` brings pandas).
+and its model calls (``pip install 'coherent[analysis]'`` brings pandas).
 
 The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
 as ``coherent bench``); this module only shapes them into DataFrames.
@@ -210,14 +210,17 @@ class Report:
     steps), and columns ``(column, stat)`` with ``stat`` one of ``SR``, ``SR ci95``,
     ``AS``, ``AS ci95`` (the half-width of a 95% interval over seeds; NaN with one
     seed). ``costs`` has a row per method: LLM calls and tokens per episode and per
-    step, and the cost in USD in all, per task (episode) and per success (NaN where a
-    model has no price). A method's parallel episodes are rows of their own,
-    ``"<method> (parallel)"``, and ``makespan`` (empty without parallel episodes) has a
-    row per method, execution and task type (``mono``, ``dual``, ``trio``, ``Avg``): SR,
-    the mean makespan of the successful episodes and the optimal makespan of their
-    tasks, actions per episode, LLM calls per action, simulated seconds (physics), and
-    the speed-up over the same method run sequentially (its steps over the parallel
-    ones', on the (task, seed) pairs both solved; ``pairs`` says how many).
+    step, the prompt tokens the servers read from their caches (``cached_tokens``) and
+    their share of all prompt tokens (``cached_share``, NaN without prompt tokens), and
+    the cost in USD (cached tokens at the cached input price) in all, per task
+    (episode) and per success (NaN where a model has no price). A method's parallel
+    episodes are rows of their own, ``"<method> (parallel)"``, and ``makespan`` (empty
+    without parallel episodes) has a row per method, execution and task type (``mono``,
+    ``dual``, ``trio``, ``Avg``): SR, the mean makespan of the successful episodes and
+    the optimal makespan of their tasks, actions per episode, LLM calls per action,
+    simulated seconds (physics), and the speed-up over the same method run sequentially
+    (its steps over the parallel ones', on the (task, seed) pairs both solved; ``pairs``
+    says how many).
     """
 
     table1: pd.DataFrame
@@ -255,8 +258,9 @@ def report(data: Results) -> Report:
     r = _coherent.report_tables(lines)
     costs = pandas.DataFrame(r["costs"]).set_index("method") if r["costs"] else pandas.DataFrame()
     if not costs.empty:
-        # A model without a price leaves None: NaN, as in the results' cost_usd.
-        costs = costs.astype({name: float for name in _COST_COLUMNS})
+        # A model without a price leaves None: NaN, as in the results' cost_usd; so does
+        # a method without prompt tokens its cached share.
+        costs = costs.astype({name: float for name in (*_COST_COLUMNS, "cached_share")})
     speed = r.get("makespan", [])
     makespan = (
         pandas.DataFrame(speed).set_index(["method", "execution", "column"]) if speed else pandas.DataFrame()
@@ -315,9 +319,10 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
     ``infeasible``, ``declined``, ``no_proposal``, ``no_decision``, ``backend_error``,
     ``method_error``) and why, whether the executor
     judged the subtask complete, whether the goal holds after it, the model calls and
-    tokens, and the time. A parallel episode's joint step has a row per robot that had
-    a part in it (the step's calls, tokens and time on its first row), or one row for
-    the step when none had."""
+    tokens (those the server read from its prompt cache apart), and the time
+    (``calls_frame`` has one row per call). A parallel episode's joint step has a row per
+    robot that had a part in it (the step's calls, tokens and time on its first row), or
+    one row for the step when none had."""
     pandas = _pandas("Episode.to_dataframe (coherent.analysis.episode_frame)")
     types = episode.task.robot_types
     rows = []
@@ -328,12 +333,12 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
         if r.get("external"):
             reports.append(r["external"])
         step = {
-            "step": r["step"],
             "done": r["done"],
             "llm_calls": len(r["calls"]) + sum(e["calls"] for e in reports),
             "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers) + sum(e["prompt_tokens"] for e in reports),
             "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers)
             + sum(e["completion_tokens"] for e in reports),
+            "cached_tokens": sum(a["usage"].get("cached_tokens", 0) for a in answers),
             "latency_ms": sum(a["latency_ms"] for a in answers),
             "wall_ms": r["wall_ms"],
         }
@@ -346,10 +351,10 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
                 robot = part["robot"]
             else:
                 robot = proposal["robot"] if proposal else (external["robot"] if external else None)
-            counted = step if i == 0 else {k: (v if k in ("step", "done") else 0) for k, v in step.items()}
+            counted = step if i == 0 else {k: (v if k == "done" else 0) for k, v in step.items()}
             rows.append(
                 {
-                    **counted,
+                    "step": r["step"],
                     "robot": robot,
                     "robot_type": types.get(robot) if robot is not None else None,
                     "subtask": proposal["subtask"] if proposal else None,
@@ -357,6 +362,7 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
                     "outcome": outcome["kind"],
                     "reason": outcome.get("reason") or outcome.get("why") or outcome.get("message"),
                     "subtask_complete": bool(decision and decision["subtask_complete"]),
+                    **counted,
                 }
             )
     frame = pandas.DataFrame(rows, columns=_EPISODE_COLUMNS)
@@ -376,6 +382,53 @@ _EPISODE_COLUMNS = [
     "llm_calls",
     "prompt_tokens",
     "completion_tokens",
+    "cached_tokens",
     "latency_ms",
     "wall_ms",
+]
+
+
+def calls_frame(episode: Episode) -> pd.DataFrame:
+    """One row per model call of ``episode``: the step, the role (``assigner`` or
+    ``executor``; the central and dialogue prompts of the baselines are filed under
+    those too) and the robot, the prompt's length in characters, how many of them begin
+    it as they began the previous call of the same role and robot (``shared_prefix``,
+    NaN for the first call of each: what a server's prompt cache could skip), the prompt
+    tokens, how many of them the server read from its cache (``cached_tokens``, when it
+    says), the completion tokens and the latency. ``cached_tokens.sum() /
+    prompt_tokens.sum()`` is the episode's cached share; ``shared_prefix.sum() /
+    prompt_chars[shared_prefix.notna()].sum()`` the share its prompts could have had
+    served from a cache."""
+    pandas = _pandas("coherent.analysis.calls_frame")
+    rows = []
+    for r in episode.transcript:
+        for c in r["calls"]:
+            usage = (c["answer"] or {}).get("usage", {})
+            rows.append(
+                {
+                    "step": r["step"],
+                    "role": c["role"],
+                    "robot": c["robot"],
+                    "prompt_chars": sum(len(m["content"]) for m in c["messages"]),
+                    "shared_prefix": c.get("shared_prefix"),
+                    "prompt_tokens": usage.get("prompt_tokens", 0),
+                    "cached_tokens": usage.get("cached_tokens", 0),
+                    "completion_tokens": usage.get("completion_tokens", 0),
+                    "latency_ms": (c["answer"] or {}).get("latency_ms", math.nan),
+                }
+            )
+    frame = pandas.DataFrame(rows, columns=_CALL_COLUMNS)
+    return frame.astype({"robot": "Int64", "shared_prefix": "float64"})
+
+
+_CALL_COLUMNS = [
+    "step",
+    "role",
+    "robot",
+    "prompt_chars",
+    "shared_prefix",
+    "prompt_tokens",
+    "cached_tokens",
+    "completion_tokens",
+    "latency_ms",
 ]

@@ -140,7 +140,7 @@ def test_an_unknown_placeholder_raises_prompt_error_before_any_call(
     assert (e.file, e.line, e.placeholder) == (str(Path("prompts") / "executor_user.txt"), 3, "no_such_thing")
     assert str(e).endswith(
         "executor_user.txt:3: unknown placeholder {{no_such_thing}}; the placeholders of this "
-        "template: subtask, observation, actions"
+        "template: subtask, observation, scene, state, actions"
     )
     with pytest.raises(coherent.PromptError, match="no_such_thing"):
         coherent.bench([task0], ["pefa"], backend=llm, out=tmp_path / "r.jsonl", prompts=bad)

@@ -130,7 +130,8 @@ impl LlmArgs {
 #[derive(Args, Debug)]
 pub(crate) struct PromptPriceArgs {
     /// A folder of prompt templates: its files replace the built-in templates of the same
-    /// name (`coherent prompts export DIR` writes those), checked before any model call.
+    /// name (`coherent prompts export DIR` writes those), checked before any model call;
+    /// or `paper-layout`, the built-in templates in the paper's layout.
     #[arg(long, value_name = "DIR")]
     pub prompts: Option<PathBuf>,
     /// A price table, JSON (TOML for a `.toml` file): USD per million input, cached input
@@ -143,8 +144,8 @@ impl PromptPriceArgs {
     /// The prompt set of `--prompts`.
     pub fn prompt_source(&self) -> PromptSource {
         self.prompts
-            .clone()
-            .map_or(PromptSource::Builtin, PromptSource::Folder)
+            .as_deref()
+            .map_or(PromptSource::Builtin, PromptSource::from_arg)
     }
 
     /// The built-in price table with the entries of `--prices`.

@@ -15,6 +15,8 @@ pub enum PromptSource {
     /// The built-in templates.
     #[default]
     Builtin,
+    /// The built-in templates in the paper's layout ([`templates::PAPER_LAYOUT`]).
+    PaperLayout,
     /// A folder whose template files replace the built-in ones of the same name.
     Folder(PathBuf),
     /// Template texts by file name, in place of the built-in ones of that name (Python's
@@ -23,10 +25,21 @@ pub enum PromptSource {
 }
 
 impl PromptSource {
+    /// What `--prompts ARG` (and `prompts="ARG"`) names: the built-in set of that name
+    /// (`paper-layout`), else a folder (`./paper-layout` is the folder of that name).
+    pub fn from_arg(arg: &Path) -> PromptSource {
+        if arg == Path::new(templates::PAPER_LAYOUT) {
+            PromptSource::PaperLayout
+        } else {
+            PromptSource::Folder(arg.to_owned())
+        }
+    }
+
     /// The prompt set; an error names the file, the line and the placeholder.
     pub fn read(self) -> Result<Prompts, Error> {
         Ok(match self {
             PromptSource::Builtin => Prompts::builtin(),
+            PromptSource::PaperLayout => Prompts::paper_layout(),
             PromptSource::Folder(dir) => Prompts::read_dir(&dir)?,
             PromptSource::Texts(files) => Prompts::from_texts(Path::new("prompts"), files)?,
         })
@@ -61,10 +74,11 @@ impl PriceSource {
     }
 }
 
-/// Writes every built-in template into `dir` (made when missing), one file each, and
-/// overwrites templates already there when `overwrite`; returns the files written.
-pub fn export(dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>, Error> {
-    Ok(templates::export(dir, overwrite)?)
+/// Writes every template of the set `from` names (the built-in one by default) into
+/// `dir` (made when missing), one file each, and overwrites templates already there when
+/// `overwrite`; returns the files written.
+pub fn export(dir: &Path, overwrite: bool, from: PromptSource) -> Result<Vec<PathBuf>, Error> {
+    Ok(templates::export(dir, overwrite, &from.read()?)?)
 }
 
 /// One line about a prompt set that replaces built-in templates (`None` for the

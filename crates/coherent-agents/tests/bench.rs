@@ -422,3 +422,49 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
         "{csv}"
     );
 }
+
+#[test]
+fn the_cached_share_and_the_cost_of_cached_tokens_come_from_the_lines() {
+    // Two pefa episodes of 10 and 30 calls (1,000 and 3,000 prompt tokens), of which the
+    // server read 600 and 2,700 from its cache: 3,300 of 4,000, 0.825.
+    let prices = PriceTable::parse_json(
+        r#"{"m": {"input": 1.0, "cached_input": 0.25, "output": 10.0}}"#,
+        "p.json",
+    )
+    .expect("a table");
+    let lines: Vec<ResultLine> = [(10, 600), (30, 2700)]
+        .into_iter()
+        .map(|(calls, cached)| {
+            let mut l = Hand {
+                task_id: i64::from(calls),
+                calls,
+                ..Hand::default()
+            }
+            .line();
+            l.backend.model = "m".into();
+            l.cached_tokens = cached;
+            l.priced(&prices)
+        })
+        .collect();
+    // 400 fresh x 1 + 600 cached x 0.25 + 100 completion x 10, per million.
+    let cost = lines[0].cost_usd.expect("priced");
+    assert!(
+        (cost - (400.0 + 150.0 + 1000.0) / 1e6).abs() < 1e-15,
+        "{cost}"
+    );
+    let r = report::build(&lines);
+    let pefa = r.costs.iter().find(|c| c.method == "pefa").expect("a row");
+    assert_eq!((pefa.prompt_tokens, pefa.cached_tokens), (4000, 3300));
+    assert_eq!(pefa.cached_share, Some(0.825));
+    assert!(
+        report::markdown(&r).contains("| 0.82 |"),
+        "{}",
+        report::markdown(&r)
+    );
+    let csv = report::csv(&r);
+    let row = csv
+        .lines()
+        .find(|l| l.starts_with("costs,pefa,"))
+        .expect("a costs row");
+    assert!(row.ends_with(",0.825000"), "{row}");
+}

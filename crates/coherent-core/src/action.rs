@@ -205,6 +205,25 @@ fn parse_inner(s: &str) -> std::result::Result<ParsedAction, String> {
     })
 }
 
+/// Every `<name>(id)` in free text (a subtask, a note), in the order written, each once.
+pub fn mentions(text: &str) -> Vec<Mention> {
+    let mut found: Vec<Mention> = Vec::new();
+    let mut rest = text;
+    while let Some(open) = rest.find('<') {
+        rest = &rest[open..];
+        match mention(rest) {
+            Ok((m, after)) => {
+                if !found.contains(&m) {
+                    found.push(m);
+                }
+                rest = after;
+            }
+            Err(_) => rest = &rest[1..],
+        }
+    }
+    found
+}
+
 /// `<name>(id)` at the start of `s`, and the rest of `s`.
 fn mention(s: &str) -> std::result::Result<(Mention, &str), String> {
     let s = s.strip_prefix('<').ok_or("expected <name>(id)")?;

@@ -258,7 +258,7 @@ fn resolve(task: &Task, m: &Mention) -> Result<Idx, Infeasible> {
 }
 
 /// Why an action that is not in the robot's list cannot be done.
-fn diagnose(v: &View<'_>, a: Action) -> Infeasible {
+pub(crate) fn diagnose(v: &View<'_>, a: Action) -> Infeasible {
     let d = Diag { v };
     let found = match (v.robot.kind, a.verb) {
         (RobotKind::Quadrotor, Verb::LandOn) => d.land_on(a.object),
@@ -281,6 +281,17 @@ fn diagnose(v: &View<'_>, a: Action) -> Infeasible {
             ),
         )
     })
+}
+
+/// Why `v`'s robot cannot get its hand on `x` from where it is (the dog must be close and
+/// `x` low enough, the arm reaches only its surface), or `None`; a quadrotor has no hand.
+pub(crate) fn hand_reach(v: &View<'_>, x: Idx) -> Option<Infeasible> {
+    match v.robot.kind {
+        RobotKind::Quadrotor => None,
+        // The arm always reaches the surface it stands on, to put things down.
+        RobotKind::RobotArm if v.own(Relation::On) == Some(x) => None,
+        RobotKind::RobotDog | RobotKind::RobotArm => Diag { v }.within_reach(x),
+    }
 }
 
 struct Diag<'v, 'a> {

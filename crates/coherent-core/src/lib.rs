@@ -2,7 +2,7 @@
 //!
 //! A [`Task`] is read from the paper's original files ([`original`]) or from our own
 //! format ([`native`]). [`rules`] gives observations, action lists and transitions,
-//! [`feasibility`] says why an action cannot be done, [`planner`] finds shortest plans
+//! [`feasibility`] says why an action cannot be done, [`reach`] what a robot can get at, [`planner`] finds shortest plans
 //! and task types, [`validate`] lists semantic problems, and [`Environment`] is what
 //! planners and physics plug into. [`benchmark`] is the project's own benchmark, compiled in.
 
@@ -23,6 +23,7 @@ pub mod makespan;
 pub mod native;
 pub mod original;
 pub mod planner;
+pub mod reach;
 pub mod relaxed;
 pub mod rules;
 mod tables;

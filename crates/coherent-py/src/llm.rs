@@ -332,6 +332,7 @@ impl PyLlm {
             error: None,
             client: Some(self.client.info()),
             endpoint: None,
+            shared_prefix: None,
         };
         let chat = Chat {
             messages,

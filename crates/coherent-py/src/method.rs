@@ -149,9 +149,9 @@ impl PyView {
         Ok(dict)
     }
 
-    /// The observation of `robot` as the executors' prompts write it (relation facts,
-    /// one per line); with no robot, every robot's merged, as the task assigner's and the
-    /// central prompt write it.
+    /// The observation of `robot` as relation facts, one per line, in one block (the
+    /// paper's layout of the executors' prompts); with no robot, every robot's merged, as
+    /// the task assigner's and the central prompt have it.
     #[pyo3(signature = (robot = None))]
     fn observation_text(&self, robot: Option<i64>) -> PyResult<String> {
         if let Some(id) = robot {

@@ -15,8 +15,9 @@ fn is_path(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
     Ok(obj.is_instance_of::<PyString>() || obj.hasattr("__fspath__")?)
 }
 
-/// `prompts=`: None (the built-in templates), a folder of template files, or a dict of
-/// `{file name: text}`; each replaces the built-in template of that name (a template
+/// `prompts=`: None (the built-in templates), `"paper-layout"` (the built-in templates in
+/// the paper's layout), a folder of template files, or a dict of `{file name: text}`;
+/// each file replaces the built-in template of that name (a template
 /// with an unknown placeholder raises `PromptError` when the session reads the set,
 /// before anything runs).
 pub(crate) fn prompt_source(spec: Option<&Bound<'_, PyAny>>) -> PyResult<PromptSource> {
@@ -36,7 +37,7 @@ pub(crate) fn prompt_source(spec: Option<&Bound<'_, PyAny>>) -> PyResult<PromptS
             .collect::<PyResult<Vec<_>>>()?;
         Ok(PromptSource::Texts(files))
     } else if is_path(spec)? {
-        Ok(PromptSource::Folder(path(spec, "prompts")?))
+        Ok(PromptSource::from_arg(&path(spec, "prompts")?))
     } else {
         Err(PyTypeError::new_err(
             "prompts: expected a folder of template files or a dict of {file name: text}",

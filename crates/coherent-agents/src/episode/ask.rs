@@ -78,6 +78,7 @@ pub(crate) async fn place_call(
         error: None,
         client: None,
         endpoint: None,
+        shared_prefix: None,
     };
     let response = tokio::select! {
         biased;

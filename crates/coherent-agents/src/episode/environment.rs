@@ -1,8 +1,9 @@
 //! What every method does with the [`Environment`]: observe the whole team, and check
 //! and run one robot's action.
 
-use coherent_core::{Environment, NodeId, Task, describe};
+use coherent_core::{Environment, NodeId, Task};
 
+use crate::methods::prompt::Sight;
 use crate::records::transcript::{Round, RoundOutcome};
 
 /// Checks and runs `action` for `robot`: executed, or why not; what a robot outside this
@@ -31,13 +32,15 @@ pub(crate) fn execute(
     }
 }
 
-/// Every robot's observation, merged, as facts.
-pub(crate) fn team_observation(env: &(dyn Environment + Send), task: &Task) -> String {
-    let observations: Vec<_> = task
-        .robots
-        .iter()
-        .filter_map(|r| env.observe(task.id(r.node)).ok())
-        .collect();
-    let refs: Vec<_> = observations.iter().collect();
-    describe::facts(task, env.state(), &refs)
+/// What the whole team sees: every robot's observation.
+pub(crate) fn team_sight<'a>(env: &'a (dyn Environment + Send), task: &'a Task) -> Sight<'a> {
+    Sight {
+        task,
+        state: env.state(),
+        observations: task
+            .robots
+            .iter()
+            .filter_map(|r| env.observe(task.id(r.node)).ok())
+            .collect(),
+    }
 }

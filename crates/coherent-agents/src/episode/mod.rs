@@ -12,6 +12,8 @@
 //!   and the history window ([`HISTORY_WINDOW`]), what a method keeps of its earlier
 //!   rounds ([`History`]).
 //! - `ask`: asking a backend one question and recording the call.
+//! - [`prefix`]: how much of each prompt is the same as the previous one of its role and
+//!   robot ([`prefix::shared_prefix`]), recorded in every call.
 //! - `environment`: observing the whole team and executing one action.
 //! - `joint`: a parallel round's joint step, carried out and recorded part by part.
 //! - [`cancel`]: stopping an episode from outside.
@@ -28,6 +30,7 @@ pub(crate) mod environment;
 pub mod execution;
 pub(crate) mod joint;
 pub mod policy;
+pub mod prefix;
 pub mod rounds;
 pub mod run;
 pub mod settings;

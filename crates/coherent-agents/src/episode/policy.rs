@@ -96,9 +96,10 @@ impl StepView {
         self.robots.iter().find(|r| r.id == id)
     }
 
-    /// The observation of `robot` as the executors' prompts write it (relation facts, one
-    /// per line), or with `None` every robot's merged, as the assigner's and the central
-    /// prompts write it; `None` for a robot that is not in the team.
+    /// The observation of `robot` as relation facts, one per line, in one block (the
+    /// paper's layout of the executors' prompts: `describe::facts`), or with `None` every
+    /// robot's merged, as the assigner's and the central prompts have it; `None` for a
+    /// robot that is not in the team.
     pub fn observation_text(&self, robot: Option<NodeId>) -> Option<String> {
         let seen: Vec<&Observation> = match robot {
             Some(id) => vec![&self.robot(id)?.observation],

@@ -12,6 +12,7 @@ use std::time::Instant;
 use coherent_core::{Environment, Task};
 
 use crate::episode::cancel::Cancel;
+use crate::episode::prefix::LastPrompts;
 use crate::records::transcript::{Round, RoundOutcome, Status, Summary};
 
 /// An episode as it ran.
@@ -23,10 +24,11 @@ pub struct Episode {
 
 /// The loop every method shares: `play` one round per step until the goal holds, the
 /// budget is spent, a round ends in a backend failure or the method's error, or `cancel`
-/// fires (`play` gives
-/// `None` when cancelled during a round); then the summary. `on_round` sees each round
-/// as it ends (the transcript writer, progress lines); its error stops the episode, so
-/// that no round goes unrecorded.
+/// fires (`play` gives `None` when cancelled during a round); then the summary. Each
+/// call of a round gets its shared prefix with the previous call of its role and robot
+/// ([`crate::episode::prefix`]). `on_round` sees each round as it ends (the transcript
+/// writer, progress lines); its error stops the episode, so that no round goes
+/// unrecorded.
 pub(crate) async fn rounds(
     env: &mut (dyn Environment + Send),
     task: &Task,
@@ -37,6 +39,7 @@ pub(crate) async fn rounds(
 ) -> io::Result<Episode> {
     let start = Instant::now();
     let mut rounds: Vec<Round> = Vec::new();
+    let mut prompts = LastPrompts::default();
     let mut status = if env.goal_satisfied() {
         Status::Success
     } else {
@@ -48,10 +51,11 @@ pub(crate) async fn rounds(
             status = Status::Interrupted;
             break;
         }
-        let Some(round) = play(env, rounds.len() as u32 + 1).await? else {
+        let Some(mut round) = play(env, rounds.len() as u32 + 1).await? else {
             status = Status::Interrupted;
             break;
         };
+        prompts.mark(&mut round.calls);
         on_round(&round)?;
         match &round.outcome {
             RoundOutcome::BackendError { message } => {

@@ -91,6 +91,10 @@ pub struct Cost {
     pub llm_calls: u64,
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
+    /// The part of `prompt_tokens` the servers read from their prompt caches.
+    pub cached_tokens: u64,
+    /// `cached_tokens` over `prompt_tokens` (`None` without prompt tokens).
+    pub cached_share: Option<f64>,
     pub calls_per_episode: f64,
     pub tokens_per_episode: f64,
     pub calls_per_step: Option<f64>,
@@ -230,6 +234,7 @@ pub fn build(lines: &[ResultLine]) -> Report {
             let calls: u64 = mine.iter().map(|l| u64::from(l.llm_calls)).sum();
             let prompt: u64 = mine.iter().map(|l| l.prompt_tokens).sum();
             let completion: u64 = mine.iter().map(|l| l.completion_tokens).sum();
+            let cached: u64 = mine.iter().map(|l| l.cached_tokens).sum();
             let n = mine.len().max(1) as f64;
             let per_step = |x: u64| (steps > 0).then(|| x as f64 / steps as f64);
             let cost: Option<f64> = mine.iter().map(|l| l.cost_usd).sum();
@@ -241,6 +246,8 @@ pub fn build(lines: &[ResultLine]) -> Report {
                 llm_calls: calls,
                 prompt_tokens: prompt,
                 completion_tokens: completion,
+                cached_tokens: cached,
+                cached_share: (prompt > 0).then(|| cached as f64 / prompt as f64),
                 calls_per_episode: calls as f64 / n,
                 tokens_per_episode: (prompt + completion) as f64 / n,
                 calls_per_step: per_step(calls),
@@ -422,12 +429,16 @@ pub fn markdown(r: &Report) -> String {
     }
     out.push_str("### LLM calls, tokens and cost per method\n\n");
     out.push_str(&format!("{}  \n", header_lines(r)[0]));
-    out.push_str("Cost in USD from each episode's `cost_usd`; - where a model has no price.  \n\n");
-    out.push_str("| Method | Episodes | Steps | LLM calls / episode | Tokens / episode | LLM calls / step | Tokens / step | Cost / task | Cost / success |\n|---|---|---|---|---|---|---|---|---|\n");
+    out.push_str(
+        "Cached: the share of prompt tokens the servers read from their prompt caches. Cost \
+         in USD from each episode's `cost_usd` (cached tokens at the cached input price); - \
+         where a model has no price.  \n\n",
+    );
+    out.push_str("| Method | Episodes | Steps | LLM calls / episode | Tokens / episode | LLM calls / step | Tokens / step | Cached | Cost / task | Cost / success |\n|---|---|---|---|---|---|---|---|---|---|\n");
     for c in &r.costs {
         let opt = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| format!("{x:.d$}"));
         out.push_str(&format!(
-            "| {} | {} | {} | {:.2} | {:.0} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {:.2} | {:.0} | {} | {} | {} | {} | {} |\n",
             c.method,
             c.episodes,
             c.steps,
@@ -435,6 +446,7 @@ pub fn markdown(r: &Report) -> String {
             c.tokens_per_episode,
             opt(c.calls_per_step, 2),
             opt(c.tokens_per_step, 0),
+            opt(c.cached_share, 2),
             opt(c.cost_per_task, 6),
             opt(c.cost_per_success, 6)
         ));
@@ -456,13 +468,14 @@ pub(crate) fn csv_field(s: &str) -> String {
 
 /// One CSV: a row per (table, method, column), ground-truth rows with `method` =
 /// `ground truth`, and a `costs` row per method (with its cost per task and per success
-/// in USD, empty where a model has no price). A run with parallel episodes adds seven
-/// columns (`execution` and the makespan table's numbers) and a `makespan` row per
-/// method, execution and task type.
+/// in USD, empty where a model has no price, and the share of its prompt tokens read
+/// from the servers' caches). A run with parallel episodes adds seven columns
+/// (`execution` and the makespan table's numbers) and a `makespan` row per method,
+/// execution and task type.
 pub fn csv(r: &Report) -> String {
     let backend = csv_field(&r.backends.join("; "));
     let mut out = String::from(
-        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend",
+        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend,cached_share",
     );
     if !r.makespan.is_empty() {
         out.push_str(
@@ -481,7 +494,7 @@ pub fn csv(r: &Report) -> String {
             for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
                 let Some(cell) = cell else { continue };
                 out.push_str(&format!(
-                    "{name},{},{c},{n},{},{},{},{},{},,,,,,,,{seeds},{backend}{pad}\n",
+                    "{name},{},{c},{n},{},{},{},{},{},,,,,,,,{seeds},{backend},{pad}\n",
                     csv_field(&row.method),
                     cell.episodes,
                     num(Some(cell.sr.mean)),
@@ -493,14 +506,14 @@ pub fn csv(r: &Report) -> String {
         }
         for ((c, n), gt) in t.columns.iter().zip(&t.tasks).zip(&t.gt) {
             out.push_str(&format!(
-                "{name},ground truth,{c},{n},,,,,,{},,,,,,,{seeds},{backend}{pad}\n",
+                "{name},ground truth,{c},{n},,,,,,{},,,,,,,{seeds},{backend},{pad}\n",
                 num(*gt)
             ));
         }
     }
     for c in &r.costs {
         out.push_str(&format!(
-            "costs,{},all,,{},,,,,,{},{},{},{},{},{},{seeds},{backend}{pad}\n",
+            "costs,{},all,,{},,,,,,{},{},{},{},{},{},{seeds},{backend},{}{pad}\n",
             csv_field(&c.method),
             c.episodes,
             num(Some(c.calls_per_episode)),
@@ -509,11 +522,12 @@ pub fn csv(r: &Report) -> String {
             num(c.tokens_per_step),
             usd(c.cost_per_task),
             usd(c.cost_per_success),
+            num(c.cached_share),
         ));
     }
     for m in &r.makespan {
         out.push_str(&format!(
-            "makespan,{},{},,{},{},,,,,,,,,,,{seeds},{backend},{},{},{},{},{},{},{}\n",
+            "makespan,{},{},,{},{},,,,,,,,,,,{seeds},{backend},,{},{},{},{},{},{},{}\n",
             csv_field(&row_name(&m.method, m.execution)),
             m.column,
             m.episodes,

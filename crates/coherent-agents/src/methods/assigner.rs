@@ -5,7 +5,9 @@
 //! Adjustment ([`crate::methods::pefa`]).
 //!
 //! Its prompt is the prompt set's `assigner_system.txt` and `assigner_user.txt`
-//! ([`crate::methods::templates`]); its answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
+//! ([`crate::methods::templates`]), the built-in ones laid out from what never changes
+//! (the rules, the team, the instruction, the scene) to what changes each round (where
+//! the robots are, the states and relations, the history); its answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
 //! to the team's labels, read into a [`Proposal`] wherever it sits in the text (or,
 //! without one, from the first line that names a robot).
 
@@ -15,7 +17,7 @@ use coherent_core::{Environment, NodeId, Relation, Task, rules};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
-use crate::episode::environment::team_observation;
+use crate::episode::environment::team_sight;
 use crate::methods::answer::{field_text, json_object, string_field};
 use crate::methods::prompt::{fill, robot_label, team};
 use crate::methods::templates::{Prompts, Template};
@@ -26,8 +28,9 @@ use crate::records::transcript::Proposal;
 pub struct AssignerView<'a> {
     /// One line per robot: label, type and where it is.
     pub robots: &'a str,
-    /// The team's observations as facts.
-    pub observation: &'a str,
+    /// The team's observations as facts, for the placeholders its template uses
+    /// (`observation`, or `scene` and `state`).
+    pub seen: &'a [(&'static str, String)],
     /// The last rounds, oldest first, one entry each.
     pub history: &'a [String],
 }
@@ -55,12 +58,13 @@ impl TaskAssigner {
     /// first.
     pub fn query(&self, env: &(dyn Environment + Send), history: &[String]) -> Query {
         let task = &self.task;
+        let sight = team_sight(env, task);
         Query {
             role: Role::Assigner,
             robot: None,
             messages: self.messages(&AssignerView {
                 robots: &robot_lines(env, task),
-                observation: &team_observation(env, task),
+                seen: &sight.values(self.prompts.text(Template::AssignerUser)),
                 history,
             }),
             schema_name: "proposal",
@@ -79,20 +83,18 @@ impl TaskAssigner {
             view.history.join("\n")
         };
         let system = self.prompts.text(Template::AssignerSystem);
+        let mut values = vec![
+            ("instruction", task.meta.instruction.as_str()),
+            ("robots", view.robots),
+            ("history", &history),
+        ];
+        values.extend(view.seen.iter().map(|(k, v)| (*k, v.as_str())));
         vec![
             Message::system(fill(system, &[("team", &team(task))]).trim_end().to_owned()),
             Message::user(
-                fill(
-                    self.prompts.text(Template::AssignerUser),
-                    &[
-                        ("instruction", &task.meta.instruction),
-                        ("robots", view.robots),
-                        ("observation", view.observation),
-                        ("history", &history),
-                    ],
-                )
-                .trim_end()
-                .to_owned(),
+                fill(self.prompts.text(Template::AssignerUser), &values)
+                    .trim_end()
+                    .to_owned(),
             ),
         ]
     }
@@ -212,9 +214,10 @@ impl TaskAssigner {
                 .map(|r| format!("- {}", robot_label(task, *r)))
                 .collect(),
         );
+        let sight = team_sight(env, task);
         let view = AssignerView {
             robots: &robot_lines(env, task),
-            observation: &team_observation(env, task),
+            seen: &sight.values(self.prompts.text(Template::AssignerParallelUser)),
             history,
         };
         Query {
@@ -246,22 +249,20 @@ impl TaskAssigner {
             view.history.join("\n")
         };
         let system = self.prompts.text(Template::AssignerParallelSystem);
+        let mut values = vec![
+            ("instruction", task.meta.instruction.as_str()),
+            ("robots", view.robots),
+            ("history", &history),
+            ("busy", busy),
+            ("idle", idle),
+        ];
+        values.extend(view.seen.iter().map(|(k, v)| (*k, v.as_str())));
         vec![
             Message::system(fill(system, &[("team", &team(task))]).trim_end().to_owned()),
             Message::user(
-                fill(
-                    self.prompts.text(Template::AssignerParallelUser),
-                    &[
-                        ("instruction", &task.meta.instruction),
-                        ("robots", view.robots),
-                        ("observation", view.observation),
-                        ("history", &history),
-                        ("busy", busy),
-                        ("idle", idle),
-                    ],
-                )
-                .trim_end()
-                .to_owned(),
+                fill(self.prompts.text(Template::AssignerParallelUser), &values)
+                    .trim_end()
+                    .to_owned(),
             ),
         ]
     }
@@ -466,6 +467,10 @@ mod tests {
         check_placeholders(Template::AssignerSystem.builtin(), &["team"]);
         check_placeholders(
             Template::AssignerUser.builtin(),
+            &["instruction", "robots", "scene", "state", "history"],
+        );
+        check_placeholders(
+            Template::AssignerUser.paper_layout(),
             &["instruction", "robots", "observation", "history"],
         );
     }

@@ -8,36 +8,24 @@ use serde_json::{Value, json};
 
 use crate::backends::llm::Message;
 use crate::methods::answer::{field_text, json_object, normal, read_line};
-use crate::methods::prompt;
+use crate::methods::prompt::{self, Sight};
 use crate::methods::templates::{self, Prompts, Template};
 
-/// The central prompt: the team, the rules, the instruction, the team's observation,
-/// the last executed actions and every team action line (CMRS, LLM-MCTS samples),
-/// rendered from `prompts`.
-pub fn messages(
+/// The central prompt: the team, the rules, the instruction, what `sight` shows the
+/// team, the last executed actions and every team action line (CMRS, LLM-MCTS
+/// samples), rendered from `prompts`.
+pub(crate) fn messages(
     prompts: &Prompts,
-    task: &Task,
-    observation: &str,
+    sight: &Sight<'_>,
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
-    render(
-        prompts.text(Template::Central),
-        task,
-        observation,
-        lines,
-        history,
-    )
+    render(prompts.text(Template::Central), sight, lines, history)
 }
 
-/// `template` (a system part, the user mark, a user part) filled.
-fn render(
-    template: &str,
-    task: &Task,
-    observation: &str,
-    lines: &[String],
-    history: &[String],
-) -> Vec<Message> {
+/// `text` (a system part, the user mark, a user part) filled.
+fn render(text: &str, sight: &Sight<'_>, lines: &[String], history: &[String]) -> Vec<Message> {
+    let task = sight.task;
     let team = prompt::team(task);
     let history = if history.is_empty() {
         "(none yet)".to_owned()
@@ -45,14 +33,15 @@ fn render(
         history.join("\n")
     };
     let actions = lines.join("\n");
-    let values = [
+    let seen = sight.values(text);
+    let mut values = vec![
         ("team", team.as_str()),
         ("instruction", task.meta.instruction.as_str()),
-        ("observation", observation),
         ("history", history.as_str()),
         ("actions", actions.as_str()),
     ];
-    let (system, user) = templates::split(template);
+    values.extend(seen.iter().map(|(k, v)| (*k, v.as_str())));
+    let (system, user) = templates::split(text);
     let mut messages = Vec::new();
     if !system.trim().is_empty() {
         messages.push(Message::system(
@@ -75,20 +64,13 @@ pub fn schema(lines: &[String]) -> Value {
 
 /// The central prompt of a parallel episode (CMRS in joint steps): as [`messages`], the
 /// model choosing at most one line per robot for the step.
-pub fn messages_parallel(
+pub(crate) fn messages_parallel(
     prompts: &Prompts,
-    task: &Task,
-    observation: &str,
+    sight: &Sight<'_>,
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
-    render(
-        prompts.text(Template::CentralParallel),
-        task,
-        observation,
-        lines,
-        history,
-    )
+    render(prompts.text(Template::CentralParallel), sight, lines, history)
 }
 
 /// The answer of a parallel episode: a list of the team action lines.
@@ -187,20 +169,21 @@ mod tests {
             .split_once(templates::USER_MARK)
             .expect("a user part");
         assert!(system.contains("{{team}}"));
-        for key in ["instruction", "observation", "history", "actions"] {
+        for key in ["instruction", "scene", "state", "history", "actions"] {
             assert!(user.contains(&format!("{{{{{key}}}}}")), "{key}");
         }
     }
 
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
-        let path =
-            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/tasks/demo.json");
-        let task = coherent_core::load_tasks(&path)
-            .expect("the demo")
-            .remove(0);
+        let task = crate::methods::prompt::demo_task();
         let prompts = crate::methods::prompt::every_placeholder(Template::Central);
-        let messages = messages(&prompts, &task, "facts", &["a: b".into()], &[]);
+        let sight = Sight {
+            task: &task,
+            state: &task.init,
+            observations: Vec::new(),
+        };
+        let messages = messages(&prompts, &sight, &["a: b".into()], &[]);
         for m in &messages {
             assert!(!m.content.contains("{{"), "{}", m.content);
         }

@@ -13,7 +13,7 @@ use coherent_core::{Environment, Task};
 use crate::backends::llm::{Backend, Query, Role, Situation};
 use crate::episode::ask::{Side, ask};
 use crate::episode::cancel::Cancel;
-use crate::episode::environment::team_observation;
+use crate::episode::environment::team_sight;
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::team_actions;
 use crate::methods::templates::Prompts;
@@ -93,8 +93,8 @@ async fn round(
     let query = Query {
         role: Role::Assigner,
         robot: None,
-        messages: central::messages(prompts, task, &team_observation(env, task), &lines, history),
-        schema_name: "team_action",
+        messages: central::messages(prompts, &team_sight(env, task), &lines, history),
+        schema_name: "joint_action",
         schema: central::schema(&lines),
         max_tokens: MAX_TOKENS,
         situation: Situation::now(task, env, None),
@@ -130,13 +130,7 @@ async fn parallel(
     let query = Query {
         role: Role::Assigner,
         robot: None,
-        messages: central::messages_parallel(
-            prompts,
-            task,
-            &team_observation(env, task),
-            &lines,
-            history,
-        ),
+        messages: central::messages_parallel(prompts, &team_sight(env, task), &lines, history),
         schema_name: "joint_step",
         schema: central::schema_parallel(&lines),
         max_tokens: MAX_TOKENS,

@@ -1,7 +1,7 @@
 //! DMRS, the paper's decentralised dialogue baselines after CoELA (docs/methods.md,
 //! `dmrs-1d` and `dmrs-2d`): each step the robots speak in a random order (seeded); each speaker sees
-//! the task, the last executed actions, its own observation, the action lists of itself
-//! and of the robots who spoke before it, and the step's dialogue so far, and proposes
+//! the task, its own observation, the action lists of itself and of the robots who spoke
+//! before it, the last executed actions and the step's dialogue so far, and proposes
 //! one `<robot>: <action>` line. The last speaker's proposal is checked and run.
 //! DMRS-1D has one dialogue round per step, DMRS-2D two (in the second every robot's
 //! list is known). One model call per robot per dialogue round.
@@ -14,7 +14,7 @@ use std::io;
 use std::sync::Arc;
 use std::time::Instant;
 
-use coherent_core::{Environment, NodeId, Task, describe};
+use coherent_core::{Environment, NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Backend, Message, Query, Role, Situation};
@@ -22,7 +22,7 @@ use crate::episode::ask::{Side, Unusable, ask};
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::answer::{field_text, json_object, normal, read_line};
-use crate::methods::prompt::{self, robot_label};
+use crate::methods::prompt::{self, Sight, robot_label};
 use crate::methods::team_actions;
 use crate::methods::templates::{self, Prompts, Template};
 use crate::methods::{central, decision, feedback};
@@ -329,10 +329,11 @@ fn speaker_messages(
     let kind = task
         .robot_by_id(speaker)
         .map_or(String::new(), |r| r.kind.to_string());
-    let observation = env
-        .observe(speaker)
-        .map(|o| describe::facts(task, env.state(), &[&o]))
-        .unwrap_or_default();
+    let sight = Sight {
+        task,
+        state: env.state(),
+        observations: env.observe(speaker).into_iter().collect(),
+    };
     let or_none = |items: &[String]| {
         if items.is_empty() {
             "(none yet)".to_owned()
@@ -340,16 +341,16 @@ fn speaker_messages(
             items.join("\n")
         }
     };
-    let values = [
+    let mut values = vec![
         ("robot", robot_label(task, speaker)),
         ("kind", kind),
         ("team", prompt::team(task)),
         ("instruction", task.meta.instruction.clone()),
-        ("observation", observation),
         ("history", or_none(history)),
         ("dialogue", or_none(dialogue)),
         ("actions", or_none(lines)),
     ];
+    values.extend(sight.values(template));
     let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
     let (system, user) = templates::split(template);
     vec![
@@ -386,7 +387,8 @@ mod tests {
         }
         for key in [
             "instruction",
-            "observation",
+            "scene",
+            "state",
             "history",
             "dialogue",
             "actions",

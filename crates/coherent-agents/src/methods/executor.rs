@@ -13,13 +13,13 @@
 
 use std::sync::Arc;
 
-use coherent_core::{Environment, NodeId, RobotKind, Task, describe};
+use coherent_core::{Environment, NodeId, RobotKind, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::error::Error;
 use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
-use crate::methods::prompt::fill;
+use crate::methods::prompt::{Sight, fill};
 use crate::methods::templates::{Prompts, Template};
 use crate::records::transcript::Decision;
 
@@ -27,7 +27,9 @@ use crate::records::transcript::Decision;
 #[derive(Clone, Debug)]
 pub struct ExecutorView<'a> {
     pub subtask: &'a str,
-    pub observation: &'a str,
+    /// Its own observation as facts, for the placeholders its template uses
+    /// (`observation`, or `scene` and `state`).
+    pub seen: &'a [(&'static str, String)],
     pub actions: &'a [String],
 }
 
@@ -79,16 +81,17 @@ impl RobotExecutor {
         actions: &[String],
     ) -> Query {
         let task = &self.task;
-        let observation = env
-            .observe(self.robot)
-            .map(|o| describe::facts(task, env.state(), &[&o]))
-            .unwrap_or_default();
+        let sight = Sight {
+            task,
+            state: env.state(),
+            observations: env.observe(self.robot).into_iter().collect(),
+        };
         Query {
             role: Role::Executor,
             robot: Some(self.robot),
             messages: self.messages(&ExecutorView {
                 subtask,
-                observation: &observation,
+                seen: &sight.values(self.prompts.text(Template::ExecutorUser)),
                 actions,
             }),
             schema_name: "decision",
@@ -114,6 +117,8 @@ impl RobotExecutor {
                 .collect::<Vec<_>>()
                 .join("\n")
         };
+        let mut values = vec![("subtask", view.subtask), ("actions", &actions)];
+        values.extend(view.seen.iter().map(|(k, v)| (*k, v.as_str())));
         vec![
             Message::system(
                 fill(system, &[("robot", &self.label)])
@@ -121,16 +126,9 @@ impl RobotExecutor {
                     .to_owned(),
             ),
             Message::user(
-                fill(
-                    self.prompts.text(Template::ExecutorUser),
-                    &[
-                        ("subtask", view.subtask),
-                        ("observation", view.observation),
-                        ("actions", &actions),
-                    ],
-                )
-                .trim_end()
-                .to_owned(),
+                fill(self.prompts.text(Template::ExecutorUser), &values)
+                    .trim_end()
+                    .to_owned(),
             ),
         ]
     }
@@ -232,6 +230,10 @@ mod tests {
     fn every_template_placeholder_is_filled() {
         check_placeholders(
             Template::ExecutorUser.builtin(),
+            &["subtask", "scene", "state", "actions"],
+        );
+        check_placeholders(
+            Template::ExecutorUser.paper_layout(),
             &["subtask", "observation", "actions"],
         );
         for system in [

@@ -1,20 +1,120 @@
 //! Feedback: what a method's next rounds hear about a round, in words. PEFA's assigner
-//! hears the executor's self-reflection on the checked outcome ([`pefa`]) and keeps the
-//! last rounds as history lines ([`assigner_history`]); the central and dialogue
-//! baselines hear what ran ([`team`]); MCTS records what its chosen action did
-//! ([`mcts`]). A transcript keeps each round's feedback, and a replay must give it back
-//! word for word.
+//! hears the executor's self-reflection on the checked outcome ([`pefa`]; a robot's part
+//! of a parallel round, [`pefa_part`]), with the engine's reasons when the executor
+//! declined or gave no usable answer ([`obstacles`]), and keeps the last rounds as
+//! history lines ([`assigner_history`]); the central and dialogue baselines hear what ran
+//! ([`team`]); MCTS records what its chosen action did ([`mcts`]). A transcript keeps
+//! each round's feedback, and a replay must give it back word for word.
 
-use coherent_core::{NodeId, Task};
+use coherent_core::reach::{self, Reach};
+use coherent_core::{NodeId, State, Task};
 
 use crate::methods::prompt::robot_label;
-use crate::records::transcript::{Decision, RobotPart, Round, RoundOutcome};
+use crate::records::transcript::{Decision, Proposal, RobotPart, Round, RoundOutcome};
+
+/// The most things of a subtask whose obstacles the feedback lists.
+pub const MAX_OBSTACLES: usize = 6;
 
 /// What the assigner hears about a round, PEFA's Feedback: self-reflection built from
-/// the executor's answer and the checked outcome (or why the round never got that far).
-/// `robot` is the one the proposal named, `actions` its list, `decision` its executor's;
-/// in a parallel round, a robot's part ([`pefa_part`]).
-pub fn pefa(
+/// the executor's answer and the checked outcome (or why the round never got that far),
+/// in state `s` (where the round left the world). When the executor declined or its
+/// answer could not be used, one line more for each thing the subtask names that its
+/// robot cannot act on now ([`obstacles`]).
+pub fn pefa(task: &Task, s: &State, round: &Round, outcome: &RoundOutcome) -> String {
+    let said = reflection(
+        task,
+        round.proposal.as_ref().map(|p| p.robot),
+        &round.actions,
+        round.decision.as_ref(),
+        outcome,
+    );
+    explained(task, s, round.proposal.as_ref(), said, outcome)
+}
+
+/// What the assigner hears about one robot's part of a parallel round, in state `s`
+/// (where the step left the world), as [`pefa`] tells a sequential round.
+pub fn pefa_part(task: &Task, s: &State, part: &RobotPart) -> String {
+    let said = reflection(
+        task,
+        Some(part.robot),
+        &part.actions,
+        part.decision.as_ref(),
+        &part.outcome,
+    );
+    explained(task, s, part.proposal.as_ref(), said, &part.outcome)
+}
+
+/// `said`, with the obstacles of the subtask when the executor declined it or gave no
+/// usable answer.
+fn explained(
+    task: &Task,
+    s: &State,
+    proposal: Option<&Proposal>,
+    said: String,
+    outcome: &RoundOutcome,
+) -> String {
+    let explained = matches!(
+        outcome,
+        RoundOutcome::Declined | RoundOutcome::NoDecision { .. }
+    );
+    match proposal {
+        Some(p) if explained => {
+            let lines = obstacles(task, s, p.robot, &p.subtask);
+            if lines.is_empty() {
+                said
+            } else {
+                format!("{said}\n{}", lines.join("\n"))
+            }
+        }
+        _ => said,
+    }
+}
+
+/// For each thing `subtask` names (as `<name>(id)`, at most [`MAX_OBSTACLES`]) that
+/// `robot` cannot act on in state `s`, one line: the engine's reason
+/// ([`reach::why_not`]) and which other robots of the team, by type, could get at it
+/// ([`reach::reach`]): now, or after moves of their own.
+pub fn obstacles(task: &Task, s: &State, robot: NodeId, subtask: &str) -> Vec<String> {
+    let Ok(me) = task.robot_by_id(robot) else {
+        return Vec::new();
+    };
+    reach::things_named(task, subtask)
+        .into_iter()
+        .filter_map(|x| {
+            let why = reach::why_not(task, s, me, x)?;
+            let others: Vec<String> = task
+                .robots
+                .iter()
+                .filter(|r| r.node != me.node)
+                .filter_map(|r| {
+                    let who = format!("{} ({})", task.node(r.node).label(), r.kind);
+                    match reach::reach(task, s, *r, x) {
+                        Reach::Now => Some(format!("{who} can get at it now")),
+                        Reach::After(1) => Some(format!("{who} could after 1 move of its own")),
+                        Reach::After(n) => Some(format!("{who} could after {n} moves of its own")),
+                        Reach::Never => None,
+                    }
+                })
+                .collect();
+            let others = if others.is_empty() {
+                "No other robot of the team could get at it.".to_owned()
+            } else {
+                format!("{}.", others.join("; "))
+            };
+            Some(format!(
+                "- {}: {} ({}). {others}",
+                task.node(x).label(),
+                why.message,
+                why.reason.name()
+            ))
+        })
+        .take(MAX_OBSTACLES)
+        .collect()
+}
+
+/// The executor's self-reflection: `robot` is the one the proposal named, `actions` its
+/// list, `decision` its executor's.
+fn reflection(
     task: &Task,
     robot: Option<NodeId>,
     actions: &[String],
@@ -71,17 +171,6 @@ pub fn pefa(
         }
         RoundOutcome::MethodError { message } => format!("The method failed: {message}"),
     }
-}
-
-/// What the assigner hears about one robot's part of a parallel round ([`pefa`]).
-pub fn pefa_part(task: &Task, part: &RobotPart) -> String {
-    pefa(
-        task,
-        Some(part.robot),
-        &part.actions,
-        part.decision.as_ref(),
-        &part.outcome,
-    )
 }
 
 /// The line PEFA's assigner reads about a round in its history (the Adjustment); of a

@@ -75,7 +75,7 @@ use coherent_core::{Environment, State, Task, rules};
 use crate::backends::llm::{Backend, Finish, Query, Role, Situation};
 use crate::episode::ask::place_call;
 use crate::episode::cancel::Cancel;
-use crate::episode::environment::{execute, team_observation};
+use crate::episode::environment::{execute, team_sight};
 use crate::episode::rounds::{Episode, HISTORY_WINDOW, History, rounds};
 use crate::methods::answer::{match_line, read_line};
 use crate::methods::team_actions::{self, TeamAction};
@@ -444,8 +444,7 @@ async fn round(
     // The prior, from the model's samples.
     let mut prior = None;
     if let Some(backend) = backend {
-        let observation = team_observation(env, task);
-        let messages = central::messages(&config.prompts, task, &observation, &lines, history);
+        let messages = central::messages(&config.prompts, &team_sight(env, task), &lines, history);
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {

@@ -1,7 +1,8 @@
 //! PEFA, the paper's loop: Proposal (the [`TaskAssigner`] gives one robot one subtask),
 //! Execution (that robot's [`RobotExecutor`] picks one action from its list; the action
 //! is checked and run through the [`Environment`]), Feedback (what ran and whether the
-//! subtask is done, or why not, with the robot's actions: [`feedback::pefa`]),
+//! subtask is done, or why not, with the robot's actions and, for a declined subtask,
+//! the engine's reason for each thing it names: [`feedback::pefa`]),
 //! Adjustment (the feedback joins the [`History`] the assigner sees next round). One
 //! round is one step; two model calls per round.
 
@@ -128,13 +129,7 @@ fn finish(
     outcome: RoundOutcome,
     start: Instant,
 ) -> Round {
-    round.feedback = feedback::pefa(
-        env.task(),
-        round.proposal.as_ref().map(|p| p.robot),
-        &round.actions,
-        round.decision.as_ref(),
-        &outcome,
-    );
+    round.feedback = feedback::pefa(env.task(), env.state(), &round, &outcome);
     round.outcome = outcome;
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;

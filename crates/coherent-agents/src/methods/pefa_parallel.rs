@@ -162,7 +162,7 @@ async fn round(
     // The joint step, each robot's feedback, and who keeps a subtask.
     let step_outcome = joint::carry_out(env, &mut parts);
     for part in &mut parts {
-        part.feedback = feedback::pefa_part(task, part);
+        part.feedback = feedback::pefa_part(task, env.state(), part);
         let goes_on = part.outcome == RoundOutcome::Executed
             && !part.decision.as_ref().is_some_and(|d| d.subtask_complete);
         if !goes_on {

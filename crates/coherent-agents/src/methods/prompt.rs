@@ -2,9 +2,10 @@
 //! ([`crate::methods::templates`]) with the situation, the team list, and robot labels.
 //! Each role renders its own templates ([`crate::methods::assigner`],
 //! [`crate::methods::executor`], [`crate::methods::team_actions`], [`crate::methods::dmrs`]).
-//! Observations are written as relation facts (`coherent_core::describe`).
+//! Observations are written as relation facts (`coherent_core::describe`), in the layout
+//! the template asks for ([`Sight`]).
 
-use coherent_core::{NodeId, Task};
+use coherent_core::{NodeId, Observation, State, Task, describe};
 
 /// `template` with every `{{key}}` replaced by its value, in one pass: a value that
 /// itself contains `{{...}}` (an instruction, say) is left as written.
@@ -34,6 +35,39 @@ pub fn fill(template: &str, values: &[(&str, &str)]) -> String {
     }
     out.push_str(rest);
     out
+}
+
+/// What a role is shown of the world: the observations it gets, written for whichever
+/// placeholders its template uses: `observation` (one block, the paper's layout:
+/// [`describe::facts`]) or `scene` and `state` (the scene's fixed facts and what
+/// changes: [`describe::layered`]). The same facts either way.
+pub(crate) struct Sight<'a> {
+    pub task: &'a Task,
+    pub state: &'a State,
+    pub observations: Vec<Observation>,
+}
+
+impl Sight<'_> {
+    /// The observation placeholders `text` uses, with their values (each layout written
+    /// only when used).
+    pub(crate) fn values(&self, text: &str) -> Vec<(&'static str, String)> {
+        let seen: Vec<&Observation> = self.observations.iter().collect();
+        let mut out = Vec::new();
+        if uses(text, "observation") {
+            out.push(("observation", describe::facts(self.task, self.state, &seen)));
+        }
+        if uses(text, "scene") || uses(text, "state") {
+            let layers = describe::layered(self.task, self.state, &seen);
+            out.push(("scene", layers.scene));
+            out.push(("state", layers.state));
+        }
+        out
+    }
+}
+
+/// Whether `text` has the placeholder `{{key}}`.
+fn uses(text: &str, key: &str) -> bool {
+    text.contains(&format!("{{{{{key}}}}}"))
 }
 
 /// The team list of a system prompt: each robot's label and type, one per line.

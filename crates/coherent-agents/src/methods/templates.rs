@@ -4,6 +4,14 @@
 //! settings; it is checked when it is made, so that a template naming a placeholder its
 //! method does not fill is refused before any model call.
 //!
+//! The built-in templates put what never changes first and what changes each round
+//! last (the rules, the team, the instruction, the scene's fixed facts; then where the
+//! robots are, states, relations, the action list; the history at the end), so that a
+//! server's prompt cache serves the unchanged beginning of each call. The paper's
+//! layout, one block of facts after the instruction, stays at hand as the set named
+//! [`PAPER_LAYOUT`] ([`Template::paper_layout`]): the same facts in the order the
+//! templates had before.
+//!
 //! A transcript's header records the set ([`PromptRecord`]): a hash of the text of every
 //! template its execution's methods render (a sequential episode's leaves the parallel
 //! templates out, so that it is what it was before they existed) and the text of each
@@ -18,6 +26,9 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::episode::execution::Execution;
+
+/// The name of the built-in set in the paper's layout (`--prompts paper-layout`).
+pub const PAPER_LAYOUT: &str = "paper-layout";
 
 /// The line of a two-part template ([`Template::Central`], [`Template::DmrsSpeaker`])
 /// that separates its system part from its user part.
@@ -131,15 +142,56 @@ impl Template {
         }
     }
 
+    /// Its text in the paper's layout: the built-in text before the templates were laid
+    /// out for prompt caching (the observation as one block, `{{observation}}`, after
+    /// the instruction; the team in the middle of the system prompt).
+    pub fn paper_layout(self) -> &'static str {
+        match self {
+            Template::AssignerSystem => {
+                include_str!("../../prompts/paper-layout/assigner_system.txt")
+            }
+            Template::AssignerUser => include_str!("../../prompts/paper-layout/assigner_user.txt"),
+            Template::ExecutorQuadrotor => {
+                include_str!("../../prompts/paper-layout/executor_quadrotor.txt")
+            }
+            Template::ExecutorRobotDog => {
+                include_str!("../../prompts/paper-layout/executor_robot_dog.txt")
+            }
+            Template::ExecutorRobotArm => {
+                include_str!("../../prompts/paper-layout/executor_robot_arm.txt")
+            }
+            Template::ExecutorUser => include_str!("../../prompts/paper-layout/executor_user.txt"),
+            Template::Central => include_str!("../../prompts/paper-layout/central.txt"),
+            Template::DmrsSpeaker => include_str!("../../prompts/paper-layout/dmrs_speaker.txt"),
+            // Written after the layout changed: one text, laid out for caching.
+            Template::AssignerParallelSystem
+            | Template::AssignerParallelUser
+            | Template::CentralParallel
+            | Template::DmrsSpeakerParallel => self.builtin(),
+        }
+    }
+
     /// The placeholders its method fills (`{{name}}` in the text); any other is refused.
+    /// Where a template shows an observation, `observation` is it in one block (the
+    /// paper's layout), `scene` and `state` the same facts in two: what never changes,
+    /// and what does.
     pub fn placeholders(self) -> &'static [&'static str] {
         match self {
             Template::AssignerSystem | Template::AssignerParallelSystem => &["team"],
-            Template::AssignerUser => &["instruction", "robots", "observation", "history"],
+            Template::AssignerUser => &[
+                "instruction",
+                "robots",
+                "observation",
+                "scene",
+                "state",
+                "history",
+            ],
             Template::AssignerParallelUser => &[
                 "instruction",
                 "robots",
                 "observation",
+                "scene",
+                "state",
                 "history",
                 "busy",
                 "idle",
@@ -147,16 +199,24 @@ impl Template {
             Template::ExecutorQuadrotor
             | Template::ExecutorRobotDog
             | Template::ExecutorRobotArm => &["robot"],
-            Template::ExecutorUser => &["subtask", "observation", "actions"],
-            Template::Central | Template::CentralParallel => {
-                &["team", "instruction", "observation", "history", "actions"]
-            }
+            Template::ExecutorUser => &["subtask", "observation", "scene", "state", "actions"],
+            Template::Central | Template::CentralParallel => &[
+                "team",
+                "instruction",
+                "observation",
+                "scene",
+                "state",
+                "history",
+                "actions",
+            ],
             Template::DmrsSpeaker | Template::DmrsSpeakerParallel => &[
                 "robot",
                 "kind",
                 "team",
                 "instruction",
                 "observation",
+                "scene",
+                "state",
                 "history",
                 "dialogue",
                 "actions",
@@ -292,6 +352,18 @@ impl Prompts {
         Prompts::with(BTreeMap::new())
     }
 
+    /// The compiled-in templates in the paper's layout ([`Template::paper_layout`]), as a
+    /// set that replaces the built-in templates whose layout changed.
+    pub fn paper_layout() -> Prompts {
+        Prompts::with(
+            Template::ALL
+                .into_iter()
+                .filter(|t| t.paper_layout() != t.builtin())
+                .map(|t| (t, t.paper_layout().to_owned()))
+                .collect(),
+        )
+    }
+
     fn with(replaced: BTreeMap<Template, String>) -> Prompts {
         let hashes = Execution::ALL.map(|execution| {
             hash(
@@ -353,38 +425,50 @@ impl Prompts {
     }
 
     /// The set a transcript recorded: the built-in templates with the recorded
-    /// replacements, which must hash as recorded (else the built-in templates changed
-    /// since, and the recorded prompts cannot be rendered again).
+    /// replacements, which must hash as recorded for `execution`. A transcript recorded
+    /// while the paper's layout was built in hashes as the paper's layout with its
+    /// replacements; any other hash means that the built-in templates changed since, and
+    /// the recorded prompts cannot be rendered again.
     pub fn from_record(
         record: &PromptRecord,
         execution: Execution,
     ) -> Result<Prompts, PromptError> {
-        let files = record
+        let replaced = record
             .replaced
             .iter()
-            .map(|(name, text)| (name.clone(), text.clone()))
-            .collect();
-        let prompts = Prompts::from_texts(Path::new("(recorded)"), files)?;
-        if prompts.hash(execution) != record.hash {
-            return Err(PromptError::Recorded(format!(
-                "the transcript was recorded with prompt set {}, but its replaced templates \
-                 ({}) with this version's built-in ones give {}: the built-in templates \
-                 changed since, so its prompts cannot be rendered again",
-                record.hash,
-                if record.replaced.is_empty() {
-                    "none".to_owned()
-                } else {
-                    record
-                        .replaced
-                        .keys()
-                        .cloned()
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                },
-                prompts.hash(execution)
-            )));
+            .map(|(name, text)| (name.clone(), text.clone()));
+        let prompts = Prompts::from_texts(Path::new("(recorded)"), replaced.clone().collect())?;
+        if prompts.hash(execution) == record.hash {
+            return Ok(prompts);
         }
-        Ok(prompts)
+        let mut files: BTreeMap<String, String> = Template::ALL
+            .iter()
+            .filter(|t| t.paper_layout() != t.builtin())
+            .map(|t| (t.file_name().to_owned(), t.paper_layout().to_owned()))
+            .collect();
+        files.extend(replaced);
+        let paper = Prompts::from_texts(Path::new("(recorded)"), files.into_iter().collect())?;
+        if paper.hash(execution) == record.hash {
+            return Ok(paper);
+        }
+        Err(PromptError::Recorded(format!(
+            "the transcript was recorded with prompt set {}, but its replaced templates ({}) \
+             with this version's built-in ones give {} (and with the paper's layout {}): the \
+             built-in templates changed since, so its prompts cannot be rendered again",
+            record.hash,
+            if record.replaced.is_empty() {
+                "none".to_owned()
+            } else {
+                record
+                    .replaced
+                    .keys()
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+            prompts.hash(execution),
+            paper.hash(execution)
+        )))
     }
 
     /// The text of `template` in this set.
@@ -448,9 +532,9 @@ fn hash<'a>(parts: impl IntoIterator<Item = (&'a str, &'a str)>) -> String {
     format!("{h:032x}")
 }
 
-/// Writes every built-in template into `dir` (made when missing), one file each; an
+/// Writes every template of `set` into `dir` (made when missing), one file each; an
 /// existing file is an error unless `overwrite`. Returns the files written.
-pub fn export(dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>, PromptError> {
+pub fn export(dir: &Path, overwrite: bool, set: &Prompts) -> Result<Vec<PathBuf>, PromptError> {
     let io = |file: &Path, e: std::io::Error| PromptError::Io {
         file: file.display().to_string(),
         message: e.to_string(),
@@ -467,7 +551,7 @@ pub fn export(dir: &Path, overwrite: bool) -> Result<Vec<PathBuf>, PromptError> 
         });
     }
     for (t, path) in Template::ALL.iter().zip(&paths) {
-        std::fs::write(path, t.builtin()).map_err(|e| io(path, e))?;
+        std::fs::write(path, set.text(*t)).map_err(|e| io(path, e))?;
     }
     Ok(paths)
 }
@@ -478,16 +562,64 @@ mod tests {
 
     #[test]
     fn every_builtin_template_uses_exactly_its_placeholders() {
+        let uses = |text: &str, p: &str| text.contains(&format!("{{{{{p}}}}}"));
         for t in Template::ALL {
-            check(t, t.builtin(), t.file_name()).expect("the built-in templates check");
+            for text in [t.builtin(), t.paper_layout()] {
+                check(t, text, t.file_name()).expect("the built-in templates check");
+            }
             for p in t.placeholders() {
-                assert!(
-                    t.builtin().contains(&format!("{{{{{p}}}}}")),
-                    "{} does not use {{{{{p}}}}}",
+                // The observation in one block in the paper's layout, in two in ours.
+                let (ours, paper) = match *p {
+                    "observation" => (false, true),
+                    "scene" | "state" => (true, false),
+                    _ => (true, true),
+                };
+                assert_eq!(
+                    uses(t.builtin(), p),
+                    ours,
+                    "{} and {{{{{p}}}}}",
+                    t.file_name()
+                );
+                assert_eq!(
+                    uses(t.paper_layout(), p),
+                    paper,
+                    "{} (paper layout) and {{{{{p}}}}}",
                     t.file_name()
                 );
             }
         }
+    }
+
+    #[test]
+    fn the_paper_layout_is_a_set_of_its_own_that_records_and_replays() {
+        let paper = Prompts::paper_layout();
+        assert_ne!(paper.hash(), Prompts::builtin().hash());
+        for t in Template::ALL {
+            assert_eq!(paper.text(t), t.paper_layout());
+        }
+        assert_eq!(
+            Prompts::from_record(&paper.record()).expect("rebuilt"),
+            paper
+        );
+        // A transcript recorded while the paper's layout was built in records no
+        // replacement and that layout's hash, with or without files of its own.
+        let then = PromptRecord {
+            hash: paper.hash().to_owned(),
+            replaced: BTreeMap::new(),
+        };
+        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), paper);
+        let edited = "Do {{instruction}} with {{observation}}.".to_owned();
+        let mut files: Vec<(String, String)> = Template::ALL
+            .iter()
+            .map(|t| (t.file_name().to_owned(), t.paper_layout().to_owned()))
+            .collect();
+        files[1].1.clone_from(&edited);
+        let old_set = Prompts::from_texts(Path::new("d"), files).expect("a set");
+        let then = PromptRecord {
+            hash: old_set.hash().to_owned(),
+            replaced: BTreeMap::from([("assigner_user.txt".to_owned(), edited)]),
+        };
+        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), old_set);
     }
 
     #[test]
@@ -497,7 +629,7 @@ mod tests {
         assert_eq!(
             e.to_string(),
             "d/assigner_user.txt:3: unknown placeholder {{no_such_thing}}; the placeholders of \
-             this template: instruction, robots, observation, history"
+             this template: instruction, robots, observation, scene, state, history"
         );
         // A placeholder of another template is unknown here too.
         assert!(check(Template::AssignerSystem, "{{history}}", "f").is_err());
@@ -604,7 +736,7 @@ mod tests {
     fn export_writes_every_template_once() {
         let dir = std::env::temp_dir().join(format!("coherent-export-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        let written = export(&dir, false).expect("exported");
+        let written = export(&dir, false, &Prompts::builtin()).expect("exported");
         assert_eq!(written.len(), Template::ALL.len());
         assert_eq!(
             Prompts::read_dir(&dir)
@@ -612,8 +744,17 @@ mod tests {
                 .hash(Execution::Parallel),
             Prompts::builtin().hash(Execution::Parallel)
         );
-        assert!(export(&dir, false).is_err(), "no silent overwrite");
-        export(&dir, true).expect("overwritten on request");
+        assert!(
+            export(&dir, false, &Prompts::builtin()).is_err(),
+            "no silent overwrite"
+        );
+        // A folder in the paper's layout (as `prompts export` wrote it before) reads back
+        // as that layout.
+        export(&dir, true, &Prompts::paper_layout()).expect("overwritten on request");
+        assert_eq!(
+            Prompts::read_dir(&dir).expect("reads back"),
+            Prompts::paper_layout()
+        );
         std::fs::remove_dir_all(&dir).expect("cleaned up");
     }
 }

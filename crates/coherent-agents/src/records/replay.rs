@@ -19,7 +19,9 @@ use crate::episode::rounds::Episode;
 use crate::episode::settings::{External, Method, MethodSpec, Settings};
 use crate::error::Error;
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Execution, RobotPart, Round, RoundOutcome, Summary, Transcript};
+use crate::records::transcript::{
+    Call, Execution, RobotPart, Round, RoundOutcome, Summary, Transcript,
+};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
 /// `backend` and `budget`, then look for a [`Replay::difference`] from the recording.
@@ -59,7 +61,8 @@ impl Replay {
 }
 
 /// The settings and budget a transcript was recorded with, to replay it: the prompt set
-/// is the recorded one (or an error when this version cannot render it again), and a
+/// is the recorded one (or an error when this version cannot render it again; the
+/// paper's layout for a transcript from before prompt sets), and a
 /// method written outside the crate replays its recorded decisions.
 pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
     let name = &t.header.method;
@@ -76,9 +79,11 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
             .ok_or_else(|| Error::Invalid(format!("unknown method {name:?} in the transcript")))?
             .into()
     };
+    // A transcript without a record was written before prompt sets, when the paper's
+    // layout was built in.
     let prompts = match &t.header.prompts {
         Some(record) => Prompts::from_record(record, t.header.execution)?,
-        None => Prompts::builtin(),
+        None => Prompts::paper_layout(),
     };
     let settings = Settings {
         method,
@@ -102,7 +107,9 @@ pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, Error> {
 /// give the same rounds (calls, answers, decisions, outcomes, feedback) apart from
 /// wall-clock time, and the same summary.
 pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
-    // What robots outside the process said is theirs, not the replay's to reproduce.
+    // What robots outside the process said is theirs, not the replay's to reproduce; a
+    // call's shared prefix follows from the prompts compared (and transcripts written
+    // before it was kept have none).
     let strip = |r: &Round| Round {
         wall_ms: 0.0,
         robot: None,
@@ -112,6 +119,14 @@ pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
             .map(|p| RobotPart {
                 report: None,
                 ..p.clone()
+            })
+            .collect(),
+        calls: r
+            .calls
+            .iter()
+            .map(|c| Call {
+                shared_prefix: None,
+                ..c.clone()
             })
             .collect(),
         ..r.clone()

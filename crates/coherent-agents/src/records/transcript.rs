@@ -75,6 +75,13 @@ pub struct Call {
     /// with endpoints; absent otherwise, and in transcripts written before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub endpoint: Option<String>,
+    /// The characters at the start of its messages that are the same as at the start of
+    /// the previous call of the same role and robot in the episode
+    /// ([`crate::episode::prefix::shared_prefix`]): what a server's prompt cache could
+    /// skip. Absent for the first call of each, and in transcripts written before it
+    /// was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub shared_prefix: Option<u64>,
 }
 
 /// Who carried an episode's actions out: this process (the rules, and Rapier with
