@@ -593,21 +593,23 @@ mod tests {
     #[test]
     fn the_paper_layout_is_a_set_of_its_own_that_records_and_replays() {
         let paper = Prompts::paper_layout();
-        assert_ne!(paper.hash(), Prompts::builtin().hash());
+        // Recorded before parallel episodes existed: a sequential episode's set.
+        let seq = Execution::Sequential;
+        assert_ne!(paper.hash(seq), Prompts::builtin().hash(seq));
         for t in Template::ALL {
             assert_eq!(paper.text(t), t.paper_layout());
         }
         assert_eq!(
-            Prompts::from_record(&paper.record()).expect("rebuilt"),
+            Prompts::from_record(&paper.record(seq), seq).expect("rebuilt"),
             paper
         );
         // A transcript recorded while the paper's layout was built in records no
         // replacement and that layout's hash, with or without files of its own.
         let then = PromptRecord {
-            hash: paper.hash().to_owned(),
+            hash: paper.hash(seq).to_owned(),
             replaced: BTreeMap::new(),
         };
-        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), paper);
+        assert_eq!(Prompts::from_record(&then, seq).expect("rebuilt"), paper);
         let edited = "Do {{instruction}} with {{observation}}.".to_owned();
         let mut files: Vec<(String, String)> = Template::ALL
             .iter()
@@ -616,10 +618,10 @@ mod tests {
         files[1].1.clone_from(&edited);
         let old_set = Prompts::from_texts(Path::new("d"), files).expect("a set");
         let then = PromptRecord {
-            hash: old_set.hash().to_owned(),
+            hash: old_set.hash(seq).to_owned(),
             replaced: BTreeMap::from([("assigner_user.txt".to_owned(), edited)]),
         };
-        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), old_set);
+        assert_eq!(Prompts::from_record(&then, seq).expect("rebuilt"), old_set);
     }
 
     #[test]
