@@ -70,7 +70,12 @@ pub(crate) fn messages_parallel(
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
-    render(prompts.text(Template::CentralParallel), sight, lines, history)
+    render(
+        prompts.text(Template::CentralParallel),
+        sight,
+        lines,
+        history,
+    )
 }
 
 /// The answer of a parallel episode: a list of the team action lines.
