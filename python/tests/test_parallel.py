@@ -174,7 +174,9 @@ def test_the_small_model_runs_parallel_pefa_with_its_executors_asked_at_once(
     # The server answers one request at a time, so a round's executors wait in its queue
     # behind each other: on a loaded machine the last may wait minutes.
     llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", read_timeout=900.0, timeout=900.0)
-    episode = coherent.run(task, llm=llm, execution="parallel", max_steps=3, out=tmp_path)
+    # The paper's layout: with it this 135M model gives two robots subtasks within three
+    # rounds (with ours its reasoning runs on until cut, and it names one).
+    episode = coherent.run(task, llm=llm, execution="parallel", max_steps=3, prompts="paper-layout", out=tmp_path)
     assert episode.status in ("success", "failure")
     rounds = episode.transcript
     assert len(rounds) == 3

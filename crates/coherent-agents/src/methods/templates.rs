@@ -163,11 +163,17 @@ impl Template {
             Template::ExecutorUser => include_str!("../../prompts/paper-layout/executor_user.txt"),
             Template::Central => include_str!("../../prompts/paper-layout/central.txt"),
             Template::DmrsSpeaker => include_str!("../../prompts/paper-layout/dmrs_speaker.txt"),
-            // Written after the layout changed: one text, laid out for caching.
-            Template::AssignerParallelSystem
-            | Template::AssignerParallelUser
-            | Template::CentralParallel
-            | Template::DmrsSpeakerParallel => self.builtin(),
+            // Its system prompt has nothing that changes: one text in both layouts.
+            Template::AssignerParallelSystem => self.builtin(),
+            Template::AssignerParallelUser => {
+                include_str!("../../prompts/paper-layout/assigner_parallel_user.txt")
+            }
+            Template::CentralParallel => {
+                include_str!("../../prompts/paper-layout/central_parallel.txt")
+            }
+            Template::DmrsSpeakerParallel => {
+                include_str!("../../prompts/paper-layout/dmrs_speaker_parallel.txt")
+            }
         }
     }
 
@@ -574,8 +580,6 @@ mod tests {
                     "scene" | "state" => (true, false),
                     _ => (true, true),
                 };
-                // The parallel templates have one text, in our layout.
-                let paper = if t.parallel_only() { ours } else { paper };
                 assert_eq!(
                     uses(t.builtin(), p),
                     ours,
