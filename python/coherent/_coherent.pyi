@@ -185,6 +185,13 @@ class Task:
     @property
     def robot_types(self) -> dict[int, _RobotType]: ...
     @property
+    def robot_names(self) -> dict[int, str]:
+        """Robot node id -> its name (``"robot_dog_13"``): its ROS 2 name and its agent
+        in ``coherent.marl``."""
+    def most_actions(self, robot: int) -> int:
+        """The most actions ``robot`` is ever offered at once (each of its type's verbs
+        once per node): the size of a fixed action space."""
+    @property
     def goal(self) -> list[str]:
         """Goal predicates as ``on_<apple>(3)_<table>(5)`` or ``inside_<a>(i)_<b>(j)``."""
     def to_native(self) -> dict[str, Any]:
@@ -195,21 +202,18 @@ class Task:
         """The task in the paper's format: one element of an env file's list."""
 
 class Env:
-    """The environment of a task: robots observe and act one action at a time, by the
-    rules, and with ``physics=True`` also in Rapier (a physical failure is a refused
-    step whose reason has the numbers; a scene that cannot be built raises
-    :class:`PhysicsError`).
+    """The environment of a task: robots observe and act, one action at a time or
+    several robots at once in a joint step, by the rules, and with ``physics=True``
+    also in Rapier (a physical failure is a refused step whose reason has the numbers;
+    a scene that cannot be built raises :class:`PhysicsError`).
 
     With ``robots="ros2"`` the robots are ROS 2 action servers, one per robot at
     ``<namespace>/<robot>/execute`` (``coherent robots serve``, or real robots): the
     rules check each action, the robot carries it out, and the state follows its
-    success. The constructor waits up to ``server_wait`` seconds for every robot's
-    server and raises :class:`CoherentError` naming those without one; a step fails
-    when a robot stays silent for ``robot_timeout`` seconds, and every later step is
-    refused.
-
-    With ``execution="parallel"`` the robots act in joint steps: ``step`` takes every
-    acting robot's action at once (see :meth:`step`).
+    success. A joint step's goals are sent at once and awaited together. The
+    constructor waits up to ``server_wait`` seconds for every robot's server and raises
+    :class:`CoherentError` naming those without one; a step fails when a robot stays
+    silent for ``robot_timeout`` seconds, and every later step is refused.
 
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
     for an id that is not one of the task's robots; an action str with a lone surrogate
@@ -221,7 +225,6 @@ class Env:
         task: Task,
         physics: bool = False,
         *,
-        execution: Literal["sequential", "parallel"] = "sequential",
         robots: Literal["local", "ros2"] = "local",
         namespace: str | None = None,
         robot_timeout: float = 10.0,
@@ -231,11 +234,6 @@ class Env:
     def task(self) -> Task: ...
     @property
     def physics(self) -> bool: ...
-    @property
-    def execution(self) -> Literal["sequential", "parallel"]: ...
-    @property
-    def sim_seconds(self) -> float | None:
-        """Simulated seconds since the start, with physics; None otherwise."""
     @property
     def namespace(self) -> str | None:
         """The namespace of the robots' ROS 2 actions; None when they act in this process."""
@@ -252,13 +250,15 @@ class Env:
         and the reason, and changes nothing."""
     @overload
     def step(
-        self, robot: Mapping[int, str] | Sequence[tuple[int, str]]
+        self, robot: Mapping[int, str] | Sequence[tuple[int, str]], action: None = None
     ) -> tuple[list[bool], list[str | None], bool]:
-        """With ``execution="parallel"``: tries one joint step, ``{robot: action}`` or
-        ``[(robot, action), ...]`` (at most one action a robot); ``(oks, reasons, done)``
-        in the order given. A step the rules refuse (an action not offered, two that
-        interfere) changes nothing, each reason saying what it means for that robot."""
+        """``step(actions)``: one joint step, several robots at once, at most one action
+        each (``{robot: action}`` or ``[(robot, action), ...]``): ``(oks, reasons,
+        done)``, a list each in the order given. A step the rules refuse (an action not
+        offered, two that interfere) carries out nothing; each reason says why."""
     def goal_satisfied(self) -> bool: ...
+    def goal_holds(self) -> list[bool]:
+        """Whether each goal predicate holds now, in the order of ``Task.goal``."""
     def graph(self) -> _Graph: ...
     def reset(self) -> None: ...
 

@@ -1,7 +1,6 @@
 """Robots acting at once, from Python: `coherent.run(..., execution="parallel")` and its
 episode (makespan, actions, a row per robot's part), `coherent.bench` with both
-executions and the report's makespan table, `Env(task, execution="parallel")` stepping
-joint steps, methods written in Python answering a decision per robot, the tree searches
+executions and the report's makespan table, methods written in Python answering a decision per robot, the tree searches
 refusing, and the real small model running a parallel PEFA episode whose executors are
 asked at once."""
 
@@ -93,29 +92,6 @@ def test_bench_runs_both_executions_and_the_report_compares_them(demo: coherent.
     assert row["makespan"] == pytest.approx(row["optimal_makespan"])
     assert "### Makespan" in report.markdown()
     assert "makespan,pefa (parallel),Avg," in report.csv()
-
-
-def test_an_env_of_parallel_execution_steps_joint_steps(demo: coherent.Task) -> None:
-    env = coherent.Env(demo, execution="parallel")
-    assert env.execution == "parallel"
-    oks, reasons, done = env.step(
-        {ARM: "[grab] <mug>(7)", QUADROTOR: "[takeoff_from] <living room floor>(3)", DOG: "[movetowards] <door>(4)"}
-    )
-    assert (oks, reasons, done) == ([True, True, True], [None, None, None], False)
-    # One robot given two of its actions: the step is refused as a whole.
-    before = env.graph()
-    first, second = env.actions(DOG)[:2]
-    oks, reasons, _ = env.step([(DOG, first), (DOG, second)])
-    assert oks == [False, False]
-    assert all("interfere over the robot <robot dog>(13)" in r for r in reasons)
-    assert env.graph() == before, "nothing of a refused step is carried out"
-    with pytest.raises(TypeError, match="takes one joint step"):
-        env.step(DOG, "[open] <door>(4)")
-    sequential = coherent.Env(demo)
-    with pytest.raises(TypeError, match='execution="parallel"'):
-        sequential.step({DOG: "[movetowards] <door>(4)"})
-    with pytest.raises(coherent.ArgumentError, match="execution='at once'"):
-        coherent.Env(demo, execution="at once")
 
 
 class TwoAtATime:

@@ -187,7 +187,7 @@ def test_a_parallel_step_shows_every_robots_part_and_moves_them_together(
     w.open(page_file.as_uri())
     page = w.page
     task = coherent.load_tasks(DEMO)[0]
-    env = coherent.Env(task, execution="parallel")
+    env = coherent.Env(task)
     rects = room_rects(page, task)
     recorded = rounds(transcript)
     assert len(printed) == len(recorded) > 0

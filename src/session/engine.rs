@@ -6,9 +6,11 @@
 
 // Tasks and the rules: what a front end reads, shows, plans and steps by hand; the task
 // formats and the feasibility check, which Python's `Task` and `Env` give as they are.
+pub use coherent_core::action::most_actions;
 pub use coherent_core::action::{Mention, parse as parse_action};
 pub use coherent_core::load::load_tasks;
 pub use coherent_core::planner::{Analysis, Limits};
+pub use coherent_core::task::predicate_holds;
 pub use coherent_core::text::{shown, shown_lines};
 pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
 pub use coherent_core::{feasibility, native, original};
@@ -47,5 +49,6 @@ pub use coherent_agents::bench::{
 // Stopping work from outside (Ctrl-C).
 pub use coherent_agents::Cancel;
 
-// Robots over ROS 2: the namespace their actions live under unless told otherwise.
-pub use coherent_ros::wire::DEFAULT_NAMESPACE;
+// Robots over ROS 2: the namespace their actions live under unless told otherwise, and
+// the names robots go by there (also the agents of `coherent.marl`).
+pub use coherent_ros::wire::{DEFAULT_NAMESPACE, robot_names};

@@ -82,6 +82,14 @@ impl Verb {
     }
 }
 
+/// The most actions a robot of type `kind` is ever offered at once in `task`: each of
+/// its verbs once per node. An action list has no duplicates, and an action differs from
+/// another of its verb by its object or, for a put, by where it puts the one thing the
+/// robot holds. A fixed-size action space (`coherent.marl`) is this long.
+pub fn most_actions(task: &Task, kind: RobotKind) -> usize {
+    Verb::of(kind).len() * task.nodes.len()
+}
+
 impl fmt::Display for Verb {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.write_str(self.name())

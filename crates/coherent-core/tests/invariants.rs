@@ -173,8 +173,9 @@ fn check_invariants(task: &Task, s: &State, context: &str) -> Result<(), TestCas
     Ok(())
 }
 
-/// Each offered action renders to a string that parses back to it and that
-/// `feasibility::check` accepts as that very action.
+/// No more actions are offered than `action::most_actions` allows, and each renders to
+/// a string that parses back to it and that `feasibility::check` accepts as that very
+/// action.
 fn check_offered(
     task: &Task,
     s: &State,
@@ -182,6 +183,12 @@ fn check_offered(
     offered: &[Action],
     context: &str,
 ) -> Result<(), TestCaseError> {
+    prop_assert!(
+        offered.len() <= action::most_actions(task, robot.kind),
+        "{context}: {} offered {} actions, more than most_actions",
+        robot.kind,
+        offered.len()
+    );
     for a in offered {
         prop_assert!(
             action::Verb::of(robot.kind).contains(&a.verb),

@@ -5,8 +5,8 @@ use std::sync::{Arc, OnceLock};
 
 use coherent::session::check;
 use coherent::session::engine::{
-    Cancel, DEFAULT_NAMESPACE, Environment, Execution, Limits, NodeId, RawGraph, Task, TaskError,
-    feasibility, native, original,
+    Cancel, DEFAULT_NAMESPACE, Environment, Limits, NodeId, RawGraph, Task, TaskError, feasibility,
+    most_actions, native, original, predicate_holds, robot_names,
 };
 use coherent::session::episode::environment;
 use coherent::session::robots::Robots;
@@ -14,7 +14,8 @@ use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{self, action_text, interruptible, json_to_py, py_repr, to_py};
+use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
+
 use crate::errors::{self, core_err, short_repr};
 
 /// A task: the scene graph at the start, the robots, the goal and the ground truth.
@@ -109,6 +110,29 @@ impl PyTask {
         Ok(dict)
     }
 
+    /// Robot node id -> the robot's name, e.g. `"robot_dog_13"`: its ROS 2 name
+    /// (`coherent robots serve`) and its agent in `coherent.marl`.
+    #[getter]
+    fn robot_names<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let dict = PyDict::new(py);
+        for (r, name) in self.task.robots.iter().zip(robot_names(&self.task)) {
+            dict.set_item(self.task.id(r.node).0, name)?;
+        }
+        Ok(dict)
+    }
+
+    /// The most actions `robot` is ever offered at once in this task (each of its
+    /// type's verbs once per node): the size of a fixed action space.
+    fn most_actions(
+        &self,
+        py: Python<'_>,
+        #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
+    ) -> PyResult<usize> {
+        let id = node_id(py, &self.task, robot)?;
+        let r = self.task.robot_by_id(id).map_err(|e| core_err(py, e))?;
+        Ok(most_actions(&self.task, r.kind))
+    }
+
     /// The goal predicates, as `on_<apple>(3)_<table>(5)` / `inside_<a>(i)_<b>(j)`.
     #[getter]
     fn goal(&self) -> Vec<String> {
@@ -170,6 +194,20 @@ fn robot_arg(obj: &Bound<'_, PyAny>) -> PyResult<RobotArg> {
     }
 }
 
+/// A `TypeError` of argument `name` says which argument it is, as PyO3 says it for the
+/// arguments it converts itself (`step`'s take one of two shapes, so it converts them by
+/// hand); other errors pass as they are.
+fn named<T>(py: Python<'_>, name: &str, converted: PyResult<T>) -> PyResult<T> {
+    converted.map_err(|e| {
+        if !e.is_instance_of::<PyTypeError>(py) {
+            return e;
+        }
+        let named = PyTypeError::new_err(format!("argument '{name}': {}", e.value(py)));
+        named.set_cause(py, Some(e));
+        named
+    })
+}
+
 /// The node id of a robot argument; an int too large for a node id is an
 /// `UnknownRobotError` as any other id that is not a robot is (the others are left to
 /// the environment, which names its robots).
@@ -198,15 +236,14 @@ fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
     dict.set_item("edges", to_py(dict.py(), &graph.edges)?)
 }
 
-/// A task's environment: robots observe and act one action at a time (with
-/// `execution="parallel"`, in joint steps), by the rules, and with `physics=True` also in
-/// Rapier; with `robots="ros2"` robots behind ROS 2 action servers carry the actions out.
+/// A task's environment: robots observe and act, one action at a time or several robots
+/// at once in a joint step, by the rules, and with `physics=True` also in Rapier; with
+/// `robots="ros2"` robots behind ROS 2 action servers carry the actions out.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 pub(crate) struct PyEnv {
     env: Box<dyn Environment + Send + Sync>,
     task: Py<PyTask>,
     physics: bool,
-    execution: Execution,
     /// The namespace of the robots' actions over ROS 2; None when local.
     namespace: Option<String>,
 }
@@ -215,15 +252,13 @@ pub(crate) struct PyEnv {
 impl PyEnv {
     #[new]
     #[pyo3(signature = (
-        task, physics = false, *, execution = Execution::Sequential, robots = "local",
-        namespace = None, robot_timeout = 10.0, server_wait = 10.0
+        task, physics = false, *, robots = "local", namespace = None, robot_timeout = 10.0,
+        server_wait = 10.0
     ))]
-    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         task: Bound<'_, PyTask>,
         physics: bool,
-        #[pyo3(from_py_with = execution_arg)] execution: Execution,
         robots: &str,
         namespace: Option<&str>,
         robot_timeout: f64,
@@ -241,16 +276,8 @@ impl PyEnv {
             env,
             task: task.unbind(),
             physics,
-            execution,
             namespace,
         })
-    }
-
-    /// `"sequential"` (`step(robot, action)`) or `"parallel"` (`step(actions)`, joint
-    /// steps).
-    #[getter]
-    fn execution(&self) -> &'static str {
-        self.execution.name()
     }
 
     /// Whether actions are also carried out in physics.
@@ -325,11 +352,12 @@ impl PyEnv {
     /// action is not an error: `ok` is False and `reason` says why. A str that is not text
     /// (a lone surrogate) cannot be tried and raises `ActionParseError`.
     ///
-    /// With `execution="parallel"`, `step(actions)` tries one joint step: `actions` is a
-    /// dict `{robot: action}` or a list of `(robot, action)` pairs, at most one action a
-    /// robot; it gives `(oks, reasons, done)`, a list each in the order given. A step the
-    /// rules refuse (an action not offered, two that interfere, a robot given two)
-    /// carries out nothing, each reason saying what it means for that robot.
+    /// `step(actions)` tries one joint step, several robots acting at once
+    /// (docs/semantics.md, "Parallel steps"): `actions` is a dict `{robot: action}` or a
+    /// list of `(robot, action)` pairs, at most one action a robot. It gives `(oks,
+    /// reasons, done)`: a list each, one per pair in the order given. A step the rules
+    /// refuse (an action not offered, two actions that interfere, a robot given two)
+    /// carries out nothing, and each reason says what that means for its robot.
     #[pyo3(signature = (robot, action = None))]
     fn step<'py>(
         &mut self,
@@ -337,45 +365,32 @@ impl PyEnv {
         robot: &Bound<'py, PyAny>,
         action: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyTuple>> {
-        let parallel = self.execution == Execution::Parallel;
-        let one = match (action, parallel) {
-            (Some(action), false) => (robot, action),
-            (None, true) => return self.step_joint(py, robot),
-            (None, false) => {
-                return Err(PyTypeError::new_err(
-                    "step(robot, action): a joint step of several robots needs \
-                     Env(task, execution=\"parallel\")",
-                ));
-            }
-            (Some(_), true) => {
-                return Err(PyTypeError::new_err(
-                    "step(actions): an Env of execution=\"parallel\" takes one joint step, \
-                     {robot: action, ...} or [(robot, action), ...]",
-                ));
-            }
+        let Some(action) = action else {
+            return self.step_joint(py, robot);
         };
-        let robot = node_id(py, self.env.task(), robot_arg(one.0)?)?;
-        let action = action_text(one.1)?;
-        let outcome = if self.physics || self.namespace.is_some() {
+        let robot = node_id(py, self.env.task(), named(py, "robot", robot_arg(robot))?)?;
+        let action = named(py, "action", action_text(action))?;
+        let outcome = if self.acts_elsewhere() {
             let env = &mut self.env;
             py.detach(|| env.step(robot, &action))
         } else {
             self.env.step(robot, &action)
         }
         .map_err(|e| core_err(py, e))?;
-        let ok = outcome.executed();
+        let executed = outcome.executed();
         let reason = outcome.infeasible.map(|i| i.message);
-        (ok, reason, outcome.done).into_pyobject(py)
+        (executed, reason, outcome.done).into_pyobject(py)
+    }
+
+    /// Whether each goal predicate holds now, in the order of `Task.goal`.
+    fn goal_holds(&self) -> Vec<bool> {
+        let state = self.env.state();
+        let goal = &self.env.task().goal;
+        goal.iter().map(|p| predicate_holds(state, p)).collect()
     }
 
     fn goal_satisfied(&self) -> bool {
         self.env.goal_satisfied()
-    }
-
-    /// The simulated seconds since the start, with physics; None otherwise.
-    #[getter]
-    fn sim_seconds(&self) -> Option<f64> {
-        self.env.sim_seconds()
     }
 
     /// The whole current graph: `{"nodes": [...], "edges": [...]}`.
@@ -394,41 +409,51 @@ impl PyEnv {
         let meta = &self.env.task().meta;
         let flag = |b: bool| if b { "True" } else { "False" };
         format!(
-            "Env(scene={}, task_id={}, robots={:?}, physics={}, execution={}, goal_satisfied={})",
+            "Env(scene={}, task_id={}, robots={:?}, physics={}, goal_satisfied={})",
             py_repr(py, &meta.scene),
             meta.task_id,
             self.robots(),
             flag(self.physics),
-            py_repr(py, self.execution.name()),
             flag(self.env.goal_satisfied())
         )
     }
 }
 
 impl PyEnv {
-    /// `step(actions)` of a parallel environment: one joint step.
+    /// Whether a step takes a while (physics, robots over ROS 2): then it runs without
+    /// holding the GIL.
+    fn acts_elsewhere(&self) -> bool {
+        self.physics || self.namespace.is_some()
+    }
+
+    /// `step(actions)`: one joint step of `{robot: action}` or `[(robot, action), ...]`.
     fn step_joint<'py>(
         &mut self,
         py: Python<'py>,
         actions: &Bound<'py, PyAny>,
     ) -> PyResult<Bound<'py, PyTuple>> {
         let pairs: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)> = match actions.cast::<PyDict>() {
-            Ok(d) => d.iter().collect(),
-            Err(_) => actions.extract()?,
+            Ok(dict) => dict.iter().collect(),
+            Err(_) => actions.extract().map_err(|_| {
+                PyTypeError::new_err(format!(
+                    "step(robot, action) tries one action, step(actions) a joint step: \
+                     actions is a dict {{robot: action}} or a list of (robot, action) \
+                     pairs, not {}",
+                    short_repr(actions)
+                ))
+            })?,
         };
         let mut step = Vec::with_capacity(pairs.len());
         for (robot, action) in &pairs {
-            step.push((
-                node_id(py, self.env.task(), robot_arg(robot)?)?,
-                action_text(action)?,
-            ));
+            let robot = node_id(py, self.env.task(), named(py, "actions", robot_arg(robot))?)?;
+            step.push((robot, named(py, "actions", action_text(action))?));
         }
-        let refs: Vec<(NodeId, &str)> = step.iter().map(|(r, a)| (*r, a.as_str())).collect();
-        let outcome = if self.physics || self.namespace.is_some() {
+        let step: Vec<(NodeId, &str)> = step.iter().map(|(r, a)| (*r, a.as_str())).collect();
+        let outcome = if self.acts_elsewhere() {
             let env = &mut self.env;
-            py.detach(|| env.step_joint(&refs))
+            py.detach(|| env.step_joint(&step))
         } else {
-            self.env.step_joint(&refs)
+            self.env.step_joint(&step)
         }
         .map_err(|e| core_err(py, e))?;
         let oks: Vec<bool> = outcome.parts.iter().map(|p| p.executed()).collect();
@@ -439,11 +464,6 @@ impl PyEnv {
             .collect();
         (oks, reasons, outcome.done).into_pyobject(py)
     }
-}
-
-/// `execution` of `Env`.
-fn execution_arg(obj: &Bound<'_, PyAny>) -> PyResult<Execution> {
-    convert::execution(obj, "execution")
 }
 
 /// The robots of `robots=` (`"local"` or `"ros2"`), with `namespace`, `robot_timeout`

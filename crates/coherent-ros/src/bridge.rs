@@ -1,13 +1,19 @@
 //! [`Ros2Env`]: the rules decide what may be done, a robot's ROS 2 action server does it,
 //! and the symbolic state moves only when the robot reports success and what it then
-//! observes agrees with the rules.
+//! observes agrees with the rules. A joint step's goals are in flight together, one per
+//! robot, and the step lasts as long as its slowest robot.
 
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 use std::time::Duration;
 
+use coherent_core::env::{refused_outcome, resolve_joint};
 use coherent_core::feasibility::{self, Infeasible, Reason};
-use coherent_core::{Action, Environment, NodeId, Outcome, Robot, RobotReport, State, Task, rules};
+use coherent_core::joint::Part;
+use coherent_core::{
+    Action, Environment, JointOutcome, NodeId, Outcome, PartOutcome, Robot, RobotReport, State,
+    Task, rules,
+};
 use ros2_client::action::GoalStatusEnum;
 
 use crate::error::Error;
@@ -87,84 +93,125 @@ impl Ros2Env {
         &self.names
     }
 
-    fn refuse(&self, reason: Reason, message: String, report: RobotReport) -> Outcome {
-        Outcome {
-            infeasible: Some(Infeasible { reason, message }),
-            done: self.goal_satisfied(),
-            report: Some(report),
+    /// How robot number `n`'s actions reach it, before it has said anything.
+    fn report(&self, n: usize) -> RobotReport {
+        let name = &self.names[n];
+        RobotReport {
+            robot: name.clone(),
+            via: format!("ros2 {}", wire::action_name(&self.options.namespace, name)),
+            message: String::new(),
         }
+    }
+
+    /// Counts `tried` more actions tried (the goals' `step`).
+    fn count(&mut self, tried: usize) {
+        let tried = u32::try_from(tried).unwrap_or(u32::MAX);
+        self.steps = self.steps.saturating_add(tried);
     }
 
     /// Stops the bridge: no later step is sent, and the episode ends.
     fn stop(&mut self, reason: Reason, why: &str) {
         self.stopped.get_or_insert_with(|| (reason, why.to_owned()));
     }
-}
 
-impl Environment for Ros2Env {
-    fn task(&self) -> &Task {
-        &self.task
-    }
-
-    fn state(&self) -> &State {
-        &self.state
-    }
-
-    /// Nothing the rules refuse is sent. A feasible action goes to its robot's server;
-    /// the step is executed when the robot reports success and every relation it then
-    /// observes holds in the rules' state after the action. A failure is refused with
-    /// the robot's reason and message; silence, a DDS failure or a disagreement stop the
-    /// bridge, since the world can no longer be known; a cancelled goal is refused.
-    fn step(&mut self, robot: NodeId, action: &str) -> coherent_core::Result<Outcome> {
-        let r = self.task.robot_by_id(robot)?;
-        self.steps += 1;
-        let a = match feasibility::check(&self.task, &self.state, r, action) {
-            Ok(a) => a,
-            Err(why) => {
-                return Ok(Outcome {
-                    infeasible: Some(why),
-                    done: self.goal_satisfied(),
-                    report: None,
-                });
-            }
-        };
-        let n = self
-            .task
-            .robots
+    /// Sends the actions of one step to their robots at once (each allowed by the rules
+    /// in the current state, no two interfering: a valid joint step, or one action) and
+    /// awaits them all; the state moves by the actions the robots carried out and agree
+    /// on. For each action, in order: why it was not executed, if it was not, and what
+    /// its robot said. Silence, a DDS failure or a disagreement stop the bridge, since
+    /// the world can no longer be known; a cancelled goal is refused.
+    fn carry_out(&mut self, step: &[Part]) -> Vec<(Option<Infeasible>, RobotReport)> {
+        let first = self.steps.saturating_add(1);
+        self.count(step.len());
+        let sent: Vec<Sent> = step
             .iter()
-            .position(|x| x.node == r.node)
-            .expect("robot_by_id found it among the robots");
-        let name = self.names[n].clone();
-        let mut report = RobotReport {
-            robot: name.clone(),
-            via: format!("ros2 {}", wire::action_name(&self.options.namespace, &name)),
-            message: String::new(),
-        };
+            .zip(first..)
+            .map(|(&(robot, action), count)| {
+                let n = self
+                    .task
+                    .robots
+                    .iter()
+                    .position(|x| x.node == robot.node)
+                    .expect("the rules resolved it among the robots");
+                Sent {
+                    n,
+                    robot,
+                    action,
+                    text: action.render(&self.task),
+                    count,
+                }
+            })
+            .collect();
         if let Some((reason, why)) = &self.stopped {
-            report.message = format!("not sent: the bridge has stopped ({why})");
-            return Ok(self.refuse(*reason, report.message.clone(), report));
+            let message = format!("not sent: the bridge has stopped ({why})");
+            return sent
+                .iter()
+                .map(|p| {
+                    let report = RobotReport {
+                        message: message.clone(),
+                        ..self.report(p.n)
+                    };
+                    let why = Infeasible {
+                        reason: *reason,
+                        message: message.clone(),
+                    };
+                    (Some(why), report)
+                })
+                .collect();
         }
-        let text = a.render(&self.task);
-        let goal = Goal {
-            action: text.clone(),
-            step: self.steps,
-        };
-        let exchange =
+        let goals = sent
+            .iter()
+            .map(|p| {
+                let goal = Goal {
+                    action: p.text.clone(),
+                    step: p.count,
+                };
+                (p.n, goal)
+            })
+            .collect();
+        let exchanges =
             self.link
-                .exchange(n, goal, self.options.robot_timeout, self.cancel.as_deref());
+                .exchange(goals, self.options.robot_timeout, self.cancel.as_deref());
+        // The state after every action its robot reports done: what a robot of the step
+        // may see of the others' actions by the time its own is over.
+        let mut joint = self.state.clone();
+        for (p, exchange) in sent.iter().zip(&exchanges) {
+            if exchange.succeeded() {
+                rules::apply(&self.task, &mut joint, p.robot, p.action);
+            }
+        }
+        let before = self.state.clone();
+        let mut out = Vec::with_capacity(sent.len());
+        for (p, exchange) in sent.iter().zip(exchanges) {
+            let (infeasible, report) = self.hear(&before, &joint, p, exchange);
+            if infeasible.is_none() {
+                rules::apply(&self.task, &mut self.state, p.robot, p.action);
+            }
+            out.push((infeasible, report));
+        }
+        out
+    }
+
+    /// What one goal's exchange means for its action `p`, sent in state `before` in a
+    /// step whose robots' reported successes lead to `joint`.
+    fn hear(
+        &mut self,
+        before: &State,
+        joint: &State,
+        p: &Sent,
+        exchange: Exchange,
+    ) -> (Option<Infeasible>, RobotReport) {
+        let mut report = self.report(p.n);
+        let name = report.robot.clone();
+        let text = &p.text;
         let (reason, message) = match exchange {
             Exchange::Result { status, result } => {
                 report.message = result.message.clone();
                 let succeeded = status == GoalStatusEnum::Succeeded;
-                match judge(&self.task, &self.state, &name, r, a, succeeded, result) {
-                    Verdict::Done(after) => {
-                        self.state = after;
-                        return Ok(Outcome {
-                            infeasible: None,
-                            done: self.goal_satisfied(),
-                            report: Some(report),
-                        });
-                    }
+                let mut alone = before.clone();
+                rules::apply(&self.task, &mut alone, p.robot, p.action);
+                match judge(&self.task, &name, text, succeeded, result, &[&alone, joint]) {
+                    Verdict::Done => return (None, report),
                     Verdict::Failed(reason, message) => (reason, message),
                     Verdict::Disagrees(why) => {
                         self.stop(Reason::Disagreement, &why);
@@ -202,7 +249,89 @@ impl Environment for Ros2Env {
         if report.message.is_empty() {
             report.message.clone_from(&message);
         }
-        Ok(self.refuse(reason, message, report))
+        (Some(Infeasible { reason, message }), report)
+    }
+}
+
+/// One action of a step on its way to its robot.
+#[derive(Debug)]
+struct Sent {
+    /// The robot's number, in the task's order.
+    n: usize,
+    robot: Robot,
+    action: Action,
+    text: String,
+    /// The goal's `step`: the count of the actions tried, this one included.
+    count: u32,
+}
+
+impl Environment for Ros2Env {
+    fn task(&self) -> &Task {
+        &self.task
+    }
+
+    fn state(&self) -> &State {
+        &self.state
+    }
+
+    /// Nothing the rules refuse is sent. A feasible action goes to its robot's server;
+    /// the step is executed when the robot reports success and every relation it then
+    /// observes holds in the rules' state after the action. A failure is refused with
+    /// the robot's reason and message; silence, a DDS failure or a disagreement stop the
+    /// bridge; a cancelled goal is refused.
+    fn step(&mut self, robot: NodeId, action: &str) -> coherent_core::Result<Outcome> {
+        let r = self.task.robot_by_id(robot)?;
+        let a = match feasibility::check(&self.task, &self.state, r, action) {
+            Ok(a) => a,
+            Err(why) => {
+                self.count(1);
+                return Ok(Outcome {
+                    infeasible: Some(why),
+                    done: self.goal_satisfied(),
+                    report: None,
+                });
+            }
+        };
+        let (infeasible, report) = self
+            .carry_out(&[(r, a)])
+            .pop()
+            .expect("one report per action sent");
+        Ok(Outcome {
+            infeasible,
+            done: self.goal_satisfied(),
+            report: Some(report),
+        })
+    }
+
+    /// Nothing of a step the rules refuse is sent. A valid step's goals are sent at
+    /// once, one per robot, and awaited together: the step takes as long as its slowest
+    /// robot. Each action is judged as [`Ros2Env::step`] judges one, with what its robot
+    /// observes allowed to show the other robots' actions of the step; the state moves
+    /// by the actions carried out (any of a valid step's actions are a valid step too).
+    /// A robot that fails, refuses or falls silent is that robot's part of the outcome;
+    /// Ctrl-C cancels every goal in flight.
+    fn step_joint(&mut self, actions: &[(NodeId, &str)]) -> coherent_core::Result<JointOutcome> {
+        let step = match resolve_joint(&self.task, &self.state, actions)? {
+            Ok(step) => step,
+            Err(refused) => {
+                self.count(actions.len());
+                return Ok(refused_outcome(self.goal_satisfied(), actions, refused));
+            }
+        };
+        let parts = actions
+            .iter()
+            .zip(self.carry_out(&step))
+            .map(|(&(robot, _), (infeasible, report))| PartOutcome {
+                robot,
+                infeasible,
+                report: Some(report),
+            })
+            .collect();
+        Ok(JointOutcome {
+            parts,
+            refused: None,
+            done: self.goal_satisfied(),
+        })
     }
 
     /// The rules' state only: the robots' world is theirs to put back (restart
@@ -221,8 +350,8 @@ impl Environment for Ros2Env {
 /// What a robot's result does to the rules' state.
 #[derive(Debug)]
 enum Verdict {
-    /// The robot succeeded and what it observes holds: the state after the action.
-    Done(State),
+    /// The robot succeeded and what it observes holds.
+    Done,
     /// The robot failed: its reason (a feasibility reason's name, else `robot`) and its
     /// message.
     Failed(Reason, String),
@@ -231,16 +360,16 @@ enum Verdict {
     Disagrees(String),
 }
 
-/// Judges the result of action `a` of robot `r` (ROS name `name`) from `state`;
-/// `succeeded` is whether the goal ended as succeeded.
+/// Judges the result of `action` by robot `name`; `succeeded` is whether the goal ended
+/// as succeeded, and each relation the robot observes must hold in one of `states` (see
+/// [`relations::disagreements`]).
 fn judge(
     task: &Task,
-    state: &State,
     name: &str,
-    r: Robot,
-    a: Action,
+    action: &str,
     succeeded: bool,
     result: ExecuteResult,
+    states: &[&State],
 ) -> Verdict {
     if !succeeded || !result.success {
         let reason = Reason::from_name(&result.reason).unwrap_or(Reason::Robot);
@@ -251,15 +380,12 @@ fn judge(
         };
         return Verdict::Failed(reason, message);
     }
-    let mut after = state.clone();
-    rules::apply(task, &mut after, r, a);
-    let diffs = relations::disagreements(task, &after, &result.relations);
+    let diffs = relations::disagreements(task, states, &result.relations);
     if diffs.is_empty() {
-        Verdict::Done(after)
+        Verdict::Done
     } else {
         Verdict::Disagrees(format!(
-            "{name} reports {} done, but what it observes disagrees with the rules: {}",
-            a.render(task),
+            "{name} reports {action} done, but what it observes disagrees with the rules: {}",
             diffs.join("; ")
         ))
     }
@@ -280,32 +406,30 @@ mod tests {
     }
 
     #[test]
-    fn a_result_moves_the_state_only_on_success_with_agreeing_relations() {
+    fn a_result_is_done_only_on_success_with_agreeing_relations() {
         let task = demo();
         let arm = task.robots[0];
         let grab = feasibility::check(&task, &task.init, arm, "[grab] <mug>(7)").expect("feasible");
-        let mut expected = task.init.clone();
-        rules::apply(&task, &mut expected, arm, grab);
-        let seen = relations::observed(&task, &expected, arm.node);
+        let mut after = task.init.clone();
+        rules::apply(&task, &mut after, arm, grab);
         let ok = ExecuteResult {
-            relations: seen.clone(),
+            relations: relations::observed(&task, &after, arm.node),
             ..result(true, "", "done")
         };
-        match judge(
-            &task,
-            &task.init,
-            "robot_arm_6",
-            arm,
-            grab,
-            true,
-            ok.clone(),
-        ) {
-            Verdict::Done(after) => assert!(after == expected),
-            other => panic!("{other:?}"),
-        }
+        let judged = |succeeded: bool, r: ExecuteResult| {
+            judge(
+                &task,
+                "robot_arm_6",
+                "[grab] <mug>(7)",
+                succeeded,
+                r,
+                &[&after],
+            )
+        };
+        assert!(matches!(judged(true, ok.clone()), Verdict::Done));
         // Succeeded by its word but not by the goal's status, or the other way round.
         for (succeeded, r) in [(false, ok), (true, result(false, "", ""))] {
-            match judge(&task, &task.init, "robot_arm_6", arm, grab, succeeded, r) {
+            match judged(succeeded, r) {
                 Verdict::Failed(Reason::Robot, _) => {}
                 other => panic!("{other:?}"),
             }
@@ -315,7 +439,7 @@ mod tests {
             relations: relations::observed(&task, &task.init, arm.node),
             ..result(true, "", "done")
         };
-        match judge(&task, &task.init, "robot_arm_6", arm, grab, true, before) {
+        match judged(true, before) {
             Verdict::Disagrees(why) => assert!(
                 why.starts_with("robot_arm_6 reports [grab] <mug>(7) done, but what it observes")
                     && why.contains("<mug>(7) ON "),
@@ -325,16 +449,72 @@ mod tests {
         }
     }
 
+    /// In a joint step a robot's report may show what another robot of the step has done
+    /// by then: each relation is judged against the state after its own action and the
+    /// state after the whole step, and one that holds in neither still disagrees.
+    #[test]
+    fn a_robot_of_a_joint_step_may_see_the_others_actions_done() {
+        let task = demo();
+        let plan = coherent_core::makespan::search(
+            &task,
+            &task.robots,
+            &task.goal,
+            &coherent_core::Limits::default(),
+        )
+        .plan
+        .expect("the demo has a joint plan");
+        let mut s = task.init.clone();
+        let mut seen_others = 0;
+        for joint_step in &plan {
+            let parts: Vec<Part> = joint_step
+                .iter()
+                .map(|step| (*task.robot(step.robot).expect("a robot"), step.action))
+                .collect();
+            let mut joint = s.clone();
+            coherent_core::joint::apply(&task, &mut joint, &parts);
+            for &(robot, action) in &parts {
+                let mut alone = s.clone();
+                rules::apply(&task, &mut alone, robot, action);
+                let late = ExecuteResult {
+                    relations: relations::observed(&task, &joint, robot.node),
+                    ..result(true, "", "done")
+                };
+                let text = action.render(&task);
+                let judged =
+                    |states: &[&State]| judge(&task, "r", &text, true, late.clone(), states);
+                assert!(matches!(judged(&[&alone, &joint]), Verdict::Done), "{text}");
+                if !matches!(judged(&[&alone]), Verdict::Done) {
+                    seen_others += 1;
+                    // Neither before the step nor after it is what it saw then.
+                    assert!(matches!(judged(&[&s]), Verdict::Disagrees(_)));
+                }
+            }
+            s = joint;
+        }
+        assert!(
+            seen_others > 0,
+            "some robot of the demo's plan sees another act"
+        );
+    }
+
     #[test]
     fn a_failure_keeps_the_robots_reason_and_message() {
         let task = demo();
         let arm = task.robots[0];
         let grab = feasibility::check(&task, &task.init, arm, "[grab] <mug>(7)").expect("feasible");
-        let judged =
-            |r: ExecuteResult| match judge(&task, &task.init, "robot_arm_6", arm, grab, false, r) {
-                Verdict::Failed(reason, message) => (reason, message),
-                other => panic!("{other:?}"),
-            };
+        let mut after = task.init.clone();
+        rules::apply(&task, &mut after, arm, grab);
+        let judged = |r: ExecuteResult| match judge(
+            &task,
+            "robot_arm_6",
+            "[grab] <mug>(7)",
+            false,
+            r,
+            &[&after],
+        ) {
+            Verdict::Failed(reason, message) => (reason, message),
+            other => panic!("{other:?}"),
+        };
         assert_eq!(
             judged(result(false, "out_of_reach", "the mug is too far")),
             (Reason::OutOfReach, "the mug is too far".to_owned())

@@ -1,8 +1,9 @@
 //! The bridge's side of DDS: one node with one action client per robot, spun on the
 //! runtime the caller hands in (the session's, the one place a runtime is built), and
-//! one goal's exchange (send it, follow its feedback, take its result; cancel it on
-//! Ctrl-C or when the robot falls silent) as a blocking call that works inside an async
-//! runtime as well as outside one.
+//! the exchange of one step's goals, one per robot acting, all in flight at once (send
+//! each, follow its feedback, take its result; cancel it on Ctrl-C or when its robot
+//! falls silent) as a blocking call that works inside an async runtime as well as
+//! outside one.
 
 use std::future::Future;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -45,6 +46,14 @@ pub(crate) enum Exchange {
     Cancelled { acknowledged: bool },
     /// DDS could not send or receive.
     Failed(String),
+}
+
+impl Exchange {
+    /// Whether the robot reports the action carried out (what it observes aside).
+    pub(crate) fn succeeded(&self) -> bool {
+        matches!(self, Exchange::Result { status, result }
+            if *status == GoalStatusEnum::Succeeded && result.success)
+    }
 }
 
 /// The bridge's DDS participant: a node and the robots' action clients.
@@ -128,16 +137,20 @@ impl Link {
         }
     }
 
-    /// Sends `goal` to robot number `robot` and waits for its end: the result, a refusal,
-    /// `silence` without a word, or `cancel` raised (the goal is then cancelled).
+    /// Sends each goal to its robot (by number) at once and waits for every one's end:
+    /// its result, a refusal, `silence` without a word, or `cancel` raised (then every
+    /// goal still in flight is cancelled). One exchange per goal, in the order given; it
+    /// takes as long as the slowest robot.
     pub(crate) fn exchange(
         &self,
-        robot: usize,
-        goal: Goal,
+        goals: Vec<(usize, Goal)>,
         silence: Duration,
         cancel: Option<&AtomicBool>,
-    ) -> Exchange {
-        self.block(follow_goal(&self.clients[robot], goal, silence, cancel))
+    ) -> Vec<Exchange> {
+        let each = goals
+            .into_iter()
+            .map(|(robot, goal)| follow_goal(&self.clients[robot], goal, silence, cancel));
+        self.block(futures::future::join_all(each))
     }
 
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that

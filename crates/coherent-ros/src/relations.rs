@@ -42,11 +42,25 @@ pub fn observed(task: &Task, s: &State, robot: Idx) -> Vec<wire::Relation> {
     out
 }
 
-/// Every relation of `reported` that `s` does not hold, in words, with what `s` has.
-pub fn disagreements(task: &Task, s: &State, reported: &[wire::Relation]) -> Vec<String> {
+/// Every relation of `reported` that none of `states` holds, in words, with what the
+/// first of them has.
+///
+/// A robot reports what it observes when its own action is over. Alone, that is the
+/// state after its action. In a joint step the other robots act meanwhile, so it
+/// observes a state between that one and the state after the whole step; since no two
+/// actions of a valid step write the same relation differently (docs/semantics.md,
+/// "Parallel steps"), each relation it can observe holds in one of those two, which the
+/// bridge passes, in that order.
+pub fn disagreements(task: &Task, states: &[&State], reported: &[wire::Relation]) -> Vec<String> {
     reported
         .iter()
-        .filter_map(|r| disagreement(task, s, r))
+        .filter_map(|r| {
+            let (first, rest) = states.split_first()?;
+            let why = disagreement(task, first, r)?;
+            rest.iter()
+                .all(|s| disagreement(task, s, r).is_some())
+                .then_some(why)
+        })
         .collect()
 }
 
@@ -124,7 +138,7 @@ pub(crate) mod tests {
             let seen = observed(&task, &task.init, r.node);
             assert!(!seen.is_empty());
             assert_eq!(
-                disagreements(&task, &task.init, &seen),
+                disagreements(&task, &[&task.init], &seen),
                 Vec::<String>::new()
             );
         }
@@ -140,7 +154,7 @@ pub(crate) mod tests {
         };
         let found = disagreements(
             &task,
-            &task.init,
+            &[&task.init],
             &[
                 rel("<apple>(9)", "ON", "<coffee table>(10)"),
                 rel("<apple>(9)", "IS", "FLYING"),
