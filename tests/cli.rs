@@ -398,6 +398,83 @@ fn help_and_version_exit_0() {
     }
 }
 
+/// `plan --parallel` adds the fewest joint steps: env0 task 9 takes 9 steps one robot
+/// at a time and 8 when the arm grabs the plate while the quadrotor takes off. Stopped
+/// at a limit, it keeps the sequential optimum scheduled (8 steps) and a lower bound.
+#[test]
+fn plan_parallel_prints_the_fewest_joint_steps_and_bounds_at_a_limit() {
+    let env0 = env_file(0);
+    let out = coherent(&["plan", arg(&env0), "--task", "9", "--parallel", "--json"]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let v: Value = serde_json::from_str(stdout(&out).trim()).expect("one JSON line");
+    assert_eq!(v["optimal_steps"], 9);
+    assert_eq!(
+        (&v["makespan"], &v["makespan_proven"], &v["makespan_lower"]),
+        (&json!(8), &json!(true), &json!(8))
+    );
+    assert_eq!(v["makespan_stop"], Value::Null);
+    assert!(
+        v["makespan_states_expanded"]
+            .as_u64()
+            .is_some_and(|n| n > 0)
+    );
+    assert!(v["makespan_ms"].as_f64().is_some_and(|ms| ms >= 0.0));
+    let steps = v["parallel_plan"]
+        .as_array()
+        .expect("a list of joint steps");
+    assert_eq!(steps.len(), 8);
+    assert_eq!(
+        steps[0],
+        json!([
+            {"robot": 22, "action": "[takeoff_from] <livingroom floor>(5)"},
+            {"robot": 24, "action": "[grab] <plate>(51)"},
+        ])
+    );
+    let actions: usize = steps.iter().map(|s| s.as_array().map_or(0, Vec::len)).sum();
+    assert_eq!(actions, 9, "the same actions as the sequential plan");
+
+    let out = coherent(&["plan", arg(&env0), "--task", "9", "--parallel"]);
+    let text = stdout(&out);
+    assert!(
+        text.contains("parallel: 8 joint steps (the fewest)")
+            && text.contains(
+                "     1  22 [takeoff_from] <livingroom floor>(5)  |  24 [grab] <plate>(51)\n"
+            ),
+        "{}",
+        show(&out)
+    );
+
+    let limited = [
+        "plan",
+        arg(&env0),
+        "--task",
+        "9",
+        "--parallel",
+        "--max-states",
+        "500",
+    ];
+    let out = coherent(&[&limited[..], &["--json"]].concat());
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let v: Value = serde_json::from_str(stdout(&out).trim()).expect("one JSON line");
+    assert_eq!(
+        v["optimal_steps"], 9,
+        "the sequential search stays within 500 states"
+    );
+    assert_eq!(
+        (&v["makespan"], &v["makespan_proven"], &v["makespan_stop"]),
+        (&json!(8), &json!(false), &json!("states"))
+    );
+    let lower = v["makespan_lower"].as_u64().expect("a lower bound");
+    assert!((1..8).contains(&lower), "{v}");
+    let text = stdout(&coherent(&limited));
+    assert!(
+        text.contains(&format!(
+            "parallel: 8 joint steps (not proven the fewest: at least {lower}; the search stopped at the limit of 500 states)"
+        )),
+        "{text}"
+    );
+}
+
 /// `plan --physics` carries the optimal plan out in Rapier and adds the four documented
 /// keys to the JSON line.
 #[test]

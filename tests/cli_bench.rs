@@ -42,7 +42,7 @@ fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
         &[
             "tasks: 8 of subset paper40 present",
             "missing: 32 of 40",
-            "16 episodes: 0 already finished, 16 run now",
+            "16 episodes: 0 already finished, 16 finished now, 0 unfinished;",
             "### Table I",
             // The built-in backend is the optimal planner: PEFA solves all 8.
             "| pefa | 1.000 / ",
@@ -82,7 +82,10 @@ fn bench_runs_paper40_of_env0_end_to_end_then_resumes_without_rerunning() {
     assert!(Path::new(transcript).exists());
 
     let second = coherent(&args);
-    says(&second, &["16 episodes: 16 already finished, 0 run now"]);
+    says(
+        &second,
+        &["16 episodes: 16 already finished, 0 finished now, 0 unfinished;"],
+    );
     let lines = std::fs::read_to_string(&out).expect("results file");
     assert_eq!(lines.lines().count(), 16, "nothing ran twice");
 
@@ -123,7 +126,7 @@ fn bench_runs_the_native40_subset_of_our_benchmark() {
         &run,
         &[
             "tasks: 40 of subset native40 (40 listed) present",
-            "40 episodes: 0 already finished, 40 run now",
+            "40 episodes: 0 already finished, 40 finished now, 0 unfinished;",
             "| pefa | 1.000 / 7.2 | 1.000 / 10.5 | 1.000 / 14.5 | 1.000 / 11.2 |",
             "s5-house (n=8)",
         ],

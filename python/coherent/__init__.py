@@ -23,8 +23,8 @@ environment. The engine is Rust (``coherent._coherent``); errors derive from
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
 ``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
-matplotlib, ``pip install 'coherent[analysis]'``; ``coherent.gym`` needs gymnasium,
-``pip install 'coherent[gym]'``.
+matplotlib, ``pip install '.[analysis]'``; ``coherent.gym`` needs gymnasium,
+``pip install '.[gym]'``.
 """
 
 # The imports the package needs for itself are bound to underscored names, so that the
@@ -120,7 +120,7 @@ __all__ = [
 
 # The public submodules. `analysis` and `executors` are imported above; the others load on
 # first use: `coherent.plot` imports matplotlib (slow to import; the extra
-# `coherent[analysis]`), `coherent.gym` gymnasium (the extra `coherent[gym]`).
+# `analysis`), `coherent.gym` gymnasium (the extra `gym`).
 _SUBMODULES = ("analysis", "benchmark", "executors", "gym", "plot")
 
 

@@ -72,6 +72,14 @@ class _PlanResult(TypedDict):
     plan: list[_PlanStep]
     states_expanded: int
     elapsed_ms: float
+    # With parallel=True only: the fewest joint steps (docs/planner.md, "Parallel plans").
+    makespan: NotRequired[int | None]
+    makespan_proven: NotRequired[bool]
+    makespan_lower: NotRequired[int]
+    makespan_stop: NotRequired[Literal["states", "memory", "cancelled", "depth"] | None]
+    parallel_plan: NotRequired[list[list[_PlanStep]] | None]
+    makespan_states_expanded: NotRequired[int]
+    makespan_ms: NotRequired[float]
 
 class _Mention(TypedDict):
     name: str
@@ -272,9 +280,11 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
 def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
     """The project's own benchmark, compiled in: every task, or its 40-task subset."""
 
-def plan(task: Task, max_states: int = ...) -> _PlanResult:
-    """Plans ``task`` optimally (one line of ``coherent plan --json``). Ctrl-C interrupts
-    it and stops the search."""
+def plan(task: Task, max_states: int = ..., parallel: bool = False) -> _PlanResult:
+    """Plans ``task`` optimally (one line of ``coherent plan --json``); with ``parallel``,
+    also its fewest joint steps, robots acting at once (``coherent plan --parallel
+    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...).
+    Ctrl-C interrupts it and stops the search."""
 
 def validate(task: Task, max_states: int = ...) -> list[str]:
     """Semantic problems of ``task``, in words; empty when it is clean."""
@@ -306,15 +316,23 @@ class _Summary(TypedDict):
     sim_seconds: NotRequired[float]
 
 class _BenchOutcome(TypedDict):
+    # total = skipped + finished + unfinished
     total: int
     skipped: int
     written: int
+    finished: int
     unfinished: int
+    # Of the unfinished: ended in the method's own error; never started (Ctrl-C) or a
+    # task that cannot run.
+    method_errors: int
+    not_started: int
     interrupted: bool
     skipped_tasks: list[str]
     repaired_bytes: int
     # Transcripts of episodes killed mid-run, renamed *.jsonl.unfinished before the run.
     orphaned: list[str]
+    # The results file (the name the settings give when none was).
+    out: str
 
 class LLM:
     """An OpenAI-compatible endpoint (OpenAI, vLLM, Ollama, llama.cpp, LM Studio, ...).
@@ -608,8 +626,8 @@ def run_bench(
     history: int = 5,
     max_states: int = ...,
     max_steps: int | None = None,
-    out: _PathLike = "results.jsonl",
-    progress: bool = False,
+    out: _PathLike | None = None,
+    progress: Literal["bar", "lines"] | None = None,
     prompts: _Prompts | None = None,
     prices: _Prices | None = None,
     physics: bool = False,
@@ -632,15 +650,22 @@ class _BenchLedger:
         methods: Sequence[str | _MethodFactory],
         *,
         seeds: int,
-        out: _PathLike,
+        out: _PathLike | None,
         execution: str | Sequence[str] = "sequential",
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
-        progress: bool = False,
+        history: int = 5,
+        max_states: int = ...,
+        max_steps: int | None = None,
+        physics: bool = False,
+        progress: Literal["bar", "lines"] | None = None,
         prompts: _PathLike | Mapping[str, str] | None = None,
         prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None: ...
+    @property
+    def out(self) -> str:
+        """The results file (the name the settings give when ``out`` was None)."""
     def pending(self) -> list[tuple[str, str, int, int, str]]:
         """The episodes to run: ``(method, scene, task_id, seed, execution)``."""
     def worker_settings(self) -> dict[str, Any]:
@@ -674,8 +699,12 @@ class _BenchWorker:
     def run(self, key: tuple[str, str, int, int, str]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
 
-def read_results(path: _PathLike) -> list[dict[str, Any]]:
-    """The lines of a results file; a last line cut off mid-write is left out."""
+def read_results(path: _PathLike, prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """The lines of a results file; a last line cut off mid-write is left out. With
+    ``prices``, each ``cost_usd`` is the line's recorded tokens at those prices."""
+
+def price_lines(lines: list[dict[str, Any]], prices: _PathLike | Mapping[str, Mapping[str, Any]]) -> list[dict[str, Any]]:
+    """Results lines with each ``cost_usd`` worked out anew from their tokens at ``prices``."""
 
 def report_tables(lines: list[dict[str, Any]]) -> dict[str, Any]:
     """Tables I and II and the costs of results lines (``coherent bench --format json``)."""

@@ -19,7 +19,7 @@ import os
 import sys
 import threading
 import traceback
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +34,18 @@ def method_name(method: Any) -> str:
         return name
     own = getattr(method, "__name__", None)
     return own if isinstance(own, str) else type(method).__name__
+
+
+def method_settings(method: Any) -> dict[str, Any]:
+    """``method.settings``: what the method declares of its own settings (a mapping of
+    JSON values), recorded in each of its results lines so that results of other
+    settings are not resumed or reported as its own; ``{}`` when it declares none."""
+    settings = getattr(method, "settings", None)
+    if settings is None:
+        return {}
+    if not isinstance(settings, Mapping) or not all(isinstance(k, str) for k in settings):
+        raise TypeError(f"{method_name(method)}.settings: expected a dict of str keys, got {settings!r}")
+    return dict(settings)
 
 
 def describe(error: BaseException, tb: Any = None) -> str:
@@ -88,6 +100,12 @@ class Loop:
         loop.call_soon_threadsafe(loop.stop)
         thread.join()
         loop.close()
+
+
+async def _when_awaited(begin: Callable[[], Any]) -> Any:
+    """Awaits the future ``begin()`` makes on the loop that awaits this coroutine: what
+    ``LLM.achat`` returns when no loop runs yet (``asyncio.run(llm.achat(...))``)."""
+    return await begin()
 
 
 def _settle(future: asyncio.Future[Any], ok: bool, value: Any) -> None:

@@ -1,5 +1,5 @@
 """Results as pandas DataFrames: benchmark runs, the paper's tables, an episode's steps
-and its model calls (``pip install 'coherent[analysis]'`` brings pandas).
+and its model calls (``pip install '.[analysis]'`` from a checkout brings pandas).
 
 The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
 as ``coherent bench``); this module only shapes them into DataFrames.
@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import os
+import sys
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import ModuleType
@@ -24,9 +25,32 @@ if TYPE_CHECKING:
 
 PathLike = Union[str, "os.PathLike[str]"]
 Results = Union["pd.DataFrame", PathLike, Sequence[Mapping[str, Any]]]
+# A price file (JSON, or TOML for a .toml file), or {model: {"input": .., "output": ..}}.
+Prices = Union[PathLike, Mapping[str, Mapping[str, Any]]]
 
 # The results file's `backend` object, spread over three columns of the DataFrame.
 _BACKEND_FIELDS = ("kind", "model", "base_url")
+# Its `settings` object (what makes lines comparable), spread over columns `settings_*`.
+_SETTINGS_FIELDS = (
+    "backend",
+    "model",
+    "sim_errors",
+    "temperature",
+    "model_seed",
+    "seeds",
+    "prompts",
+    "history",
+    "max_steps",
+    "max_states",
+    "physics",
+    "robots",
+    "coherent",
+    "executions",
+    "method",
+)
+# The settings columns that hold ints, none negative, kept ints (pandas's nullable
+# UInt64, which holds a u64 seed whole) where some lines record no settings.
+_SETTINGS_INTS = ("model_seed", "seeds", "history", "max_steps", "max_states")
 
 
 def _pandas(what: str) -> ModuleType:
@@ -37,12 +61,15 @@ def _pandas(what: str) -> ModuleType:
     return pandas
 
 
-def results(path: PathLike) -> pd.DataFrame:
+def results(path: PathLike, *, prices: Prices | None = None) -> pd.DataFrame:
     """The results file of :func:`bench` (or ``coherent bench --out``) as a DataFrame,
     one row per line; the ``backend`` object is spread over ``backend_kind``,
-    ``backend_model`` and ``backend_base_url``."""
+    ``backend_model`` and ``backend_base_url``, the ``settings`` object over
+    ``settings_backend``, ``settings_sim_errors``, ``settings_seeds``, ... (NA on lines
+    that record none). With ``prices`` (a price file or a dict, as :func:`bench` takes),
+    each ``cost_usd`` is the line's recorded tokens at those prices."""
     pandas = _pandas("coherent.results's DataFrame")
-    frame = _frame(pandas, _coherent.read_results(path))
+    frame = _frame(pandas, _coherent.read_results(path, prices=prices))
     frame.attrs["path"] = os.fspath(path)
     return frame
 
@@ -50,13 +77,19 @@ def results(path: PathLike) -> pd.DataFrame:
 def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
     rows = []
     for line in lines:
-        row = {k: v for k, v in line.items() if k != "backend"}
+        row = {k: v for k, v in line.items() if k not in ("backend", "settings")}
         for name in _BACKEND_FIELDS:
             row[f"backend_{name}"] = line["backend"][name]
+        settings = line.get("settings") or {}
+        for name in _SETTINGS_FIELDS:
+            row[f"settings_{name}"] = settings.get(name)
         rows.append(row)
     # `df.coherent` shows the results page in Jupyter (coherent.view).
     _view.register(pandas)
-    return pandas.DataFrame(rows)
+    frame = pandas.DataFrame(rows)
+    if not frame.empty:
+        frame = frame.astype({f"settings_{name}": "UInt64" for name in _SETTINGS_INTS})
+    return frame
 
 
 def _lines(data: Results) -> list[dict[str, Any]]:
@@ -69,6 +102,15 @@ def _lines(data: Results) -> list[dict[str, Any]]:
         line = {k: _missing_to_none(v) for k, v in record.items()}
         if "backend" not in line:
             line["backend"] = {name: line.pop(f"backend_{name}", None) for name in _BACKEND_FIELDS}
+        if "settings" not in line:
+            settings = {name: line.pop(f"settings_{name}", None) for name in _SETTINGS_FIELDS}
+            # A line that records no settings has none of them.
+            line["settings"] = settings if settings["backend"] is not None else None
+            if line["settings"] is not None and line["settings"]["method"] is None:
+                line["settings"]["method"] = {}
+            # A sequential run records no executions (NA in its column).
+            if line["settings"] is not None and line["settings"]["executions"] is None:
+                del line["settings"]["executions"]
         lines.append(line)
     return lines
 
@@ -95,10 +137,10 @@ def bench(
     history: int = 5,
     max_states: int = _coherent.DEFAULT_MAX_STATES,
     max_steps: int | None = None,
-    out: PathLike = "results.jsonl",
-    progress: bool = False,
+    out: PathLike | None = None,
+    progress: bool | None = None,
     prompts: PathLike | Mapping[str, str] | None = None,
-    prices: PathLike | Mapping[str, Mapping[str, Any]] | None = None,
+    prices: Prices | None = None,
     executor: Literal["local", "ray"] | RayExecutor = "local",
     physics: bool = False,
     robots: Literal["local", "ros2"] = "local",
@@ -110,21 +152,32 @@ def bench(
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
 
     ``tasks`` is a list of tasks (e.g. from :func:`coherent.select`) or a path, of which
-    every well-formed task runs. The file is appended to and resumable: episodes already
-    finished in it are skipped, so after Ctrl-C (``KeyboardInterrupt``) the same call
-    finishes the rest. ``backend``: ``"builtin"`` (the optimal planner plays every
-    role), ``"simulated"`` (the planner with seeded mistakes at the ``sim_errors``
+    every well-formed task runs. ``backend``: ``"builtin"`` (the optimal planner plays
+    every role), ``"simulated"`` (the planner with seeded mistakes at the ``sim_errors``
     rates, e.g. ``"all=0.1"``), an :class:`LLM`, or ``"replay"``: the episodes of the
     earlier results file ``replay_from`` answer from their transcripts (no network), with
     their recorded settings; a line's ``error`` says when one came out differently.
+    ``methods`` may then name methods written in Python by their name, without their
+    code.
+
+    ``out`` is the results file, appended to and resumable: episodes already finished
+    in it are skipped, so after Ctrl-C (``KeyboardInterrupt``) the same call finishes the
+    rest. Each line records the settings that make it comparable (the backend and its
+    model, the error rates, the seeds, the prompt set, the history, the budget, physics,
+    the robots, each method's own settings, the version); a file whose lines have other
+    settings raises :class:`~coherent.ArgumentError` naming each one before anything
+    runs. Without ``out`` the name comes from the settings,
+    ``results-<backend>-<8 hex digits>.jsonl`` in the current folder (in
+    ``df.attrs["path"]``): other settings, another file.
 
     ``methods`` are built-in methods' names (:data:`METHODS`) and methods written in
     Python: a class (or any callable) ``M``, made once per episode as ``M(task)``, whose
     ``act(view)`` gives each step's :class:`Decision` (see :func:`coherent.run` and
-    ``docs/methods.md``), named ``M.name`` or its class's name; ``"MODULE:CLASS"`` loads
-    one. An exception in ``act`` ends that episode alone with status ``"error"`` and the
-    traceback in ``error``; such episodes run again when the call is repeated.
-    ``max_steps`` sets every episode's budget (2 x GT by default).
+    ``docs/methods.md``), named ``M.name`` or its class's name; ``M.settings``, a dict,
+    declares its own settings; ``"MODULE:CLASS"`` loads one. An exception in ``act``
+    ends that episode alone with status ``"error"`` and the traceback in ``error`` and
+    in its transcript; the report lists such episodes by method. ``max_steps`` sets every
+    episode's budget (2 x GT by default).
 
     ``execution``: ``"sequential"`` (one robot's action a step, the paper's),
     ``"parallel"`` (joint steps: every robot at most one action, all at once; the budget
@@ -136,10 +189,15 @@ def bench(
     prompt templates; a template with an unknown placeholder raises
     :class:`~coherent.PromptError` before anything runs. ``prices`` (a JSON or TOML price
     file, or ``{model: {"input": .., "cached_input": .., "output": ..}}`` in USD per
-    million tokens) adds to the built-in price table; each line's ``cost_usd`` is its
-    tokens at its model's price (NaN when the model has none). What the run did is in
-    ``df.attrs["outcome"]``; with a path, the malformed tasks left out are in
-    ``df.attrs["malformed"]``.
+    million tokens) adds to the built-in price table; every row's ``cost_usd`` is its
+    tokens at its model's price (NaN when the model has none), the rows of episodes
+    finished before this call included. What the run did is in ``df.attrs["outcome"]``;
+    with a path, the malformed tasks left out are in ``df.attrs["malformed"]``.
+
+    ``progress``: a bar on stderr with the episodes done, their rate and the time left
+    (redrawn in place in a terminal or a notebook); ``None`` (the default) shows it when
+    Python runs interactively (a terminal, IPython, Jupyter), ``True`` always (one line
+    per episode when stderr is no terminal), ``False`` never.
 
     ``physics=True`` carries every action out in Rapier too (a physical failure is an
     infeasible step whose message has the numbers). ``robots="ros2"`` sends the actions
@@ -174,7 +232,7 @@ def bench(
         "max_states": max_states,
         "max_steps": max_steps,
         "out": out,
-        "progress": progress,
+        "progress": _progress_mode(progress),
         "prompts": prompts,
         "prices": prices,
         "physics": physics,
@@ -194,11 +252,39 @@ def bench(
         )
     else:
         outcome = runner.run(chosen, list(methods), **settings)
-    frame = _frame(pandas, _coherent.read_results(out))
+    frame = _frame(pandas, _coherent.read_results(outcome["out"], prices=prices))
     frame.attrs["outcome"] = outcome
     frame.attrs["malformed"] = [str(e) for e in malformed]
-    frame.attrs["path"] = os.fspath(out)
+    frame.attrs["path"] = outcome["out"]
     return frame
+
+
+def _progress_mode(progress: bool | None) -> Literal["bar", "lines"] | None:
+    """How :func:`bench` shows its progress: a bar redrawn in place (stderr a terminal,
+    IPython, a notebook), a line per episode (otherwise, with ``progress=True`` or in an
+    interactive session), or not at all (``progress=False``, or ``None`` when Python
+    runs neither interactively nor into a terminal), as tqdm users would expect."""
+    in_place = _stderr_is_terminal() or _in_ipython()
+    interactive = in_place or hasattr(sys, "ps1") or bool(sys.flags.interactive)
+    if progress is False or (progress is None and not interactive):
+        return None
+    return "bar" if in_place else "lines"
+
+
+def _stderr_is_terminal() -> bool:
+    isatty = getattr(sys.stderr, "isatty", None)
+    try:
+        return bool(isatty and isatty())
+    except ValueError:  # a closed stream
+        return False
+
+
+def _in_ipython() -> bool:
+    """Whether this runs in IPython or a Jupyter kernel, whose output redraws a line on
+    a carriage return as a terminal does."""
+    shell = sys.modules.get("IPython")
+    get = getattr(shell, "get_ipython", None)
+    return get is not None and get() is not None
 
 
 @dataclass(frozen=True)
@@ -236,6 +322,15 @@ class Report:
     """Those of them that ended in an error raised by the method (status ``error``)."""
     untyped_tasks: int
     """Tasks the planner finds no plan for: counted in Avg only."""
+    settings: dict[str, Any] | None
+    """The settings every line was run with (the results file's ``settings`` without a
+    method's own); None for lines that record none."""
+    method_settings: dict[str, dict[str, Any]]
+    """The settings each method written in Python declared, by method."""
+    failures: list[dict[str, Any]]
+    """The episodes that failed with the method's own error, by method: ``method``,
+    ``episodes``, ``first_error`` (the exception and where it was raised) and the
+    ``transcript`` that has the whole traceback."""
     lines: list[dict[str, Any]] = field(repr=False)
 
     def markdown(self) -> str:
@@ -250,11 +345,19 @@ class Report:
         return self.markdown()
 
 
-def report(data: Results) -> Report:
+def report(data: Results, *, prices: Prices | None = None) -> Report:
     """Table I and Table II of the paper, and the costs, from benchmark results: a
-    DataFrame of :func:`bench` or :func:`results`, a results file, or its lines."""
+    DataFrame of :func:`bench` or :func:`results`, a results file, or its lines.
+
+    The lines must share their settings (one run, resumed as often as you like): lines
+    of several raise :class:`~coherent.ArgumentError` naming the runs and the settings
+    in which they differ; pick one run's rows by its ``settings_*`` columns. With
+    ``prices`` (a price file or a dict, as :func:`bench` takes) each line's cost is its
+    recorded tokens at those prices."""
     pandas = _pandas("coherent.report's Report")
     lines = _lines(data)
+    if prices is not None:
+        lines = _priced(lines, prices)
     r = _coherent.report_tables(lines)
     costs = pandas.DataFrame(r["costs"]).set_index("method") if r["costs"] else pandas.DataFrame()
     if not costs.empty:
@@ -277,8 +380,16 @@ def report(data: Results) -> Report:
         unfinished=r["unfinished"],
         errors=r["errors"],
         untyped_tasks=r["untyped_tasks"],
+        settings=r["settings"],
+        method_settings=r["method_settings"],
+        failures=r["failures"],
         lines=lines,
     )
+
+
+def _priced(lines: list[dict[str, Any]], prices: Prices) -> list[dict[str, Any]]:
+    """The lines with their ``cost_usd`` worked out anew from their tokens."""
+    return _coherent.price_lines(lines, prices)
 
 
 # The report's cost columns, in USD (None where a model has no price).

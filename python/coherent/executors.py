@@ -17,10 +17,11 @@ import os
 from collections import Counter, deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 from . import _coherent
 from ._coherent import LLM, CoherentError, Task
+from ._extras import needs
 
 if TYPE_CHECKING:
     from ._ray_worker import NodeEndpoints
@@ -30,10 +31,8 @@ Key = tuple[str, str, int, int, str]
 
 
 def _import_ray() -> Any:
-    try:
+    with needs('executor="ray"', "ray"):
         import ray
-    except ImportError as e:
-        raise ImportError('executor="ray" needs Ray: pip install "coherent[ray]"') from e
     return ray
 
 
@@ -78,8 +77,8 @@ class RayExecutor:
         history: int,
         max_states: int,
         max_steps: int | None,
-        out: str | os.PathLike[str],
-        progress: bool,
+        out: str | os.PathLike[str] | None,
+        progress: Literal["bar", "lines"] | None,
         prompts: str | os.PathLike[str] | Mapping[str, str] | None,
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
         physics: bool = False,
@@ -92,20 +91,24 @@ class RayExecutor:
             raise ValueError("endpoint_per_node needs an LLM backend")
         if self.max_attempts < 1:
             raise ValueError("max_attempts must be at least 1")
-        out = os.path.abspath(out)
         ledger = _coherent._BenchLedger(
             list(tasks),
             list(methods),
             seeds=seeds,
-            out=out,
+            out=None if out is None else os.path.abspath(out),
             execution=execution,
             backend=backend,
             sim_errors=sim_errors,
             replay_from=replay_from,
+            history=history,
+            max_states=max_states,
+            max_steps=max_steps,
+            physics=physics,
             progress=progress,
             prompts=prompts,
             prices=prices,
         )
+        out = os.path.abspath(ledger.out)
         pending = deque(ledger.pending())
         if not pending:
             return {**ledger.finish(interrupted=False), "resubmitted": 0}

@@ -1,5 +1,5 @@
 """A Gymnasium environment over :class:`coherent.Env`, for planners that plug into RL
-tooling (``pip install 'coherent[gym]'``)::
+tooling (``pip install '.[gym]'``)::
 
     from coherent.gym import CoherentEnv
 

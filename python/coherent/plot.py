@@ -1,5 +1,5 @@
 """The figures people put in papers, one call each (matplotlib; ``pip install
-'coherent[analysis]'`` brings it):
+'.[analysis]'`` from a checkout brings it):
 
 - :func:`table`: the paper's Table I (by task type) or Table II (by scene) as a
   figure: success rate and average steps per method, with 95% intervals over seeds and

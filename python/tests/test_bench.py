@@ -60,11 +60,15 @@ def test_bench_into_a_dataframe(few: list[coherent.Task], tmp_path: Path) -> Non
         "total": 9,
         "skipped": 0,
         "written": 9,
+        "finished": 9,
         "unfinished": 0,
+        "method_errors": 0,
+        "not_started": 0,
         "interrupted": False,
         "skipped_tasks": [],
         "repaired_bytes": 0,
         "orphaned": [],
+        "out": str(out),
     }
     assert frame["success"].all()
     assert (frame["steps"] == frame["gt_steps"]).all()
@@ -230,8 +234,9 @@ def test_bench_is_interruptible_and_resumes(env0_tasks: list[coherent.Task], tmp
         signal.signal(signal.SIGINT, previous)
     done = coherent.results(out)
     assert 0 < len(done) < 160
-    frame = coherent.bench(tasks[:1], ["pefa"], backend="simulated", sim_errors="all=0.3", seeds=1, out=out)
-    assert frame.attrs["outcome"]["written"] + frame.attrs["outcome"]["skipped"] == 1
+    # The same settings resume (a task of the run, its 20 seeds).
+    frame = coherent.bench(tasks[:1], ["pefa"], backend="simulated", sim_errors="all=0.3", seeds=20, out=out)
+    assert frame.attrs["outcome"]["written"] + frame.attrs["outcome"]["skipped"] == 20
 
 
 def test_bench_replays_an_earlier_run(few: list[coherent.Task], tmp_path: Path) -> None:

@@ -6,8 +6,10 @@ are known exactly."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
+import subprocess
 import threading
 from collections.abc import Iterator
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -333,3 +335,93 @@ def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path)
     assert (tmp_path / "pareto.png").stat().st_size > 5_000
     with pytest.raises(ValueError, match="prices="):
         plot.pareto([_line(method="pefa", model="unpriced", task_id=0, success=True, cost=None)])
+
+
+ASKS_THE_STUB = (
+    "import os\n"
+    "import coherent\n\n"
+    "class AsksTheStub:\n"
+    "    name = 'asks-the-stub'\n"
+    "    llm = coherent.LLM(base_url=os.environ['STUB_URL'], model='stub-model')\n"
+    "    def __init__(self, task):\n"
+    "        pass\n"
+    "    def act(self, view):\n"
+    "        schema = {'type': 'object', 'properties': {'action': {'type': 'string', 'enum': ['go']}}}\n"
+    "        self.llm.chat('Which robot?', schema, max_tokens=10)\n"
+    "        return next((r, a[0]) for r, a in view.actions.items() if a)\n"
+)
+
+
+def test_a_python_method_s_calls_cost_the_same_from_every_entry_point(
+    task0: coherent.Task,
+    env0_path: Path,
+    stub: tuple[coherent.LLM, list[dict[str, Any]]],
+    coherent_exe: str,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # The price given: run(prices=), the command's run --prices, bench(prices=) agree.
+    monkeypatch.setenv("STUB_URL", stub[0].base_url)
+    (tmp_path / "asks.py").write_text(ASKS_THE_STUB)
+    (tmp_path / "prices.json").write_text(json.dumps(PRICES))
+    method = f"{tmp_path / 'asks.py'}:AsksTheStub"
+    episode = coherent.run(task0, method, max_steps=2, out=tmp_path / "run", prices=PRICES)
+    assert episode.llm_calls == 2
+    assert episode.cost_usd == pytest.approx(2 * PER_CALL, rel=1e-12)
+    cli = subprocess.run(
+        [coherent_exe, "run", str(env0_path), "--task", str(task0.task_id), "--method", "asks.py:AsksTheStub",
+         "--max-steps", "2", "--prices", "prices.json", "--out", "cli", "--json"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=300,
+    )  # fmt: skip
+    assert cli.returncode == 1, cli.stderr  # the budget of 2 steps spent
+    assert json.loads(cli.stdout)["cost_usd"] == pytest.approx(episode.cost_usd, rel=1e-12)
+    # The summary line shows the cached tokens beside the cost, so that it adds up by hand.
+    lines = subprocess.run(
+        [coherent_exe, "run", str(env0_path), "--task", str(task0.task_id), "--method", "asks.py:AsksTheStub",
+         "--max-steps", "2", "--prices", "prices.json", "--out", "cli"],
+        capture_output=True, text=True, cwd=tmp_path, timeout=300,
+    )  # fmt: skip
+    assert lines.returncode == 1, lines.stderr
+    assert f"tokens {2 * PROMPT} prompt ({2 * CACHED} cached) + {2 * COMPLETION} completion | cost ${2 * PER_CALL:.6f}" in lines.stdout
+    frame = coherent.bench([task0], [method], max_steps=2, out=tmp_path / "r.jsonl", prices=PRICES)
+    assert list(frame["cost_usd"]) == [pytest.approx(episode.cost_usd, rel=1e-12)]
+
+
+def test_finished_results_are_priced_anew_from_their_tokens(
+    env0_tasks: list[coherent.Task], stub: tuple[coherent.LLM, list[dict[str, Any]]], coherent_exe: str, tmp_path: Path
+) -> None:
+    llm, _ = stub
+    out = tmp_path / "r.jsonl"
+    unpriced = coherent.bench(env0_tasks[:2], ["pefa"], backend=llm, max_steps=2, out=out)
+    assert unpriced["cost_usd"].isna().all()
+    expected = [pytest.approx(calls * PER_CALL, rel=1e-12) for calls in unpriced["llm_calls"]]
+    # results(prices=), report(prices=), and bench(prices=) resuming: the finished lines too.
+    assert list(coherent.results(out, prices=PRICES)["cost_usd"]) == expected
+    report = coherent.report(out, prices=PRICES)
+    assert report.costs.loc["pefa", "cost_per_task"] == pytest.approx(float(unpriced["llm_calls"].mean()) * PER_CALL)
+    resumed = coherent.bench(env0_tasks[:2], ["pefa"], backend=llm, max_steps=2, out=out, prices=PRICES)
+    assert resumed.attrs["outcome"]["skipped"] == 2 and list(resumed["cost_usd"]) == expected
+    assert coherent.results(out)["cost_usd"].isna().all(), "the file keeps what it recorded"
+    # The command's report re-prices the same way.
+    (tmp_path / "prices.json").write_text(json.dumps(PRICES))
+    cli = subprocess.run(
+        [coherent_exe, "bench", "--report", str(out), "--prices", str(tmp_path / "prices.json"), "--format", "json"],
+        capture_output=True, text=True, timeout=300,
+    )  # fmt: skip
+    assert cli.returncode == 0, cli.stderr
+    (pefa,) = [c for c in json.loads(cli.stdout)["costs"] if c["method"] == "pefa"]
+    assert pefa["cost_per_task"] == pytest.approx(report.costs.loc["pefa", "cost_per_task"], rel=1e-12)
+
+
+def test_achat_runs_outside_a_running_loop_too(stub: tuple[coherent.LLM, list[dict[str, Any]]]) -> None:
+    # asyncio.run(llm.achat(...)): the call starts on the loop that awaits it.
+    llm, seen = stub
+    schema = {"type": "object", "properties": {"action": {"type": "string", "enum": ["go"]}}}
+    reply = asyncio.run(llm.achat("Which action?", schema, max_tokens=10))
+    assert json.loads(reply.text)["action"] == "go" and reply.prompt_tokens == PROMPT
+    assert len(seen) == 1
+
+    async def twice() -> list[coherent.Reply]:
+        return await asyncio.gather(llm.achat("A?", schema), llm.achat("B?", schema))
+
+    assert [json.loads(r.text)["action"] for r in asyncio.run(twice())] == ["go", "go"]

@@ -38,8 +38,8 @@ def test_benchmark_figures_writes_the_figures(env0_path: Path, tmp_path: Path) -
     # Run again, it only redraws: every episode is in the results files already.
     again = subprocess.run([sys.executable, str(script), *args], capture_output=True, text=True, timeout=600)
     assert again.returncode == 0, again.stderr
-    assert "0 episodes to run, 6 already finished" in again.stderr  # builtin: 3 tasks x 2 methods
-    assert "0 episodes to run, 12 already finished" in again.stderr  # simulated: and 2 seeds
+    assert "6 episodes: 6 already finished in the results file, 0 to run" in again.stderr  # builtin: 3 tasks x 2 methods
+    assert "12 episodes: 12 already finished in the results file, 0 to run" in again.stderr  # simulated: and 2 seeds
 
 
 def test_step_by_hand_runs(capsys: pytest.CaptureFixture[str]) -> None:

@@ -19,8 +19,10 @@ from coherent._extras import needs
 from conftest import DEMO, REPO
 
 EXTRA_PACKAGES = ("pandas", "matplotlib", "numpy", "gymnasium")
-ANALYSIS = "pip install 'coherent[analysis]'"
-GYM = "pip install 'coherent[gym]'"
+# The packages as the installed metadata pins them, and the extra from a checkout.
+EXTRAS = "; the extras: analysis, gym, ray"
+ANALYSIS = 'pip install "pandas>=3.1" "matplotlib>=3.11" (from a checkout of the repository: pip install ".[analysis]")' + EXTRAS
+GYM = 'pip install "gymnasium>=1.4" (from a checkout of the repository: pip install ".[gym]")' + EXTRAS
 
 
 def _run_without(hidden: tuple[str, ...], code: str, **paths: Path) -> subprocess.CompletedProcess[str]:
@@ -44,7 +46,7 @@ def finished(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 def test_the_package_requires_nothing_but_its_extras() -> None:
     # The installed wheel's metadata: every requirement belongs to an extra.
-    requires = importlib.metadata.requires("coherent") or []
+    requires = importlib.metadata.requires("coherent-robots") or []
     assert requires and all("extra ==" in r for r in requires), requires
     project = tomllib.loads((REPO / "pyproject.toml").read_text())["project"]
     assert project["dependencies"] == []

@@ -151,7 +151,9 @@ def test_each_fault_is_a_step(task0: coherent.Task, tmp_path: Path) -> None:
     assert (replayed.success, replayed.steps, replayed.prompt_tokens) == (True, episode.steps, 7)
 
 
-def test_an_exception_ends_that_episode_only(env0_tasks: list[coherent.Task], tmp_path: Path) -> None:
+def test_an_exception_ends_that_episode_only(
+    env0_tasks: list[coherent.Task], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     class Fails(FollowPlan):
         name = "fails"
 
@@ -178,9 +180,22 @@ def test_an_exception_ends_that_episode_only(env0_tasks: list[coherent.Task], tm
     assert records[3]["status"] == "error"
     report = coherent.report(frame)
     assert (report.unfinished, report.errors) == (1, 1)
-    assert "1 of them ended in an error raised by the method" in report.markdown()
-    # The same call runs the error episode again, and only it.
-    again = coherent.bench(tasks, ["optimal", Fails], out=tmp_path / "r.jsonl")
+    # The report lists it by method with the exception and where it was raised, and
+    # gives no advice to run the same (failing) code again.
+    (failure,) = report.failures
+    assert failure["method"] == "fails" and failure["episodes"] == 1
+    assert failure["first_error"].startswith("ValueError: boom at step 2 (test_methods.py, line ")
+    assert failure["first_error"].endswith(", in act)") and failure["transcript"] == line["transcript"]
+    markdown = report.markdown()
+    assert "1 episode(s) failed with the method's own error" in markdown
+    assert "Episodes that failed with the method's error" in markdown and "run the same command" not in markdown
+    # The same call runs the error episode again, and only it; the progress says why it failed.
+    again = coherent.bench(tasks, ["optimal", Fails], out=tmp_path / "r.jsonl", progress=True)
+    told = capsys.readouterr().err
+    assert "6 episodes: 5 already finished in the results file, 1 to run" in told
+    assert "fails env0 task 1 seed 0: error: ValueError: boom at step 2 (test_methods.py, line " in told
+    # The traceback of this run's episode: its own transcript, beside the first one's.
+    assert f"; traceback in {Path(line['transcript']).parent}/env0-task1-fails-" in told
     assert again.attrs["outcome"]["skipped"] == 5 and again.attrs["outcome"]["written"] == 1
     # coherent.run raises, with the method's exception as the cause and the episode.
     with pytest.raises(coherent.MethodError, match="ValueError: boom at step 2") as info:

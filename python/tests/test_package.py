@@ -24,7 +24,7 @@ TREE = ast.parse(STUB.read_text())
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
 # `coherent.view` wraps the pages of `coherent view`.
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "benchmark_tasks", "view_page", "results_page", "framed_page"}
+WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "price_lines", "benchmark_tasks", "view_page", "results_page", "framed_page"}
 
 
 def _public(name: str) -> bool:
@@ -189,7 +189,7 @@ def test_submodules_load_on_first_use() -> None:
 
 
 def test_version_is_the_installed_distributions() -> None:
-    assert coherent.__version__ == importlib.metadata.version("coherent")
+    assert coherent.__version__ == importlib.metadata.version("coherent-robots")
 
 
 def test_methods_are_the_cli_methods() -> None:

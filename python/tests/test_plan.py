@@ -55,6 +55,52 @@ def test_plan_stops_at_the_state_limit(task0: coherent.Task) -> None:
     assert coherent.plan(task0, 3)["reason"] == result["reason"]  # positional too
 
 
+PARALLEL_KEYS = {
+    "makespan", "makespan_proven", "makespan_lower", "makespan_stop", "parallel_plan",
+    "makespan_states_expanded", "makespan_ms",
+}  # fmt: skip
+
+
+def test_plan_parallel_gives_the_fewest_joint_steps_as_the_cli(
+    env0_path: Path, env0_tasks: list[coherent.Task]
+) -> None:
+    # env0 task 9: 9 steps in turn, 8 when the arm grabs the plate as the quadrotor
+    # takes off.
+    task9 = next(t for t in env0_tasks if t.task_id == 9)
+    result = coherent.plan(task9, parallel=True)
+    assert set(result) == PLAN_KEYS | PARALLEL_KEYS
+    assert result["optimal_steps"] == 9
+    assert (result["makespan"], result["makespan_proven"], result["makespan_lower"]) == (8, True, 8)
+    assert result["makespan_stop"] is None
+    steps = result["parallel_plan"]
+    assert steps is not None and len(steps) == 8
+    assert [(a["robot"], a["action"]) for a in steps[0]] == [
+        (22, "[takeoff_from] <livingroom floor>(5)"),
+        (24, "[grab] <plate>(51)"),
+    ]
+    assert sorted(a["action"] for step in steps for a in step) == sorted(a["action"] for a in result["plan"])
+    out = subprocess.run(
+        [sys.executable, "-m", "coherent._cli", "plan", str(env0_path), "--task", "9", "--parallel", "--json"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    untimed = [
+        {k: v for k, v in line.items() if k not in ("elapsed_ms", "makespan_ms")}
+        for line in (json.loads(out.stdout), dict(result))
+    ]
+    assert untimed[0] == untimed[1]
+    assert set(coherent.plan(task9)) == PLAN_KEYS  # nothing parallel unless asked
+
+
+def test_plan_parallel_at_a_limit_keeps_the_scheduled_plan_and_a_lower_bound(
+    env0_tasks: list[coherent.Task],
+) -> None:
+    task9 = next(t for t in env0_tasks if t.task_id == 9)
+    result = coherent.plan(task9, max_states=500, parallel=True)
+    assert result["optimal_steps"] == 9
+    assert (result["makespan"], result["makespan_proven"], result["makespan_stop"]) == (8, False, "states")
+    assert 1 <= result["makespan_lower"] < 8
+
+
 def test_plan_rejects_negative_limit(task0: coherent.Task) -> None:
     with pytest.raises(coherent.ArgumentError, match=r"^max_states=-1: out of range: 0 to 18446744073709551615$"):
         coherent.plan(task0, max_states=-1)

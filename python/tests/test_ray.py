@@ -35,7 +35,7 @@ def cluster(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
     """A local Ray cluster of 2 CPUs with its files in the test's temporary folder (that
     folder is given) and its token in the environment (not under the home folder)."""
     if importlib.util.find_spec("ray") is None:
-        pytest.fail("Ray is not installed: `make venv` installs it (the coherent[ray] extra)")
+        pytest.fail("Ray is not installed: `make venv` installs it (the ray extra)")
     saved = {k: os.environ.get(k) for k in ("RAY_AUTH_MODE", "RAY_AUTH_TOKEN", "OPENAI_API_KEY")}
     os.environ["RAY_AUTH_MODE"] = "token"
     os.environ["RAY_AUTH_TOKEN"] = secrets.token_hex(16)

@@ -169,6 +169,7 @@ def test_env_over_ros2_without_servers_raises_naming_the_robots(netns: Netns) ->
     out, _ = run.communicate(timeout=LONG)
     assert run.returncode == 0, out
     assert "no ROS 2 action server for robot_arm_6, quadrotor_11, robot_dog_13 under /nobody" in out
+    assert "or wait longer with server_wait=)" in out and "--server-wait" not in out, "Python's argument"
     assert out.strip().endswith("None"), "no episode started"
 
 

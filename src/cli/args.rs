@@ -5,13 +5,14 @@
 //! method names (and `MODULE:CLASS`, a method written in Python, which the Python
 //! package loads).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use clap::{Args, ValueEnum};
 
 use crate::session::Error;
-use crate::session::backend::EndpointSource;
+use crate::session::backend::{EndpointSource, RecordedRun};
+use crate::session::bench::recorded_method;
 use crate::session::engine::{
     ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, Execution, External, Method, MethodSpec,
     OpenAiConfig, OutputMode,
@@ -213,34 +214,71 @@ pub(crate) fn sim_errors(flag: Option<&str>) -> Result<Option<ErrorRates>, Error
         .map_err(|e| Error::Invalid(format!("--sim-errors: {e}")))
 }
 
-/// A value of `--method` and `--methods`: a built-in method's name, or `MODULE:CLASS`,
-/// a method written in Python (loaded when the command runs from the Python package).
+/// A value of `--method` and `--methods`: a built-in method's name, `MODULE:CLASS`, a
+/// method written in Python (loaded when the command runs from the Python package), or
+/// the name of one in a results file that `bench --backend replay` replays.
 pub(crate) fn method_name(value: &str) -> Result<String, String> {
-    if Method::from_name(value).is_some() || value.contains(':') {
+    let named = !value.is_empty()
+        && !value.starts_with('.')
+        && value
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+    if named || value.contains(':') {
         return Ok(value.to_owned());
     }
+    Err(format!("not a method: {}", method_choices()))
+}
+
+/// The methods a flag takes, for its messages.
+fn method_choices() -> String {
     let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-    Err(format!(
-        "not a method: the methods are {}, or MODULE:CLASS for one written in Python",
+    format!(
+        "the methods are {}, or MODULE:CLASS for one written in Python",
         names.join(", ")
-    ))
+    )
 }
 
 /// Loads a method written in Python from `MODULE:CLASS` (an importable module or a `.py`
 /// file, and the class or callable in it); the Python package's console script has one.
 pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, Error> + Send + Sync + 'a;
 
-/// The method a value of [`method_name`] names: a built-in one, or one that `load` loads.
-pub(crate) fn method_spec(value: &str, load: Option<&LoadMethod<'_>>) -> Result<MethodSpec, Error> {
+/// The method a value of [`method_name`] names: a built-in one, or one that `load`
+/// loads; with `replay_from` (`bench --backend replay`), a name that is no built-in
+/// method's is the recorded method of that name, which replays without its code.
+pub(crate) fn method_spec(
+    value: &str,
+    load: Option<&LoadMethod<'_>>,
+    replay_from: Option<&Path>,
+) -> Result<MethodSpec, Error> {
     if let Some(method) = Method::from_name(value) {
         return Ok(method.into());
     }
+    if let Some(results) = replay_from {
+        // By the name the results file records; MODULE:CLASS only tells that name.
+        let name = match load.filter(|_| value.contains(':')).map(|load| load(value)) {
+            Some(Ok(method)) => method.name().to_owned(),
+            Some(Err(e)) => {
+                return Err(Error::Invalid(format!(
+                    "method {value}: {e}; a replay runs the recorded decisions and needs no \
+                     code: name the method as {} records it ({})",
+                    results.display(),
+                    RecordedRun::read(results)?.methods().join(", ")
+                )));
+            }
+            None => value.to_owned(),
+        };
+        return recorded_method(results, &name);
+    }
     match load {
-        Some(load) => load(value).map(MethodSpec::External),
-        None => Err(Error::Invalid(format!(
+        Some(load) if value.contains(':') => load(value).map(MethodSpec::External),
+        None if value.contains(':') => Err(Error::Invalid(format!(
             "method {value}: a method written in Python needs the Python package: run the \
              `coherent` command that `pip install .` installs (or `python -m coherent._cli`), \
              not the plain binary"
+        ))),
+        _ => Err(Error::Invalid(format!(
+            "unknown method {value:?}: {}",
+            method_choices()
         ))),
     }
 }

@@ -16,10 +16,10 @@ use crate::session::bench::{
     self as session_bench, BenchConfig, EpisodesRequest, TableFormat as Tables,
 };
 use crate::session::engine::{
-    Cancel, Event, HISTORY_WINDOW, Limits, Progress, ResultLine, Subset, read_results, shown,
-    shown_lines, transcripts_dir,
+    BenchOutcome, Cancel, Event, HISTORY_WINDOW, Limits, Progress, ResultLine, Setting, Style,
+    Subset, read_results, shown, shown_lines, transcripts_dir,
 };
-use crate::session::error::BackendProblem;
+use crate::session::error::{BackendProblem, settings_differ};
 use crate::session::{self, Error, prompts};
 
 #[derive(Args)]
@@ -125,8 +125,7 @@ pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, E
         }
         let mut lines = file.lines;
         if args.inputs.prices.is_some() {
-            let prices = args.inputs.price_source().read()?;
-            lines = lines.into_iter().map(|l| l.priced(&prices)).collect();
+            lines = session_bench::priced(lines, args.inputs.price_source())?;
         }
         print_tables(&lines, args.format);
         return Ok(status::OK);
@@ -134,7 +133,62 @@ pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, E
     if let Some(seed) = args.old_llm_seed {
         args.llm.seed = Some(seed);
     }
-    session::block_on(run_async(args, load))?
+    session::block_on(run_async(args, load))?.map_err(with_flags)
+}
+
+/// ` (2 with the method's error, 3 not started, 1 interrupted or a backend error)`, the
+/// kinds of unfinished episodes there are; empty without any.
+fn unfinished_detail(o: &BenchOutcome) -> String {
+    let others = o.unfinished - o.method_errors - o.not_started;
+    let parts: Vec<String> = [
+        (o.method_errors, "with the method's error"),
+        (others, "interrupted or a backend error"),
+        (o.not_started, "not started"),
+    ]
+    .iter()
+    .filter(|(n, _)| *n > 0)
+    .map(|(n, what)| format!("{n} {what}"))
+    .collect();
+    if parts.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", parts.join(", "))
+    }
+}
+
+/// `e`, the settings of a results file named by the flags that set them.
+fn with_flags(e: Error) -> Error {
+    let Error::SettingsDiffer { file, differences } = &e else {
+        return e;
+    };
+    Error::Invalid(settings_differ(
+        file,
+        differences,
+        |s| flag_of(s).into(),
+        "--out",
+    ))
+}
+
+/// The flag of `coherent bench` that sets `setting`.
+fn flag_of(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Backend => "--backend",
+        Setting::Model => "--model",
+        Setting::SimErrors => "--sim-errors",
+        Setting::Temperature => "--temperature",
+        Setting::ModelSeed => "--seed",
+        Setting::Seeds => "--seeds",
+        Setting::Prompts => "--prompts",
+        Setting::History => "--history",
+        Setting::MaxSteps => "--max-steps",
+        Setting::MaxStates => "--max-states",
+        Setting::Physics => "--physics",
+        Setting::Robots => "--robots",
+        Setting::Execution => "--execution",
+        Setting::Version => "coherent's version",
+        Setting::Method => "the method's own settings",
+        Setting::Unrecorded => "settings",
+    }
 }
 
 fn print_tables(lines: &[ResultLine], format: TableFormat) {
@@ -143,7 +197,7 @@ fn print_tables(lines: &[ResultLine], format: TableFormat) {
         TableFormat::Csv => Tables::Csv,
         TableFormat::Json => Tables::Json,
     };
-    let mut text = session_bench::tables(lines, format);
+    let mut text = session_bench::tables_by_run(lines, format);
     if format == Tables::Json {
         text.push('\n');
     }
@@ -152,10 +206,15 @@ fn print_tables(lines: &[ResultLine], format: TableFormat) {
 
 /// The episodes' settings the flags ask for.
 fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesRequest, Error> {
+    // A replay runs the recorded methods: one written in Python needs no code then.
+    let replay_from = match args.backend {
+        BackendFlag::Replay => args.replay_from.as_deref(),
+        _ => None,
+    };
     let methods = args
         .methods
         .iter()
-        .map(|m| method_spec(m, load))
+        .map(|m| method_spec(m, load, replay_from))
         .collect::<Result<Vec<_>, _>>()?;
     if args.seeds == 0 {
         return Err(Error::Invalid("--seeds must be at least 1".into()));
@@ -263,7 +322,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         })
     };
     let terminal = std::io::stderr().is_terminal();
-    let mut progress = Progress::new(terminal);
+    let mut progress = Progress::new(if terminal { Style::Bar } else { Style::Lines });
     let mut show = |e: Event<'_>| {
         if let Some(text) = progress.line(&e) {
             let mut err = std::io::stderr();
@@ -296,11 +355,12 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         eprintln!("skipped: {}", shown(why));
     }
     println!(
-        "{} episodes: {} already finished, {} run now, {} unfinished; results in {}, transcripts in {}",
+        "{} episodes: {} already finished, {} finished now, {} unfinished{}; results in {}, transcripts in {}",
         outcome.total,
         outcome.skipped,
-        outcome.written,
+        outcome.finished,
         outcome.unfinished,
+        unfinished_detail(&outcome),
         out.display(),
         transcripts_dir(out).display()
     );

@@ -12,12 +12,15 @@ mod run;
 mod status;
 mod view;
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
 use clap::{Parser, Subcommand};
 
-use crate::session::engine::{Analysis, Limits, Task, TaskError, shown, shown_lines};
+use crate::session::engine::{
+    Analysis, Limits, Makespan, Stop, Task, TaskError, clock, shown, shown_lines,
+};
 use crate::session::{Error, check, tasks};
 
 pub use args::LoadMethod;
@@ -83,9 +86,10 @@ enum Command {
     /// when a plan fails in physics (--physics) or a file holds no tasks, 2 on malformed
     /// input.
     Plan {
-        /// An original env file, a native task file or a folder of them; `native`: the
+        /// Original env files, native task files or folders of them; `native`: the
         /// project's own benchmark, compiled in.
-        file: PathBuf,
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
         /// Only these task ids (repeatable).
         #[arg(long = "task")]
         tasks: Vec<i64>,
@@ -102,6 +106,11 @@ enum Command {
         /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
         #[arg(long)]
         physics: bool,
+        /// Also find the fewest joint steps, robots acting at once (adds makespan,
+        /// makespan_proven, makespan_lower, makespan_stop, parallel_plan,
+        /// makespan_states_expanded, makespan_ms).
+        #[arg(long)]
+        parallel: bool,
     },
 }
 
@@ -144,17 +153,18 @@ where
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
         Command::Plan {
-            file,
+            files,
             tasks,
             json,
             max_states,
             max_memory,
             physics,
+            parallel,
         } => plan(
-            &file,
+            &files,
             &tasks,
             json,
-            physics,
+            check::PlanOptions { physics, parallel },
             &limits(max_states, max_memory),
         ),
     };
@@ -236,23 +246,25 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
 }
 
 fn plan(
-    file: &Path,
+    files: &[PathBuf],
     only: &[i64],
     as_json: bool,
-    physics: bool,
+    options: check::PlanOptions,
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
-    let mut tasks = read_all(&[file.to_owned()], &mut malformed, &mut empty);
+    let mut tasks = read_all(files, &mut malformed, &mut empty);
     if !only.is_empty() {
+        let known = tasks::id_list(tasks.iter().map(|t| t.meta.task_id));
         tasks.retain(|t| only.contains(&t.meta.task_id));
         if let Some(missing) = only
             .iter()
             .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
         {
+            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
             return Err(Error::Task(TaskError::Io {
-                file: file.display().to_string(),
-                message: format!("no task with task_id {missing}"),
+                file: names.join(", "),
+                message: format!("no task with task_id {missing}; its task ids: {known}"),
             }));
         }
     }
@@ -260,14 +272,25 @@ fn plan(
     let mut out = stdout.lock();
     let mut total_ms = 0.0;
     let mut physics_failed = false;
-    for t in &tasks {
-        let planned = check::plan(t, limits, physics);
+    let (start, terminal) = (Instant::now(), std::io::stderr().is_terminal());
+    for (done, t) in tasks.iter().enumerate() {
+        if options.physics && tasks.len() > 1 {
+            tell_planned(done, tasks.len(), start, terminal);
+        }
+        let planned = check::plan(t, limits, options);
         total_ms += planned.analysis.elapsed.as_secs_f64() * 1e3;
+        total_ms += planned
+            .makespan
+            .as_ref()
+            .map_or(0.0, |m| m.elapsed.as_secs_f64() * 1e3);
         physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
         let line = if as_json {
             planned.to_json(t).to_string()
         } else {
             let mut text = plan_text(t, &planned.analysis);
+            if let Some(m) = &planned.makespan {
+                text.push_str(&parallel_text(t, m, limits));
+            }
             if let Some(r) = &planned.physics {
                 text.push_str(&match &r.physics_error {
                     None => format!(
@@ -284,6 +307,9 @@ fn plan(
             return Ok(0);
         }
     }
+    if options.physics && tasks.len() > 1 && terminal {
+        eprint!("\r\x1b[2K");
+    }
     if !as_json {
         let _ = writeln!(out, "{} tasks planned in {:.1} ms", tasks.len(), total_ms);
     }
@@ -294,6 +320,81 @@ fn plan(
     } else {
         0
     })
+}
+
+/// Says on stderr how far `plan --physics` is through its tasks (each is planned, then
+/// run in Rapier: a second or so each), with the rate and the time left: on a terminal
+/// one line redrawn before each task, in a log a line before every tenth of them.
+fn tell_planned(done: usize, total: usize, start: Instant, terminal: bool) {
+    let tenth = total.div_ceil(10);
+    if !terminal && !done.is_multiple_of(tenth) {
+        return;
+    }
+    let elapsed = start.elapsed();
+    let (rate, left) = match done {
+        0 => ("-".to_owned(), "-".to_owned()),
+        _ => (
+            format!("{:.1} s/task", elapsed.as_secs_f64() / done as f64),
+            clock(elapsed.mul_f64((total - done) as f64 / done as f64)),
+        ),
+    };
+    let text = format!("planning in physics: {done}/{total} tasks, {rate}, {left} left");
+    if terminal {
+        eprint!("\r\x1b[2K{text}");
+    } else {
+        eprintln!("{text}");
+    }
+}
+
+/// The fewest joint steps, one line each: `  step 1  22 [takeoff_from] ... | 23 ...`.
+fn parallel_text(t: &Task, m: &Makespan, limits: &Limits) -> String {
+    let Some(plan) = &m.plan else {
+        return match m.stop {
+            None => "\n  parallel: no plan".to_owned(),
+            Some(stop) => format!(
+                "\n  parallel: no plan found before {}",
+                stopped_at(stop, limits)
+            ),
+        };
+    };
+    // Stopped early, the plan is an upper bound (at worst the sequential optimum
+    // scheduled by its dependencies) and the open frontier a lower one.
+    let verdict = match m.stop {
+        None => "the fewest".to_owned(),
+        Some(stop) => format!(
+            "not proven the fewest: at least {}; the search stopped at {}",
+            m.lower,
+            stopped_at(stop, limits)
+        ),
+    };
+    let steps: Vec<String> = plan
+        .iter()
+        .enumerate()
+        .map(|(k, step)| {
+            let parts: Vec<String> = step
+                .iter()
+                .map(|s| format!("{} {}", t.id(s.robot), shown(&s.action.render(t))))
+                .collect();
+            format!("  {:>4}  {}", k + 1, parts.join("  |  "))
+        })
+        .collect();
+    format!(
+        "\n  parallel: {} joint steps ({verdict}), {} states, {:.1} ms\n{}",
+        plan.len(),
+        m.states_expanded,
+        m.elapsed.as_secs_f64() * 1e3,
+        steps.join("\n")
+    )
+}
+
+/// The limit a search met, in words.
+fn stopped_at(stop: Stop, limits: &Limits) -> String {
+    match stop {
+        Stop::States => format!("the limit of {} states", limits.max_states),
+        Stop::Memory => format!("the memory limit of {} MiB", limits.max_memory >> 20),
+        Stop::Cancelled => "a cancel".to_owned(),
+        Stop::Depth => "the deepest cost it counts".to_owned(),
+    }
 }
 
 fn plan_text(t: &Task, a: &Analysis) -> String {

@@ -2,9 +2,11 @@
 //! summary, and a transcript. The episode itself is the session layer's
 //! ([`crate::session::episode`]); this file has the flags and the printing.
 
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use clap::Args;
 use serde_json::json;
@@ -17,10 +19,11 @@ use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
     Budget, Cancel, Execution, HISTORY_WINDOW, Limits, MethodSpec, Round, Status, Summary,
-    executed_actions, shown,
+    executed_actions, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
+use crate::session::waiting::{SLOW, Waiting, waiting_text};
 use crate::session::{self, Error, prompts};
 
 #[derive(Args)]
@@ -153,7 +156,7 @@ fn prepare(
         max_states: args.max_states,
         out: args.out.clone(),
         execution: args.execution.into(),
-        ..RunRequest::new(task, method_spec(&args.method, load)?)
+        ..RunRequest::new(task, method_spec(&args.method, load, None)?)
     };
     request.prepare(cancel)
 }
@@ -186,12 +189,23 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
     let execution = prepared.settings().execution;
+    let mut prepared = prepared;
+    let drawn = Arc::new(AtomicBool::new(false));
+    let ticker = tokio::spawn(tell_waiting(prepared.watch(), Arc::clone(&drawn)));
     let mut progress = |r: &Round| {
+        // A step ends the wait: its line, if drawn in place, goes first.
+        if drawn.swap(false, Ordering::Relaxed) {
+            eprint!("\r\x1b[2K");
+        }
         for line in session::lines::round(&task, r, max, execution) {
             lines.say(&line);
         }
     };
     let result = prepared.run(&cancel, &mut progress).await;
+    ticker.abort();
+    if drawn.swap(false, Ordering::Relaxed) {
+        eprint!("\r\x1b[2K");
+    }
     ctrl_c.abort();
     let ran = result?;
     let s = ran.summary();
@@ -242,6 +256,31 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         lines.say(&format!("stopped: {why}"));
     }
     Ok(status::of_ending(&ending))
+}
+
+/// Says on stderr, once a second, which model call the episode waits for once it has
+/// run for [`SLOW`]: on a terminal one line redrawn in place (`drawn` says it is there),
+/// in a log a line after 5, 15 and 30 s, then every minute.
+async fn tell_waiting(waiting: Arc<Waiting>, drawn: Arc<AtomicBool>) {
+    let terminal = std::io::stderr().is_terminal();
+    let mut tick = tokio::time::interval(Duration::from_secs(1));
+    let mut told = 0;
+    loop {
+        tick.tick().await;
+        let Some(longest) = waiting.longest().filter(|l| l.waited >= SLOW) else {
+            told = 0;
+            continue;
+        };
+        let text = waiting_text(&longest);
+        let secs = longest.waited.as_secs();
+        if terminal {
+            eprint!("\r\x1b[2K{text}...");
+            drawn.store(true, Ordering::Relaxed);
+        } else if worth_a_line(secs, told) {
+            eprintln!("{text}...");
+            told = secs;
+        }
+    }
 }
 
 fn task_line(p: &Prepared) -> String {
@@ -334,8 +373,14 @@ fn summary_line(
     let sim = s
         .sim_seconds
         .map_or(String::new(), |t| format!(" | simulated {t:.2} s"));
+    // The cached part, which the cost prices apart, so that it can be checked by hand.
+    let cached = if s.cached_tokens > 0 {
+        format!(" ({} cached)", s.cached_tokens)
+    } else {
+        String::new()
+    };
     format!(
-        "{result} | goal {goal} | {steps} | LLM calls {} | tokens {} prompt + {} completion{cost}{sim} | wall {:.2} s",
+        "{result} | goal {goal} | {steps} | LLM calls {} | tokens {} prompt{cached} + {} completion{cost}{sim} | wall {:.2} s",
         s.llm_calls,
         s.prompt_tokens,
         s.completion_tokens,

@@ -43,6 +43,7 @@ pub(crate) fn of_error(error: &Error) -> u8 {
         | Error::Prompt(_)
         | Error::File { .. }
         | Error::Endpoint(_)
+        | Error::SettingsDiffer { .. }
         | Error::Physics(_)
         | Error::Robots(_)
         | Error::Internal(_) => BAD_INPUT,

@@ -80,6 +80,14 @@ pub struct RecordedRun {
 }
 
 impl RecordedRun {
+    /// The names of the methods it recorded, sorted.
+    pub fn methods(&self) -> Vec<&str> {
+        let mut names: Vec<&str> = self.transcripts.keys().map(|k| k.method.as_str()).collect();
+        names.sort_unstable();
+        names.dedup();
+        names
+    }
+
     /// The final episodes of the results file `results`.
     pub fn read(results: &Path) -> Result<RecordedRun, Error> {
         let file = read_results(results)?;

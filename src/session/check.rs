@@ -6,7 +6,8 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_core::planner::{self, Analysis, Limits};
+use coherent_core::makespan::{self, Makespan};
+use coherent_core::planner::{self, Analysis, Limits, Stop};
 use coherent_core::{Error, Task, native, validate};
 use coherent_sim::PlanReport;
 
@@ -28,10 +29,21 @@ pub fn findings(task: &Task, limits: &Limits) -> Vec<String> {
     found
 }
 
-/// A task's optimal plan, and, when asked, that plan carried out in Rapier.
+/// What `coherent plan` does besides the shortest plan.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PlanOptions {
+    /// Carry the plan out in Rapier, checking it against the rules after every step.
+    pub physics: bool,
+    /// Also find the fewest joint steps (`--parallel`, docs/planner.md, "Parallel plans").
+    pub parallel: bool,
+}
+
+/// A task's optimal plan, and, when asked, its fewest joint steps and that plan carried
+/// out in Rapier.
 #[derive(Debug)]
 pub struct Planned {
     pub analysis: Analysis,
+    pub makespan: Option<Makespan>,
     pub physics: Option<PlanReport>,
 }
 
@@ -39,6 +51,24 @@ impl Planned {
     /// One line of `coherent plan --json`, `coherent.plan()`'s dict.
     pub fn to_json(&self, task: &Task) -> serde_json::Value {
         let mut value = self.analysis.to_json(task);
+        if let Some(m) = &self.makespan {
+            let plan: Option<Vec<serde_json::Value>> = m.plan.as_ref().map(|plan| {
+                plan.iter()
+                    .map(|step| {
+                        step.iter()
+                            .map(|s| serde_json::json!({"robot": task.id(s.robot).0, "action": s.action.render(task)}))
+                            .collect()
+                    })
+                    .collect()
+            });
+            value["makespan"] = m.makespan().into();
+            value["makespan_proven"] = m.proven.into();
+            value["makespan_lower"] = m.lower.into();
+            value["makespan_stop"] = m.stop.map(stop_name).into();
+            value["parallel_plan"] = plan.into();
+            value["makespan_states_expanded"] = m.states_expanded.into();
+            value["makespan_ms"] = ((m.elapsed.as_secs_f64() * 1e6).round() / 1e3).into();
+        }
         if let Some(r) = &self.physics {
             value["physics_ok"] = r.physics_ok.into();
             value["physics_error"] = r.physics_error.clone().into();
@@ -49,15 +79,40 @@ impl Planned {
     }
 }
 
-/// Plans `task` optimally; with `physics`, also carries the plan out in Rapier and
-/// checks it against the rules after every step.
-pub fn plan(task: &Task, limits: &Limits, physics: bool) -> Planned {
+/// Plans `task` optimally; with `parallel`, also finds its fewest joint steps from the
+/// shortest plan; with `physics`, also carries the plan out in Rapier and checks it
+/// against the rules after every step.
+pub fn plan(task: &Task, limits: &Limits, options: PlanOptions) -> Planned {
     let analysis = planner::analyse(task, limits);
-    let physics = match (&analysis.plan, physics) {
+    let makespan = options.parallel.then(|| {
+        makespan::search_with(
+            task,
+            &task.init,
+            &task.robots,
+            &task.goal,
+            analysis.plan.as_deref(),
+            limits,
+        )
+    });
+    let physics = match (&analysis.plan, options.physics) {
         (Some(plan), true) => Some(coherent_sim::execute_plan(&Arc::new(task.clone()), plan)),
         _ => None,
     };
-    Planned { analysis, physics }
+    Planned {
+        analysis,
+        makespan,
+        physics,
+    }
+}
+
+/// The limit a search stopped at, as `makespan_stop` names it.
+fn stop_name(stop: Stop) -> &'static str {
+    match stop {
+        Stop::States => "states",
+        Stop::Memory => "memory",
+        Stop::Cancelled => "cancelled",
+        Stop::Depth => "depth",
+    }
 }
 
 /// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`; returns the

@@ -9,7 +9,8 @@
 pub use coherent_core::action::most_actions;
 pub use coherent_core::action::{Mention, parse as parse_action};
 pub use coherent_core::load::load_tasks;
-pub use coherent_core::planner::{Analysis, Limits};
+pub use coherent_core::makespan::Makespan;
+pub use coherent_core::planner::{Analysis, Limits, Stop};
 pub use coherent_core::task::predicate_holds;
 pub use coherent_core::text::{shown, shown_lines};
 pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
@@ -41,10 +42,14 @@ pub use coherent_agents::{ErrorRates, PriceTable, PromptError, Prompts};
 
 // Benchmarks: the results file, its lines and the driver's ledger, the subsets, the
 // progress lines, the paper's tables.
+pub use coherent_agents::bench::progress::clock;
+pub use coherent_agents::bench::run_settings::field as setting_field;
 pub use coherent_agents::bench::{
-    BenchOutcome, EpisodeKey, EpisodeResult, Event, Ledger, Progress, ResultLine, Subset,
-    read_results, select, transcripts_dir,
+    BenchOutcome, Difference, EpisodeKey, EpisodeResult, Event, Group, Ledger, Progress,
+    ResultLine, RunSettings, Setting, Style, Subset, read_results, select, transcripts_dir,
+    worth_a_line,
 };
+pub use coherent_agents::report::{Mixed, Report};
 
 // Stopping work from outside (Ctrl-C).
 pub use coherent_agents::Cancel;

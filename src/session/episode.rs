@@ -23,6 +23,7 @@ use crate::session::error::Error;
 use crate::session::prompts::{PriceSource, PromptSource};
 use crate::session::robots::{Robots, ros_error};
 use crate::session::tasks::TaskSource;
+use crate::session::waiting::Waiting;
 
 /// A new episode.
 #[derive(Debug)]
@@ -136,6 +137,17 @@ impl ReplayRequest {
         let prices = self.prices.read()?;
         let path = self.transcript;
         let recorded = transcript::read(&path)?;
+        if recorded.summary.is_none() {
+            return Err(Error::File {
+                file: path.display().to_string(),
+                line: None,
+                message: format!(
+                    "unfinished: the episode was stopped after {} rounds (the transcript has \
+                     no summary line), so there is no end to replay it to",
+                    recorded.rounds.len()
+                ),
+            });
+        }
         if let Some(given) = self.task
             && native::to_value(&*given.task()?) != recorded.header.task
         {
@@ -382,6 +394,14 @@ impl Prepared {
     /// The backend chosen for a new episode (none for a replay).
     pub fn backend_choice(&self) -> Option<&BackendChoice> {
         self.spec.choice.as_ref()
+    }
+
+    /// Keeps the episode's model calls in a [`Waiting`] while they run, so that a front
+    /// end can say which one it waits for when the model is slow.
+    pub fn watch(&mut self) -> Arc<Waiting> {
+        let waiting = Arc::new(Waiting::default());
+        self.spec.backend = waiting.watch(Arc::clone(&self.spec.backend));
+        waiting
     }
 
     /// The transcript a replay answers from.

@@ -5,6 +5,7 @@
 use std::fmt;
 
 use coherent_agents::PromptError;
+use coherent_agents::bench::{Difference, Setting};
 
 /// Why the session could not do what it was asked.
 #[derive(Debug)]
@@ -29,6 +30,12 @@ pub enum Error {
     },
     /// The model endpoint is misconfigured: no model, a base URL that is no URL.
     Endpoint(String),
+    /// A results file whose lines were run with other settings than the run that would
+    /// resume it (each front end names the settings as its flags or arguments).
+    SettingsDiffer {
+        file: String,
+        differences: Vec<Difference>,
+    },
     /// The physical world cannot be built for the task.
     Physics(coherent_sim::PhysicsError),
     /// Robots over ROS 2 cannot be reached (no server within the wait, no DDS).
@@ -57,6 +64,10 @@ impl fmt::Display for Error {
                 line: None,
                 message,
             } => write!(f, "{file}: {message}"),
+            Error::SettingsDiffer { file, differences } => {
+                let name = |s| coherent_agents::bench::run_settings::field(s).to_owned();
+                f.write_str(&settings_differ(file, differences, name, "results file"))
+            }
             Error::Physics(e) => write!(f, "physics: {}", e.message),
             Error::Robots(e) => e.fmt(f),
             Error::Interrupted => f.write_str("interrupted"),
@@ -88,6 +99,7 @@ impl From<coherent_agents::Error> for Error {
             A::Endpoint(e) => Error::Endpoint(e.to_string()),
             A::Invalid(why) | A::NoBudget(why) => Error::Invalid(why),
             A::Task(e) => Error::Task(e),
+            A::SettingsDiffer { file, differences } => Error::SettingsDiffer { file, differences },
         }
     }
 }
@@ -120,6 +132,30 @@ impl From<BackendProblem> for Error {
     fn from(p: BackendProblem) -> Error {
         Error::Backend(p)
     }
+}
+
+/// What a front end says when a results file holds episodes of other settings: each
+/// setting by `name` (a flag, a keyword argument) with its two values, and the two ways
+/// on (`out`: how the front end names the results file).
+pub fn settings_differ(
+    file: &str,
+    differences: &[Difference],
+    name: impl Fn(Setting) -> String,
+    out: &str,
+) -> String {
+    let mut text = format!("{file} holds episodes run with other settings:");
+    for d in differences {
+        let method = d
+            .method
+            .as_ref()
+            .map_or(String::new(), |m| format!(" of {m}"));
+        text.push_str(&format!("\n  {}{method}: {d}", name(d.setting)));
+    }
+    text.push_str(&format!(
+        "\nnothing ran: to keep both runs, give this one another {out}; to resume the \
+         file, run with its settings."
+    ));
+    text
 }
 
 /// Why the backend's settings do not fit together. Each front end words these in its own

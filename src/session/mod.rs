@@ -36,6 +36,7 @@ pub mod render;
 pub mod robots;
 pub mod tasks;
 pub mod view;
+pub mod waiting;
 
 use std::future::Future;
 use std::sync::OnceLock;

@@ -83,8 +83,16 @@ pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, Error> {
         file: name.clone(),
         message,
     };
+    let ids = |results: &[Result<Task, _>]| {
+        id_list(
+            results
+                .iter()
+                .filter_map(|r| r.as_ref().ok().map(|t| t.meta.task_id)),
+        )
+    };
     match id {
         Some(id) => {
+            let known = ids(&results);
             let mut malformed = Vec::new();
             for r in results {
                 match r {
@@ -93,7 +101,8 @@ pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, Error> {
                     Err(e) => malformed.push(e.to_string()),
                 }
             }
-            let mut message = format!("no well-formed task with task_id {id}");
+            let mut message =
+                format!("no well-formed task with task_id {id}; its task ids: {known}");
             for e in malformed {
                 message.push_str(&format!("\n  (malformed, and possibly that task: {e})"));
             }
@@ -104,9 +113,38 @@ pub fn pick_task(file: &Path, id: Option<i64>) -> Result<Task, Error> {
             match results.len() {
                 1 => results.pop().expect("one task"),
                 0 => Err(no("no tasks".into())),
-                n => Err(no(format!("{n} tasks; choose one with --task ID"))),
+                n => Err(no(format!(
+                    "{n} tasks; choose one with --task ID (its task ids: {})",
+                    ids(&results)
+                ))),
             }
         }
+    }
+}
+
+/// Task ids as a short list, runs of consecutive ids as ranges: `0-16`, `0-3, 5, 7-9`.
+pub fn id_list(ids: impl IntoIterator<Item = i64>) -> String {
+    let mut ids: Vec<i64> = ids.into_iter().collect();
+    ids.sort_unstable();
+    ids.dedup();
+    let mut parts: Vec<String> = Vec::new();
+    let mut i = 0;
+    while i < ids.len() {
+        let start = ids[i];
+        while i + 1 < ids.len() && ids[i + 1] == ids[i] + 1 {
+            i += 1;
+        }
+        parts.push(if ids[i] == start {
+            start.to_string()
+        } else {
+            format!("{start}-{}", ids[i])
+        });
+        i += 1;
+    }
+    if parts.is_empty() {
+        "none".to_owned()
+    } else {
+        parts.join(", ")
     }
 }
 

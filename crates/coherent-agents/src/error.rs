@@ -5,6 +5,7 @@
 use std::fmt;
 
 use crate::backends::llm::LlmError;
+use crate::harness::run_settings::{Difference, field};
 use crate::methods::templates::PromptError;
 
 /// Why the crate could not do what it was asked.
@@ -31,6 +32,12 @@ pub enum Error {
     NoBudget(String),
     /// A task (one recorded in a transcript) that cannot be read.
     Task(coherent_core::Error),
+    /// A results file whose lines were run with other settings than the run that would
+    /// resume it: each setting that differs.
+    SettingsDiffer {
+        file: String,
+        differences: Vec<Difference>,
+    },
 }
 
 impl Error {
@@ -70,6 +77,16 @@ impl fmt::Display for Error {
             Error::Endpoint(e) => e.fmt(f),
             Error::Invalid(why) | Error::NoBudget(why) => f.write_str(why),
             Error::Task(e) => e.fmt(f),
+            Error::SettingsDiffer { file, differences } => {
+                write!(f, "{file} holds episodes run with other settings (")?;
+                for (i, d) in differences.iter().enumerate() {
+                    let sep = if i == 0 { "" } else { "; " };
+                    write!(f, "{sep}{}: {d}", field(d.setting))?;
+                }
+                f.write_str(
+                    "): give this run another results file, or run it with the file's settings",
+                )
+            }
         }
     }
 }

@@ -41,7 +41,11 @@
 //! The modules are also reachable at the crate root by their short names
 //! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
 
+/// The version of coherent, as transcripts and results lines record it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
 pub mod backends;
+pub mod digest;
 pub mod episode;
 pub mod error;
 pub mod harness;
@@ -75,5 +79,5 @@ pub use methods::assigner::TaskAssigner;
 pub use methods::executor::RobotExecutor;
 pub use methods::pefa::PefaConfig;
 pub use methods::templates::{PromptError, Prompts};
-pub use records::replay::Replay;
+pub use records::replay::{Replay, recorded_settings};
 pub use records::transcript::{RobotPart, RoundOutcome, Status, Summary, Transcript};

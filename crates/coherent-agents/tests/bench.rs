@@ -127,6 +127,7 @@ impl Hand {
             uses_model: self.method != "mcts",
             error: None,
             transcript: "t.jsonl".into(),
+            settings: None,
         }
     }
 
@@ -211,7 +212,7 @@ fn report_numbers_match_a_hand_computation() {
     .concat();
     std::fs::write(&path, text).expect("write");
     let lines = bench::read_results(&path).expect("reads").lines;
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let close = |a: f64, b: f64| (a - b).abs() < 1e-9;
 
     assert_eq!(r.seeds, [0, 1]);
@@ -403,7 +404,7 @@ fn costs_per_task_and_per_success_come_from_the_priced_lines() {
     std::fs::write(&path, text).expect("write");
     let back = bench::read_results(&path).expect("reads").lines;
     assert_eq!(back, priced, "cost_usd round-trips through the file");
-    let r = report::build(&back);
+    let r = report::build(&back).expect("one run's lines");
     let row = |m: &str| r.costs.iter().find(|c| c.method == m).expect("a row");
     // pefa: 40 calls x 200 tokens-worth = 0.008 USD over 2 tasks, 1 success.
     let pefa = row("pefa");
@@ -452,7 +453,7 @@ fn the_cached_share_and_the_cost_of_cached_tokens_come_from_the_lines() {
         (cost - (400.0 + 150.0 + 1000.0) / 1e6).abs() < 1e-15,
         "{cost}"
     );
-    let r = report::build(&lines);
+    let r = report::build(&lines).expect("one run's lines");
     let pefa = r.costs.iter().find(|c| c.method == "pefa").expect("a row");
     assert_eq!((pefa.prompt_tokens, pefa.cached_tokens), (4000, 3300));
     assert_eq!(pefa.cached_share, Some(0.825));

@@ -6,7 +6,7 @@ use std::fmt;
 
 use crate::action::{self, Action, Mention, Verb};
 use crate::graph::{Idx, NodeKind, RobotKind, State};
-use crate::rules::View;
+use crate::rules::{Contents, View};
 use crate::task::{Robot, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
@@ -233,7 +233,8 @@ pub fn check(task: &Task, s: &State, robot: Robot, text: &str) -> Result<Action,
         target,
     };
     // One view serves both the action list and, when the action is not in it, the why.
-    let view = View::new(task, s, robot);
+    let contents = Contents::new(task, s);
+    let view = View::with(task, s, robot, &contents);
     if view.actions().contains(&action) {
         return Ok(action);
     }

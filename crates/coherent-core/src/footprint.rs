@@ -28,7 +28,7 @@ use smallvec::SmallVec;
 
 use crate::action::{Action, Verb};
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
-use crate::rules::View;
+use crate::rules::{Contents, View};
 use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
@@ -235,7 +235,8 @@ impl Footprint {
 impl Footprint {
     /// The footprint of `a`, an action offered to `robot` in `s`.
     pub fn of(task: &Task, s: &State, robot: Robot, a: Action) -> Footprint {
-        in_view(&View::new(task, s, robot), a)
+        let contents = Contents::new(task, s);
+        in_view(&View::with(task, s, robot, &contents), a)
     }
 }
 

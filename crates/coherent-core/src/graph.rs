@@ -3,6 +3,8 @@
 
 use std::fmt;
 
+use smallvec::SmallVec;
+
 use crate::error::clip;
 use crate::vocab::{PropSet, Relation, StateSet};
 
@@ -105,6 +107,117 @@ impl Node {
     }
 }
 
+/// A set of node indices; up to 256 nodes without a heap allocation (the search builds
+/// several per expanded state).
+#[derive(Debug, PartialEq, Eq)]
+pub struct NodeSet(SmallVec<[u64; 4]>);
+
+impl Clone for NodeSet {
+    fn clone(&self) -> NodeSet {
+        // The words copied in place when they fit inline, not a push per word.
+        let words = self.0.as_slice();
+        if words.len() <= INLINE_WORDS {
+            let mut buf = [0u64; INLINE_WORDS];
+            buf[..words.len()].copy_from_slice(words);
+            NodeSet(SmallVec::from_buf_and_len(buf, words.len()))
+        } else {
+            NodeSet(SmallVec::from_slice(words))
+        }
+    }
+}
+
+/// Words a [`NodeSet`] keeps without a heap allocation (256 nodes).
+const INLINE_WORDS: usize = 4;
+
+impl NodeSet {
+    pub fn new(n: usize) -> NodeSet {
+        let words = n.div_ceil(64);
+        if words <= INLINE_WORDS {
+            NodeSet(SmallVec::from_buf_and_len([0; INLINE_WORDS], words))
+        } else {
+            NodeSet(smallvec::smallvec![0; words])
+        }
+    }
+    pub fn contains(&self, n: Idx) -> bool {
+        self.0[n.get() / 64] >> (n.get() % 64) & 1 == 1
+    }
+    /// Inserts `n`; returns whether it was new.
+    pub fn insert(&mut self, n: Idx) -> bool {
+        let new = !self.contains(n);
+        self.0[n.get() / 64] |= 1 << (n.get() % 64);
+        new
+    }
+    pub fn remove(&mut self, n: Idx) {
+        self.0[n.get() / 64] &= !(1 << (n.get() % 64));
+    }
+    /// Removes every node whose bit is set in `words32` (32 nodes a word, as
+    /// [`State`] keeps its `ON_HIGH_SURFACE` flags).
+    pub(crate) fn remove_words32(&mut self, words32: &[u32]) {
+        for (i, w) in self.0.iter_mut().enumerate() {
+            let lo = u64::from(words32.get(2 * i).copied().unwrap_or(0));
+            let hi = u64::from(words32.get(2 * i + 1).copied().unwrap_or(0));
+            *w &= !(lo | hi << 32);
+        }
+    }
+    /// Removes every node of `other`.
+    pub fn remove_all(&mut self, other: &NodeSet) {
+        for (w, o) in self.0.iter_mut().zip(other.0.iter()) {
+            *w &= !o;
+        }
+    }
+    /// Keeps only the nodes of `other`.
+    pub fn keep_only(&mut self, other: &NodeSet) {
+        for (w, o) in self.0.iter_mut().zip(other.0.iter()) {
+            *w &= o;
+        }
+    }
+    /// Adds every node of `other`.
+    pub fn insert_all(&mut self, other: &NodeSet) {
+        for (w, o) in self.0.iter_mut().zip(other.0.iter()) {
+            *w |= o;
+        }
+    }
+    /// The 64-bit words of the set, node `i` at bit `i % 64` of word `i / 64`.
+    pub fn words(&self) -> &[u64] {
+        &self.0
+    }
+    /// The words, to change in a loop without the small-vector's checks on each access.
+    pub(crate) fn words_mut(&mut self) -> &mut [u64] {
+        &mut self.0
+    }
+    /// The nodes, lowest index first.
+    pub fn iter(&self) -> NodeSetIter<'_> {
+        NodeSetIter {
+            words: &self.0,
+            at: 0,
+            rest: self.0.first().copied().unwrap_or(0),
+        }
+    }
+}
+
+/// The nodes of a [`NodeSet`], lowest index first: one step per node, not per bit.
+#[derive(Clone, Debug)]
+pub struct NodeSetIter<'a> {
+    words: &'a [u64],
+    /// The word being read, and its bits not yet returned.
+    at: usize,
+    rest: u64,
+}
+
+impl Iterator for NodeSetIter<'_> {
+    type Item = Idx;
+
+    fn next(&mut self) -> Option<Idx> {
+        while self.rest == 0 {
+            self.at += 1;
+            self.rest = *self.words.get(self.at)?;
+        }
+        let b = self.rest.trailing_zeros() as usize;
+        self.rest &= self.rest - 1;
+        Some(Idx((self.at * 64 + b) as u16))
+    }
+}
+
 /// One directed edge, packed as `from << 17 | relation << 14 | to` so that a sorted
 /// edge list groups each node's outgoing edges by relation.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, bytemuck::Pod, bytemuck::Zeroable)]
@@ -117,6 +230,10 @@ impl Edge {
     }
     pub fn from(self) -> Idx {
         Idx((self.0 >> 17) as u16)
+    }
+    /// The packed word.
+    pub(crate) fn bits(self) -> u32 {
+        self.0
     }
     pub fn rel(self) -> Relation {
         Relation::from_bits(self.0 >> 14 & 0b111)
@@ -195,6 +312,11 @@ impl State {
         self.data[1 + n.get()] = s.0;
     }
 
+    /// The `ON_HIGH_SURFACE` flags, node `i` at bit `i % 32` of word `i / 32`.
+    pub(crate) fn high_words(&self) -> &[u32] {
+        &self.data[1 + self.nodes()..self.edges_start()]
+    }
+
     /// Whether node `n` currently has the `ON_HIGH_SURFACE` property.
     pub fn on_high_surface(&self, n: Idx) -> bool {
         self.data[1 + self.nodes() + n.get() / 32] >> (n.get() % 32) & 1 == 1
@@ -240,9 +362,11 @@ impl State {
 
     /// Sources of `rel` edges pointing at `n`.
     pub fn sources(&self, rel: Relation, n: Idx) -> impl Iterator<Item = Idx> + '_ {
+        // A pass over every edge: compare the relation and target bits at once.
+        let key = Edge::new(Idx(0), rel, n).0;
         self.edges()
             .iter()
-            .filter(move |e| e.rel() == rel && e.to() == n)
+            .filter(move |e| e.0 & 0x1_ffff == key)
             .map(|e| e.from())
     }
 

@@ -118,6 +118,7 @@ pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) 
             node.properties = node.properties.with(label);
         }
     }
+    task.find_node_sets();
     let high: Vec<Idx> = task
         .indices()
         .filter(|&n| {

@@ -9,7 +9,6 @@
 //! [`Refusal`] that names the actions at fault and, for two that interfere, what they
 //! share.
 
-use std::borrow::Cow;
 use std::fmt;
 
 use crate::action::Action;
@@ -87,7 +86,7 @@ pub fn check(task: &Task, s: &State, step: &[Part]) -> Result<(), Refusal> {
     let contents = Contents::new(task, s);
     let views: Vec<View<'_>> = step
         .iter()
-        .map(|&(robot, _)| View::with(task, s, robot, Cow::Borrowed(&contents)))
+        .map(|&(robot, _)| View::with(task, s, robot, &contents))
         .collect();
     let infeasible: Vec<(usize, Infeasible)> = step
         .iter()

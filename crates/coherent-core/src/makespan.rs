@@ -15,7 +15,6 @@
 //! possible ([`schedule`]), and looks only for shorter plans; when it stops at a limit
 //! it still has that plan, and the frontier's `f` is a lower bound.
 
-use std::borrow::Cow;
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
 
@@ -132,7 +131,9 @@ pub fn schedule(
             steps.extend(rest.drain(..).map(|st| vec![st]));
             break;
         }
-        let step: JointStep = chosen.iter().map(|&j| rest[j]).collect();
+        let mut step: JointStep = chosen.iter().map(|&j| rest[j]).collect();
+        // In team order, as the search gives its steps (the order is free: they commute).
+        step.sort_by_key(|st| task.robots.iter().position(|r| r.node == st.robot));
         for st in &step {
             if let Some(&robot) = task.robot(st.robot) {
                 rules::apply(task, &mut s, robot, st.action);
@@ -311,7 +312,7 @@ impl<'a> Search<'a> {
             .robots
             .iter()
             .map(|&robot| {
-                let view = View::with(self.task, &s, robot, Cow::Borrowed(&contents));
+                let view = View::with(self.task, &s, robot, &contents);
                 view.actions()
                     .into_iter()
                     .filter(|a| self.useful.allows(self.task, a))

@@ -174,9 +174,9 @@ pub fn search_from(
         };
         for (&robot, actions) in robots
             .iter()
-            .zip(rules::team_actions(task, &t.states[i], robots))
+            .zip(&rules::team_actions(task, &t.states[i], robots))
         {
-            for action in actions.into_iter().filter(|a| useful.allows(task, a)) {
+            for &action in actions.iter().filter(|a| useful.allows(task, a)) {
                 child.clone_from(&t.states[i]);
                 rules::apply(task, &mut child, robot, action);
                 let step = Some(Step {

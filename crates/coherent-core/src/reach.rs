@@ -9,7 +9,7 @@ use std::collections::{HashSet, VecDeque};
 use crate::action::{self, Action, Verb};
 use crate::feasibility::{Infeasible, Reason, diagnose, hand_reach};
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
-use crate::rules::{self, View};
+use crate::rules::{self, Contents, View};
 use crate::task::{Robot, Task};
 use crate::vocab::{PropSet, Relation};
 
@@ -95,7 +95,8 @@ fn search(task: &Task, s: &State, robot: Robot, targets: &[Idx]) -> Found {
     let mut now = Vec::new();
     let mut anywhere = Vec::new();
     while let Some((state, depth)) = queue.pop_front() {
-        let view = View::new(task, &state, robot);
+        let contents = Contents::new(task, &state);
+        let view = View::with(task, &state, robot, &contents);
         let offered = view.actions();
         let named = |x: Idx| offered.iter().any(|a| a.object == x || a.target == Some(x));
         if targets

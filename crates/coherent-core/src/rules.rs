@@ -2,45 +2,15 @@
 //! actions it may take, and how one action changes the state. Imported original tasks
 //! run under these rules exactly, quirks included (see `docs/semantics-notes.md`).
 
-use std::borrow::Cow;
 use std::cell::OnceCell;
 
 use smallvec::SmallVec;
 
 use crate::action::{Action, Verb};
+pub use crate::graph::NodeSet;
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
 use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
-
-/// A set of node indices; up to 256 nodes without a heap allocation (the search builds
-/// several per expanded state).
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct NodeSet(SmallVec<[u64; 4]>);
-
-impl NodeSet {
-    pub fn new(n: usize) -> NodeSet {
-        NodeSet(smallvec::smallvec![0; n.div_ceil(64)])
-    }
-    pub fn contains(&self, n: Idx) -> bool {
-        self.0[n.get() / 64] >> (n.get() % 64) & 1 == 1
-    }
-    /// Inserts `n`; returns whether it was new.
-    pub fn insert(&mut self, n: Idx) -> bool {
-        let new = !self.contains(n);
-        self.0[n.get() / 64] |= 1 << (n.get() % 64);
-        new
-    }
-    pub fn remove(&mut self, n: Idx) {
-        self.0[n.get() / 64] &= !(1 << (n.get() % 64));
-    }
-    pub fn iter(&self) -> impl Iterator<Item = Idx> + '_ {
-        self.0.iter().enumerate().flat_map(|(w, &word)| {
-            (0..64)
-                .filter(move |b| word >> b & 1 == 1)
-                .map(move |b| Idx((w * 64 + b) as u16))
-        })
-    }
-}
 
 /// What one robot observes: the visible nodes and every edge between two of them.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -61,124 +31,167 @@ pub fn room_of(task: &Task, s: &State, n: Idx) -> Option<Idx> {
 /// or in each node. Visibility and the arm's reach walk down these lists instead of
 /// passing over every edge once per level; the planner builds them once per expanded
 /// state for the views of all its robots, which then also share what each room shows.
-#[derive(Clone)]
 pub(crate) struct Contents {
-    /// `edges[start[p]..start[p + 1]]` are the location edges pointing at node `p`.
-    start: Vec<u32>,
-    edges: Vec<Edge>,
+    /// `start` (`n + 2` words), then the location edges by target:
+    /// `edges[start[p]..start[p + 1]]` point at node `p`. One block, as the search
+    /// builds one of these per state it expands.
+    data: Vec<u32>,
+    /// Where the edges begin in `data`: `n + 2`.
+    edges_at: usize,
     /// What a robot in each room of `Task::rooms` sees, besides itself and what it
     /// holds; found when a robot there first looks.
-    sights: Vec<OnceCell<NodeSet>>,
+    sights: SmallVec<[OnceCell<NodeSet>; 8]>,
+    /// Every node `INSIDE` a container, not a room, that is neither `OPEN` nor
+    /// `OPEN_FOREVER`: hidden from view wherever it is.
+    hidden: NodeSet,
+    /// `(robot, room)` for each robot's `INSIDE` edge to a room.
+    robot_rooms: SmallVec<[(Idx, Idx); 4]>,
 }
 
 impl Contents {
     pub fn new(task: &Task, s: &State) -> Contents {
         let n = task.nodes.len();
+        let locations = || s.edges().iter().filter(|e| e.rel().is_location());
         // Counting sort by target: count, prefix sums, then place in edge order.
-        let mut start = vec![0u32; n + 2];
-        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
-            start[e.to().get() + 2] += 1;
+        let mut data = Vec::with_capacity(n + 2 + s.edges().len());
+        data.resize(n + 2, 0u32);
+        for e in locations() {
+            data[e.to().get() + 2] += 1;
         }
-        for p in 2..start.len() {
-            start[p] += start[p - 1];
+        for p in 2..n + 2 {
+            data[p] += data[p - 1];
         }
-        let mut edges = vec![Edge::new(Idx(0), Relation::On, Idx(0)); start[n + 1] as usize];
-        for e in s.edges().iter().filter(|e| e.rel().is_location()) {
+        let total = data[n + 1] as usize;
+        data.resize(n + 2 + total, 0);
+        let (start, edges) = data.split_at_mut(n + 2);
+        let mut hidden = NodeSet::new(n);
+        let mut robot_rooms = SmallVec::new();
+        for e in locations() {
             let at = &mut start[e.to().get() + 1];
-            edges[*at as usize] = *e;
+            edges[*at as usize] = e.bits();
             *at += 1;
+            if e.rel() == Relation::Inside {
+                if !task.room_set().contains(e.to()) {
+                    if !s.states(e.to()).is_open() {
+                        hidden.insert(e.from());
+                    }
+                } else if task.robot_set().contains(e.from()) {
+                    robot_rooms.push((e.from(), e.to()));
+                }
+            }
         }
-        start.pop();
+        // `start[p]` now holds where `p`'s edges begin, `start[n]` where they end.
         Contents {
-            start,
-            edges,
-            sights: vec![OnceCell::new(); task.rooms().len()],
+            data,
+            edges_at: n + 2,
+            robot_rooms,
+            sights: (0..task.rooms().len()).map(|_| OnceCell::new()).collect(),
+            hidden,
         }
     }
 
     /// The location edges pointing at `p`, in edge order.
     pub fn of(&self, p: Idx) -> &[Edge] {
-        &self.edges[self.start[p.get()] as usize..self.start[p.get() + 1] as usize]
+        let (lo, hi) = (self.data[p.get()] as usize, self.data[p.get() + 1] as usize);
+        bytemuck::cast_slice(&self.data[self.edges_at + lo..self.edges_at + hi])
     }
 }
 
 /// The visible set of docs/semantics.md, "Observations".
 pub fn visible(task: &Task, s: &State, robot: Idx) -> NodeSet {
-    visible_with(task, s, robot, &Contents::new(task, s))
+    look(task, s, robot, &Contents::new(task, s)).1
 }
 
-fn visible_with(task: &Task, s: &State, robot: Idx, contents: &Contents) -> NodeSet {
-    let mut v = match room_of(task, s, robot).and_then(|room| sight(task, s, room, contents)) {
+/// What `robot` sees from where it is: its room ([`room_of`]), its visible set, and what
+/// it holds (its first `HOLD` target, which it always sees).
+fn look(
+    task: &Task,
+    s: &State,
+    robot: Idx,
+    contents: &Contents,
+) -> (Option<Idx>, NodeSet, Option<Idx>) {
+    // The robot's own edges, found once: a few, sorted by relation and target.
+    let mine = s.out(robot);
+    let room = mine
+        .iter()
+        .filter(|e| e.rel() == Relation::Inside)
+        .map(|e| e.to())
+        .find(|&t| task.room_set().contains(t));
+    let mut v = match room.and_then(|room| sight(task, room, contents)) {
         Some(sight) => sight.clone(),
-        None => {
-            let mut v = NodeSet::new(task.nodes.len());
-            for &r in task.rooms() {
-                v.insert(r);
-            }
-            v
-        }
+        None => task.room_set().clone(),
     };
     v.insert(robot);
-    for h in s.targets(robot, Relation::Hold) {
-        v.insert(h);
+    let mut holding = None;
+    for e in mine.iter().filter(|e| e.rel() == Relation::Hold) {
+        v.insert(e.to());
+        holding.get_or_insert(e.to());
     }
-    v
+    (room, v, holding)
 }
 
 /// What any robot in `room` sees (the rooms included), computed once per state; none
 /// when `room` is not one of the task's rooms.
-fn sight<'c>(task: &Task, s: &State, room: Idx, contents: &'c Contents) -> Option<&'c NodeSet> {
+fn sight<'c>(task: &Task, room: Idx, contents: &'c Contents) -> Option<&'c NodeSet> {
     let at = task.rooms().iter().position(|&r| r == room)?;
     Some(contents.sights[at].get_or_init(|| {
         let mut v = NodeSet::new(task.nodes.len());
         // Everything INSIDE the room, then whatever is ON or INSIDE something seen, at
         // any depth: the least set closed under location edges, found by a walk down.
-        let mut todo: SmallVec<[Idx; 64]> = SmallVec::new();
+        let words = v.words_mut();
+        let mut insert = |n: Idx| {
+            let (w, bit) = (n.get() / 64, 1u64 << (n.get() % 64));
+            let new = words[w] & bit == 0;
+            words[w] |= bit;
+            new
+        };
+        // Each node enters the stack once, so it never holds more than the nodes.
+        let n = task.nodes.len();
+        let mut inline = [Idx(0); 256];
+        let mut heap = Vec::new();
+        let stack: &mut [Idx] = if n <= inline.len() {
+            &mut inline[..n]
+        } else {
+            heap.resize(n, Idx(0));
+            &mut heap
+        };
+        let mut top = 0;
         for e in contents.of(room) {
-            if e.rel() == Relation::Inside && v.insert(e.from()) {
-                todo.push(e.from());
+            if e.rel() == Relation::Inside && insert(e.from()) {
+                stack[top] = e.from();
+                top += 1;
             }
         }
-        while let Some(p) = todo.pop() {
-            for e in contents.of(p) {
-                if v.insert(e.from()) {
-                    todo.push(e.from());
+        while top > 0 {
+            top -= 1;
+            for e in contents.of(stack[top]) {
+                if insert(e.from()) {
+                    stack[top] = e.from();
+                    top += 1;
                 }
             }
         }
         // Only a thing's direct container is checked: what stands ON a hidden thing
         // stays visible, as in the original.
-        for e in s.edges() {
-            if e.rel() == Relation::Inside
-                && v.contains(e.from())
-                && task.node(e.to()).kind != NodeKind::Room
-                && !s.states(e.to()).is_open()
-            {
-                v.remove(e.from());
-            }
-        }
+        v.remove_all(&contents.hidden);
         v.insert(room);
         for &(door, r) in task.doors() {
             if r == room {
                 v.insert(door);
             }
         }
-        for r in &task.robots {
-            if s.has(Edge::new(r.node, Relation::Inside, room)) {
-                v.insert(r.node);
-                if let Some(basket) = task.basket_of(r.node) {
-                    v.insert(basket);
-                    for e in contents.of(basket) {
-                        if e.rel() == Relation::Inside {
-                            v.insert(e.from());
-                        }
+        for &(robot, _) in contents.robot_rooms.iter().filter(|(_, r)| *r == room) {
+            v.insert(robot);
+            if let Some(basket) = task.basket_of(robot) {
+                v.insert(basket);
+                for e in contents.of(basket) {
+                    if e.rel() == Relation::Inside {
+                        v.insert(e.from());
                     }
                 }
             }
         }
-        for &r in task.rooms() {
-            v.insert(r);
-        }
+        v.insert_all(task.room_set());
         v
     }))
 }
@@ -203,34 +216,22 @@ pub(crate) struct View<'a> {
     pub task: &'a Task,
     pub s: &'a State,
     pub robot: Robot,
-    pub contents: Cow<'a, Contents>,
+    pub contents: &'a Contents,
     pub visible: NodeSet,
     pub room: Option<Idx>,
     pub holding: Option<Idx>,
 }
 
 impl<'a> View<'a> {
-    pub fn new(task: &'a Task, s: &'a State, robot: Robot) -> View<'a> {
-        View::with(task, s, robot, Cow::Owned(Contents::new(task, s)))
-    }
-
     /// The view with the state's [`Contents`] built already.
-    pub fn with(
-        task: &'a Task,
-        s: &'a State,
-        robot: Robot,
-        contents: Cow<'a, Contents>,
-    ) -> View<'a> {
-        let visible = visible_with(task, s, robot.node, &contents);
-        let holding = s
-            .targets(robot.node, Relation::Hold)
-            .find(|&h| visible.contains(h));
+    pub fn with(task: &'a Task, s: &'a State, robot: Robot, contents: &'a Contents) -> View<'a> {
+        let (room, visible, holding) = look(task, s, robot.node, contents);
         View {
             task,
             s,
             robot,
             contents,
-            room: room_of(task, s, robot.node),
+            room,
             visible,
             holding,
         }
@@ -288,25 +289,12 @@ impl<'a> View<'a> {
             .map(|(room, _)| room)
     }
 
-    /// What the robot dog may move towards (`unreached` of docs/semantics.md, "Actions").
-    pub fn unreached(&self, n: Idx) -> bool {
-        self.sees(n)
-            && Some(n) != self.holding
-            && !self.close_to(n)
-            && !matches!(
-                self.kind(n),
-                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
-            )
-            && !self.has(n, PropSet::HIGH_HEIGHT)
-            && !self.has(n, PropSet::ON_HIGH_SURFACE)
-    }
-
     /// What a fixed arm reaches: things on its surface, then three levels of things
     /// ON/INSIDE those, then the direct children of surfaces and containers among them.
     /// Each level is in node order, as one pass over the sorted edges finds it.
     pub fn arm_reach(&self) -> Vec<Idx> {
         let mut set = NodeSet::new(self.task.nodes.len());
-        let mut reach = Vec::new();
+        let mut reach = Vec::with_capacity(16);
         let Some(surface) = self.own(Relation::On) else {
             return reach;
         };
@@ -350,56 +338,153 @@ impl<'a> View<'a> {
 
 /// Every action `robot` may take in state `s`, without duplicates.
 pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
-    View::new(task, s, robot).actions()
+    View::with(task, s, robot, &Contents::new(task, s)).actions()
 }
 
 /// The action lists of several robots in state `s`, in the order of `robots`: what one
-/// planning round asks of the rules. The state's [`Contents`] is built once for all.
-pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> Vec<Vec<Action>> {
+/// planning round asks of the rules. The state's [`Contents`] is built once for all, and
+/// the lists share one block.
+pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> TeamActions {
     let contents = Contents::new(task, s);
-    robots
-        .iter()
-        .map(|&robot| View::with(task, s, robot, Cow::Borrowed(&contents)).actions())
-        .collect()
+    let mut lists = TeamActions {
+        actions: Vec::with_capacity(32 * robots.len()),
+        ends: SmallVec::with_capacity(robots.len()),
+    };
+    for &robot in robots {
+        View::with(task, s, robot, &contents).actions_into(&mut lists.actions);
+        lists.ends.push(lists.actions.len() as u32);
+    }
+    lists
 }
+
+/// Every robot's action list in one state ([`team_actions`]), one after the other in one
+/// vector; robot `i`'s list is [`TeamActions::get`]`(i)`, and iterating gives the lists
+/// in order.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct TeamActions {
+    actions: Vec<Action>,
+    /// Where each robot's list ends in `actions`.
+    ends: SmallVec<[u32; 4]>,
+}
+
+impl TeamActions {
+    /// Robot `i`'s list.
+    pub fn get(&self, i: usize) -> &[Action] {
+        let start = if i == 0 { 0 } else { self.ends[i - 1] as usize };
+        &self.actions[start..self.ends[i] as usize]
+    }
+
+    /// How many robots' lists there are.
+    pub fn len(&self) -> usize {
+        self.ends.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ends.is_empty()
+    }
+
+    /// The lists, in the robots' order.
+    pub fn iter(&self) -> Lists<'_> {
+        Lists {
+            lists: self,
+            next: 0,
+        }
+    }
+}
+
+impl<'a> IntoIterator for &'a TeamActions {
+    type Item = &'a [Action];
+    type IntoIter = Lists<'a>;
+
+    fn into_iter(self) -> Lists<'a> {
+        self.iter()
+    }
+}
+
+/// The lists as vectors of their own, for callers that keep or consume them (the same
+/// iteration as the `Vec<Vec<Action>>` this function returned before).
+impl IntoIterator for TeamActions {
+    type Item = Vec<Action>;
+    type IntoIter = std::vec::IntoIter<Vec<Action>>;
+
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+            .map(<[Action]>::to_vec)
+            .collect::<Vec<_>>()
+            .into_iter()
+    }
+}
+
+/// The lists of a [`TeamActions`], in the robots' order.
+#[derive(Clone, Debug)]
+pub struct Lists<'a> {
+    lists: &'a TeamActions,
+    next: usize,
+}
+
+impl<'a> Iterator for Lists<'a> {
+    type Item = &'a [Action];
+
+    fn next(&mut self) -> Option<&'a [Action]> {
+        (self.next < self.lists.len()).then(|| {
+            self.next += 1;
+            self.lists.get(self.next - 1)
+        })
+    }
+
+    fn size_hint(&self) -> (usize, Option<usize>) {
+        let left = self.lists.len() - self.next;
+        (left, Some(left))
+    }
+}
+
+impl ExactSizeIterator for Lists<'_> {}
 
 impl View<'_> {
     /// The robot's action list, from this view.
     pub fn actions(&self) -> Vec<Action> {
-        let mut out = Vec::new();
+        // Room for a long list at once: growing it step by step cost more than the rest.
+        let mut out = Vec::with_capacity(32);
+        self.actions_into(&mut out);
+        out
+    }
+
+    /// Appends the robot's action list to `all`.
+    pub fn actions_into(&self, all: &mut Vec<Action>) {
+        let start = all.len();
+        let out = all;
         match self.robot.kind {
-            RobotKind::Quadrotor => quadrotor_actions(self, &mut out),
-            RobotKind::RobotDog => dog_actions(self, &mut out),
-            RobotKind::RobotArm => arm_actions(self, &mut out),
-        }
-        // Lists are short: a quadratic pass in place beats hashing.
-        let mut kept = 0;
-        for i in 0..out.len() {
-            if !out[..kept].contains(&out[i]) {
-                out[kept] = out[i];
-                kept += 1;
+            RobotKind::Quadrotor => quadrotor_actions(self, out, start),
+            RobotKind::RobotDog => dog_actions(self, out, start),
+            RobotKind::RobotArm => {
+                arm_actions(self, out);
+                // The put on its own surface may come again from what it reaches. Lists
+                // are short: a quadratic pass in place beats hashing.
+                let mut kept = start;
+                for i in start..out.len() {
+                    if !out[start..kept].contains(&out[i]) {
+                        out[kept] = out[i];
+                        kept += 1;
+                    }
+                }
+                out.truncate(kept);
             }
         }
-        out.truncate(kept);
-        out
     }
 }
 
-fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>) {
+/// The quadrotor's list, appended to `out` (its own list begins at `start`).
+fn quadrotor_actions(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
     let me = v.states(v.robot.node);
     if me.contains(StateSet::FLYING) {
         if let Some(above) = v.above() {
             out.push(Action::new(Verb::LandOn, above));
-            for n in v.visible.iter() {
-                if n != above && v.has(n, PropSet::LANDABLE) {
-                    out.push(Action::new(Verb::MoveTowards, n));
-                }
-            }
+            let mut landables = v.visible.clone();
+            landables.keep_only(v.task.landable_set());
+            landables.remove(above);
+            out.extend(landables.iter().map(|n| Action::new(Verb::MoveTowards, n)));
         }
-        out.extend(
-            v.open_next_rooms()
-                .map(|room| Action::new(Verb::MoveTowards, room)),
-        );
+        room_moves(v, out, start);
     }
     if me.contains(StateSet::LAND)
         && let Some(surface) = v.own(Relation::On)
@@ -435,19 +520,34 @@ fn hand_actions(v: &View<'_>, r: Idx, doors_too: bool, out: &mut Vec<Action>) {
     }
 }
 
-fn dog_actions(v: &View<'_>, out: &mut Vec<Action>) {
+fn dog_actions(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
+    let mut close = NodeSet::new(v.task.nodes.len());
     for r in v.reachable() {
+        close.insert(r);
         hand_actions(v, r, true, out);
     }
-    for n in v.visible.iter() {
-        if v.unreached(n) {
-            out.push(Action::new(Verb::MoveTowards, n));
+    // What it may walk up to (`View::unreached`), as set operations: what it sees, less
+    // what it is close to, holds, can never approach, or is on a high surface.
+    let mut unreached = v.visible.clone();
+    unreached.remove_all(&close);
+    unreached.remove_all(v.task.never_approached());
+    unreached.remove_words32(v.s.high_words());
+    if let Some(h) = v.holding {
+        unreached.remove(h);
+    }
+    out.extend(unreached.iter().map(|n| Action::new(Verb::MoveTowards, n)));
+    room_moves(v, out, start);
+}
+
+/// `movetowards` each room an open door leads to, once: two doors may lead to one room
+/// (the other moves of a list name distinct nodes, none a room for the dog).
+fn room_moves(v: &View<'_>, out: &mut Vec<Action>, start: usize) {
+    for room in v.open_next_rooms() {
+        let a = Action::new(Verb::MoveTowards, room);
+        if !out[start..].contains(&a) {
+            out.push(a);
         }
     }
-    out.extend(
-        v.open_next_rooms()
-            .map(|room| Action::new(Verb::MoveTowards, room)),
-    );
 }
 
 fn arm_actions(v: &View<'_>, out: &mut Vec<Action>) {
@@ -487,7 +587,7 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
                 s.retain(|e| {
                     !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
                 });
-                set_basket_high(s, b, true);
+                mark_high(s, b, &inside, true);
             }
         }
         (RobotKind::Quadrotor, Verb::MoveTowards) => {
@@ -581,9 +681,14 @@ fn dog_approach(task: &Task, s: &mut State, me: Idx, x: Idx) {
 }
 
 fn set_basket_high(s: &mut State, basket: Idx, on: bool) {
-    s.set_on_high_surface(basket, on);
     let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, basket).collect();
-    for y in inside {
+    mark_high(s, basket, &inside, on);
+}
+
+/// Sets or clears `ON_HIGH_SURFACE` on `basket` and on what is `inside` it.
+fn mark_high(s: &mut State, basket: Idx, inside: &[Idx], on: bool) {
+    s.set_on_high_surface(basket, on);
+    for &y in inside {
         s.set_on_high_surface(y, on);
     }
 }

@@ -6,7 +6,7 @@ use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, Site, ensure, quoted};
-use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, RobotKind, State};
+use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, NodeSet, RobotKind, State};
 use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
 /// A node as written in a task file (the original format's field names).
@@ -155,8 +155,44 @@ pub struct Task {
     /// Each room's floor (a `Floor` node `INSIDE` it), if it has one.
     floors: FxHashMap<Idx, Idx>,
     /// Each quadrotor's basket (target of its `WITH` edge), if it has one.
-    baskets: FxHashMap<Idx, Idx>,
+    /// `(quadrotor, basket)`: a list, as a team has one or two quadrotors and the rules
+    /// look a basket up for every robot in view.
+    baskets: Vec<(Idx, Idx)>,
     rooms: Vec<Idx>,
+    /// The rooms, as a set: every robot sees them all.
+    room_set: NodeSet,
+    /// The `LANDABLE` nodes.
+    landable_set: NodeSet,
+    /// The robots.
+    robot_set: NodeSet,
+
+    /// What a robot dog never walks up to whatever the state: rooms, robots, floors and
+    /// `HIGH_HEIGHT` things (`unreached` of docs/semantics.md, "Actions").
+    never_approached: NodeSet,
+}
+
+/// What the rules look up from the initial edges: the doors (`LEADING_TO`), each room's
+/// floor (the first `Floor` `INSIDE` it) and each quadrotor's basket (its first `WITH`).
+type Links = (Vec<(Idx, Idx)>, FxHashMap<Idx, Idx>, Vec<(Idx, Idx)>);
+
+fn links(nodes: &[Node], edges: &[Edge]) -> Links {
+    let (mut doors, mut floors, mut baskets) = (Vec::new(), FxHashMap::default(), Vec::new());
+    let kind = |n: Idx| nodes[n.get()].kind;
+    for e in edges {
+        match e.rel() {
+            Relation::LeadingTo => doors.push((e.from(), e.to())),
+            Relation::Inside
+                if kind(e.from()) == NodeKind::Floor && kind(e.to()) == NodeKind::Room =>
+            {
+                floors.entry(e.to()).or_insert(e.from());
+            }
+            Relation::With if !baskets.iter().any(|&(q, _)| q == e.from()) => {
+                baskets.push((e.from(), e.to()));
+            }
+            _ => {}
+        }
+    }
+    (doors, floors, baskets)
 }
 
 impl Task {
@@ -274,25 +310,8 @@ impl Task {
             .map(|i| Idx(i as u16))
             .filter(|&i| nodes[i.get()].kind == NodeKind::Room)
             .collect();
-        let mut doors = Vec::new();
-        let mut floors = FxHashMap::default();
-        let mut baskets = FxHashMap::default();
-        for e in &init_edges {
-            match e.rel() {
-                Relation::LeadingTo => doors.push((e.from(), e.to())),
-                Relation::Inside
-                    if nodes[e.from().get()].kind == NodeKind::Floor
-                        && nodes[e.to().get()].kind == NodeKind::Room =>
-                {
-                    floors.entry(e.to()).or_insert(e.from());
-                }
-                Relation::With => {
-                    baskets.entry(e.from()).or_insert(e.to());
-                }
-                _ => {}
-            }
-        }
-        Ok(Task {
+        let (doors, floors, baskets) = links(&nodes, &init_edges);
+        let mut task = Task {
             meta,
             nodes,
             vocab,
@@ -305,7 +324,46 @@ impl Task {
             floors,
             baskets,
             rooms,
-        })
+            room_set: NodeSet::new(0),
+            landable_set: NodeSet::new(0),
+            robot_set: NodeSet::new(0),
+            never_approached: NodeSet::new(0),
+        };
+        task.find_node_sets();
+        Ok(task)
+    }
+
+    /// Finds the node sets the rules use ([`Task::room_set`], [`Task::robot_set`],
+    /// [`Task::landable_set`], [`Task::never_approached`]) from the nodes; again after
+    /// their properties change (the geometric rules derive heights).
+    pub(crate) fn find_node_sets(&mut self) {
+        let n = self.nodes.len();
+        let (mut rooms, mut landable, mut never) =
+            (NodeSet::new(n), NodeSet::new(n), NodeSet::new(n));
+        let mut robots = NodeSet::new(n);
+        for r in &self.robots {
+            robots.insert(r.node);
+        }
+        for (i, node) in self.nodes.iter().enumerate() {
+            let i = Idx(i as u16);
+            if node.kind == NodeKind::Room {
+                rooms.insert(i);
+            }
+            if node.properties.contains(PropSet::LANDABLE) {
+                landable.insert(i);
+            }
+            if matches!(
+                node.kind,
+                NodeKind::Room | NodeKind::Robot(_) | NodeKind::Floor
+            ) || node.properties.contains(PropSet::HIGH_HEIGHT)
+            {
+                never.insert(i);
+            }
+        }
+        self.room_set = rooms;
+        self.landable_set = landable;
+        self.never_approached = never;
+        self.robot_set = robots;
     }
 
     /// Every node's index, in file order.
@@ -359,12 +417,35 @@ impl Task {
         &self.rooms
     }
 
+    /// [`Task::rooms`] as a set.
+    pub(crate) fn room_set(&self) -> &NodeSet {
+        &self.room_set
+    }
+
+    /// The robots, as a set.
+    pub(crate) fn robot_set(&self) -> &NodeSet {
+        &self.robot_set
+    }
+
+    /// The `LANDABLE` nodes, as a set.
+    pub(crate) fn landable_set(&self) -> &NodeSet {
+        &self.landable_set
+    }
+
+    /// What a robot dog never walks up to: rooms, robots, floors, `HIGH_HEIGHT` things.
+    pub(crate) fn never_approached(&self) -> &NodeSet {
+        &self.never_approached
+    }
+
     pub fn floor_of(&self, room: Idx) -> Option<Idx> {
         self.floors.get(&room).copied()
     }
 
     pub fn basket_of(&self, quadrotor: Idx) -> Option<Idx> {
-        self.baskets.get(&quadrotor).copied()
+        self.baskets
+            .iter()
+            .find(|(q, _)| *q == quadrotor)
+            .map(|(_, b)| *b)
     }
 
     /// Whether `n` has property `p` in state `s` (`ON_HIGH_SURFACE` is dynamic).

@@ -45,7 +45,17 @@ impl Relation {
     }
 
     pub(crate) fn from_bits(bits: u32) -> Relation {
-        Relation::ALL[bits as usize]
+        // A match, not a table: edges decode their relation in every inner loop, and
+        // this compiles to no lookup and no bounds check.
+        match bits {
+            0 => Relation::On,
+            1 => Relation::Inside,
+            2 => Relation::LeadingTo,
+            3 => Relation::With,
+            4 => Relation::Close,
+            5 => Relation::Hold,
+            _ => Relation::Above,
+        }
     }
 
     /// ON and INSIDE place a thing somewhere; the goal test counts only these.

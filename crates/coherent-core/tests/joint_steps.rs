@@ -352,12 +352,9 @@ fn footprints_meet_exactly_when_two_actions_do_not_commute_near_every_shortest_p
                 let (p, m) =
                     every_pair(task, &t, &context(task, &trace)).unwrap_or_else(|e| panic!("{e}"));
                 (pairs, meet) = (pairs + p, meet + m);
-                for (&robot, actions) in
-                    task.robots
-                        .iter()
-                        .zip(rules::team_actions(task, &t, &task.robots))
-                {
-                    for a in actions {
+                let lists = rules::team_actions(task, &t, &task.robots);
+                for (&robot, actions) in task.robots.iter().zip(&lists) {
+                    for &a in actions {
                         let next = after(task, &t, robot, a);
                         if seen.len() < AROUND && !seen.contains(&next) {
                             seen.push(next.clone());

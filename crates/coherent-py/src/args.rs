@@ -42,6 +42,12 @@ pub(crate) fn out(obj: &Bound<'_, PyAny>) -> PyResult<PathBuf> {
     Ok(out)
 }
 
+/// `out` of `run_bench` and the Ray executor's ledger: a results file, or None for the
+/// name the run's settings give.
+pub(crate) fn results_out(obj: &Bound<'_, PyAny>) -> PyResult<Option<PathBuf>> {
+    optional(obj, out)
+}
+
 /// `replay_from` of `run_bench`.
 pub(crate) fn replay_from(obj: &Bound<'_, PyAny>) -> PyResult<Option<PathBuf>> {
     optional(obj, |o| convert::path(o, "replay_from"))

@@ -3,15 +3,15 @@
 //! (`coherent::session::bench`) as `coherent bench` does.
 
 use std::ffi::CString;
-use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
 use coherent::session::bench::{self as session_bench, BenchConfig, EpisodesRequest, TableFormat};
 use coherent::session::engine::{
-    BenchOutcome, Cancel, Event, Execution, HISTORY_WINDOW, Limits, MethodSpec, Progress,
-    ResultLine, Subset, read_results as read_results_file, select as select_tasks,
+    BenchOutcome, Cancel, Event, Execution, HISTORY_WINDOW, Limits, MethodSpec, Progress, Report,
+    ResultLine, Setting, Style, Subset, read_results as read_results_file, select as select_tasks,
+    setting_field,
 };
 use coherent::session::error::BackendProblem;
 use coherent::session::{self, Error};
@@ -25,6 +25,7 @@ use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_source, prompt_source};
 use crate::task::{PyTask, robots_arg};
 use crate::{args, errors};
+use coherent::session::prompts::PriceSource;
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
 fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
@@ -95,12 +96,42 @@ pub(crate) fn select(
     ))
 }
 
+/// How `progress` asks for the run's progress to be shown: `"bar"` (redrawn in place),
+/// `"lines"` (one per episode) or None (not at all).
+pub(crate) fn progress_style(py: Python<'_>, progress: Option<&str>) -> PyResult<Option<Style>> {
+    match progress {
+        None => Ok(None),
+        Some("bar") => Ok(Some(Style::Bar)),
+        Some("lines") => Ok(Some(Style::Lines)),
+        Some(other) => Err(errors::choice(
+            py,
+            "progress",
+            other,
+            "expected \"bar\", \"lines\" or None",
+        )),
+    }
+}
+
+/// Writes `text` to Python's `sys.stderr` (which a notebook shows in the cell, where
+/// the process's own stderr would not be seen), taking the GIL for it.
+pub(crate) fn to_stderr(text: &str) {
+    Python::attach(|py| {
+        if let Ok(stderr) = py.import("sys").and_then(|sys| sys.getattr("stderr")) {
+            let _ = stderr.call_method1("write", (text,));
+            let _ = stderr.call_method0("flush");
+        }
+    });
+}
+
 pub(crate) fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     d.set_item("total", o.total)?;
     d.set_item("skipped", o.skipped)?;
     d.set_item("written", o.written)?;
+    d.set_item("finished", o.finished)?;
     d.set_item("unfinished", o.unfinished)?;
+    d.set_item("method_errors", o.method_errors)?;
+    d.set_item("not_started", o.not_started)?;
     d.set_item("interrupted", o.interrupted)?;
     d.set_item("skipped_tasks", &o.skipped_tasks)?;
     d.set_item("repaired_bytes", o.repaired_bytes)?;
@@ -110,17 +141,23 @@ pub(crate) fn outcome_dict<'py>(py: Python<'py>, o: &BenchOutcome) -> PyResult<B
 }
 
 /// The methods of a run, checked with its seeds and tasks as `coherent.bench` checks
-/// them; those written in Python are added to `python` (`tasks`: the run's).
+/// them; those written in Python are added to `python` (`tasks`: the run's). A run that
+/// replays the results file `replay` runs the recorded methods (by name: one written in
+/// Python needs no code then).
 pub(crate) fn run_methods(
     py: Python<'_>,
     methods: &[MethodArg],
     seeds: u32,
     tasks: &[Py<PyTask>],
     python: &mut Methods,
+    replay: Option<&Path>,
 ) -> PyResult<Vec<MethodSpec>> {
     let methods = methods
         .iter()
-        .map(|m| m.spec(py, python, tasks))
+        .map(|m| match replay {
+            Some(results) => m.recorded(py, results),
+            None => m.spec(py, python, tasks),
+        })
         .collect::<PyResult<Vec<_>>>()?;
     if methods.is_empty() {
         return Err(errors::invalid(py, "methods: name at least one method"));
@@ -134,6 +171,17 @@ pub(crate) fn run_methods(
         return Err(errors::invalid(py, "tasks: no tasks to run"));
     }
     Ok(methods)
+}
+
+/// The results file a run replays: `replay_from` when `backend` is `"replay"`.
+pub(crate) fn replaying<'a>(
+    backend: Option<&Bound<'_, PyAny>>,
+    replay_from: Option<&'a Path>,
+) -> Option<&'a Path> {
+    let replay = backend
+        .and_then(|b| b.cast::<PyString>().ok())
+        .is_some_and(|b| convert::utf8(b).is_ok_and(|name| name == "replay"));
+    replay_from.filter(|_| replay)
 }
 
 /// The backend `coherent.bench`'s `backend`, `sim_errors` and `replay_from` ask for
@@ -205,7 +253,7 @@ pub(crate) fn settings_err(py: Python<'_>, e: Error) -> PyErr {
     tasks, methods, *, execution = vec![Execution::Sequential], backend = None,
     sim_errors = None, replay_from = None, seeds = 1,
     concurrency = 4, history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES,
-    max_steps = None, out = PathBuf::from("results.jsonl"), progress = false, prompts = None,
+    max_steps = None, out = None, progress = None, prompts = None,
     prices = None, physics = false, robots = "local", namespace = None, robot_timeout = 10.0,
     server_wait = 10.0
 ))]
@@ -223,8 +271,8 @@ pub(crate) fn run_bench<'py>(
     #[pyo3(from_py_with = args::history)] history: usize,
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
     #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
-    #[pyo3(from_py_with = args::out)] out: PathBuf,
-    progress: bool,
+    #[pyo3(from_py_with = args::results_out)] out: Option<PathBuf>,
+    progress: Option<&str>,
     prompts: Option<&Bound<'py, PyAny>>,
     prices: Option<&Bound<'py, PyAny>>,
     physics: bool,
@@ -233,11 +281,12 @@ pub(crate) fn run_bench<'py>(
     robot_timeout: f64,
     server_wait: f64,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let style = progress_style(py, progress)?;
     let prompts_given = prompts.is_some();
     let request = EpisodesRequest {
         prompts: prompt_source(prompts)?,
         prices: price_source(prices)?,
-        backend: run_backend(backend, sim_errors, replay_from, prompts_given)?,
+        backend: run_backend(backend, sim_errors, replay_from.clone(), prompts_given)?,
         robots: robots_arg(py, robots, namespace, robot_timeout, server_wait)?,
         physics,
         history,
@@ -248,11 +297,13 @@ pub(crate) fn run_bench<'py>(
     };
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
     let mut python = Methods::new(py)?;
-    let methods = run_methods(py, &methods, seeds, &objects, &mut python)?;
+    let replay = replaying(backend, replay_from.as_deref());
+    let methods = run_methods(py, &methods, seeds, &objects, &mut python, replay)?;
     let settings = EpisodesRequest { methods, ..request }
         .prepare()
         .map_err(|e| settings_err(py, e))?;
     let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
+    let out = out.unwrap_or_else(|| session_bench::default_out(&settings, seeds));
     let config = BenchConfig {
         episodes: settings,
         seeds,
@@ -263,40 +314,64 @@ pub(crate) fn run_bench<'py>(
         let message = CString::new(note).unwrap_or_default();
         PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
     }
+    let config_out = config.out.display().to_string();
     let cancel = Cancel::default();
     let stop = cancel.clone();
     let result = interruptible(
         py,
         move || stop.cancel(),
         move || {
-            let mut lines = Progress::new(false);
+            let mut lines = style.map(Progress::new);
             let mut show = |e: Event<'_>| {
-                if let Some(text) = lines.line(&e).filter(|_| progress) {
-                    let _ = std::io::stderr().write_all(text.as_bytes());
+                if let Some(text) = lines.as_mut().and_then(|p| p.line(&e)) {
+                    to_stderr(&text);
                 }
             };
-            session::block_on(session_bench::run(&tasks, &config, &cancel, &mut show))?
+            let ran = session::block_on(session_bench::run(&tasks, &config, &cancel, &mut show));
+            if style == Some(Style::Bar) {
+                to_stderr("\n");
+            }
+            ran?
         },
     );
     python.close(py)?;
     let outcome = result?.map_err(|e| errors::session_err(py, e))?;
-    outcome_dict(py, &outcome)
+    let d = outcome_dict(py, &outcome)?;
+    d.set_item("out", &config_out)?;
+    Ok(d)
 }
 
 /// The lines of a results file, as dicts; a last line cut off mid-write is left out.
+/// With `prices`, each line's `cost_usd` is its recorded tokens at those prices.
 #[pyfunction]
-pub(crate) fn read_results(
-    py: Python<'_>,
+#[pyo3(signature = (path, prices = None))]
+pub(crate) fn read_results<'py>(
+    py: Python<'py>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
-) -> PyResult<Bound<'_, PyList>> {
+    prices: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let prices = price_source(prices)?;
     let file = py
         .detach(|| read_results_file(&path))
         .map_err(|e| errors::session_err(py, e.into()))?;
+    let lines = priced(py, file.lines, prices)?;
     let list = PyList::empty(py);
-    for line in &file.lines {
+    for line in &lines {
         list.append(to_py(py, line)?)?;
     }
     Ok(list)
+}
+
+/// `lines` priced anew from their tokens at `prices`, or as they are without.
+fn priced(
+    py: Python<'_>,
+    lines: Vec<ResultLine>,
+    prices: PriceSource,
+) -> PyResult<Vec<ResultLine>> {
+    if prices == PriceSource::Builtin {
+        return Ok(lines);
+    }
+    session_bench::priced(lines, prices).map_err(|e| errors::session_err(py, e))
 }
 
 /// Results lines (dicts with the results file's fields) as the harness's type; errors
@@ -313,6 +388,68 @@ pub(crate) fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine
         .collect()
 }
 
+/// Results lines with each `cost_usd` worked out anew from their recorded tokens at
+/// `prices` (a price file or a dict by model, added to the built-in table).
+#[pyfunction]
+pub(crate) fn price_lines<'py>(
+    lines: &Bound<'py, PyList>,
+    prices: &Bound<'py, PyAny>,
+) -> PyResult<Bound<'py, PyList>> {
+    let py = lines.py();
+    let source = price_source(Some(prices))?;
+    let priced = session_bench::priced(result_lines(lines)?, source)
+        .map_err(|e| errors::session_err(py, e))?;
+    let list = PyList::empty(py);
+    for line in &priced {
+        list.append(to_py(py, line)?)?;
+    }
+    Ok(list)
+}
+
+/// The report of results lines of one set of settings; lines of several are an
+/// `ArgumentError` that says how to pick one.
+fn report_of(lines: &Bound<'_, PyList>) -> PyResult<Report> {
+    let py = lines.py();
+    let lines = result_lines(lines)?;
+    session_bench::report(&lines).map_err(|mixed| {
+        let example = match mixed.differing.first() {
+            Some(&setting) if setting != Setting::Unrecorded => {
+                let column = format!("settings_{}", setting_field(setting));
+                let value = mixed
+                    .groups
+                    .first()
+                    .and_then(|(s, _)| s.as_ref())
+                    .and_then(|s| serde_json::to_value(s).ok())
+                    .and_then(|v| v.get(setting_field(setting)).cloned())
+                    .unwrap_or_default();
+                match value {
+                    serde_json::Value::Null => format!("df[df.{column}.isna()]"),
+                    v => format!("df[df.{column} == {}]", py_literal(&v)),
+                }
+            }
+            _ => "df[df.settings_backend.notna()]".to_owned(),
+        };
+        errors::invalid(
+            py,
+            format!(
+                "{mixed}\nreport one run at a time: pick its rows by their settings_* \
+                 columns, e.g. coherent.report({example})"
+            ),
+        )
+    })
+}
+
+/// A JSON value as Python writes it (`True`, `None`, `'text'`, `3`).
+fn py_literal(v: &serde_json::Value) -> String {
+    match v {
+        serde_json::Value::Bool(true) => "True".into(),
+        serde_json::Value::Bool(false) => "False".into(),
+        serde_json::Value::Null => "None".into(),
+        serde_json::Value::String(s) => format!("{s:?}"),
+        other => other.to_string(),
+    }
+}
+
 /// The paper's tables of results lines: Table I (by task type), Table II (by scene),
 /// the costs, as `coherent bench --report FILE --format json` gives them.
 #[pyfunction]
@@ -320,8 +457,7 @@ pub(crate) fn report_tables<'py>(
     py: Python<'py>,
     lines: &Bound<'py, PyList>,
 ) -> PyResult<Bound<'py, PyAny>> {
-    let lines = result_lines(lines)?;
-    to_py(py, &session_bench::report(&lines))
+    to_py(py, &report_of(lines)?)
 }
 
 /// The tables as text: `"markdown"`, `"csv"` or `"json"`, as `coherent bench --report`
@@ -333,7 +469,6 @@ pub(crate) fn report_text(
     #[pyo3(from_py_with = args::format)] format: &str,
 ) -> PyResult<String> {
     let py = lines.py();
-    let lines = result_lines(lines)?;
     let format = TableFormat::from_name(format).ok_or_else(|| {
         errors::choice(
             py,
@@ -342,5 +477,5 @@ pub(crate) fn report_text(
             "expected \"markdown\", \"csv\" or \"json\"",
         )
     })?;
-    Ok(session_bench::tables(&lines, format))
+    Ok(session_bench::text(&report_of(lines)?, format))
 }

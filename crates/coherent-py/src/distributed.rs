@@ -5,21 +5,22 @@
 //! local executor runs them).
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent::session::bench::{EpisodesRequest, RunTasks, Worker};
+use coherent::session::bench::{EpisodesRequest, RunTasks, Worker, default_out};
 use coherent::session::engine::{
     Cancel, EpisodeKey, EpisodeResult, Event, Execution, HISTORY_WINDOW, Ledger, Limits,
-    PriceTable, Progress, ResultLine, native,
+    PriceTable, Progress, ResultLine, Style, native,
 };
 use coherent::session::prompts::{PriceSource, PromptSource};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use crate::bench::{outcome_dict, run_backend, run_methods, settings_err};
+use crate::bench::{
+    outcome_dict, progress_style, replaying, run_backend, run_methods, settings_err, to_stderr,
+};
 use crate::convert::{json_at, text, to_py};
 use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_source, prompt_source};
@@ -47,9 +48,12 @@ fn key_of(py: Python<'_>, (method, scene, task_id, seed, execution): Key) -> PyR
 
 /// The driver's side of a run: checks the run's settings as `coherent.bench` does (the
 /// backend's too, though the workers build their own), opens (and repairs) the results
-/// file `out`, knows the episodes still to run, writes each result handed to it, once.
+/// file `out`, refusing one of other settings, knows the episodes still to run, writes
+/// each result handed to it, once, with the run's settings.
 #[pyclass(name = "_BenchLedger", module = "coherent._coherent")]
 pub(crate) struct PyLedger {
+    /// The results file.
+    out: PathBuf,
     ledger: Option<Ledger>,
     pending: Vec<EpisodeKey>,
     progress: Option<Progress>,
@@ -72,7 +76,9 @@ impl PyLedger {
     #[new]
     #[pyo3(signature = (
         tasks, methods, *, seeds, out, execution = vec![Execution::Sequential], backend = None,
-        sim_errors = None, replay_from = None, progress = false, prompts = None, prices = None
+        sim_errors = None, replay_from = None, history = HISTORY_WINDOW,
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, physics = false,
+        progress = None, prompts = None, prices = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -80,12 +86,16 @@ impl PyLedger {
         tasks: Vec<Bound<'_, PyTask>>,
         #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
         #[pyo3(from_py_with = args::seeds)] seeds: u32,
-        #[pyo3(from_py_with = args::out)] out: PathBuf,
+        #[pyo3(from_py_with = args::results_out)] out: Option<PathBuf>,
         #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
         backend: Option<&Bound<'_, PyAny>>,
         sim_errors: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
-        progress: bool,
+        #[pyo3(from_py_with = args::history)] history: usize,
+        #[pyo3(from_py_with = args::max_states)] max_states: usize,
+        #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
+        physics: bool,
+        progress: Option<&str>,
         prompts: Option<&Bound<'_, PyAny>>,
         prices: Option<&Bound<'_, PyAny>>,
     ) -> PyResult<PyLedger> {
@@ -93,14 +103,19 @@ impl PyLedger {
         let request = EpisodesRequest {
             prompts: prompt_source(prompts)?,
             prices: price_source(prices)?,
-            backend: run_backend(backend, sim_errors, replay_from, prompts_given)?,
+            backend: run_backend(backend, sim_errors, replay_from.clone(), prompts_given)?,
             executions: execution,
+            history,
+            max_states,
+            max_steps,
+            physics,
             ..EpisodesRequest::new(Vec::new())
         };
         // The methods written in Python are only named here; the workers run them.
         let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
         let mut python = Methods::new(py)?;
-        let methods = run_methods(py, &methods, seeds, &objects, &mut python);
+        let replay = replaying(backend, replay_from.as_deref());
+        let methods = run_methods(py, &methods, seeds, &objects, &mut python, replay);
         python.close(py)?;
         let methods = methods?;
         // The settings checked as `coherent.bench` checks them (the backend's too, though
@@ -110,9 +125,11 @@ impl PyLedger {
             .map_err(|e| settings_err(py, e))?;
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
         RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
-        let mut ledger = Ledger::open(&out).map_err(|e| errors::session_err(py, e.into()))?;
+        let out = out.unwrap_or_else(|| default_out(&settings, seeds));
+        let mut ledger = Ledger::open(&out, &settings.record(seeds))
+            .map_err(|e| errors::session_err(py, e.into()))?;
         let pending = ledger.plan(&tasks, &settings.methods, &settings.executions, seeds);
-        let mut progress = progress.then(|| Progress::new(false));
+        let mut progress = progress_style(py, progress)?.map(Progress::new);
         if let Some(p) = progress.as_mut() {
             let start = Event::Start {
                 to_run: pending.len(),
@@ -121,6 +138,7 @@ impl PyLedger {
             show(p.line(&start));
         }
         Ok(PyLedger {
+            out,
             ledger: Some(ledger),
             pending,
             progress,
@@ -202,13 +220,25 @@ impl PyLedger {
                 .mark_orphans()
                 .map_err(|e| errors::session_err(py, e.into()))?;
         }
-        outcome_dict(py, &ledger.finish(interrupted))
+        if self.progress.as_ref().map(Progress::style) == Some(Style::Bar) {
+            // The bar's last redraw ends its line.
+            to_stderr("\n");
+        }
+        let d = outcome_dict(py, &ledger.finish(interrupted))?;
+        d.set_item("out", self.out.display().to_string())?;
+        Ok(d)
+    }
+
+    /// The results file (the name the settings give when `out` was None).
+    #[getter]
+    fn out(&self) -> String {
+        self.out.display().to_string()
     }
 }
 
 fn show(text: Option<String>) {
     if let Some(text) = text {
-        let _ = std::io::stderr().write_all(text.as_bytes());
+        to_stderr(&text);
     }
 }
 
@@ -261,7 +291,8 @@ impl PyWorker {
             .map(|t| Py::new(py, PyTask::shared(Arc::clone(t))))
             .collect::<PyResult<Vec<_>>>()?;
         let mut python = Methods::new(py)?;
-        let methods = run_methods(py, &methods, 1, &objects, &mut python)?;
+        let replay = replaying(backend, replay_from.as_deref());
+        let methods = run_methods(py, &methods, 1, &objects, &mut python, replay)?;
         // The driver refused a prompt set with a replay; the prompt set and the price
         // table come as the driver's data.
         let files = prompts
@@ -274,7 +305,7 @@ impl PyWorker {
             })
             .collect::<PyResult<Vec<_>>>()?;
         let settings = EpisodesRequest {
-            backend: run_backend(backend, sim_errors, replay_from, false)?,
+            backend: run_backend(backend, sim_errors, replay_from.clone(), false)?,
             prompts: PromptSource::Texts(files),
             prices: PriceSource::Json(json_at(prices.as_any(), "prices")?.to_string()),
             history,

@@ -6,8 +6,9 @@
 use std::fmt::Display;
 
 use coherent::session::Error;
-use coherent::session::engine::{PromptError, TaskError};
+use coherent::session::engine::{PromptError, Setting, TaskError};
 use coherent::session::episode::Ending;
+use coherent::session::error::settings_differ;
 use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -159,10 +160,37 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
             raised(message, built)
         }
         Error::Endpoint(_) => error(py, Kind::Backend, message, None),
+        Error::SettingsDiffer { file, differences } => {
+            let message = settings_differ(&file, &differences, |s| argument_of(s).into(), "out=");
+            error(py, Kind::Argument, message, None)
+        }
         Error::Physics(_) => error(py, Kind::Physics, message, None),
-        Error::Robots(_) => error(py, Kind::Robot, message, None),
+        // Python's words: the wait is the argument `server_wait=`.
+        Error::Robots(e) => error(py, Kind::Robot, e.with_wait_named("server_wait="), None),
         Error::Interrupted => PyKeyboardInterrupt::new_err(message),
         Error::Internal(_) => error(py, Kind::Coherent, message, None),
+    }
+}
+
+/// The keyword argument of `coherent.bench` that sets `setting`.
+pub(crate) fn argument_of(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Backend => "backend",
+        Setting::Model => "backend (the LLM's model)",
+        Setting::SimErrors => "sim_errors",
+        Setting::Temperature => "backend (the LLM's temperature)",
+        Setting::ModelSeed => "backend (the LLM's seed)",
+        Setting::Seeds => "seeds",
+        Setting::Prompts => "prompts",
+        Setting::History => "history",
+        Setting::MaxSteps => "max_steps",
+        Setting::MaxStates => "max_states",
+        Setting::Physics => "physics",
+        Setting::Robots => "robots",
+        Setting::Execution => "execution",
+        Setting::Version => "coherent's version",
+        Setting::Method => "the method's own settings (its `settings`)",
+        Setting::Unrecorded => "settings",
     }
 }
 

@@ -99,16 +99,18 @@ fn benchmark_tasks(
     Ok(tasks.into_iter().map(PyTask::shared).collect())
 }
 
-/// Plans `task` optimally: one line of `coherent plan --json`, as a dict.
+/// Plans `task` optimally: one line of `coherent plan --json`, as a dict; with
+/// `parallel`, of `coherent plan --parallel --json` (the fewest joint steps too).
 ///
 /// The default `max_states` is `Limits::DEFAULT_MAX_STATES` (Python shows it as `...` in
 /// the signature; the module has it as `DEFAULT_MAX_STATES`).
 #[pyfunction]
-#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES))]
+#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES, parallel = false))]
 fn plan<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
+    parallel: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
@@ -120,7 +122,13 @@ fn plan<'py>(
     let json = interruptible(
         py,
         move || stop.store(true, Ordering::Relaxed),
-        move || check::plan(&task, &limits, false).to_json(&task),
+        move || {
+            let options = check::PlanOptions {
+                physics: false,
+                parallel,
+            };
+            check::plan(&task, &limits, options).to_json(&task)
+        },
     )?;
     json_to_py(py, &json)
 }
@@ -241,6 +249,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bench::read_results, m)?)?;
     m.add_function(wrap_pyfunction!(bench::report_tables, m)?)?;
     m.add_function(wrap_pyfunction!(bench::report_text, m)?)?;
+    m.add_function(wrap_pyfunction!(bench::price_lines, m)?)?;
     m.add_function(wrap_pyfunction!(scene::scene_layout, m)?)?;
     m.add_function(wrap_pyfunction!(scene::robot_paths, m)?)?;
     m.add_function(wrap_pyfunction!(scene::render_svg, m)?)?;

@@ -4,8 +4,8 @@
 //! fallbacks, token accounting, the key in no text), and inside a method's `act` each
 //! call is filed in that step's round of the transcript, like a built-in method's.
 
-use std::sync::Arc;
 use std::sync::mpsc::{self, RecvTimeoutError};
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use coherent::session::engine::{
@@ -15,7 +15,7 @@ use coherent::session::engine::{
 use coherent::session::{self, backend};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::types::{PyCFunction, PyDict, PyList, PyString};
 
 use crate::args;
 use crate::convert::{json_at, py_repr, to_py};
@@ -177,8 +177,9 @@ impl PyLlm {
     }
 
     /// `chat`, awaited: `reply = await llm.achat(messages)` (an asyncio future of the
-    /// running loop). Calls of concurrent coroutines are in flight together, up to the
-    /// LLM's `concurrency`.
+    /// running loop), or `asyncio.run(llm.achat(messages))` outside any loop (a coroutine
+    /// that starts the call on the loop that awaits it). Calls of concurrent coroutines
+    /// are in flight together, up to the LLM's `concurrency`.
     #[pyo3(signature = (messages, schema = None, *, max_tokens = 400, role = "assigner", robot = None))]
     fn achat<'py>(
         &self,
@@ -191,33 +192,22 @@ impl PyLlm {
     ) -> PyResult<Bound<'py, PyAny>> {
         let (chat, call) = self.request(messages, schema, max_tokens, role, robot)?;
         let recorder = Recorder::current(py)?;
-        let event_loop = py.import("asyncio")?.call_method0("get_running_loop")?;
-        let future = event_loop.call_method0("create_future")?;
-        let settle = helpers(py)?.getattr("_settle")?.unbind();
-        let (event_loop, pending) = (event_loop.unbind(), future.clone().unbind());
         let client = Arc::clone(&self.client);
-        runtime(py)?.spawn(async move {
-            let result = ask(client, chat, call, recorder).await;
-            Python::attach(|py| {
-                let (ok, value) = match result {
-                    Ok(answer) => match Py::new(py, PyReply { answer }) {
-                        Ok(reply) => (true, reply.into_any()),
-                        Err(e) => (false, e.into_value(py).into_any()),
-                    },
-                    Err(e) => (
-                        false,
-                        errors::backend(py, e.to_string()).into_value(py).into_any(),
-                    ),
-                };
-                // A loop closed meanwhile has nobody waiting.
-                let _ = event_loop.call_method1(
-                    py,
-                    "call_soon_threadsafe",
-                    (settle, pending, ok, value),
-                );
-            });
-        });
-        Ok(future)
+        let asyncio = py.import("asyncio")?;
+        if let Ok(event_loop) = asyncio.call_method0("get_running_loop") {
+            return start(py, &event_loop, client, chat, call, recorder);
+        }
+        // No loop runs yet: the call starts when the coroutine is awaited, on its loop.
+        let once = Mutex::new(Some((client, chat, call, recorder)));
+        let begin = PyCFunction::new_closure(py, None, None, move |args, _| {
+            let py = args.py();
+            let taken = once.lock().unwrap_or_else(PoisonError::into_inner).take();
+            let (client, chat, call, recorder) = taken
+                .ok_or_else(|| PyRuntimeError::new_err("this achat call was awaited already"))?;
+            let event_loop = py.import("asyncio")?.call_method0("get_running_loop")?;
+            start(py, &event_loop, client, chat, call, recorder).map(Bound::unbind)
+        })?;
+        helpers(py)?.call_method1("_when_awaited", (begin,))
     }
 
     /// The base URL; several comma-separated when several serve the model.
@@ -298,6 +288,40 @@ impl PyLlm {
             self.config.temperature
         )
     }
+}
+
+/// Starts the call of `chat` on `event_loop` (running): an asyncio future of that loop,
+/// settled from the session's runtime when the answer comes.
+fn start<'py>(
+    py: Python<'py>,
+    event_loop: &Bound<'py, PyAny>,
+    client: Arc<OpenAiClient>,
+    chat: Chat,
+    call: Call,
+    recorder: Option<Py<Recorder>>,
+) -> PyResult<Bound<'py, PyAny>> {
+    let future = event_loop.call_method0("create_future")?;
+    let settle = helpers(py)?.getattr("_settle")?.unbind();
+    let (event_loop, pending) = (event_loop.clone().unbind(), future.clone().unbind());
+    runtime(py)?.spawn(async move {
+        let result = ask(client, chat, call, recorder).await;
+        Python::attach(|py| {
+            let (ok, value) = match result {
+                Ok(answer) => match Py::new(py, PyReply { answer }) {
+                    Ok(reply) => (true, reply.into_any()),
+                    Err(e) => (false, e.into_value(py).into_any()),
+                },
+                Err(e) => (
+                    false,
+                    errors::backend(py, e.to_string()).into_value(py).into_any(),
+                ),
+            };
+            // A loop closed meanwhile has nobody waiting.
+            let _ =
+                event_loop.call_method1(py, "call_soon_threadsafe", (settle, pending, ok, value));
+        });
+    });
+    Ok(future)
 }
 
 impl PyLlm {

@@ -7,9 +7,14 @@
 //! (`coherent._methods.Loop`), where those of concurrent episodes overlap, while the
 //! episode waits without the GIL.
 
+use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
+use std::path::Path;
+
 use coherent::session::Error;
+use coherent::session::backend::RecordedRun;
+use coherent::session::bench::recorded_method;
 use coherent::session::engine::{
     Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
     Policy, RobotView, StepView, Task,
@@ -20,7 +25,7 @@ use pyo3::sync::PyOnceLock;
 use pyo3::types::{PyDict, PyList, PyTuple};
 use tokio::sync::oneshot;
 
-use crate::convert::{py_repr, to_py};
+use crate::convert::{json_at, py_repr, to_py};
 use crate::errors;
 use crate::task::PyTask;
 
@@ -343,7 +348,8 @@ impl Methods {
     }
 
     /// `method` (a class or any callable) as a method of the engine, named by its `name`
-    /// or its class's name; `tasks` are the run's Python tasks.
+    /// or its class's name, with the settings it declares (`settings`, recorded in its
+    /// results lines); `tasks` are the run's Python tasks.
     pub(crate) fn add(
         &mut self,
         method: &Bound<'_, PyAny>,
@@ -360,6 +366,11 @@ impl Methods {
         let name: String = helpers(py)?
             .call_method1("method_name", (method,))?
             .extract()?;
+        let declared = helpers(py)?.call_method1("method_settings", (method,))?;
+        let settings = match json_at(&declared, &format!("{name}.settings"))? {
+            serde_json::Value::Object(map) => map.into_iter().collect(),
+            _ => BTreeMap::new(),
+        };
         let shared = Arc::new(PythonMethod {
             factory: method.clone().unbind(),
             tasks: tasks.iter().map(|t| t.clone_ref(py)).collect(),
@@ -390,8 +401,9 @@ impl Methods {
                 }
             })
         });
-        let external =
-            External::new(&name, make).map_err(|e| errors::session_err(py, Error::from(e)))?;
+        let external = External::new(&name, make)
+            .map_err(|e| errors::session_err(py, Error::from(e)))?
+            .with_settings(settings);
         self.methods.push(shared);
         Ok(external)
     }
@@ -556,5 +568,42 @@ impl MethodArg {
                 .add(object.bind(py), tasks)
                 .map(MethodSpec::External),
         }
+    }
+
+    /// The method as the replay of the results file `results` runs it: a built-in one,
+    /// or the recorded one of the name a method written in Python goes by, whose
+    /// decisions replay without its code (a `MODULE:CLASS` that cannot be loaded any
+    /// more is an error listing the recorded names).
+    pub(crate) fn recorded(&self, py: Python<'_>, results: &Path) -> PyResult<MethodSpec> {
+        let name = match self {
+            MethodArg::Name(name) if !name.contains(':') => {
+                if let Some(method) = Method::from_name(name) {
+                    return Ok(method.into());
+                }
+                name.clone()
+            }
+            MethodArg::Name(spec) => match helpers(py)?.call_method1("load", (spec,)) {
+                Ok(found) => helpers(py)?
+                    .call_method1("method_name", (found,))?
+                    .extract()?,
+                Err(e) => {
+                    let names = RecordedRun::read(results)
+                        .map(|r| r.methods().join(", "))
+                        .map_err(|e| errors::session_err(py, e))?;
+                    return Err(errors::invalid(
+                        py,
+                        format!(
+                            "method {spec}: {e}; a replay runs the recorded decisions and \
+                             needs no code: name the method as {} records it ({names})",
+                            results.display()
+                        ),
+                    ));
+                }
+            },
+            MethodArg::Python(object) => helpers(py)?
+                .call_method1("method_name", (object,))?
+                .extract()?,
+        };
+        recorded_method(results, &name).map_err(|e| errors::session_err(py, e))
     }
 }

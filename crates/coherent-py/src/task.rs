@@ -85,7 +85,7 @@ impl PyTask {
             py,
             move || cancel.store(true, Ordering::Relaxed),
             move || {
-                check::plan(&task, &limits, false)
+                check::plan(&task, &limits, check::PlanOptions::default())
                     .analysis
                     .task_type
                     .map(|k| k.name())

@@ -21,22 +21,33 @@ pub enum Error {
     Physics(coherent_sim::PhysicsError),
 }
 
-impl std::fmt::Display for Error {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+impl Error {
+    /// The error's text, naming the setting of the wait for the servers as `wait` (a
+    /// front end's flag, `--server-wait`, or argument, `server_wait=`).
+    pub fn with_wait_named(&self, wait: &str) -> String {
         match self {
-            Error::Invalid(why) => f.write_str(why),
             Error::Missing {
                 robots,
                 namespace,
                 waited,
-            } => write!(
-                f,
+            } => format!(
                 "no ROS 2 action server for {} under {namespace} within {:.1} s (start the \
                  robots' servers, e.g. `coherent robots serve TASK --namespace {namespace}`, \
-                 or wait longer with --server-wait)",
+                 or wait longer with {wait})",
                 robots.join(", "),
                 waited.as_secs_f64()
             ),
+            other => other.to_string(),
+        }
+    }
+}
+
+/// The command line's words: the wait is `--server-wait`.
+impl std::fmt::Display for Error {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Error::Invalid(why) => f.write_str(why),
+            Error::Missing { .. } => f.write_str(&self.with_wait_named("--server-wait")),
             Error::Dds(why) => write!(f, "ROS 2: {why}"),
             Error::Physics(e) => write!(f, "physics: {e}"),
         }

@@ -21,6 +21,7 @@ use super::settings::EpisodeSettings;
 use crate::session::backend::BackendChoice;
 use crate::session::episode::{self, EpisodeSpec, Ran};
 use crate::session::error::Error;
+use crate::session::waiting::Waiting;
 
 /// What the planner says about a task, once per task: its type and optimum for the
 /// results lines, and why it has no plan when it has none; in a run with parallel
@@ -95,13 +96,15 @@ pub fn episode_seed(seed: u32, method: &str, scene: &str, task_id: i64) -> u64 {
 /// `seed<N>` subfolder of `transcripts` (the run's
 /// [`coherent_agents::bench::transcripts_dir`]), on the current tokio runtime
 /// (multi-threaded; the episode itself runs on a thread of its own). `cancel` ends it as
-/// interrupted, or keeps it from starting.
+/// interrupted, or keeps it from starting. With `waiting`, its model calls are kept
+/// there while they run.
 pub async fn run_one(
     tasks: &RunTasks,
     key: &EpisodeKey,
     settings: &EpisodeSettings,
     transcripts: &Path,
     cancel: &Cancel,
+    waiting: Option<&Arc<Waiting>>,
 ) -> Result<EpisodeResult, Error> {
     let method = settings
         .methods
@@ -185,7 +188,10 @@ pub async fn run_one(
                 prompts: settings.prompts.clone(),
             },
             budget,
-            backend: choice.for_episode(&limits, seed)?,
+            backend: match waiting {
+                Some(waiting) => waiting.watch(choice.for_episode(&limits, seed)?),
+                None => choice.for_episode(&limits, seed)?,
+            },
             robots: settings.robots.clone(),
             out: dir,
             prices: settings.prices.clone(),
@@ -304,6 +310,8 @@ fn line(
         uses_model: ran.model_use.uses_model(),
         error: mismatch.or_else(|| s.error.clone()),
         transcript: ran.path.display().to_string(),
+        // The run's settings are the driver's to record (`Ledger::record`).
+        settings: None,
     }
 }
 

@@ -15,11 +15,11 @@ pub mod settings;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::Cancel;
 use coherent_agents::bench::{
     self, BenchOutcome, EpisodeKey, EpisodeResult, Event, Ledger, ResultLine, Selection, Subset,
 };
-use coherent_agents::report::{self, Report};
+use coherent_agents::report::{self, Mixed, Report};
+use coherent_agents::{Cancel, MethodSpec};
 use coherent_core::Task;
 use tokio::sync::Semaphore;
 use tokio::task::JoinSet;
@@ -27,20 +27,48 @@ use tokio::task::JoinSet;
 pub use episode::{RunTasks, episode_seed, run_one};
 pub use settings::{EpisodeSettings, EpisodesRequest, distinct_names};
 
+use crate::session::backend::RecordedRun;
 use crate::session::error::Error;
+use crate::session::prompts::PriceSource;
 use crate::session::robots::Robots;
+use crate::session::waiting::{SLOW, Waiting, waiting_text};
 
-/// A subset by name (`all`, `paper40`, `native40`), else a file of `scene task_id` lines.
+/// A subset by name (`all`, `paper40`, `native40`), else a file of `scene task_id` lines;
+/// a name that is neither says which names there are.
 pub fn subset(name_or_file: &str) -> Result<Subset, Error> {
-    match Subset::named(name_or_file) {
-        Some(named) => Ok(named),
-        None => subset_file(Path::new(name_or_file)),
+    if let Some(named) = Subset::named(name_or_file) {
+        return Ok(named);
     }
+    let path = Path::new(name_or_file);
+    if !path.exists() {
+        return Err(Error::Invalid(format!(
+            "subset {name_or_file:?}: no subset of that name ({}) and no file of that name \
+             (a file lists `scene task_id` lines)",
+            Subset::NAMES.join(", ")
+        )));
+    }
+    subset_file(path)
 }
 
 /// The subset a file of `scene task_id` lines lists.
 pub fn subset_file(path: &Path) -> Result<Subset, Error> {
     Ok(Subset::read_file(path)?)
+}
+
+/// The method `name` of the earlier results file `results`, as its replay runs it: the
+/// recorded one, so that a method written in Python replays by its name, without its
+/// code. An error names the methods the file has when it has none of that name.
+pub fn recorded_method(results: &Path, name: &str) -> Result<MethodSpec, Error> {
+    let recorded = RecordedRun::read(results)?;
+    let Some((_, path)) = recorded.transcripts.iter().find(|(k, _)| k.method == name) else {
+        return Err(Error::Invalid(format!(
+            "method {name:?}: {} has no finished episode of it; its methods are {}",
+            results.display(),
+            recorded.methods().join(", ")
+        )));
+    };
+    let transcript = coherent_agents::transcript::read(path)?;
+    Ok(coherent_agents::recorded_settings(&transcript)?.0.method)
 }
 
 /// The tasks a subset picks from the tasks at a path, and the malformed tasks left out.
@@ -64,6 +92,38 @@ pub fn choose(path: &Path, subset: &Subset) -> Result<Chosen, Error> {
         selection: bench::select(tasks, subset)?,
         malformed,
     })
+}
+
+/// The results file a run of `settings` with `seeds` seeds writes when it is given none:
+/// `results-<backend>[-<model>]-<8 hex digits of the settings>.jsonl` in the current
+/// folder, so that runs of other settings never share a file and the same call resumes
+/// its own.
+pub fn default_out(settings: &EpisodeSettings, seeds: u32) -> PathBuf {
+    let record = settings.record(seeds);
+    let Some(any) = record.values().next() else {
+        return PathBuf::from("results.jsonl");
+    };
+    let safe = |s: &str| -> String {
+        s.chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '.' | '_') {
+                    c
+                } else {
+                    '-'
+                }
+            })
+            .take(40)
+            .collect()
+    };
+    let model = any
+        .model
+        .as_deref()
+        .map_or(String::new(), |m| format!("-{}", safe(m)));
+    PathBuf::from(format!(
+        "results-{}{model}-{}.jsonl",
+        any.backend,
+        any.digest()
+    ))
 }
 
 /// What to run: the episodes' settings, how many seeds, how many at once, and where the
@@ -118,7 +178,7 @@ pub async fn run(
         return Err(Error::Invalid("seeds must be at least 1".into()));
     }
     let run_tasks = Arc::new(RunTasks::new(tasks)?);
-    let mut ledger = Ledger::open(&config.out)?;
+    let mut ledger = Ledger::open(&config.out, &config.episodes.record(config.seeds))?;
     let episodes = &config.episodes;
     let keys = ledger.plan(tasks, &episodes.methods, &episodes.executions, config.seeds);
     progress(Event::Start {
@@ -128,21 +188,45 @@ pub async fn run(
     let settings = Arc::new(config.episodes.clone());
     let transcripts = Arc::new(bench::transcripts_dir(&config.out));
     let permits = Arc::new(Semaphore::new(config.at_once()));
+    let waiting = Arc::new(Waiting::default());
     let mut set = JoinSet::new();
     for key in keys {
         let (tasks, settings) = (Arc::clone(&run_tasks), Arc::clone(&settings));
-        let transcripts = Arc::clone(&transcripts);
+        let (transcripts, waiting) = (Arc::clone(&transcripts), Arc::clone(&waiting));
         let (permits, cancel) = (Arc::clone(&permits), cancel.clone());
         set.spawn(async move {
             let _permit = tokio::select! {
                 p = permits.acquire() => p.map_err(|e| Error::Internal(e.to_string()))?,
                 () = cancel.cancelled() => return Ok(EpisodeResult::NotStarted),
             };
-            run_one(&tasks, &key, &settings, &transcripts, &cancel).await
+            run_one(
+                &tasks,
+                &key,
+                &settings,
+                &transcripts,
+                &cancel,
+                Some(&waiting),
+            )
+            .await
         });
     }
     let mut first_error = None;
-    while let Some(joined) = set.join_next().await {
+    // Once a second, a sign of life while a model call is slow.
+    let mut tick = tokio::time::interval(std::time::Duration::from_secs(1));
+    loop {
+        let joined = tokio::select! {
+            joined = set.join_next() => match joined {
+                Some(joined) => joined,
+                None => break,
+            },
+            _ = tick.tick() => {
+                if let Some(longest) = waiting.longest().filter(|l| l.waited >= SLOW) {
+                    let text = waiting_text(&longest);
+                    progress(Event::Waiting { waited: longest.waited, text: &text });
+                }
+                continue;
+            }
+        };
         let result = joined.map_err(|e| Error::Internal(format!("an episode panicked: {e}")));
         // A transcript or a line that cannot be written would lose data: stop everything.
         match result
@@ -208,6 +292,7 @@ impl Worker {
             &self.settings,
             &self.transcripts,
             cancel,
+            None,
         ))?
     }
 }
@@ -231,18 +316,71 @@ impl TableFormat {
     }
 }
 
-/// The paper's tables of results lines: Table I by task type, Table II by scene, the
-/// costs.
-pub fn report(lines: &[ResultLine]) -> Report {
+/// `lines` with each `cost_usd` worked out anew from its recorded tokens at `prices`.
+pub fn priced(lines: Vec<ResultLine>, prices: PriceSource) -> Result<Vec<ResultLine>, Error> {
+    let prices = prices.read()?;
+    Ok(lines.into_iter().map(|l| l.priced(&prices)).collect())
+}
+
+/// The paper's tables of results lines of one set of settings: Table I by task type,
+/// Table II by scene, the costs; lines of several sets are refused ([`Mixed`]).
+pub fn report(lines: &[ResultLine]) -> Result<Report, Mixed> {
     report::build(lines)
 }
 
 /// The paper's tables ([`report`]) as text.
-pub fn tables(lines: &[ResultLine], format: TableFormat) -> String {
-    let r = report(lines);
+pub fn tables(lines: &[ResultLine], format: TableFormat) -> Result<String, Mixed> {
+    report(lines).map(|r| text(&r, format))
+}
+
+/// A report as text.
+pub fn text(r: &Report, format: TableFormat) -> String {
     match format {
-        TableFormat::Markdown => report::markdown(&r),
-        TableFormat::Csv => report::csv(&r),
-        TableFormat::Json => report::json(&r),
+        TableFormat::Markdown => report::markdown(r),
+        TableFormat::Csv => report::csv(r),
+        TableFormat::Json => report::json(r),
+    }
+}
+
+/// The tables of every set of settings in `lines`, one after the other ([`report::groups`]):
+/// in Markdown each under a heading that says which run it is, in CSV one header for all
+/// (each row names its settings), in JSON one report, or an array of one per set.
+pub fn tables_by_run(lines: &[ResultLine], format: TableFormat) -> String {
+    // Each group has one set of settings, so each builds.
+    let reports: Vec<Report> = report::groups(lines)
+        .iter()
+        .filter_map(|g| report::build(&g.lines).ok())
+        .collect();
+    let n = reports.len();
+    if n <= 1 {
+        let one = reports.into_iter().next();
+        return text(&one.unwrap_or_else(report::empty), format);
+    }
+    match format {
+        TableFormat::Markdown => {
+            let mut out = format!(
+                "The results hold {n} runs of different settings; each has its own tables.\n\n"
+            );
+            for (i, r) in reports.iter().enumerate() {
+                out.push_str(&format!("## Run {} of {n}\n\n", i + 1));
+                out.push_str(&report::markdown(r));
+                out.push('\n');
+            }
+            out
+        }
+        TableFormat::Csv => {
+            let mut out = String::new();
+            for (i, r) in reports.iter().enumerate() {
+                let csv = report::csv(r);
+                let body = if i == 0 {
+                    csv.as_str()
+                } else {
+                    csv.split_once('\n').map_or("", |(_, rest)| rest)
+                };
+                out.push_str(body);
+            }
+            out
+        }
+        TableFormat::Json => serde_json::to_string_pretty(&reports).unwrap_or_default(),
     }
 }

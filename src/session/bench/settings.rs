@@ -2,7 +2,11 @@
 //! and the prices, the budget and the robots; as a front end asks for them
 //! ([`EpisodesRequest`]) and as the episodes get them ([`EpisodeSettings`]).
 
+use std::collections::BTreeMap;
+
+use coherent_agents::bench::RunSettings;
 use coherent_agents::episode::HISTORY_WINDOW;
+use coherent_agents::transcript::RobotsRecord;
 use coherent_agents::{Execution, MethodSpec, PriceTable, Prompts};
 use coherent_core::planner::Limits;
 
@@ -107,6 +111,60 @@ pub struct EpisodeSettings {
     pub prices: PriceTable,
     pub physics: bool,
     pub robots: Robots,
+}
+
+impl EpisodeSettings {
+    /// What the results lines of each method (by name) record of a run of these
+    /// settings with seed indices `0..seeds`: the settings that make them comparable.
+    pub fn record(&self, seeds: u32) -> BTreeMap<String, RunSettings> {
+        let info = self.backend.info();
+        let (model, sim_errors) = match &self.backend {
+            BackendChoice::Builtin => (None, None),
+            BackendChoice::Simulated(rates) => (None, Some(rates.label())),
+            BackendChoice::OpenAi(_) | BackendChoice::Replay(_) => {
+                (Some(info.model).filter(|m| !m.is_empty()), None)
+            }
+        };
+        let model_seed = match &self.backend {
+            BackendChoice::OpenAi(client) => client.config().seed,
+            _ => None,
+        };
+        let run = RunSettings {
+            backend: info.kind,
+            model,
+            sim_errors,
+            temperature: self.backend.temperature(),
+            model_seed,
+            seeds,
+            // The set of every template the run renders: the parallel set holds the
+            // sequential one's templates too.
+            prompts: self
+                .prompts
+                .hash(self.executions.iter().copied().max().unwrap_or_default())
+                .to_owned(),
+            history: self.history,
+            max_steps: self.max_steps,
+            max_states: self.max_states,
+            physics: self.physics,
+            robots: match self.robots.record() {
+                RobotsRecord::Local => "local".to_owned(),
+                RobotsRecord::Ros2 { .. } => "ros2".to_owned(),
+            },
+            coherent: coherent_agents::VERSION.to_owned(),
+            executions: self.executions.clone(),
+            method: BTreeMap::new(),
+        };
+        self.methods
+            .iter()
+            .map(|m| {
+                let own = RunSettings {
+                    method: m.own_settings(),
+                    ..run.clone()
+                };
+                (m.name().to_owned(), own)
+            })
+            .collect()
+    }
 }
 
 /// Refuses two methods of one name: results are keyed by the method's name, so one

@@ -92,10 +92,14 @@ pub fn view(
             link: links.get(i).cloned().flatten(),
         })
         .collect();
+    // The tables of one run: a file that holds several (written by an earlier version,
+    // or put together by hand) shows those of its last, whose settings the report has.
+    let runs = report::groups(&named);
+    let last = runs.last().map_or(&[][..], |run| run.lines.as_slice());
     ResultsView {
         kind: "results",
         file: shown(&file.display().to_string()).into_owned(),
-        report: report::build(&named),
+        report: report::build(last).unwrap_or_else(|_| report::empty()),
         episodes,
         live,
     }

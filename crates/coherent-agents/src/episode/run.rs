@@ -95,7 +95,7 @@ pub async fn run(
     let header = Header {
         format: transcript::FORMAT.into(),
         version: transcript::VERSION,
-        coherent: env!("CARGO_PKG_VERSION").into(),
+        coherent: crate::VERSION.into(),
         task: native::to_value(task),
         task_name: task.meta.name.clone(),
         method: settings.method.name().into(),

@@ -1,6 +1,7 @@
 //! How an episode is run: the method (built in, or written outside the crate) and its
 //! settings as a transcript records them. The step budget is apart ([`crate::episode::budget`]).
 
+use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
 
@@ -82,6 +83,8 @@ impl Method {
 pub struct External {
     name: String,
     make: Arc<MakePolicy>,
+    /// What the method declares of its own settings, recorded in each results line.
+    settings: BTreeMap<String, serde_json::Value>,
 }
 
 impl External {
@@ -103,11 +106,24 @@ impl External {
         Ok(External {
             name: name.to_owned(),
             make,
+            settings: BTreeMap::new(),
         })
+    }
+
+    /// The method with its own settings declared (recorded in every results line, so
+    /// that results of other settings are not taken for its own).
+    pub fn with_settings(mut self, settings: BTreeMap<String, serde_json::Value>) -> External {
+        self.settings = settings;
+        self
     }
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Its own settings, as declared.
+    pub fn settings(&self) -> &BTreeMap<String, serde_json::Value> {
+        &self.settings
     }
 
     /// The policy of one episode of `task`, or why there is none.
@@ -120,14 +136,18 @@ impl fmt::Debug for External {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("External")
             .field("name", &self.name)
+            .field("settings", &self.settings)
             .finish_non_exhaustive()
     }
 }
 
-/// Two are the same method when they have the same name and the same maker.
+/// Two are the same method when they have the same name, the same maker and the same
+/// settings.
 impl PartialEq for External {
     fn eq(&self, other: &External) -> bool {
-        self.name == other.name && Arc::ptr_eq(&self.make, &other.make)
+        self.name == other.name
+            && Arc::ptr_eq(&self.make, &other.make)
+            && self.settings == other.settings
     }
 }
 
@@ -173,6 +193,15 @@ impl MethodSpec {
              run it with execution sequential",
             self.name()
         )))
+    }
+
+    /// The method's own settings: what a method written outside the crate declares;
+    /// none for a built-in one (its settings are the run's).
+    pub fn own_settings(&self) -> BTreeMap<String, serde_json::Value> {
+        match self {
+            MethodSpec::Builtin(_) => BTreeMap::new(),
+            MethodSpec::External(e) => e.settings.clone(),
+        }
     }
 
     /// The built-in method, when it is one.

@@ -2,7 +2,7 @@
 //! file read back and repaired, the episodes still to run, and each result written as
 //! it comes, once. Only the driver writes the results file; executors hand it results.
 
-use std::collections::HashSet;
+use std::collections::{BTreeMap, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -13,6 +13,8 @@ use coherent_core::Task;
 use crate::episode::settings::{Execution, MethodSpec};
 use crate::error::Error;
 use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results, repair};
+use crate::harness::run_settings::{Difference, RunSettings, Setting, method_text};
+use crate::records::transcript::Status;
 
 /// What came of one episode, as an executor hands it to the driver.
 #[derive(Debug)]
@@ -63,9 +65,16 @@ pub struct BenchOutcome {
     pub skipped: usize,
     /// Lines written by this run (any status).
     pub written: usize,
-    /// Episodes this run did not finish for good: interrupted, backend errors, or never
-    /// started because of Ctrl-C.
+    /// Episodes this run finished for good (success or budget spent): `total` is
+    /// `skipped + finished + unfinished`.
+    pub finished: usize,
+    /// Episodes this run did not finish for good: interrupted, backend errors, the
+    /// method's errors, tasks that cannot run, or never started because of Ctrl-C.
     pub unfinished: usize,
+    /// Those of them that ended in the method's own error (status `error`).
+    pub method_errors: usize,
+    /// Those of them never started (Ctrl-C) or whose task cannot run.
+    pub not_started: usize,
     /// Whether Ctrl-C (the `cancel` handle) stopped the run.
     pub interrupted: bool,
     /// Tasks that could not be run and why (no ground truth and no plan to size a budget).
@@ -86,18 +95,29 @@ pub struct Ledger {
     done: HashSet<EpisodeKey>,
     /// Episodes this run has written a line for (of any status).
     written: HashSet<EpisodeKey>,
+    /// The run's settings by method, recorded in each line written.
+    settings: BTreeMap<String, RunSettings>,
     outcome: BenchOutcome,
 }
 
 impl Ledger {
     /// Opens the results file `out` (and its folder) for appending: a last line cut off
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
-    /// episodes with a final line are known to be done.
-    pub fn open(out: &Path) -> Result<Ledger, Error> {
+    /// episodes with a final line are known to be done. A file whose lines were run with
+    /// other settings than `now` (each method's, by name) is refused before anything is
+    /// changed ([`Error::SettingsDiffer`]).
+    pub fn open(out: &Path, now: &BTreeMap<String, RunSettings>) -> Result<Ledger, Error> {
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
         if out.exists() {
             let file = read_results(out)?;
+            let differences = mismatch(&file.lines, now);
+            if !differences.is_empty() {
+                return Err(Error::SettingsDiffer {
+                    file: out.display().to_string(),
+                    differences,
+                });
+            }
             outcome.repaired_bytes = file.truncated_bytes;
             repair(out, &file)?;
             done.extend(
@@ -120,6 +140,7 @@ impl Ledger {
             file,
             done,
             written: HashSet::new(),
+            settings: now.clone(),
             outcome,
         })
     }
@@ -141,18 +162,23 @@ impl Ledger {
         pending
     }
 
-    /// Records what came of one episode: a line is appended and flushed, unless this
-    /// run already wrote that episode's line (a result delivered twice is written
-    /// once). Returns the line written, if one was.
+    /// Records what came of one episode: a line with the run's settings is appended and
+    /// flushed, unless this run already wrote that episode's line (a result delivered
+    /// twice is written once). Returns the line written, if one was.
     pub fn record(&mut self, result: EpisodeResult) -> Result<Option<ResultLine>, Error> {
         let line = match result {
-            EpisodeResult::Line(line) => *line,
+            EpisodeResult::Line(line) => ResultLine {
+                settings: self.settings.get(&line.method).cloned(),
+                ..*line
+            },
             EpisodeResult::NotStarted => {
                 self.outcome.unfinished += 1;
+                self.outcome.not_started += 1;
                 return Ok(None);
             }
             EpisodeResult::TaskSkipped(why) => {
                 self.outcome.unfinished += 1;
+                self.outcome.not_started += 1;
                 if !self.outcome.skipped_tasks.contains(&why) {
                     self.outcome.skipped_tasks.push(why);
                 }
@@ -174,8 +200,10 @@ impl Ledger {
         self.outcome.written += 1;
         if line.is_final() {
             self.done.insert(line.key());
+            self.outcome.finished += 1;
         } else {
             self.outcome.unfinished += 1;
+            self.outcome.method_errors += usize::from(line.status == Status::Error);
         }
         Ok(Some(line))
     }
@@ -200,4 +228,61 @@ impl Ledger {
         self.outcome.interrupted = interrupted;
         self.outcome
     }
+}
+
+/// Why the lines already in a results file cannot be resumed by a run whose methods have
+/// the settings `now` (by method name): each setting that differs, once, with its value
+/// in the file and now. Empty when every line has this run's settings (a line of a
+/// method this run does not have is held to the run-wide settings alone).
+pub fn mismatch(lines: &[ResultLine], now: &BTreeMap<String, RunSettings>) -> Vec<Difference> {
+    let Some(any) = now.values().next() else {
+        return Vec::new();
+    };
+    let mut found: Vec<Difference> = Vec::new();
+    let mut seen: Vec<(&str, &RunSettings)> = Vec::new();
+    let add = |d: Difference, found: &mut Vec<Difference>| {
+        if !found
+            .iter()
+            .any(|f| f.setting == d.setting && f.method == d.method)
+        {
+            found.push(d);
+        }
+    };
+    for line in lines {
+        let Some(settings) = &line.settings else {
+            let d = Difference {
+                setting: Setting::Unrecorded,
+                method: None,
+                file: "not recorded (the file was written by a version that did not keep them)"
+                    .to_owned(),
+                now: "recorded".to_owned(),
+            };
+            add(d, &mut found);
+            continue;
+        };
+        // A file holds few distinct settings: compare each once.
+        if seen
+            .iter()
+            .any(|(m, s)| *m == line.method && *s == settings)
+        {
+            continue;
+        }
+        seen.push((&line.method, settings));
+        for d in settings.differences(any) {
+            add(d, &mut found);
+        }
+        if let Some(mine) = now.get(&line.method)
+            && mine.method != settings.method
+        {
+            let d = Difference {
+                setting: Setting::Method,
+                method: Some(line.method.clone()),
+                file: method_text(&settings.method),
+                now: method_text(&mine.method),
+            };
+            add(d, &mut found);
+        }
+    }
+    found.sort_by(|a, b| (a.setting, &a.method).cmp(&(b.setting, &b.method)));
+    found
 }

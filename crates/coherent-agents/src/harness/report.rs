@@ -14,7 +14,9 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 use serde::Serialize;
 
 use crate::harness::results::{EpisodeKey, ResultLine};
+use crate::harness::run_settings::{RunSettings, Setting, field, method_text};
 use crate::harness::speedup::{self, SpeedRow, row_name, row_order};
+use crate::records::transcript::headline;
 use crate::records::transcript::{Execution, Status};
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
@@ -125,6 +127,54 @@ pub struct Report {
     /// The makespan table, when some episode ran in parallel ([`speedup::build`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub makespan: Vec<SpeedRow>,
+    /// The settings every line was run with (none for lines that record none).
+    pub settings: Option<RunSettings>,
+    /// The settings methods written outside the crate declared, by method.
+    pub method_settings: BTreeMap<String, BTreeMap<String, serde_json::Value>>,
+    /// The episodes that failed with the method's own error, by method.
+    pub failures: Vec<Failure>,
+}
+
+/// The episodes of one method that failed with its own error (status `error`, and no
+/// final line since).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Failure {
+    pub method: String,
+    pub episodes: usize,
+    /// The first one's error: the exception and where it was raised
+    /// ([`crate::transcript::headline`]).
+    pub first_error: String,
+    /// The transcript with the first one's whole error (the traceback).
+    pub transcript: String,
+}
+
+/// Lines of more than one set of settings, which one report would mix.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Mixed {
+    /// Each set of run-wide settings (none: not recorded) and how many lines have it.
+    pub groups: Vec<(Option<RunSettings>, usize)>,
+    /// The settings in which they differ.
+    pub differing: Vec<Setting>,
+}
+
+impl std::fmt::Display for Mixed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = self.differing.iter().map(|s| field(*s)).collect();
+        write!(
+            f,
+            "the results hold {} runs of different settings (they differ in {}), which one \
+             table would mix:",
+            self.groups.len(),
+            names.join(", ")
+        )?;
+        for (i, (settings, n)) in self.groups.iter().enumerate() {
+            let what = settings
+                .as_ref()
+                .map_or_else(|| "settings not recorded".to_owned(), RunSettings::summary);
+            write!(f, "\n  run {}: {n} lines: {what}", i + 1)?;
+        }
+        Ok(())
+    }
 }
 
 /// The steps AS counts for one episode.
@@ -164,24 +214,72 @@ pub fn final_lines(lines: &[ResultLine]) -> (Vec<&ResultLine>, usize) {
     (last.into_values().collect(), unfinished)
 }
 
-/// The episodes with no final line whose last line is the method's error.
-fn errors(lines: &[ResultLine]) -> usize {
-    let mut last: BTreeMap<EpisodeKey, &ResultLine> = BTreeMap::new();
-    for l in lines {
-        last.insert(l.key(), l);
+/// The episodes with no final line whose last line is the method's error, in the order
+/// of the file.
+fn errors(lines: &[ResultLine]) -> Vec<&ResultLine> {
+    let mut last: HashMap<EpisodeKey, usize> = HashMap::new();
+    for (i, l) in lines.iter().enumerate() {
+        last.insert(l.key(), i);
     }
     let finished: BTreeSet<EpisodeKey> = lines
         .iter()
         .filter(|l| l.is_final())
         .map(ResultLine::key)
         .collect();
-    last.values()
-        .filter(|l| l.status == Status::Error && !finished.contains(&l.key()))
-        .count()
+    lines
+        .iter()
+        .enumerate()
+        .filter(|(i, l)| {
+            last.get(&l.key()) == Some(i)
+                && l.status == Status::Error
+                && !finished.contains(&l.key())
+        })
+        .map(|(_, l)| l)
+        .collect()
 }
 
-/// Builds both tables, the costs and the makespan table.
-pub fn build(lines: &[ResultLine]) -> Report {
+/// The failed episodes of `errors` by method, in the order methods first failed.
+fn failures(errors: &[&ResultLine]) -> Vec<Failure> {
+    let mut out: Vec<Failure> = Vec::new();
+    for l in errors {
+        match out.iter_mut().find(|f| f.method == l.method) {
+            Some(f) => f.episodes += 1,
+            None => out.push(Failure {
+                method: l.method.clone(),
+                episodes: 1,
+                first_error: headline(l.error.as_deref().unwrap_or("")),
+                transcript: l.transcript.clone(),
+            }),
+        }
+    }
+    out
+}
+
+/// Builds both tables, the costs and the makespan table of lines of one set of
+/// settings; lines of several
+/// ([`groups`]) are refused, since one table would mix them.
+pub fn build(lines: &[ResultLine]) -> Result<Report, Mixed> {
+    let groups = groups(lines);
+    if groups.len() > 1 {
+        return Err(Mixed {
+            differing: differing(&groups),
+            groups: groups
+                .into_iter()
+                .map(|g| (g.settings, g.lines.len()))
+                .collect(),
+        });
+    }
+    let settings = groups.into_iter().next().and_then(|g| g.settings);
+    Ok(build_one(lines, settings))
+}
+
+/// The tables of no lines at all.
+pub fn empty() -> Report {
+    build_one(&[], None)
+}
+
+/// The tables of lines that share `settings`.
+fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
     let (finals, unfinished) = final_lines(lines);
     let mut rows: Vec<(String, Execution)> = finals
         .iter()
@@ -258,6 +356,18 @@ pub fn build(lines: &[ResultLine]) -> Report {
             }
         })
         .collect();
+    let errors = errors(lines);
+    let mut method_settings = BTreeMap::new();
+    for l in lines {
+        if let Some(own) = l
+            .settings
+            .as_ref()
+            .map(|s| &s.method)
+            .filter(|m| !m.is_empty())
+        {
+            method_settings.insert(l.method.clone(), own.clone());
+        }
+    }
     Report {
         backends: backends.into_iter().collect(),
         seeds: seeds.into_iter().collect(),
@@ -265,9 +375,12 @@ pub fn build(lines: &[ResultLine]) -> Report {
         table2,
         costs,
         unfinished,
-        errors: errors(lines),
+        errors: errors.len(),
         untyped_tasks,
         makespan: speedup::build(&finals),
+        settings,
+        method_settings,
+        failures: failures(&errors),
     }
 }
 
@@ -347,6 +460,13 @@ fn header_lines(r: &Report) -> Vec<String> {
         r.backends.join("; ")
     };
     let mut out = vec![format!("Backend: {backend}")];
+    out.push(match &r.settings {
+        Some(s) => format!("Settings: {}", s.summary()),
+        None => "Settings: not recorded (results written before lines kept them)".to_owned(),
+    });
+    for (method, own) in &r.method_settings {
+        out.push(format!("Settings of {method}: {}", method_text(own)));
+    }
     let seeds = r.seeds.len();
     out.push(if seeds > 1 {
         format!(
@@ -362,18 +482,39 @@ fn header_lines(r: &Report) -> Vec<String> {
             r.untyped_tasks
         ));
     }
-    if r.unfinished > 0 {
+    let others = r.unfinished - r.errors;
+    if others > 0 {
         out.push(format!(
-            "{} episode(s) have no final result (backend error, the method's error or interrupted) and are left out; re-run the same command to finish them.",
-            r.unfinished
+            "{others} episode(s) have no final result (the backend failed or the run was interrupted) and are left out; run the same command again to finish them."
         ));
     }
     if r.errors > 0 {
         out.push(format!(
-            "{} of them ended in an error raised by the method (status error; its results line and transcript have the text).",
+            "{} episode(s) failed with the method's own error and are left out (see \"Episodes that failed with the method's error\").",
             r.errors
         ));
     }
+    out
+}
+
+/// The failed episodes by method, in Markdown; empty without any.
+fn failures_markdown(r: &Report) -> String {
+    if r.failures.is_empty() {
+        return String::new();
+    }
+    let mut out = String::from(
+        "### Episodes that failed with the method's error\n\n| Method | Episodes | First error | Its transcript (the whole traceback) |\n|---|---|---|---|\n",
+    );
+    for f in &r.failures {
+        out.push_str(&format!(
+            "| {} | {} | {} | {} |\n",
+            f.method,
+            f.episodes,
+            f.first_error.replace('|', "\\|"),
+            f.transcript
+        ));
+    }
+    out.push('\n');
     out
 }
 
@@ -427,6 +568,7 @@ pub fn markdown(r: &Report) -> String {
                 .collect();
         out.push_str(&format!("| Ground truth | {} |\n\n", gt.join(" | ")));
     }
+    out.push_str(&failures_markdown(r));
     out.push_str("### LLM calls, tokens and cost per method\n\n");
     out.push_str(&format!("{}  \n", header_lines(r)[0]));
     out.push_str(
@@ -469,13 +611,19 @@ pub(crate) fn csv_field(s: &str) -> String {
 /// One CSV: a row per (table, method, column), ground-truth rows with `method` =
 /// `ground truth`, and a `costs` row per method (with its cost per task and per success
 /// in USD, empty where a model has no price, and the share of its prompt tokens read
-/// from the servers' caches). A run with parallel episodes adds seven columns
-/// (`execution` and the makespan table's numbers) and a `makespan` row per method,
-/// execution and task type.
+/// from the servers' caches); every row has the seeds, the backend and the settings. A
+/// run with parallel episodes adds seven columns after those (`execution` and the
+/// makespan table's numbers) and a `makespan` row per method, execution and task type.
 pub fn csv(r: &Report) -> String {
     let backend = csv_field(&r.backends.join("; "));
+    let settings = csv_field(
+        &r.settings
+            .as_ref()
+            .map_or_else(String::new, RunSettings::summary),
+    );
+    let backend = format!("{backend},{settings}");
     let mut out = String::from(
-        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend,cached_share",
+        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend,settings,cached_share",
     );
     if !r.makespan.is_empty() {
         out.push_str(
@@ -547,6 +695,49 @@ pub fn csv(r: &Report) -> String {
 /// The whole report as one JSON object.
 pub fn json(r: &Report) -> String {
     serde_json::to_string_pretty(r).unwrap_or_else(|e| format!("{{\"error\": \"{e}\"}}"))
+}
+
+/// Lines of one set of run-wide settings (`None`: lines that record none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Group {
+    pub settings: Option<RunSettings>,
+    pub lines: Vec<ResultLine>,
+}
+
+/// The lines by their run-wide settings, in the order each set first appears: the
+/// tables are made of one group at a time.
+pub fn groups(lines: &[ResultLine]) -> Vec<Group> {
+    let mut out: Vec<Group> = Vec::new();
+    for line in lines {
+        let settings = line.settings.as_ref().map(RunSettings::run_wide);
+        match out.iter_mut().find(|g| g.settings == settings) {
+            Some(group) => group.lines.push(line.clone()),
+            None => out.push(Group {
+                settings,
+                lines: vec![line.clone()],
+            }),
+        }
+    }
+    out
+}
+
+/// The settings in which the groups differ (run-wide), each once, in [`Setting`] order.
+pub fn differing(groups: &[Group]) -> Vec<Setting> {
+    let mut out: Vec<Setting> = Vec::new();
+    let first = groups.first().and_then(|g| g.settings.as_ref());
+    for g in groups.iter().skip(1) {
+        let found = match (first, &g.settings) {
+            (Some(a), Some(b)) => a.differences(b).into_iter().map(|d| d.setting).collect(),
+            _ => vec![Setting::Unrecorded],
+        };
+        for s in found {
+            if !out.contains(&s) {
+                out.push(s);
+            }
+        }
+    }
+    out.sort();
+    out
 }
 
 #[cfg(test)]

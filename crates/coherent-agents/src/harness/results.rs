@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::backends::llm::{BackendInfo, Usage};
 use crate::error::Error;
 use crate::harness::prices::PriceTable;
+use crate::harness::run_settings::RunSettings;
 use crate::records::transcript::{Execution, Status};
 
 /// One finished episode: a line of the results file.
@@ -70,6 +71,10 @@ pub struct ResultLine {
     #[serde(default)]
     pub error: Option<String>,
     pub transcript: String,
+    /// The settings the episode ran with, which lines must share to be compared (absent
+    /// from lines written before they were kept).
+    #[serde(default)]
+    pub settings: Option<RunSettings>,
 }
 
 fn yes() -> bool {

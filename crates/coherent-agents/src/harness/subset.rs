@@ -34,6 +34,9 @@ impl Subset {
     /// The subset a name stands for: `all`, `paper40` (the paper's subset of its released
     /// tasks) or `native40` (the 40-task subset of the project's own benchmark, listed by
     /// `coherent_core::benchmark::subset40`); None for any other name.
+    /// The subsets that have a name.
+    pub const NAMES: [&'static str; 3] = ["all", "paper40", "native40"];
+
     pub fn named(name: &str) -> Option<Subset> {
         match name {
             "all" => Some(Subset::All),

@@ -25,6 +25,7 @@ use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
+use crate::digest;
 use crate::episode::execution::Execution;
 
 /// The name of the built-in set in the paper's layout (`--prompts paper-layout`).
@@ -372,7 +373,7 @@ impl Prompts {
 
     fn with(replaced: BTreeMap<Template, String>) -> Prompts {
         let hashes = Execution::ALL.map(|execution| {
-            hash(
+            digest::fnv128(
                 Template::ALL
                     .into_iter()
                     .filter(|t| t.used_in(execution))
@@ -521,21 +522,6 @@ pub struct PromptRecord {
     pub hash: String,
     /// The files that replaced built-in templates, by name, with their text.
     pub replaced: BTreeMap<String, String>,
-}
-
-/// FNV-1a, 128 bits, of each `(name, text)` with a 0 byte after each part.
-fn hash<'a>(parts: impl IntoIterator<Item = (&'a str, &'a str)>) -> String {
-    const PRIME: u128 = 0x0000_0000_0100_0000_0000_0000_0000_013b;
-    let mut h: u128 = 0x6c62_272e_07bb_0142_62b8_2175_6295_c58d;
-    for (name, text) in parts {
-        for bytes in [name.as_bytes(), text.as_bytes()] {
-            for &b in bytes.iter().chain(&[0]) {
-                h ^= u128::from(b);
-                h = h.wrapping_mul(PRIME);
-            }
-        }
-    }
-    format!("{h:032x}")
 }
 
 /// Writes every template of `set` into `dir` (made when missing), one file each; an
@@ -726,7 +712,7 @@ mod tests {
         // parallel templates existed: old transcripts replay.
         assert_eq!(
             builtin.hash(Execution::Sequential),
-            hash(
+            digest::fnv128(
                 Template::ALL[..8]
                     .iter()
                     .map(|t| (t.file_name(), t.builtin()))

@@ -140,6 +140,39 @@ pub enum RoundOutcome {
     MethodError { message: String },
 }
 
+/// The headline of an error's text: for a Python traceback, the exception's first line
+/// and where it was raised (`ZeroDivisionError: division by zero (mine.py, line 12, in
+/// act)`); for any other text, its first line that is not blank.
+pub fn headline(error: &str) -> String {
+    let lines: Vec<&str> = error.lines().collect();
+    let Some(at) = lines
+        .iter()
+        .rposition(|l| l.trim_start().starts_with("File \"") && l.starts_with(' '))
+    else {
+        return lines
+            .iter()
+            .map(|l| l.trim())
+            .find(|l| !l.is_empty())
+            .unwrap_or("")
+            .to_owned();
+    };
+    // After the last frame: its source lines (indented), then the exception.
+    let exception = lines[at + 1..]
+        .iter()
+        .find(|l| !l.starts_with(' ') && !l.trim().is_empty())
+        .map_or("", |l| l.trim());
+    let frame = lines[at].trim().trim_start_matches("File ");
+    let place = match frame.split_once("\", ") {
+        Some((file, rest)) => {
+            let file = file.trim_start_matches('"');
+            let base = file.rsplit(['/', '\\']).next().unwrap_or(file);
+            format!("{base}, {rest}")
+        }
+        None => frame.to_owned(),
+    };
+    format!("{exception} ({place})")
+}
+
 /// What a method written outside the crate decided in one round
 /// ([`crate::episode::policy`]), as it gave it, and the model use it reported itself
 /// (calls through its own clients; those through the project's are in [`Round::calls`]).
@@ -462,4 +495,27 @@ pub fn read(path: &Path) -> Result<Transcript, Error> {
         rounds,
         summary,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::headline;
+
+    #[test]
+    fn a_traceback_s_headline_is_the_exception_and_where_it_was_raised() {
+        let traceback = "Traceback (most recent call last):\n  File \"/work/x/coherent/_methods.py\", line 40, in call\n    return f()\n  File \"/home/me/mine.py\", line 12, in act\n    return 1 / 0\n           ~~^~~\nZeroDivisionError: division by zero";
+        assert_eq!(
+            headline(traceback),
+            "ZeroDivisionError: division by zero (mine.py, line 12, in act)"
+        );
+    }
+
+    #[test]
+    fn other_errors_keep_their_first_line() {
+        assert_eq!(
+            headline("\nTypeError: act returned 3\nmore"),
+            "TypeError: act returned 3"
+        );
+        assert_eq!(headline(""), "");
+    }
 }
