@@ -1,7 +1,8 @@
 //! `--execution parallel` on the command line: `coherent run` prints a joint step as a
 //! line for the step and a line per robot, reports the makespan and the actions in its
 //! summary and `--json`, and replays; the tree searches refuse it; `coherent bench
-//! --execution sequential,parallel` runs every method both ways, resumes by execution,
+//! --execution sequential,parallel` runs every method both ways as one run (its
+//! executions a setting), resumes by execution,
 //! and its report compares them; with physics, the simulated seconds.
 
 mod common;
@@ -154,7 +155,7 @@ fn the_tree_searches_refuse_parallel_execution() {
 }
 
 #[test]
-fn bench_runs_each_method_both_ways_resumes_by_execution_and_compares_them() {
+fn bench_runs_each_method_both_ways_as_one_run_resumes_by_execution_and_compares_them() {
     let dir = scratch("bench-parallel");
     let results = dir.join("r.jsonl");
     let bench = |executions: &str| {
@@ -176,28 +177,61 @@ fn bench_runs_each_method_both_ways_resumes_by_execution_and_compares_them() {
         !stdout(&out).contains("Makespan"),
         "no parallel episode, no makespan table"
     );
-    let out = bench("sequential,parallel");
-    assert_eq!(code(&out), 0, "{}", show(&out));
     assert!(
-        stdout(&out).contains("4 episodes: 2 already finished, 2 run now"),
+        lines(&results)
+            .iter()
+            .all(|l| l["settings"].get("executions").is_none()),
+        "a sequential run records its settings as before parallel episodes"
+    );
+    // The executions are a setting of the run: a sequential run's file is not resumed
+    // by a run of both, whose tables would count two runs as one.
+    let out = bench("sequential,parallel");
+    assert_eq!(code(&out), 2, "{}", show(&out));
+    assert!(
+        show(&out).contains("--execution: sequential in the file, sequential,parallel now"),
         "{}",
         show(&out)
     );
+    std::fs::remove_file(&results).expect("removed");
+    let out = bench("sequential,parallel");
+    assert_eq!(code(&out), 0, "{}", show(&out));
     let written = lines(&results);
     assert_eq!(written.len(), 4);
     for l in &written {
         let parallel = l["execution"] == json!("parallel");
+        assert_eq!(
+            l["settings"]["executions"],
+            json!(["sequential", "parallel"])
+        );
         assert_eq!(l["success"], json!(true), "{l}");
         assert_eq!(l["makespan"], json!(if parallel { 13 } else { 22 }), "{l}");
         assert_eq!(l["actions"], json!(22), "{l}");
-        assert_eq!(
-            l["optimal_makespan"],
-            if parallel { json!(13) } else { Value::Null }
-        );
+        // A run with parallel episodes searches each task's makespan, which its
+        // sequential lines are measured against too.
+        assert_eq!(l["optimal_makespan"], json!(13), "{l}");
         assert_eq!(l["max_steps"], json!(if parallel { 26 } else { 44 }), "{l}");
     }
-    // The second run's sequential lines count no makespan search: the first run had
-    // none. Its tables: a row per method and execution, and the makespan table.
+    // An episode is known by its execution too: without its parallel PEFA line, the
+    // file resumes with that episode alone.
+    let kept: Vec<String> = std::fs::read_to_string(&results)
+        .expect("results")
+        .lines()
+        .filter(|l| {
+            let v: Value = serde_json::from_str(l).expect("a line");
+            !(v["method"] == json!("pefa") && v["execution"] == json!("parallel"))
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(&results, kept.concat()).expect("written");
+    let out = bench("sequential,parallel");
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    assert!(
+        stdout(&out).contains("4 episodes: 3 already finished, 1 finished now, 0 unfinished"),
+        "{}",
+        show(&out)
+    );
+    assert_eq!(lines(&results).len(), 4);
+    // Its tables: a row per method and execution, and the makespan table.
     let report = coherent(&["bench", "--report", utf8(&results)]);
     let text = stdout(&report);
     assert!(
@@ -222,11 +256,17 @@ fn bench_runs_each_method_both_ways_resumes_by_execution_and_compares_them() {
     assert!(header.ends_with(
         ",execution,makespan,optimal_makespan,actions,calls_per_action,sim_seconds,speedup"
     ));
-    let columns = header.split(',').count();
-    assert!(
-        csv.lines().all(|l| l.split(',').count() == columns),
-        "{csv}"
-    );
+    // The settings column is quoted, its commas inside the quotes.
+    let fields = |l: &str| {
+        l.split('"')
+            .step_by(2)
+            .map(|outside| outside.matches(',').count())
+            .sum::<usize>()
+            + 1
+    };
+    let columns = fields(header);
+    assert!(csv.lines().all(|l| fields(l) == columns), "{csv}");
+    assert!(header.contains(",seeds,backend,settings,cached_share,execution,"));
     assert!(
         csv.lines()
             .any(|l| l.starts_with("makespan,optimal (parallel),trio,"))

@@ -92,6 +92,12 @@ def test_bench_runs_both_executions_and_the_report_compares_them(demo: coherent.
     assert row["makespan"] == pytest.approx(row["optimal_makespan"])
     assert "### Makespan" in report.markdown()
     assert "makespan,pefa (parallel),Avg," in report.csv()
+    # Both executions are one run: its settings record them, and a run of other
+    # executions does not resume the file.
+    assert all(list(e) == ["sequential", "parallel"] for e in frame["settings_executions"])
+    with pytest.raises(coherent.ArgumentError, match="execution: sequential,parallel in the file, parallel now"):
+        coherent.bench(chosen, ["pefa"], execution="parallel", backend="simulated",
+                       sim_errors="all=0.1", seeds=2, out=tmp_path / "r.jsonl")
 
 
 class TwoAtATime:
