@@ -5,7 +5,7 @@ figures in docs/prompts.md, "Prompt caching", come from it.
 
     .venv/bin/python scripts/measure-prompts.py builtin --tasks ../shared/coherent-original/env
     .venv/bin/python scripts/measure-prompts.py llama --tasks ../shared/coherent-original/env \\
-        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 2 --slots 5
+        --task env0:2 --task env1:3 --task env2:2 --task env3:1 --max-steps 4 --slots 5
 
 `builtin`: every method that asks a model, on every solvable task of the folder, with
 the built-in backend (the optimal planner answers; the prompts are rendered and recorded
@@ -16,8 +16,9 @@ robot began (the transcript's `shared_prefix`). Deterministic: the same on any m
 `llama`: PEFA with SmolLM2-135M-Instruct served by llama.cpp's server (`xllamacpp`, its
 prompt cache on, as the tests start it; `--slots 5` gives each role and robot a slot of
 its own), each task run in both layouts one after the other: per role, the prompt
-tokens from the second round on and the share the server reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), and the
-median latency per call. Prints Markdown tables.
+tokens from the second round on and the share the server reports it read from its cache (`usage.prompt_tokens_details.cached_tokens`), the
+median latency per call, and the cached share of the calls that have an earlier call of
+their role and robot. Prints Markdown tables.
 """
 
 from __future__ import annotations
@@ -127,9 +128,12 @@ def llama(args: argparse.Namespace) -> None:
         timeout=3600.0,
     )
     load_before = os.getloadavg()
-    # (role, layout) -> prompt tokens, cached tokens, latencies (from round 2 on)
+    # (role, layout) -> prompt tokens, cached tokens, latencies (from round 2 on); and the
+    # prompt and cached tokens of the calls that have an earlier call of their role and
+    # robot (an executor's round-2 call can be its robot's first).
     prompt: dict[tuple[str, str], int] = defaultdict(int)
     cached: dict[tuple[str, str], int] = defaultdict(int)
+    again: dict[tuple[str, str], list[int]] = defaultdict(lambda: [0, 0, 0])
     latency: dict[tuple[str, str], list[float]] = defaultdict(list)
     started = time.time()
     with tempfile.TemporaryDirectory() as out:
@@ -147,6 +151,10 @@ def llama(args: argparse.Namespace) -> None:
                     prompt[(role, layout)] += int(group["prompt_tokens"].sum())
                     cached[(role, layout)] += int(group["cached_tokens"].sum())
                     latency[(role, layout)].extend(group["latency_ms"].dropna())
+                for role, group in frame[frame["shared_prefix"].notna()].groupby("role"):
+                    again[(role, layout)][0] += len(group)
+                    again[(role, layout)][1] += int(group["prompt_tokens"].sum())
+                    again[(role, layout)][2] += int(group["cached_tokens"].sum())
                 print(
                     f"{task.scene} task {task.task_id} {layout}: {episode.steps} steps, "
                     f"{episode.llm_calls} calls, {episode.prompt_tokens} prompt tokens "
@@ -161,8 +169,11 @@ def llama(args: argparse.Namespace) -> None:
         f"{os.cpu_count()} cores, load average {load_before[0]:.1f} before and "
         f"{os.getloadavg()[0]:.1f} after, {time.time() - started:.0f} s; {time.strftime('%Y-%m-%d')}\n"
     )
-    print("| role | layout | calls | prompt tokens | cached | median latency per call | spread (quartiles) |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| role | layout | calls from round 2 | prompt tokens | cached | median latency per call | spread (quartiles) "
+        "| calls with an earlier one of their robot | cached |"
+    )
+    print("|---|---|---|---|---|---|---|---|---|")
     for role in ("assigner", "executor"):
         for layout in LAYOUTS:
             lat = latency[(role, layout)]
@@ -172,7 +183,8 @@ def llama(args: argparse.Namespace) -> None:
             p = prompt[(role, layout)]
             print(
                 f"| {role} | {layout} | {len(lat)} | {p:,} | {cached[(role, layout)] / p:.1%} "
-                f"| {statistics.median(lat) / 1e3:.2f} s | {q[0] / 1e3:.2f} to {q[2] / 1e3:.2f} s |"
+                f"| {statistics.median(lat) / 1e3:.2f} s | {q[0] / 1e3:.2f} to {q[2] / 1e3:.2f} s "
+                f"| {again[(role, layout)][0]} | {again[(role, layout)][2] / max(again[(role, layout)][1], 1):.1%} |"
             )
 
 
