@@ -268,18 +268,18 @@ mod tests {
 
     #[test]
     fn a_sequential_run_records_no_executions_and_a_run_of_both_does() {
-        let json = serde_json::to_value(settings()).unwrap();
+        let json = serde_json::to_value(settings()).expect("settings as JSON");
         assert!(json.get("executions").is_none(), "{json}");
         let both = RunSettings {
             executions: Execution::ALL.to_vec(),
             ..settings()
         };
-        let json = serde_json::to_value(&both).unwrap();
+        let json = serde_json::to_value(&both).expect("settings as JSON");
         assert_eq!(
             json["executions"],
             serde_json::json!(["sequential", "parallel"])
         );
-        let back: RunSettings = serde_json::from_value(json).unwrap();
+        let back: RunSettings = serde_json::from_value(json).expect("read back");
         assert_eq!(back, both);
         let d = settings().differences(&both);
         assert_eq!(d.len(), 1);
