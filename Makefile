@@ -25,8 +25,10 @@ venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
 	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
-	# The extras [analysis] (coherent.analysis, .plot) and [gym], pinned.
+	# The extras [analysis] (coherent.analysis, .plot), [gym] and [marl] (coherent.marl),
+	# pinned.
 	$(BIN)/pip install --quiet "pandas==3.1.1" "matplotlib==3.11.2" "gymnasium==1.4.0"
+	$(BIN)/pip install --quiet "pettingzoo==1.27.0"
 	# Eclipse Cyclone DDS (its wheel carries the C library): the DDS that is not RustDDS in
 	# python/tests/test_ros_interop.py, reading the robots' ROS 2 traffic.
 	$(BIN)/pip install --quiet "cyclonedds==11.0.1"

@@ -18,13 +18,13 @@ Everything the ``coherent`` command line does, from Python::
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
 against cost (``pareto``) and the scene map (matplotlib); ``coherent.gym`` is a Gymnasium
-environment. The engine is Rust (``coherent._coherent``); errors derive from
+environment, ``coherent.marl`` a PettingZoo one with the robots as agents. The engine is Rust (``coherent._coherent``); errors derive from
 :class:`CoherentError`.
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
 ``results``, ``report``, ``Episode.to_dataframe``) and ``coherent.plot`` need pandas and
 matplotlib, ``pip install '.[analysis]'``; ``coherent.gym`` needs gymnasium,
-``pip install '.[gym]'``.
+``pip install '.[gym]'``; ``coherent.marl`` needs pettingzoo, ``pip install '.[marl]'``.
 """
 
 # The imports the package needs for itself are bound to underscored names, so that the
@@ -120,8 +120,9 @@ __all__ = [
 
 # The public submodules. `analysis` and `executors` are imported above; the others load on
 # first use: `coherent.plot` imports matplotlib (slow to import; the extra
-# `analysis`), `coherent.gym` gymnasium (the extra `gym`).
-_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "plot")
+# `analysis`), `coherent.gym` gymnasium (the extra `gym`), `coherent.marl` pettingzoo (the
+# extra `marl`).
+_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "marl", "plot")
 
 
 def __getattr__(name: str) -> _Any:

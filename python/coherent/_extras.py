@@ -1,7 +1,7 @@
 """The optional dependencies, installed by the package's extras (pyproject.toml): planning,
 stepping and running need none of them; DataFrames, tables and figures need
-the ``analysis`` extra, the Gymnasium environment the ``gym`` extra, a Ray cluster the
-``ray`` extra. The distribution is ``coherent-robots`` (the import name is
+the ``analysis`` extra, the Gymnasium environment the ``gym`` extra, the PettingZoo
+environment the ``marl`` extra, a Ray cluster the ``ray`` extra. The distribution is ``coherent-robots`` (the import name is
 ``coherent``); from a checkout, ``pip install ".[analysis]"`` installs an extra, and
 where the package is installed already, its packages themselves do (the messages name
 them, with the versions the package's metadata requires)."""
@@ -20,6 +20,7 @@ DISTRIBUTION = "coherent-robots"
 _PACKAGES = {
     "analysis": ("pandas", "matplotlib", "numpy"),
     "gym": ("gymnasium", "numpy"),
+    "marl": ("pettingzoo", "gymnasium", "numpy"),
     "ray": ("ray",),
 }
 
@@ -38,7 +39,7 @@ def install(extra: str) -> str:
 
 
 @contextmanager
-def needs(what: str, extra: Literal["analysis", "gym", "ray"]) -> Iterator[None]:
+def needs(what: str, extra: Literal["analysis", "gym", "marl", "ray"]) -> Iterator[None]:
     """Turns the import error of a package that ``extra`` brings, raised in the block, into
     one that says which extra to install for ``what``; any other import error passes."""
     try:

@@ -1,6 +1,6 @@
 """The package without its extras: `pip install .` brings no other package, planning,
-stepping and running need none, and each entry point that needs pandas, matplotlib or
-gymnasium says which extra to install. Each check runs in a fresh interpreter in which
+stepping and running need none, and each entry point that needs pandas, matplotlib,
+gymnasium or pettingzoo says which extra to install. Each check runs in a fresh interpreter in which
 the packages it hides cannot be imported (`sys.modules[name] = None`)."""
 
 from __future__ import annotations
@@ -18,11 +18,12 @@ import coherent
 from coherent._extras import needs
 from conftest import DEMO, REPO
 
-EXTRA_PACKAGES = ("pandas", "matplotlib", "numpy", "gymnasium")
+EXTRA_PACKAGES = ("pandas", "matplotlib", "numpy", "gymnasium", "pettingzoo")
 # The packages as the installed metadata pins them, and the extra from a checkout.
-EXTRAS = "; the extras: analysis, gym, ray"
+EXTRAS = "; the extras: analysis, gym, marl, ray"
 ANALYSIS = 'pip install "pandas>=3.1" "matplotlib>=3.11" (from a checkout of the repository: pip install ".[analysis]")' + EXTRAS
 GYM = 'pip install "gymnasium>=1.4" (from a checkout of the repository: pip install ".[gym]")' + EXTRAS
+MARL = 'pip install "pettingzoo>=1.27" "gymnasium>=1.4" (from a checkout of the repository: pip install ".[marl]")' + EXTRAS
 
 
 def _run_without(hidden: tuple[str, ...], code: str, **paths: Path) -> subprocess.CompletedProcess[str]:
@@ -53,6 +54,7 @@ def test_the_package_requires_nothing_but_its_extras() -> None:
     extras = project["optional-dependencies"]
     assert extras["analysis"] == ["pandas>=3.1", "matplotlib>=3.11"]
     assert extras["gym"] == ["gymnasium>=1.4"]
+    assert extras["marl"] == ["pettingzoo>=1.27", "gymnasium>=1.4"]
 
 
 def test_planning_stepping_and_running_need_no_extra(tmp_path: Path) -> None:
@@ -94,6 +96,8 @@ def test_planning_stepping_and_running_need_no_extra(tmp_path: Path) -> None:
         ("pandas", "coherent.plot.table(RESULTS)", f"coherent.plot needs pandas: {ANALYSIS}"),
         ("gymnasium", "from coherent.gym import CoherentEnv", f"coherent.gym needs gymnasium: {GYM}"),
         ("numpy", "coherent.gym.CoherentEnv", f"coherent.gym needs numpy: {GYM}"),
+        ("pettingzoo", "from coherent.marl import CoherentParallelEnv", f"coherent.marl needs pettingzoo: {MARL}"),
+        ("gymnasium", "coherent.marl.CoherentParallelEnv", f"coherent.marl needs gymnasium: {MARL}"),
     ],
 )
 def test_what_needs_an_extra_names_it(

@@ -140,7 +140,7 @@ def test_py_typed_is_installed() -> None:
 
 # The names `coherent` defines in Python (the rest of `__all__` is the native module's).
 PYTHON_API = {"Page", "RayExecutor", "Report", "bench", "report", "results", "view"}
-SUBMODULES = {"analysis", "benchmark", "executors", "gym", "plot"}
+SUBMODULES = {"analysis", "benchmark", "executors", "gym", "marl", "plot"}
 DOCS = REPO / "docs" / "python.md"
 
 
