@@ -583,6 +583,7 @@ def run(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
     ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
@@ -596,9 +597,11 @@ def run(
     ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
     actions out, as for :class:`Env`. ``execution="parallel"`` runs the robots in joint
     steps (the budget is 2 x the fewest joint steps; MCTS and LLM-MCTS are sequential
-    only and raise :class:`ArgumentError`). Raises :class:`BackendError` when the server fails
-    for good, :class:`MethodError` when the method raises, :class:`RobotError` when a
-    robot stops answering; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
+    only and raise :class:`ArgumentError`). Raises :class:`BackendError` when the server
+    fails for good, :class:`MethodError` when the method raises or one of its steps
+    (``M(task)`` and ``act``) takes longer than ``step_timeout`` seconds,
+    :class:`RobotError` when a robot stops answering; Ctrl-C stops the episode, whatever
+    ``act`` is doing, and raises ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -635,6 +638,7 @@ def run_bench(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""
@@ -695,6 +699,7 @@ class _BenchWorker:
         out: _PathLike,
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],
+        step_timeout: float | None = None,
     ) -> None: ...
     def run(self, key: tuple[str, str, int, int, str]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""

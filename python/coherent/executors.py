@@ -83,6 +83,7 @@ class RayExecutor:
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
         physics: bool = False,
         execution: str | Sequence[str] = "sequential",
+        step_timeout: float | None = None,
     ) -> dict[str, Any]:
         """Runs the benchmark as :func:`coherent.bench` describes; returns its outcome,
         with ``resubmitted``: the episodes run again after their worker died."""
@@ -129,6 +130,7 @@ class RayExecutor:
             "max_steps": max_steps,
             "physics": physics,
             "execution": execution,
+            "step_timeout": step_timeout,
             "out": out,
             # A folder or a price file of this machine's, as data: the workers' machines
             # may not have them.

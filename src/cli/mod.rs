@@ -9,6 +9,7 @@ mod prompts;
 mod render;
 mod robots;
 mod run;
+mod signals;
 mod status;
 mod view;
 

@@ -15,11 +15,12 @@ use super::args::{
     AnswerFormat, ExecutionFlag, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name,
     method_spec, sim_errors,
 };
+use super::signals::Stop;
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
-    Budget, Cancel, Execution, HISTORY_WINDOW, Limits, MethodSpec, Round, Status, Summary,
-    executed_actions, shown, worth_a_line,
+    Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, Execution, HISTORY_WINDOW, Limits, MIB,
+    MethodSpec, Round, Status, Summary, executed_actions, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -44,6 +45,10 @@ pub(crate) struct RunArgs {
     /// steps).
     #[arg(long, value_enum, default_value_t = ExecutionFlag::Sequential)]
     execution: ExecutionFlag,
+    /// The longest one step of a method written in Python may take, in seconds (its
+    /// act, and making it at the first step); a longer step ends as the method's error.
+    #[arg(long, value_name = "SECONDS")]
+    step_timeout: Option<f64>,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = HISTORY_WINDOW)]
     history: usize,
@@ -57,6 +62,9 @@ pub(crate) struct RunArgs {
     /// that every round comes out the same.
     #[arg(long)]
     replay: Option<PathBuf>,
+    /// With --replay: the most the transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
     /// Print a JSON summary on stdout (step lines go to stderr).
     #[arg(long)]
     json: bool,
@@ -135,6 +143,7 @@ fn prepare(
             task,
             prices: args.inputs.price_source(),
             out: args.out.clone(),
+            max_bytes: args.max_transcript_mib.saturating_mul(MIB),
         };
         return request.prepare();
     }
@@ -156,7 +165,10 @@ fn prepare(
         max_states: args.max_states,
         out: args.out.clone(),
         execution: args.execution.into(),
-        ..RunRequest::new(task, method_spec(&args.method, load, None)?)
+        ..RunRequest::new(
+            task,
+            method_spec(&args.method, load, args.step_timeout, None)?,
+        )
     };
     request.prepare(cancel)
 }
@@ -178,14 +190,12 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     if let Some(line) = prompts::describe(&settings.prompts, &[settings.execution]) {
         lines.say(&line);
     }
-    let ctrl_c = {
-        let cancel = cancel.clone();
-        tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                cancel.cancel();
-            }
-        })
-    };
+    if let Some(dir) = &args.inputs.prompts {
+        for warning in prompts::blank_warnings(dir, &prepared.settings().prompts) {
+            eprintln!("warning: {}", shown(&warning));
+        }
+    }
+    let stop = Stop::watch(&cancel);
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
     let execution = prepared.settings().execution;
@@ -206,7 +216,6 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     if drawn.swap(false, Ordering::Relaxed) {
         eprint!("\r\x1b[2K");
     }
-    ctrl_c.abort();
     let ran = result?;
     let s = ran.summary();
     let actions = executed_actions(&ran.transcript.rounds);
@@ -217,7 +226,10 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         ran.goal_satisfied,
         ran.cost_usd,
     ));
-    lines.say(&format!("transcript: {}", ran.path.display()));
+    lines.say(&format!(
+        "transcript: {}",
+        shown(&ran.path.display().to_string())
+    ));
     let ending = ran.ending();
     match &ending {
         Ending::ReplayDiffers(why) => lines.say(&format!("replay: {}", shown(why))),
@@ -252,10 +264,11 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             })
         );
     }
-    if let Ending::RobotStopped(why) = &ending {
-        lines.say(&format!("stopped: {why}"));
-    }
-    Ok(status::of_ending(&ending))
+    Ok(match ending {
+        // Ctrl-C or SIGTERM: the status the shell gives the signal.
+        Ending::Interrupted => stop.status(),
+        other => status::of_ending(&other),
+    })
 }
 
 /// Says on stderr, once a second, which model call the episode waits for once it has
@@ -346,12 +359,15 @@ fn summary_line(
     goal_satisfied: bool,
     cost_usd: Option<f64>,
 ) -> String {
-    let result = match s.status {
-        Status::Success => "success",
-        Status::Failure => "failure: step budget spent",
-        Status::BackendError => "stopped: the backend failed",
-        Status::Interrupted => "interrupted",
-        Status::Error => "stopped: the method raised an error",
+    let result = match (s.status, &s.error) {
+        (Status::Success, _) => "success".to_owned(),
+        (Status::Failure, _) => "failure: step budget spent".to_owned(),
+        (Status::BackendError, _) => "stopped: the backend failed".to_owned(),
+        // Stopped by the environment, not by a signal: what happened (a robot's
+        // silence, say).
+        (Status::Interrupted, Some(why)) => format!("stopped: {}", shown(why)),
+        (Status::Interrupted, None) => "interrupted".to_owned(),
+        (Status::Error, _) => "stopped: the method raised an error".to_owned(),
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {

@@ -20,6 +20,8 @@ pub(crate) const METHOD_FAILED: u8 = 4;
 pub(crate) const ROBOT_STOPPED: u8 = 5;
 /// Ctrl-C, as shells report SIGINT.
 pub(crate) const INTERRUPTED: u8 = 130;
+/// SIGTERM, as shells report it; it stops a run as Ctrl-C does (`super::signals`).
+pub(crate) const TERMINATED: u8 = 143;
 
 /// The exit status of an episode that ended as `ending`.
 pub(crate) fn of_ending(ending: &Ending) -> u8 {

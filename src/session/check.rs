@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use coherent_core::makespan::{self, Makespan};
 use coherent_core::planner::{self, Analysis, Limits, Stop};
+use coherent_core::text::file_name_part;
 use coherent_core::{Error, Task, native, validate};
 use coherent_sim::PlanReport;
 
@@ -115,13 +116,15 @@ fn stop_name(stop: Stop) -> &'static str {
     }
 }
 
-/// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`; returns the
+/// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`, the scene's
+/// folder named in safe characters only (no `..`, no `/`, no control character; a hash
+/// when its name had to change, `coherent_core::text::file_name_part`); returns the
 /// files written.
 pub fn import(tasks: &[Task], out: &Path) -> Result<Vec<PathBuf>, Error> {
     let mut written = HashSet::new();
     let mut files = Vec::new();
     for t in tasks {
-        let dir = out.join(&t.meta.scene);
+        let dir = out.join(file_name_part(&t.meta.scene, 64).as_ref());
         let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
         if !written.insert(path.clone()) {
             return Err(Error::Io {

@@ -17,6 +17,7 @@ mod method;
 mod prompts;
 mod run;
 mod scene;
+mod stepper;
 mod task;
 mod view;
 
@@ -184,7 +185,7 @@ fn cli_main(
     py: Python<'_>,
     #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>,
 ) -> PyResult<u8> {
-    let methods = Mutex::new(Methods::new(py)?);
+    let methods = Mutex::new(Methods::new(py, None)?);
     let load = |spec: &str| -> Result<External, Error> {
         Python::attach(|py| {
             let found = method::helpers(py)?.call_method1("load", (spec,))?;

@@ -8,13 +8,14 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use coherent_agents::bench::{EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
+use coherent_agents::bench::{self, EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
 use coherent_agents::episode::{Budget, Execution, NoPlan, PlannedMakespan, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::{BackendInfo, BackendKind, Cancel, MethodSpec, Replay, transcript};
 use coherent_core::Task;
 use coherent_core::makespan;
 use coherent_core::planner::{self, Limits};
+use coherent_core::text::cut;
 use tokio::sync::OnceCell;
 
 use super::settings::EpisodeSettings;
@@ -162,7 +163,8 @@ pub async fn run_one(
                 )));
             };
             // A replay runs with the recorded settings and budget.
-            let replay = Replay::prepare(&transcript::read(path)?, path)?;
+            let read = transcript::read_within(path, recorded.max_transcript_bytes)?;
+            let replay = Replay::prepare(&read, path)?;
             EpisodeSpec {
                 task: Arc::clone(task),
                 settings: replay.settings.clone(),
@@ -308,7 +310,10 @@ fn line(
         sim_seconds: s.sim_seconds,
         backend: line_backend(&settings.backend, method, ran),
         uses_model: ran.model_use.uses_model(),
-        error: mismatch.or_else(|| s.error.clone()),
+        // Cut, so that the line stays within what a results file may hold.
+        error: mismatch
+            .or_else(|| s.error.clone())
+            .map(|e| cut(&e, bench::ERROR_BYTES).into_owned()),
         transcript: ran.path.display().to_string(),
         // The run's settings are the driver's to record (`Ledger::record`).
         settings: None,

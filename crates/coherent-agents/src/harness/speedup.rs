@@ -160,8 +160,9 @@ fn column_name(c: &str) -> &str {
     }
 }
 
-/// The table in Markdown (empty without rows).
-pub fn markdown(rows: &[SpeedRow]) -> String {
+/// The table in Markdown (empty without rows), each row's name written by `name` (the
+/// report's escaping of a name from a results line in a cell).
+pub fn markdown(rows: &[SpeedRow], name: fn(&str) -> String) -> String {
     if rows.is_empty() {
         return String::new();
     }
@@ -182,7 +183,7 @@ pub fn markdown(rows: &[SpeedRow]) -> String {
             .map_or("-".into(), |x| format!("{x:.2}x (n={})", r.pairs));
         out.push_str(&format!(
             "| {} | {} | {} | {:.3} | {} | {} | {} | {} | {} | {speedup} |\n",
-            row_name(&r.method, r.execution),
+            name(&row_name(&r.method, r.execution)),
             column_name(&r.column),
             r.episodes,
             r.sr,

@@ -7,15 +7,17 @@
 //! Faults are steps like any: an action outside the robot's list is run as written, so
 //! that the feasibility check gives the reason; a robot that is not in the team is a
 //! failed step that says so; no robot is no action (the step still counts). A policy
-//! that fails (raises, in Python) ends the episode with status `error` and its words.
+//! that fails (raises, in Python) ends the episode with status `error` and its words,
+//! and so does a step that takes longer than the method's step limit.
 //!
 //! In a parallel episode the policy answers a decision per robot that acts, carried out
 //! together as one joint step (two for one robot refuse the step, as the rules do).
 
 use std::io;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
@@ -27,14 +29,15 @@ use crate::methods::{decision, feedback};
 use crate::records::transcript::{Execution, RobotPart, Round, RoundOutcome};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
-/// spent, the policy fails, or `cancel` fires; in a parallel episode each step's choices
-/// (one per robot that acts) are carried out as one joint step. A policy that could not
-/// be made fails the first step.
+/// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
+/// fires; in a parallel episode each step's choices (one per robot that acts) are
+/// carried out as one joint step. A policy that could not be made fails the first step.
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     made: Result<Box<dyn Policy>, MethodFailure>,
     (execution, max_steps): (Execution, u32),
+    step_timeout: Option<Duration>,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
@@ -46,10 +49,23 @@ pub async fn run(
             Ok(policy) => {
                 let past = history.entries();
                 let view = StepView::now(env, task, (step, max_steps), execution, &past);
+                let act = policy.act(Arc::new(view));
+                // Without a limit, a step may take as long as it takes (a sleep of
+                // Duration::MAX would overflow the clock).
+                let limit = async {
+                    match step_timeout {
+                        Some(limit) => tokio::time::sleep(limit).await,
+                        None => std::future::pending().await,
+                    }
+                };
                 tokio::select! {
                     biased;
                     () = cancel.cancelled() => return Ok(None),
-                    act = policy.act(Arc::new(view)) => act,
+                    act = act => act,
+                    () = limit => Act {
+                        choices: Err(out_of_time(step_timeout.unwrap_or_default())),
+                        calls: Vec::new(),
+                    },
                 }
             }
             Err(why) => Act {
@@ -59,7 +75,7 @@ pub async fn run(
         };
         let mut round = Round::new(step);
         round.calls = act.calls;
-        match (act.choices, execution) {
+        match (bounded(act.choices), execution) {
             (Ok(choices), Execution::Parallel) => jointly(env, task, &mut round, choices),
             (Ok(mut choices), Execution::Sequential) if choices.len() <= 1 => {
                 let choice = choices.pop().unwrap_or_default();
@@ -175,6 +191,35 @@ fn jointly(
     };
     let paragraph = joint::paragraph(None, &parts);
     joint::close(env, round, parts, outcome, paragraph);
+}
+
+/// The failure of a step that took longer than `limit`.
+fn out_of_time(limit: Duration) -> MethodFailure {
+    MethodFailure(format!(
+        "the step took longer than its time limit of {} s (--step-timeout, step_timeout=), \
+         and was stopped",
+        number(limit.as_secs_f64())
+    ))
+}
+
+/// The most of a method's note, action or error a round keeps: what a method says is
+/// text of any length, and the transcript must stay readable.
+pub const MAX_TEXT_BYTES: usize = 64 << 10;
+
+/// `choices` with their texts cut at [`MAX_TEXT_BYTES`]: each note and action at its
+/// end, an error at its start (a traceback ends with the exception).
+fn bounded(choices: Result<Vec<Choice>, MethodFailure>) -> Result<Vec<Choice>, MethodFailure> {
+    match choices {
+        Ok(choices) => Ok(choices
+            .into_iter()
+            .map(|mut c| {
+                c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
+                c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
+                c
+            })
+            .collect()),
+        Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
+    }
 }
 
 /// Runs `robot`'s `action` as the round's decision; a robot that is not in the team is a
