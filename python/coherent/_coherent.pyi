@@ -80,6 +80,16 @@ class _PlanResult(TypedDict):
     parallel_plan: NotRequired[list[list[_PlanStep]] | None]
     makespan_states_expanded: NotRequired[int]
     makespan_ms: NotRequired[float]
+    # With physics=True only: the plan carried out in Rapier (docs/physics.md).
+    physics_ok: NotRequired[bool]
+    physics_error: NotRequired[str | None]
+    sim_seconds: NotRequired[float]
+    physics_wall_ms: NotRequired[float]
+    # With parallel=True and physics=True: the makespan plan carried out in Rapier.
+    makespan_physics_ok: NotRequired[bool]
+    makespan_physics_error: NotRequired[str | None]
+    makespan_sim_seconds: NotRequired[float]
+    makespan_physics_wall_ms: NotRequired[float]
 
 class _Mention(TypedDict):
     name: str
@@ -91,7 +101,9 @@ class _ParsedAction(TypedDict):
     target: _Mention | None
 
 class CoherentError(Exception):
-    """Base class of every error raised by coherent."""
+    """Base class of every error raised by coherent; raised itself when coherent
+    fails whatever the input (its async runtime cannot start: the process may
+    open no more files or start no more threads; an episode's thread panicked)."""
 
 class ArgumentError(CoherentError, ValueError):
     """An argument of the right type whose value cannot be used: an int out of range, a
@@ -280,10 +292,13 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
 def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
     """The project's own benchmark, compiled in: every task, or its 40-task subset."""
 
-def plan(task: Task, max_states: int = ..., parallel: bool = False) -> _PlanResult:
+def plan(task: Task, max_states: int = ..., parallel: bool = False, physics: bool = False) -> _PlanResult:
     """Plans ``task`` optimally (one line of ``coherent plan --json``); with ``parallel``,
     also its fewest joint steps, robots acting at once (``coherent plan --parallel
-    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...).
+    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...);
+    with ``physics``, carries the plan out in Rapier (``--physics``: ``physics_ok``,
+    ``sim_seconds``...), and with both the makespan plan too, each joint step's robots
+    moving at once (``makespan_physics_ok``, ``makespan_sim_seconds``...).
     Ctrl-C interrupts it and stops the search."""
 
 def validate(task: Task, max_states: int = ...) -> list[str]:

@@ -198,5 +198,14 @@ impl fmt::Display for BackendProblem {
     }
 }
 
+/// What a caught panic said: its message, when it has one (`panic!` with text does).
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".to_owned())
+}
+
 /// The session's results.
 pub type Result<T, E = Error> = std::result::Result<T, E>;

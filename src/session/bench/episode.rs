@@ -21,7 +21,7 @@ use tokio::sync::OnceCell;
 use super::settings::EpisodeSettings;
 use crate::session::backend::BackendChoice;
 use crate::session::episode::{self, EpisodeSpec, Ran};
-use crate::session::error::Error;
+use crate::session::error::{Error, panic_message};
 use crate::session::waiting::Waiting;
 
 /// What the planner says about a task, once per task: its type and optimum for the
@@ -251,14 +251,10 @@ async fn on_its_own_thread(
         .map_err(|e| Error::Internal(format!("cannot start an episode's thread: {e}")))?;
     match result.await {
         Ok(Ok(value)) => Ok(value),
-        Ok(Err(panic)) => {
-            let message = panic
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(Error::Internal(format!("an episode panicked: {message}")))
-        }
+        Ok(Err(panic)) => Err(Error::Internal(format!(
+            "an episode panicked: {}",
+            panic_message(panic.as_ref())
+        ))),
         Err(_) => Err(Error::Internal(
             "an episode's thread ended without a result".into(),
         )),
