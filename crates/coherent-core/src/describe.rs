@@ -7,7 +7,7 @@
 //! what actions change after, so that a prompt's beginning stays the same from one
 //! round to the next and a server's prompt cache can skip it.
 
-use std::fmt::Write;
+use std::fmt::{self, Write};
 
 use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
 use crate::rules::Observation;
@@ -52,7 +52,7 @@ pub fn facts(task: &Task, s: &State, observations: &[&Observation]) -> String {
         let states = task.vocab.state_names(s.states(n));
         item(
             &mut out,
-            &node.label(),
+            node.shown_label(),
             properties.into_iter().chain(states),
         );
     }
@@ -125,7 +125,7 @@ pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers 
         let _ = write!(scene, "- {}", joins(task, door));
         let states = task.vocab.state_names(s.states(door));
         if states_change(task, s, door) {
-            item(&mut things, &task.node(door).label(), states);
+            item(&mut things, task.node(door).shown_label(), states);
             scene.push('\n');
         } else if states.is_empty() {
             scene.push('\n');
@@ -150,18 +150,18 @@ pub fn layered(task: &Task, s: &State, observations: &[&Observation]) -> Layers 
         if moves(task, n) {
             item(
                 changing,
-                &node.label(),
+                node.shown_label(),
                 properties.into_iter().chain(states),
             );
         } else if states_change(task, s, n) {
-            item(&mut scene, &node.label(), properties);
+            item(&mut scene, node.shown_label(), properties);
             if !states.is_empty() {
-                item(changing, &node.label(), states);
+                item(changing, node.shown_label(), states);
             }
         } else {
             item(
                 &mut scene,
-                &node.label(),
+                node.shown_label(),
                 properties.into_iter().chain(states),
             );
         }
@@ -203,19 +203,21 @@ fn relation(out: &mut String, task: &Task, e: Edge) {
         out,
         "- {}({}, {})",
         e.rel().name(),
-        task.node(e.from()).label(),
-        task.node(e.to()).label()
+        task.node(e.from()).shown_label(),
+        task.node(e.to()).shown_label()
     );
 }
 
 /// `- <label>` or `- <label>: WORD, WORD`.
-fn item(out: &mut String, label: &str, words: impl IntoIterator<Item = String>) {
-    let words: Vec<String> = words.into_iter().collect();
-    if words.is_empty() {
-        let _ = writeln!(out, "- {label}");
-    } else {
-        let _ = writeln!(out, "- {label}: {}", words.join(", "));
+fn item(out: &mut String, label: impl fmt::Display, words: impl IntoIterator<Item = String>) {
+    let _ = write!(out, "- {label}");
+    let mut separator = ": ";
+    for word in words {
+        out.push_str(separator);
+        out.push_str(&word);
+        separator = ", ";
     }
+    out.push('\n');
 }
 
 /// Whether an action can move `n` (change what it stands on or is in, or whether it is

@@ -17,7 +17,7 @@ pub struct NodeId(pub i64);
 
 impl fmt::Display for NodeId {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.0)
+        fmt::Display::fmt(&self.0, f)
     }
 }
 
@@ -97,13 +97,28 @@ pub struct Node {
 impl Node {
     /// `<class_name>(id)`, as in action strings and goals.
     pub fn label(&self) -> String {
-        format!("<{}>({})", self.class_name, self.id)
+        self.shown_label().to_string()
+    }
+
+    /// [`Node::label`] written straight into a formatter, for text that names many
+    /// nodes (a prompt's facts), without a string per name.
+    pub fn shown_label(&self) -> impl fmt::Display + '_ {
+        Label(self)
     }
 
     /// [`Node::label`] with a name longer than [`crate::error::ECHO_CHARS`] cut, for messages about
     /// input.
     pub fn short_label(&self) -> String {
         format!("<{}>({})", clip(&self.class_name), self.id)
+    }
+}
+
+/// See [`Node::shown_label`].
+struct Label<'a>(&'a Node);
+
+impl fmt::Display for Label<'_> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "<{}>({})", self.0.class_name, self.0.id)
     }
 }
 
