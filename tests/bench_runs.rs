@@ -10,9 +10,10 @@ use std::sync::Arc;
 use coherent::session::backend::{BackendName, BackendRequest};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
-    Act, BenchOutcome, BoxFuture, Cancel, Choice, ErrorRates, Event, External, MakePolicy, Method,
-    MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task,
-    Transcript, read_results, transcripts_dir,
+    Act, BenchOutcome, BoxFuture, Cancel, Choice, DEFAULT_MAX_RESULTS_BYTES,
+    DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Event, External, MakePolicy, Method, MethodFailure,
+    MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task, Transcript,
+    read_results, transcripts_dir,
 };
 use coherent::session::episode;
 use coherent_agents::BackendKind;
@@ -47,6 +48,7 @@ fn config(
         seeds,
         concurrency,
         out: out.to_owned(),
+        max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
     }
 }
 
@@ -350,7 +352,11 @@ fn a_policy_that_follows_the_plan_is_a_method_like_optimal() {
             .iter()
             .all(|l| !l.uses_model && l.backend.kind == BackendKind::None)
     );
-    let recorded = episode::recorded(Path::new(&followed[0].transcript)).expect("a transcript");
+    let recorded = episode::recorded(
+        Path::new(&followed[0].transcript),
+        DEFAULT_MAX_TRANSCRIPT_BYTES,
+    )
+    .expect("a transcript");
     let transcript: &Transcript = &recorded.transcript;
     assert!(transcript.header.external);
     assert!(transcript.rounds.iter().all(|r| r.external.is_some()));
@@ -443,11 +449,14 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
             seeds: 1,
             concurrency: 2,
             out: out.clone(),
+            max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
         };
         run(&tasks, &config);
         let mut got = lines(&out);
         for l in &got {
-            let recorded = episode::recorded(Path::new(&l.transcript)).expect("a transcript");
+            let recorded =
+                episode::recorded(Path::new(&l.transcript), DEFAULT_MAX_TRANSCRIPT_BYTES)
+                    .expect("a transcript");
             assert_eq!(
                 recorded.transcript.header.physics, physics,
                 "{}",

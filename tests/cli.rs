@@ -488,6 +488,51 @@ fn plan_physics_adds_the_physical_outcome_to_each_line() {
     assert!(line["physics_wall_ms"].as_f64().is_some_and(|s| s > 0.0));
 }
 
+/// `plan --parallel --physics` carries out the makespan plan as well, each joint step's
+/// robots moving at once: the demo's 13 joint steps take less simulated time than its 22
+/// actions in turn, and the sequential plan's keys stay what `--physics` alone gives.
+#[test]
+fn plan_parallel_physics_runs_the_makespan_plan_in_rapier() {
+    let demo = demo();
+    let out = coherent(&["plan", arg(&demo), "--physics", "--json"]);
+    let alone: Value = serde_json::from_str(stdout(&out).trim()).expect("one JSON line");
+    let out = coherent(&["plan", arg(&demo), "--parallel", "--physics", "--json"]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let line: Value = serde_json::from_str(stdout(&out).trim()).expect("one JSON line");
+    assert_eq!(line["physics_ok"], json!(true), "{line}");
+    assert_eq!(line["sim_seconds"], alone["sim_seconds"]);
+    assert_eq!(line["makespan_physics_ok"], json!(true), "{line}");
+    assert_eq!(line["makespan_physics_error"], Value::Null);
+    assert!(
+        line["makespan_physics_wall_ms"]
+            .as_f64()
+            .is_some_and(|ms| ms > 0.0)
+    );
+    let (actions, joint) = (&line["optimal_steps"], &line["makespan"]);
+    assert!(joint.as_u64() < actions.as_u64(), "{actions} {joint}");
+    let (seconds, parallel) = (
+        line["sim_seconds"].as_f64().expect("seconds in turn"),
+        line["makespan_sim_seconds"]
+            .as_f64()
+            .expect("seconds at once"),
+    );
+    assert!(
+        parallel > 1.0 && parallel < seconds,
+        "{parallel} s at once against {seconds} s in turn"
+    );
+
+    let out = coherent(&["plan", arg(&demo), "--parallel", "--physics"]);
+    assert_eq!(code(&out), 0, "{}", show(&out));
+    let text = stdout(&out);
+    assert!(
+        text.contains(&format!("\n  physics: ok, {seconds:.1} s simulated in "))
+            && text.contains(&format!(
+                "\n  parallel physics: ok, {parallel:.1} s simulated in "
+            )),
+        "{text}"
+    );
+}
+
 /// `run --physics` and `run --method mcts` go through the same loop and transcript.
 #[test]
 fn run_with_physics_and_with_mcts() {

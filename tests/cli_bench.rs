@@ -1,13 +1,14 @@
 //! `coherent bench` as a separate process: an end-to-end run on the paper40 tasks of
-//! env0, resume, `--report` in every format, our own benchmark's native40 subset, and
-//! the exit status of bad input.
+//! env0, resume, `--report` in every format, our own benchmark's native40 subset, the
+//! exit status of bad input, and a second run refused while one holds its results file.
 
 use std::path::Path;
-use std::process::Output;
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
 
 mod common;
 
-use common::{coherent, env0, scratch, show};
+use common::{coherent, demo, env0, scratch, show, silent_server, utf8};
 
 /// Asserts that `out` exited 0 and that its stdout says each of `texts`.
 fn says(out: &Output, texts: &[&str]) {
@@ -246,6 +247,79 @@ fn backend_replay_reruns_an_earlier_results_file_from_its_transcripts() {
     let bad = run(&dir.join("x.jsonl"), &["--backend", "replay"]);
     assert_eq!(bad.status.code(), Some(2), "{}", show(&bad));
     assert!(String::from_utf8_lossy(&bad.stderr).contains("--replay-from FILE"));
+}
+
+#[test]
+fn a_second_bench_on_the_same_results_file_is_refused_and_touches_nothing() {
+    let dir = scratch("two-runs");
+    let (url, requests) = silent_server();
+    let demo = demo();
+    let out = dir.join("results.jsonl");
+    // `--timeout`: the first run waits on the silent server until it is killed; a second
+    // one, were it let run, would give up at once.
+    let args = |out: &Path, timeout: &str| -> Vec<String> {
+        let mut args: Vec<String> = ["bench", "--tasks", utf8(&demo), "--methods", "pefa,cmrs"]
+            .map(str::to_owned)
+            .to_vec();
+        for (flag, value) in [
+            ("--base-url", url.as_str()),
+            ("--model", "m"),
+            ("--max-retries", "0"),
+            ("--timeout", timeout),
+            ("--out", utf8(out)),
+        ] {
+            args.extend([flag.to_owned(), value.to_owned()]);
+        }
+        args
+    };
+    let mut first = Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args(args(&out, "600"))
+        .env_remove("OPENAI_API_KEY")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .expect("coherent starts");
+    // Both episodes are in flight, their transcripts open.
+    for _ in 0..2 {
+        requests
+            .recv_timeout(Duration::from_secs(60))
+            .expect("a model request");
+    }
+    let transcripts = || -> Vec<String> {
+        let seed0 = dir.join("results.transcripts/seed0");
+        let mut names: Vec<String> = std::fs::read_dir(seed0)
+            .expect("the transcripts")
+            .map(|e| {
+                e.expect("an entry")
+                    .file_name()
+                    .to_string_lossy()
+                    .into_owned()
+            })
+            .collect();
+        names.sort();
+        names
+    };
+    let before = transcripts();
+    assert_eq!(before.len(), 2, "{before:?}");
+    // The same file, and another whose transcripts share the folder.
+    for other in [out.clone(), dir.join("results.json")] {
+        let second_args = args(&other, "1");
+        let second_args: Vec<&str> = second_args.iter().map(String::as_str).collect();
+        let second = coherent(&second_args);
+        let err = String::from_utf8_lossy(&second.stderr);
+        assert_eq!(second.status.code(), Some(2), "{}", show(&second));
+        let holder = format!(
+            "another benchmark run is using it (process {} holds",
+            first.id()
+        );
+        assert!(err.contains(&holder), "{err}");
+        assert_eq!(transcripts(), before, "nothing renamed");
+    }
+    assert_eq!(std::fs::read_to_string(&out).unwrap_or_default(), "");
+    assert!(!dir.join("results.json").exists());
+    let _ = first.kill();
+    let _ = first.wait();
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `bench --physics` carries every episode's actions out in Rapier too: the demo's

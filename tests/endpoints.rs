@@ -14,7 +14,8 @@ use std::time::Duration;
 use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
-    ApiKey, Backoff, Cancel, Method, OpenAiConfig, ResultLine, Subset, Task, read_results,
+    ApiKey, Backoff, Cancel, DEFAULT_MAX_RESULTS_BYTES, Method, OpenAiConfig, ResultLine, Subset,
+    Task, read_results,
 };
 use coherent_agents::transcript;
 use tokio::io::AsyncWriteExt;
@@ -140,6 +141,7 @@ async fn bench_over(urls: &[String], seeds: u32, out: &Path) -> Vec<ResultLine> 
         seeds,
         concurrency: 6,
         out: out.join("results.jsonl"),
+        max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
     };
     let outcome = bench::run(&tasks(), &config, &Cancel::default(), &mut |_| {})
         .await

@@ -247,3 +247,60 @@ fn a_server_gone_for_good_exits_3_and_ctrl_c_exits_130() {
     drop(held);
     assert_eq!(code, Some(130), "interrupted");
 }
+
+/// Coherent's own failure (70): its async runtime takes file descriptors (epoll, an
+/// eventfd, a socket pair for signals and a copy of one), so with `ulimit -n` just above
+/// what the process needs to start and read its task, it cannot start. Every limit from
+/// the lowest the dynamic loader takes up to one that runs the episode ends in the
+/// runtime's error with the OS's words (70), a transcript that cannot be opened (2) or
+/// the goal reached, never in a panic (tokio panics on the socket pair: 101 before).
+#[test]
+fn a_runtime_without_file_descriptors_exits_70_and_says_why_at_every_low_limit() {
+    let dir = scratch("no-descriptors");
+    let out = format!("{}/runs", utf8(&dir));
+    let demo = demo().display().to_string();
+    let mut runtime_failures = Vec::new();
+    let mut ran = false;
+    for limit in 3..=64 {
+        let run = Command::new("prlimit")
+            .arg(format!("--nofile={limit}:{limit}"))
+            .arg(env!("CARGO_BIN_EXE_coherent"))
+            .args(["run", &demo, "--out", &out])
+            .env_remove("OPENAI_BASE_URL")
+            .env_remove("OPENAI_API_KEY")
+            .env_remove("COHERENT_MODEL")
+            .output()
+            .expect("prlimit (util-linux) runs");
+        let said = String::from_utf8_lossy(&run.stderr);
+        match run.status.code() {
+            // Too few for the dynamic loader to open the binary's libraries.
+            Some(127) if said.contains("error while loading shared libraries") => {}
+            Some(70) => {
+                assert!(
+                    said.starts_with("error: cannot start the async runtime: ")
+                        && said.contains("Too many open files")
+                        && !said.contains("panicked"),
+                    "limit {limit}: {said}"
+                );
+                runtime_failures.push(limit);
+            }
+            Some(2) => assert!(
+                said.contains(".jsonl: Too many open files"),
+                "limit {limit}: only the transcript may fail for want of descriptors: {}",
+                show(&run)
+            ),
+            Some(0) => {
+                ran = true;
+                break;
+            }
+            _ => panic!("limit {limit}: {}", show(&run)),
+        }
+    }
+    assert!(ran, "64 descriptors are enough to run the demo");
+    // The lowest limit the loader takes leaves the process one descriptor after its
+    // task is read; the runtime needs five, so at least four limits in a row fail.
+    assert!(
+        runtime_failures.len() >= 4,
+        "the runtime fails at the lowest limits: {runtime_failures:?}"
+    );
+}

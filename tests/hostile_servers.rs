@@ -1,16 +1,18 @@
 //! `coherent run` against model servers that misbehave on purpose, over real loopback
 //! sockets: a body that never ends, a 20 MB answer, an answer dripped one byte a second,
-//! and answers full of terminal escapes. Each run must end in bounded time and memory
-//! (the peak resident memory of the `coherent` process, read from `/proc`, stays under
-//! [`MEMORY_BOUND`]), leave a complete transcript, and print nothing a terminal would
-//! act on.
+//! answers full of terminal escapes, a `Retry-After` of days or centuries, redirects to
+//! another server; and base URLs that carry a secret (a gateway's key in the query, a
+//! user and password). Each run must end in bounded time and memory (the peak resident
+//! memory of the `coherent` process, read from `/proc`, stays under [`MEMORY_BOUND`]),
+//! leave a complete transcript, print nothing a terminal would act on, and write no
+//! secret anywhere.
 
 use std::io::{BufReader, Read, Write};
 use std::net::{TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
@@ -18,14 +20,14 @@ use serde_json::{Value, json};
 
 mod common;
 
-use common::read_request;
+use common::{Request, read_whole_request};
 
 /// The most resident memory a run against a hostile server may reach: the engine, the
 /// physics-free world and a few MB of response buffers fit many times over.
 const MEMORY_BOUND: u64 = 200 << 20;
 
 /// What the server does with every request.
-#[derive(Clone, Copy)]
+#[derive(Clone)]
 enum Behaviour {
     /// Headers, then bytes forever (no length, no end).
     Endless,
@@ -35,6 +37,12 @@ enum Behaviour {
     Drip,
     /// Valid JSON answers whose fields are full of terminal escapes.
     Escapes,
+    /// HTTP 429 with this `Retry-After`.
+    RetryAfter(&'static str),
+    /// A redirect: this status, to this URL.
+    Redirect(u16, String),
+    /// Valid answers; every request is kept.
+    Record(Arc<Mutex<Vec<Request>>>),
 }
 
 /// A server on a loopback port that answers every request with `behaviour`, until the
@@ -50,27 +58,46 @@ fn serve(behaviour: Behaviour) -> (String, Arc<AtomicBool>) {
                 return;
             }
             let Ok(socket) = socket else { continue };
-            let done = Arc::clone(&done);
-            thread::spawn(move || connection(socket, behaviour, &done));
+            let (done, behaviour) = (Arc::clone(&done), behaviour.clone());
+            thread::spawn(move || connection(socket, &behaviour, &done));
         }
     });
     (url, stop)
 }
 
-fn connection(socket: TcpStream, behaviour: Behaviour, stop: &AtomicBool) {
+fn connection(socket: TcpStream, behaviour: &Behaviour, stop: &AtomicBool) {
     let mut reader = BufReader::new(socket.try_clone().expect("clone the socket"));
     let mut out = socket;
-    while let Some(request) = read_request(&mut reader) {
+    while let Some(whole) = read_whole_request(&mut reader) {
+        let request = &whole.body;
         let answered = match behaviour {
             Behaviour::Endless => endless(&mut out, stop),
             Behaviour::Huge(size) => {
-                let content = format!("{{\"note\": \"{}\"}}", "x".repeat(size));
+                let content = format!("{{\"note\": \"{}\"}}", "x".repeat(*size));
                 respond(&mut out, &completion(&content))
             }
-            Behaviour::Drip => drip(&mut out, &completion(&answer(&request, "")), stop),
+            Behaviour::Drip => drip(&mut out, &completion(&answer(request, "")), stop),
             Behaviour::Escapes => {
                 let evil = "\u{1b}[2J\rsuccess=true\n\u{202e}";
-                respond(&mut out, &completion(&answer(&request, evil)))
+                respond(&mut out, &completion(&answer(request, evil)))
+            }
+            Behaviour::RetryAfter(wait) => {
+                let body = r#"{"error": "slow down"}"#;
+                write!(
+                    out,
+                    "HTTP/1.1 429 Too Many Requests\r\nretry-after: {wait}\r\n\
+                     content-type: application/json\r\ncontent-length: {}\r\n\r\n{body}",
+                    body.len()
+                )
+            }
+            Behaviour::Redirect(status, to) => write!(
+                out,
+                "HTTP/1.1 {status} Elsewhere\r\nlocation: {to}\r\ncontent-length: 0\r\n\r\n"
+            ),
+            Behaviour::Record(log) => {
+                let reply = respond(&mut out, &completion(&answer(request, "")));
+                log.lock().expect("the log").push(whole);
+                reply
             }
         };
         if answered.is_err() {
@@ -344,5 +371,141 @@ fn terminal_escapes_in_answers_are_shown_escaped_and_kept_raw() {
     assert!(
         action.starts_with("\u{1b}[2J\rsuccess=true\n\u{202e}"),
         "{action:?}"
+    );
+}
+
+#[test]
+fn a_retry_after_of_days_or_centuries_is_capped_said_and_ends_in_exit_3() {
+    for wait in [
+        "999999",
+        "18446744073709551615",
+        "Thu, 01 Jan 2099 00:00:00 GMT",
+    ] {
+        let (url, stop) = serve(Behaviour::RetryAfter(wait));
+        let flags = ["--max-steps", "1", "--timeout", "2", "--max-retries", "2"];
+        let ran = run("retry-after", &url, &flags);
+        stop.store(true, Ordering::Relaxed);
+        within_bounds("retry-after", &ran, 30);
+        assert_eq!(ran.status, Some(3), "{wait}: {}", ran.stdout);
+        let notes: Vec<&str> = ran
+            .stderr
+            .lines()
+            .filter(|l| l.contains("answered HTTP 429 and asked to wait"))
+            .collect();
+        assert_eq!(notes.len(), 2, "one note per wait: {}", ran.stderr);
+        assert!(
+            notes[0].ends_with("waiting 2.0 s, retry 1 of 2"),
+            "{}",
+            ran.stderr
+        );
+        if wait == "999999" {
+            assert!(
+                notes[0].contains("asked to wait 999999 s"),
+                "{}",
+                ran.stderr
+            );
+        }
+        let lines = records(&ran);
+        assert_eq!(
+            lines.last().map(|l| &l["status"]),
+            Some(&json!("backend_error"))
+        );
+    }
+}
+
+/// `coherent bench` on the demo task with `pefa` against `url`, one step; the results
+/// file's text.
+fn bench_once(name: &str, url: &str) -> String {
+    let out = std::env::temp_dir().join(format!("coherent-hostile-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&out);
+    let results = out.join("results.jsonl");
+    let demo = Path::new(env!("CARGO_MANIFEST_DIR")).join("examples/tasks/demo.json");
+    let ran = Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .arg("bench")
+        .arg("--tasks")
+        .arg(&demo)
+        .args(["--methods", "pefa", "--max-steps", "1", "--base-url", url])
+        .args(["--model", "hostile", "--api-key", "sk-hostile-0123456789"])
+        .arg("--out")
+        .arg(&results)
+        .output()
+        .expect("coherent runs");
+    assert_eq!(ran.status.code(), Some(0), "{ran:?}");
+    std::fs::read_to_string(&results).expect("the results file")
+}
+
+#[test]
+fn a_secret_in_the_base_url_stays_on_the_request_and_out_of_every_record() {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let (url, stop) = serve(Behaviour::Record(Arc::clone(&log)));
+    let secret = "gw-secret-0123456789";
+    let in_query = format!("{url}?api-key={secret}");
+    let ran = run("query-key", &in_query, &["--max-steps", "2", "--json"]);
+    let results = bench_once("query-key-bench", &in_query);
+    // A user and password in the URL: basic auth alone, no bearer key beside it.
+    let password = "gw-pass-0123456789";
+    let with_user = url.replacen("http://", &format!("http://gw-user:{password}@"), 1);
+    let user = run("user-password", &with_user, &["--max-steps", "1", "--json"]);
+    stop.store(true, Ordering::Relaxed);
+    let requests = log.lock().expect("the log");
+    let (queried, basic): (Vec<&Request>, Vec<&Request>) =
+        requests.iter().partition(|r| r.line.contains("api-key"));
+    assert!(queried.len() >= 3 && !basic.is_empty());
+    for r in &queried {
+        assert_eq!(
+            r.line,
+            format!("POST /v1/chat/completions?api-key={secret} HTTP/1.1")
+        );
+        assert_eq!(r.header("authorization"), ["Bearer sk-hostile-0123456789"]);
+    }
+    for r in &basic {
+        assert_eq!(r.line, "POST /v1/chat/completions HTTP/1.1");
+        // base64 of "gw-user:gw-pass-0123456789".
+        assert_eq!(
+            r.header("authorization"),
+            ["Basic Z3ctdXNlcjpndy1wYXNzLTAxMjM0NTY3ODk="]
+        );
+    }
+    let transcript = std::fs::read_to_string(&ran.transcript).expect("the transcript");
+    for (what, text) in [
+        ("--json", &ran.stdout),
+        ("stderr", &ran.stderr),
+        ("the transcript", &transcript),
+        ("the results line", &results),
+    ] {
+        assert!(!text.contains(secret), "{what} holds the secret: {text}");
+        assert!(text.contains("/v1?api-key=[redacted]"), "{what}: {text}");
+    }
+    let transcript = std::fs::read_to_string(&user.transcript).expect("the transcript");
+    for text in [&user.stdout, &user.stderr, &transcript] {
+        assert!(
+            !text.contains(password) && !text.contains("gw-user"),
+            "{text}"
+        );
+    }
+}
+
+#[test]
+fn a_redirect_is_the_servers_error_and_is_never_followed() {
+    let log = Arc::new(Mutex::new(Vec::new()));
+    let (elsewhere, stop_elsewhere) = serve(Behaviour::Record(Arc::clone(&log)));
+    let to = format!("{elsewhere}/chat/completions");
+    for status in [307, 302] {
+        let (url, stop) = serve(Behaviour::Redirect(status, to.clone()));
+        let ran = run("redirect", &url, &["--max-steps", "2"]);
+        stop.store(true, Ordering::Relaxed);
+        within_bounds("redirect", &ran, 30);
+        assert_eq!(ran.status, Some(3), "{}", ran.stdout);
+        let said = format!("HTTP {status}: redirect to {to}, not followed");
+        assert!(ran.stdout.contains(&said), "{said}\n{}", ran.stdout);
+        let lines = records(&ran);
+        let call = &lines[1]["calls"][0];
+        assert_eq!(call["endpoint"], json!(url), "the server that answered");
+        assert_eq!(call["error"]["kind"], json!({"status": status}));
+    }
+    stop_elsewhere.store(true, Ordering::Relaxed);
+    assert!(
+        log.lock().expect("the log").is_empty(),
+        "nothing sent elsewhere"
     );
 }

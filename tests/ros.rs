@@ -1,5 +1,6 @@
 //! Robots over ROS 2, end to end: `coherent robots serve` and `coherent run --robots ros2`
 //! as separate processes, in a network namespace of each test's own (`common::netns`).
+//! Hostile robots are here too: two servers for one robot, at the start or mid-episode.
 
 mod common;
 
@@ -190,6 +191,15 @@ fn a_server_killed_mid_episode_fails_the_step_with_a_timeout_and_ends_the_run() 
         said.contains("infeasible (timeout)")
             && said.contains("stopped: robot_dog_13 did not answer"),
         "{said}"
+    );
+    // The summary says what happened: a robot's silence, not an interruption.
+    let summary = said
+        .lines()
+        .find(|l| l.contains("| goal not reached |"))
+        .expect("a summary line");
+    assert!(
+        summary.starts_with("stopped: robot_dog_13 did not answer [movetowards] <fridge>(8)"),
+        "{summary}"
     );
     let t = transcript(&runs);
     assert_eq!(t.summary["status"], "interrupted");
@@ -421,6 +431,62 @@ fn a_robot_whose_server_never_starts_exits_2_naming_it() {
 }
 
 #[test]
+fn two_servers_for_one_robot_are_refused_at_the_start_naming_them() {
+    let ns = Netns::new("two-at-start");
+    let mut first = ns.spawn("serve-a", &["robots", "serve", &demo()]);
+    let mut second = ns.spawn("serve-b", &["robots", "serve", &demo()]);
+    first.wait_for("serving 3 robots", LONG);
+    second.wait_for("serving 3 robots", LONG);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let mut run = ns.spawn("run", &["run", &demo, "--robots", "ros2", "--out", &runs]);
+    assert_eq!(run.wait(LONG), 2, "{}", run.show());
+    let err = std::fs::read_to_string(&run.err).expect("stderr");
+    let servers = err
+        .split("2 ROS 2 action servers for robot_arm_6 under /coherent (")
+        .nth(1)
+        .unwrap_or_else(|| panic!("{err}"));
+    assert_eq!(servers.matches("participant ").count(), 2, "{err}");
+    assert!(err.contains("stop all but one"), "{err}");
+    assert!(!Path::new(&runs).exists(), "no episode, no transcript");
+    for server in [&first, &second] {
+        assert!(!server.stdout().contains("accepted"), "{}", server.show());
+    }
+}
+
+#[test]
+fn a_second_server_that_takes_a_goal_mid_episode_stops_the_bridge() {
+    let ns = Netns::new("two-mid-episode");
+    let mut first = ns.spawn("serve-a", &["robots", "serve", &demo(), "--delay", "0.5"]);
+    first.wait_for("serving 3 robots", LONG);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let args = ["run", &demo, "--robots", "ros2", "--out", &runs];
+    let mut run = ns.spawn("run", &args);
+    first.wait_for("step 2 [movetowards] <door>(4) -> accepted", LONG);
+    let mut second = ns.spawn("serve-b", &["robots", "serve", &demo, "--delay", "0.5"]);
+    second.wait_for("serving 3 robots", LONG);
+    assert_eq!(
+        run.wait(LONG),
+        5,
+        "{}\n{}\n{}",
+        run.show(),
+        first.show(),
+        second.show()
+    );
+    let said = run.stdout();
+    assert!(
+        said.contains("two servers accepted the goal, participant "),
+        "{said}"
+    );
+    let t = transcript(&runs);
+    assert_eq!(t.summary["status"], "interrupted");
+    let error = t.summary["error"].as_str().expect("why");
+    assert!(error.contains("two servers accepted the goal"), "{error}");
+    assert!(second.stdout().contains("-> accepted"), "{}", second.show());
+}
+
+#[test]
 fn ctrl_c_during_an_action_cancels_the_goal() {
     let ns = Netns::new("ctrl-c");
     let mut server = ns.spawn("serve", &["robots", "serve", &demo(), "--delay", "30"]);
@@ -464,7 +530,7 @@ fn bad_robot_flags_exit_2_before_anything_runs() {
         ),
         (
             vec!["--robots", "ros2", "--robot-timeout=-1"],
-            "the robot timeout must be seconds >= 0",
+            "the robot timeout must be seconds from 0 to 1.8e19, not -1",
         ),
     ] {
         let out = Command::new(BIN)

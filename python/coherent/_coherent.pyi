@@ -80,6 +80,16 @@ class _PlanResult(TypedDict):
     parallel_plan: NotRequired[list[list[_PlanStep]] | None]
     makespan_states_expanded: NotRequired[int]
     makespan_ms: NotRequired[float]
+    # With physics=True only: the plan carried out in Rapier (docs/physics.md).
+    physics_ok: NotRequired[bool]
+    physics_error: NotRequired[str | None]
+    sim_seconds: NotRequired[float]
+    physics_wall_ms: NotRequired[float]
+    # With parallel=True and physics=True: the makespan plan carried out in Rapier.
+    makespan_physics_ok: NotRequired[bool]
+    makespan_physics_error: NotRequired[str | None]
+    makespan_sim_seconds: NotRequired[float]
+    makespan_physics_wall_ms: NotRequired[float]
 
 class _Mention(TypedDict):
     name: str
@@ -91,7 +101,9 @@ class _ParsedAction(TypedDict):
     target: _Mention | None
 
 class CoherentError(Exception):
-    """Base class of every error raised by coherent."""
+    """Base class of every error raised by coherent; raised itself when coherent
+    fails whatever the input (its async runtime cannot start: the process may
+    open no more files or start no more threads; an episode's thread panicked)."""
 
 class ArgumentError(CoherentError, ValueError):
     """An argument of the right type whose value cannot be used: an int out of range, a
@@ -280,10 +292,13 @@ def read_tasks(path: _PathLike) -> tuple[list[Task], list[TaskFormatError]]:
 def benchmark_tasks(subset: Literal["40"] | None = None) -> list[Task]:
     """The project's own benchmark, compiled in: every task, or its 40-task subset."""
 
-def plan(task: Task, max_states: int = ..., parallel: bool = False) -> _PlanResult:
+def plan(task: Task, max_states: int = ..., parallel: bool = False, physics: bool = False) -> _PlanResult:
     """Plans ``task`` optimally (one line of ``coherent plan --json``); with ``parallel``,
     also its fewest joint steps, robots acting at once (``coherent plan --parallel
-    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...).
+    --json``: ``makespan``, ``makespan_proven``, ``makespan_lower``, ``parallel_plan``...);
+    with ``physics``, carries the plan out in Rapier (``--physics``: ``physics_ok``,
+    ``sim_seconds``...), and with both the makespan plan too, each joint step's robots
+    moving at once (``makespan_physics_ok``, ``makespan_sim_seconds``...).
     Ctrl-C interrupts it and stops the search."""
 
 def validate(task: Task, max_states: int = ...) -> list[str]:
@@ -565,6 +580,7 @@ def run(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
     ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
@@ -577,8 +593,10 @@ def run(
     :func:`load_episode` gives for the transcript at the same prices). With
     ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
     actions out, as for :class:`Env`. Raises :class:`BackendError` when the server fails
-    for good, :class:`MethodError` when the method raises, :class:`RobotError` when a
-    robot stops answering; Ctrl-C stops the episode and raises ``KeyboardInterrupt``."""
+    for good, :class:`MethodError` when the method raises or one of its steps (``M(task)``
+    and ``act``) takes longer than ``step_timeout`` seconds, :class:`RobotError` when a
+    robot stops answering; Ctrl-C stops the episode, whatever ``act`` is doing, and raises
+    ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -614,6 +632,7 @@ def run_bench(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> _BenchOutcome:
     """The benchmark run behind ``coherent.bench`` (which returns the results as a
     DataFrame)."""
@@ -672,6 +691,7 @@ class _BenchWorker:
         out: _PathLike,
         prompts: Mapping[str, str],
         prices: Mapping[str, Mapping[str, Any]],
+        step_timeout: float | None = None,
     ) -> None: ...
     def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""

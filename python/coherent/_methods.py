@@ -3,7 +3,9 @@
 
 The Rust side calls ``act`` of a method once per step, with the step's model-call
 recorder in :data:`_step` (a context variable, so that :class:`coherent.LLM` files each
-call under the step that made it, however many episodes run at once). A coroutine that
+call under the step that made it, however many episodes run at once), on a thread of
+the episode's own: a call the episode stops waiting for (Ctrl-C, the step's time limit)
+is interrupted there with :class:`StepStopped` (:func:`interrupt`). A coroutine that
 ``act`` returns runs on one asyncio event loop, on its own thread, shared by every
 episode of a run: the coroutines of concurrent episodes overlap there.
 """
@@ -13,6 +15,7 @@ from __future__ import annotations
 import asyncio
 import concurrent.futures
 import contextvars
+import ctypes
 import importlib
 import importlib.util
 import os
@@ -25,6 +28,18 @@ from typing import Any
 
 # The recorder of the step being decided, read by LLM.chat and LLM.achat.
 _step: contextvars.ContextVar[Any] = contextvars.ContextVar("coherent_step", default=None)
+
+
+class StepStopped(BaseException):
+    """Raised inside a method's ``act`` (or its constructor) that the episode no longer
+    waits for: it was stopped (Ctrl-C, SIGTERM) or the step ran out of time
+    (``step_timeout``). A ``BaseException``, so that ``except Exception`` lets it through."""
+
+
+def interrupt(ident: int) -> None:
+    """Raises :class:`StepStopped` in the thread ``ident`` (``threading.get_ident()``) at
+    its next bytecode (a call blocked in C code sees it once that returns)."""
+    ctypes.pythonapi.PyThreadState_SetAsyncExc(ctypes.c_ulong(ident), ctypes.py_object(StepStopped))
 
 
 def method_name(method: Any) -> str:

@@ -142,6 +142,7 @@ def bench(
     namespace: str | None = None,
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
+    step_timeout: float | None = None,
 ) -> pd.DataFrame:
     """Runs every method on every task for every seed, as ``coherent bench`` does, and
     returns the whole results file ``out`` as a DataFrame (see :func:`results`).
@@ -171,8 +172,10 @@ def bench(
     ``docs/methods.md``), named ``M.name`` or its class's name; ``M.settings``, a dict,
     declares its own settings; ``"MODULE:CLASS"`` loads one. An exception in ``act``
     ends that episode alone with status ``"error"`` and the traceback in ``error`` and
-    in its transcript; the report lists such episodes by method. ``max_steps`` sets every
-    episode's budget (2 x GT by default).
+    in its transcript; the report lists such episodes by method. ``step_timeout``
+    (seconds) ends a step of a method written in Python that takes longer (its ``act``,
+    or ``M(task)`` at the first step) as that method's error, and the run goes on.
+    ``max_steps`` sets every episode's budget (2 x GT by default).
 
     ``prompts`` (a folder of template files, or ``{file name: text}``) replaces built-in
     prompt templates; a template with an unknown placeholder raises
@@ -224,6 +227,7 @@ def bench(
         "prompts": prompts,
         "prices": prices,
         "physics": physics,
+        "step_timeout": step_timeout,
     }
     robot_settings = {
         "robots": robots,

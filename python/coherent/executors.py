@@ -82,6 +82,7 @@ class RayExecutor:
         prompts: str | os.PathLike[str] | Mapping[str, str] | None,
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
         physics: bool = False,
+        step_timeout: float | None = None,
     ) -> dict[str, Any]:
         """Runs the benchmark as :func:`coherent.bench` describes; returns its outcome,
         with ``resubmitted``: the episodes run again after their worker died."""
@@ -126,6 +127,7 @@ class RayExecutor:
             "max_states": max_states,
             "max_steps": max_steps,
             "physics": physics,
+            "step_timeout": step_timeout,
             "out": out,
             # A folder or a price file of this machine's, as data: the workers' machines
             # may not have them.

@@ -7,6 +7,8 @@ tests/error_kinds.rs. Robots over ROS 2 that cannot be reached or stop answering
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -128,3 +130,37 @@ def test_each_way_an_episode_ends_raises_its_class_or_returns(refusing: str, tmp
     with pytest.raises(coherent.ReplayMismatchError, match="summary differs") as replay:
         coherent.replay(tampered, out=tmp_path)
     assert replay.value.episode.status == "success"
+
+
+# Loads the demo, then lowers the file limit so that the process has one descriptor left
+# (enough for a module Python imports on first use, which it opens and closes again) and
+# runs it: the async runtime, which keeps five (epoll, an eventfd, a socket pair and a
+# copy of one), cannot start. In a process of its own: the runtime is built once per
+# process.
+_NO_DESCRIPTORS = """
+import os, resource, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+lowest_free = os.open(os.devnull, os.O_RDONLY)
+os.close(lowest_free)
+resource.setrlimit(resource.RLIMIT_NOFILE, (lowest_free + 1, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
+try:
+    coherent.run(task, out=sys.argv[2])
+except coherent.CoherentError as e:
+    print(type(e).__name__)
+    print(e)
+"""
+
+
+def test_a_runtime_that_cannot_start_raises_coherent_error_itself(tmp_path: Path) -> None:
+    ran = subprocess.run(
+        [sys.executable, "-c", _NO_DESCRIPTORS, str(DEMO), str(tmp_path / "runs")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert ran.returncode == 0, ran.stderr
+    kind, message = ran.stdout.splitlines()
+    assert kind == "CoherentError", "coherent failed, not the input: the base class itself"
+    assert message.startswith("cannot start the async runtime: ") and "Too many open files" in message, message
+    assert not (tmp_path / "runs").exists(), "no episode started"

@@ -91,6 +91,33 @@ def test_plan_parallel_gives_the_fewest_joint_steps_as_the_cli(
     assert set(coherent.plan(task9)) == PLAN_KEYS  # nothing parallel unless asked
 
 
+PHYSICS_KEYS = {"physics_ok", "physics_error", "sim_seconds", "physics_wall_ms"}
+
+
+def test_plan_parallel_physics_runs_both_plans_in_rapier_as_the_cli(
+    env0_path: Path, env0_tasks: list[coherent.Task]
+) -> None:
+    # env0 task 9 again: its 8 joint steps carried out in Rapier, the quadrotor taking
+    # off while the arm grabs the plate, next to its 9 steps in turn.
+    task9 = next(t for t in env0_tasks if t.task_id == 9)
+    result = coherent.plan(task9, parallel=True, physics=True)
+    joint_keys = {f"makespan_{k}" for k in PHYSICS_KEYS}
+    assert set(result) == PLAN_KEYS | PARALLEL_KEYS | PHYSICS_KEYS | joint_keys
+    assert result["physics_ok"] is True and result["makespan_physics_ok"] is True
+    assert result["physics_error"] is None and result["makespan_physics_error"] is None
+    assert 1.0 < result["makespan_sim_seconds"] < result["sim_seconds"]
+    assert set(coherent.plan(task9, physics=True)) == PLAN_KEYS | PHYSICS_KEYS
+    out = subprocess.run(
+        [sys.executable, "-m", "coherent._cli", "plan", str(env0_path), "--task", "9", "--parallel", "--physics", "--json"],
+        capture_output=True, text=True, check=True,
+    )  # fmt: skip
+    timed = {"elapsed_ms", "makespan_ms", "physics_wall_ms", "makespan_physics_wall_ms"}
+    untimed = [
+        {k: v for k, v in line.items() if k not in timed} for line in (json.loads(out.stdout), dict(result))
+    ]
+    assert untimed[0] == untimed[1]
+
+
 def test_plan_parallel_at_a_limit_keeps_the_scheduled_plan_and_a_lower_bound(
     env0_tasks: list[coherent.Task],
 ) -> None:

@@ -1,7 +1,8 @@
 """Robots over ROS 2 from Python, and seen by an independent DDS implementation.
 
 `coherent robots serve`, `coherent run --robots ros2`, a `coherent.Env(robots="ros2")`
-and an Eclipse Cyclone DDS participant (`ros_listener.py`, PyPI `cyclonedds`) run as
+and Eclipse Cyclone DDS participants (`ros_listener.py` reads the robots' traffic,
+`ros_intruder.py` publishes feedback as if it were a robot; PyPI `cyclonedds`) run as
 separate processes in a network namespace each test makes (DDS discovery needs
 multicast, which a container's loopback may lack): `unshare --net`, then `ip` for the
 loopback. That needs root; without it the tests fail saying so.
@@ -22,6 +23,7 @@ import coherent
 from conftest import DEMO
 
 LISTENER = Path(__file__).with_name("ros_listener.py")
+INTRUDER = Path(__file__).with_name("ros_intruder.py")
 ROBOTS = ["robot_arm_6", "quadrotor_11", "robot_dog_13"]
 SETUP = (
     "ip link set lo up && ip link set lo multicast on && ip route add 224.0.0.0/4 dev lo "
@@ -121,6 +123,40 @@ def test_a_cyclone_dds_reader_decodes_the_robots_feedback_and_status_by_their_ro
         succeeded = {s["goal"] for s in seen[robot]["status"] if s["status"] == 4}
         assert succeeded == goals, f"{robot}: every goal reported SUCCEEDED on the status topic"
     server.kill()
+
+
+def intrude(netns: Netns) -> subprocess.Popen[str]:
+    """`ros_intruder.py` for robot_arm_6 under /coherent, once it is ready."""
+    intruder = netns.popen(
+        [sys.executable, str(INTRUDER), "/coherent", "robot_arm_6"], stdin=subprocess.PIPE, stdout=subprocess.PIPE
+    )  # fmt: skip
+    assert intruder.stdout is not None
+    assert intruder.stdout.readline().strip() == "ready"
+    return intruder
+
+
+def what_it_did(intruder: subprocess.Popen[str]) -> dict[str, int]:
+    assert intruder.stdin is not None and intruder.stdout is not None
+    intruder.stdin.close()
+    return json.loads(intruder.stdout.read().splitlines()[-1])
+
+
+def test_feedback_from_a_third_participant_is_no_sign_of_life(netns: Netns, coherent_exe: str, tmp_path: Path) -> None:
+    serve(netns, coherent_exe, "--silent", "robot_arm_6")
+    intruder = intrude(netns)
+    run = netns.popen(
+        [coherent_exe, "run", str(DEMO), "--robots", "ros2", "--robot-timeout", "2", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE,
+    )  # fmt: skip
+    try:
+        out, _ = run.communicate(timeout=30)
+    except subprocess.TimeoutExpired:
+        run.kill()
+        pytest.fail("the run never gave up on the silent robot: the intruder's feedback kept it waiting")
+    did = what_it_did(intruder)
+    assert did["goals"] >= 1 and did["sent"] >= 5, did
+    assert run.returncode == 5, out
+    assert "stopped: robot_arm_6 did not answer [grab] <mug>(7) within 2.0 s" in out
 
 
 STEP_BY_HAND = """

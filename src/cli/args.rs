@@ -14,7 +14,7 @@ use crate::session::backend::{EndpointSource, RecordedRun};
 use crate::session::bench::recorded_method;
 use crate::session::engine::{
     ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, External, Method, MethodSpec, OpenAiConfig,
-    OutputMode,
+    OutputMode, ReadLimits, number,
 };
 use crate::session::prompts::{PriceSource, PromptSource};
 use crate::session::robots::Robots;
@@ -86,8 +86,12 @@ impl LlmArgs {
     /// The endpoint the flags give, with what they leave unset from the environment.
     pub fn endpoint(&self) -> Result<EndpointSource, Error> {
         let seconds = |s: f64, what: &str| {
-            Duration::try_from_secs_f64(s)
-                .map_err(|_| Error::Invalid(format!("--{what} {s}: not a number of seconds")))
+            Duration::try_from_secs_f64(s).map_err(|_| {
+                Error::Invalid(format!(
+                    "--{what} {}: not a number of seconds from 0 to 1.8e19",
+                    number(s)
+                ))
+            })
         };
         Ok(EndpointSource::WithEnvironment(OpenAiConfig {
             base_urls: self.base_url.clone(),
@@ -224,18 +228,34 @@ fn method_choices() -> String {
 /// file, and the class or callable in it); the Python package's console script has one.
 pub type LoadMethod<'a> = dyn Fn(&str) -> Result<External, Error> + Send + Sync + 'a;
 
-/// The method a value of [`method_name`] names: a built-in one, or one that `load`
-/// loads; with `replay_from` (`bench --backend replay`), a name that is no built-in
-/// method's is the recorded method of that name, which replays without its code.
+/// The method a value of [`method_name`] names: a built-in one, or one that `load` loads,
+/// each of its steps limited to `step_timeout` seconds (`--step-timeout`); with
+/// `replay_from` (`bench --backend replay`: the results file and the limits it is read
+/// within), a name that is no built-in method's is the recorded method of that name,
+/// which replays without its code.
 pub(crate) fn method_spec(
     value: &str,
     load: Option<&LoadMethod<'_>>,
-    replay_from: Option<&Path>,
+    step_timeout: Option<f64>,
+    replay_from: Option<(&Path, ReadLimits)>,
 ) -> Result<MethodSpec, Error> {
     if let Some(method) = Method::from_name(value) {
         return Ok(method.into());
     }
-    if let Some(results) = replay_from {
+    let limit = step_timeout
+        .map(|s| {
+            Duration::try_from_secs_f64(s)
+                .ok()
+                .filter(|d| !d.is_zero())
+                .ok_or_else(|| {
+                    Error::Invalid(format!(
+                        "--step-timeout must be seconds above 0 and at most 1.8e19, not {}",
+                        number(s)
+                    ))
+                })
+        })
+        .transpose()?;
+    if let Some((results, limits)) = replay_from {
         // By the name the results file records; MODULE:CLASS only tells that name.
         let name = match load.filter(|_| value.contains(':')).map(|load| load(value)) {
             Some(Ok(method)) => method.name().to_owned(),
@@ -244,15 +264,17 @@ pub(crate) fn method_spec(
                     "method {value}: {e}; a replay runs the recorded decisions and needs no \
                      code: name the method as {} records it ({})",
                     results.display(),
-                    RecordedRun::read(results)?.methods().join(", ")
+                    RecordedRun::read(results, limits)?.methods().join(", ")
                 )));
             }
             None => value.to_owned(),
         };
-        return recorded_method(results, &name);
+        return recorded_method(results, &name, limits);
     }
     match load {
-        Some(load) if value.contains(':') => load(value).map(MethodSpec::External),
+        Some(load) if value.contains(':') => {
+            load(value).map(|m| MethodSpec::External(m.with_step_timeout(limit)))
+        }
         None if value.contains(':') => Err(Error::Invalid(format!(
             "method {value}: a method written in Python needs the Python package: run the \
              `coherent` command that `pip install .` installs (or `python -m coherent._cli`), \

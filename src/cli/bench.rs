@@ -9,14 +9,16 @@ use clap::{Args, ValueEnum};
 use super::args::{
     LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec, sim_errors,
 };
+use super::signals::Stop;
 use super::status;
 use crate::session::backend::{BackendName, BackendRequest};
 use crate::session::bench::{
     self as session_bench, BenchConfig, EpisodesRequest, TableFormat as Tables,
 };
 use crate::session::engine::{
-    BenchOutcome, Cancel, Event, HISTORY_WINDOW, Limits, Progress, ResultLine, Setting, Style,
-    Subset, read_results, shown, shown_lines, transcripts_dir,
+    BenchOutcome, Cancel, DEFAULT_MAX_RESULTS_BYTES, DEFAULT_MAX_TRANSCRIPT_BYTES, Event,
+    HISTORY_WINDOW, Limits, MIB, Progress, ReadLimits, ResultLine, Setting, Style, Subset,
+    read_results_within, shown, shown_lines, transcripts_dir,
 };
 use crate::session::error::{BackendProblem, settings_differ};
 use crate::session::{self, Error, prompts};
@@ -46,6 +48,18 @@ pub struct BenchArgs {
     /// their transcripts (no network) and checked against them.
     #[arg(long)]
     replay_from: Option<PathBuf>,
+    /// The most a results file may hold (--out when resuming, --report, --replay-from),
+    /// in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_RESULTS_BYTES / MIB)]
+    max_results_mib: u64,
+    /// With `--backend replay`: the most each transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
+    /// The longest one step of a method written in Python may take, in seconds (its
+    /// act, and making it at the first step); a longer step ends that episode as the
+    /// method's error, and the run goes on.
+    #[arg(long, value_name = "SECONDS")]
+    step_timeout: Option<f64>,
     /// The simulated backend's error rates: `hallucinate=0.1,wrong_robot=0.1,malformed=0.1,suboptimal=0.1`
     /// or `all=0.1`; kinds not named are 0.
     #[arg(long)]
@@ -107,9 +121,19 @@ enum TableFormat {
     Json,
 }
 
+impl BenchArgs {
+    /// What `--max-results-mib` and `--max-transcript-mib` allow.
+    fn limits(&self) -> ReadLimits {
+        ReadLimits {
+            results_bytes: self.max_results_mib.saturating_mul(MIB),
+            transcript_bytes: self.max_transcript_mib.saturating_mul(MIB),
+        }
+    }
+}
+
 pub fn bench(mut args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8, Error> {
     if let Some(path) = &args.report {
-        let file = read_results(path)?;
+        let file = read_results_within(path, args.limits().results_bytes)?;
         if file.truncated_bytes > 0 {
             eprintln!(
                 "note: {}: the last line is cut off ({} bytes) and is ignored",
@@ -201,13 +225,13 @@ fn print_tables(lines: &[ResultLine], format: TableFormat) {
 fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesRequest, Error> {
     // A replay runs the recorded methods: one written in Python needs no code then.
     let replay_from = match args.backend {
-        BackendFlag::Replay => args.replay_from.as_deref(),
+        BackendFlag::Replay => args.replay_from.as_deref().map(|p| (p, args.limits())),
         _ => None,
     };
     let methods = args
         .methods
         .iter()
-        .map(|m| method_spec(m, load, replay_from))
+        .map(|m| method_spec(m, load, args.step_timeout, replay_from))
         .collect::<Result<Vec<_>, _>>()?;
     if args.seeds == 0 {
         return Err(Error::Invalid("--seeds must be at least 1".into()));
@@ -228,6 +252,7 @@ fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesR
             endpoint: args.llm.endpoint()?,
             sim_errors: sim_errors(args.sim_errors.as_deref())?,
             replay_from: args.replay_from.clone(),
+            limits: args.limits(),
         },
         prompts: args.inputs.prompt_source(),
         prices: args.inputs.price_source(),
@@ -290,29 +315,29 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         seeds: args.seeds,
         concurrency: args.concurrency.max(1),
         out: out.clone(),
+        max_results_bytes: args.limits().results_bytes,
     };
     let info = config.episodes.backend.info();
     println!(
         "backend: {} ({}){}",
         info.kind,
-        info.model,
-        info.base_url.map_or(String::new(), |u| format!(" at {u}"))
+        shown(&info.model),
+        info.base_url
+            .map_or(String::new(), |u| format!(" at {}", shown(&u)))
     );
     if let Some(line) = prompts::describe(&config.episodes.prompts) {
         println!("{line}");
+    }
+    if let Some(dir) = &args.inputs.prompts {
+        for warning in prompts::blank_warnings(dir, &config.episodes.prompts) {
+            eprintln!("warning: {}", shown(&warning));
+        }
     }
     if let Some(note) = config.concurrency_note() {
         eprintln!("note: {note}");
     }
     let cancel = Cancel::default();
-    let ctrl_c = {
-        let cancel = cancel.clone();
-        tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                cancel.cancel();
-            }
-        })
-    };
+    let stop = Stop::watch(&cancel);
     let terminal = std::io::stderr().is_terminal();
     let mut progress = Progress::new(if terminal { Style::Bar } else { Style::Lines });
     let mut show = |e: Event<'_>| {
@@ -323,7 +348,6 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         }
     };
     let result = session_bench::run(&selection.tasks, &config, &cancel, &mut show).await;
-    ctrl_c.abort();
     if terminal {
         eprintln!();
     }
@@ -333,7 +357,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
             "note: {} transcripts of episodes killed mid-run had no results line; renamed to \
              *.jsonl.unfinished (e.g. {}), and their episodes ran again",
             outcome.orphaned.len(),
-            first.display()
+            shown(&first.display().to_string())
         );
     }
     if outcome.repaired_bytes > 0 {
@@ -356,11 +380,11 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         out.display(),
         transcripts_dir(out).display()
     );
-    let lines = read_results(out)?.lines;
+    let lines = read_results_within(out, args.limits().results_bytes)?.lines;
     print_tables(&lines, args.format);
     if outcome.interrupted {
         eprintln!("interrupted: re-run the same command to finish the rest");
-        return Ok(status::INTERRUPTED);
+        return Ok(stop.status());
     }
     Ok(status::OK)
 }

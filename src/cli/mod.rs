@@ -9,6 +9,7 @@ mod prompts;
 mod render;
 mod robots;
 mod run;
+mod signals;
 mod status;
 mod view;
 
@@ -44,8 +45,8 @@ enum Command {
     /// Run a planning method on one task: one line per step, a summary, a transcript.
     /// Exit 0 when the goal is reached, 1 when the budget runs out, 2 on bad input,
     /// 3 when the model's server fails for good or a replay diverges, 4 when a method
-    /// written in Python raised, 5 when a robot over ROS 2 stops answering, 130 on
-    /// Ctrl-C.
+    /// written in Python raised, 5 when a robot over ROS 2 stops answering, 70 when
+    /// coherent itself fails (its async runtime cannot start), 130 on Ctrl-C.
     Run(Box<run::RunArgs>),
     /// Show an episode (its transcript), two side by side, or a benchmark's results as
     /// pages in the browser; `--serve` follows a results file as it grows. Exit 2 on an
@@ -55,7 +56,8 @@ enum Command {
     Robots(robots::RobotsArgs),
     /// Run methods x tasks x seeds concurrently into a resumable results file, then print
     /// the paper's tables; with --report FILE, only the tables. Exit 0 when the run
-    /// finished (whatever the success rate), 2 on bad input, 130 on Ctrl-C.
+    /// finished (whatever the success rate), 2 on bad input, 70 when coherent itself
+    /// fails, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
     /// no tasks, 0 when clean.
@@ -103,7 +105,9 @@ enum Command {
         #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
         max_memory: usize,
         /// Also execute each plan in Rapier and check it against the rules after every
-        /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms).
+        /// step (adds physics_ok, physics_error, sim_seconds, physics_wall_ms); with
+        /// --parallel, the makespan plan too, after every joint step (adds the same keys
+        /// with makespan_ before them).
         #[arg(long)]
         physics: bool,
         /// Also find the fewest joint steps, robots acting at once (adds makespan,
@@ -283,7 +287,7 @@ fn plan(
             .makespan
             .as_ref()
             .map_or(0.0, |m| m.elapsed.as_secs_f64() * 1e3);
-        physics_failed |= planned.physics.as_ref().is_some_and(|r| !r.physics_ok);
+        physics_failed |= planned.physics_failed();
         let line = if as_json {
             planned.to_json(t).to_string()
         } else {
@@ -291,15 +295,7 @@ fn plan(
             if let Some(m) = &planned.makespan {
                 text.push_str(&parallel_text(t, m, limits));
             }
-            if let Some(r) = &planned.physics {
-                text.push_str(&match &r.physics_error {
-                    None => format!(
-                        "\n  physics: ok, {:.1} s simulated in {:.0} ms",
-                        r.sim_seconds, r.wall_ms
-                    ),
-                    Some(e) => format!("\n  physics: failed: {}", shown(e)),
-                });
-            }
+            text.push_str(&planned.physics_text());
             text
         };
         // A closed pipe (e.g. `| head`) ends the listing quietly.

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use clap::Args;
 
-use crate::session::engine::{Limits, shown};
+use crate::session::engine::{DEFAULT_MAX_TRANSCRIPT_BYTES, Limits, MIB, shown};
 use crate::session::{Error, episode, render, tasks};
 
 #[derive(Args)]
@@ -28,13 +28,17 @@ pub(crate) struct RenderArgs {
     /// Draw each robot's path along the executed actions of a `coherent run` transcript.
     #[arg(long)]
     transcript: Option<PathBuf>,
+    /// The most the transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
 }
 
 pub(crate) fn render(args: &RenderArgs) -> Result<u8, Error> {
+    let max_bytes = args.max_transcript_mib.saturating_mul(MIB);
     let recorded = args
         .transcript
         .as_deref()
-        .map(episode::recorded)
+        .map(|path| episode::recorded(path, max_bytes))
         .transpose()?;
     let task = match (&recorded, &args.task_file) {
         (Some(recorded), _) => Arc::clone(&recorded.task),

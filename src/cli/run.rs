@@ -15,10 +15,12 @@ use super::args::{
     AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
     sim_errors,
 };
+use super::signals::Stop;
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
-    Budget, Cancel, HISTORY_WINDOW, Limits, MethodSpec, Round, Status, Summary, shown, worth_a_line,
+    Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, HISTORY_WINDOW, Limits, MIB, MethodSpec, Round,
+    Status, Summary, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -38,6 +40,10 @@ pub(crate) struct RunArgs {
     /// .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
+    /// The longest one step of a method written in Python may take, in seconds (its
+    /// act, and making it at the first step); a longer step ends as the method's error.
+    #[arg(long, value_name = "SECONDS")]
+    step_timeout: Option<f64>,
     /// Rounds of history the task assigner sees; 0 is the paper's "w/o history".
     #[arg(long, default_value_t = HISTORY_WINDOW)]
     history: usize,
@@ -51,6 +57,9 @@ pub(crate) struct RunArgs {
     /// that every round comes out the same.
     #[arg(long)]
     replay: Option<PathBuf>,
+    /// With --replay: the most the transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
     /// Print a JSON summary on stdout (step lines go to stderr).
     #[arg(long)]
     json: bool,
@@ -124,6 +133,7 @@ fn prepare(
             task,
             prices: args.inputs.price_source(),
             out: args.out.clone(),
+            max_bytes: args.max_transcript_mib.saturating_mul(MIB),
         };
         return request.prepare();
     }
@@ -144,7 +154,10 @@ fn prepare(
         seed: args.llm.seed,
         max_states: args.max_states,
         out: args.out.clone(),
-        ..RunRequest::new(task, method_spec(&args.method, load, None)?)
+        ..RunRequest::new(
+            task,
+            method_spec(&args.method, load, args.step_timeout, None)?,
+        )
     };
     request.prepare(cancel)
 }
@@ -165,14 +178,12 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     if let Some(line) = prompts::describe(&prepared.settings().prompts) {
         lines.say(&line);
     }
-    let ctrl_c = {
-        let cancel = cancel.clone();
-        tokio::spawn(async move {
-            if tokio::signal::ctrl_c().await.is_ok() {
-                cancel.cancel();
-            }
-        })
-    };
+    if let Some(dir) = &args.inputs.prompts {
+        for warning in prompts::blank_warnings(dir, &prepared.settings().prompts) {
+            eprintln!("warning: {}", shown(&warning));
+        }
+    }
+    let stop = Stop::watch(&cancel);
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
     let mut prepared = prepared;
@@ -190,11 +201,13 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     if drawn.swap(false, Ordering::Relaxed) {
         eprint!("\r\x1b[2K");
     }
-    ctrl_c.abort();
     let ran = result?;
     let s = ran.summary();
     lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
-    lines.say(&format!("transcript: {}", ran.path.display()));
+    lines.say(&format!(
+        "transcript: {}",
+        shown(&ran.path.display().to_string())
+    ));
     let ending = ran.ending();
     match &ending {
         Ending::ReplayDiffers(why) => lines.say(&format!("replay: {}", shown(why))),
@@ -225,10 +238,11 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             })
         );
     }
-    if let Ending::RobotStopped(why) = &ending {
-        lines.say(&format!("stopped: {why}"));
-    }
-    Ok(status::of_ending(&ending))
+    Ok(match ending {
+        // Ctrl-C or SIGTERM: the status the shell gives the signal.
+        Ending::Interrupted => stop.status(),
+        other => status::of_ending(&other),
+    })
 }
 
 /// Says on stderr, once a second, which model call the episode waits for once it has
@@ -305,12 +319,15 @@ fn replay_line(path: &Path, model: &str) -> String {
 }
 
 fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {
-    let result = match s.status {
-        Status::Success => "success",
-        Status::Failure => "failure: step budget spent",
-        Status::BackendError => "stopped: the backend failed",
-        Status::Interrupted => "interrupted",
-        Status::Error => "stopped: the method raised an error",
+    let result = match (s.status, &s.error) {
+        (Status::Success, _) => "success".to_owned(),
+        (Status::Failure, _) => "failure: step budget spent".to_owned(),
+        (Status::BackendError, _) => "stopped: the backend failed".to_owned(),
+        // Stopped by the environment, not by a signal: what happened (a robot's
+        // silence, say).
+        (Status::Interrupted, Some(why)) => format!("stopped: {}", shown(why)),
+        (Status::Interrupted, None) => "interrupted".to_owned(),
+        (Status::Error, _) => "stopped: the method raised an error".to_owned(),
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {

@@ -18,8 +18,14 @@ pub(crate) const BACKEND_FAILED: u8 = 3;
 pub(crate) const METHOD_FAILED: u8 = 4;
 /// A robot over ROS 2 stopped answering (the environment stopped the episode).
 pub(crate) const ROBOT_STOPPED: u8 = 5;
+/// Coherent itself failed, whatever the input: its async runtime did not start (no file
+/// descriptors or threads left to the process), an episode's thread panicked. The
+/// number is `EX_SOFTWARE` of BSD's sysexits.h ("an internal software error").
+pub(crate) const INTERNAL: u8 = 70;
 /// Ctrl-C, as shells report SIGINT.
 pub(crate) const INTERRUPTED: u8 = 130;
+/// SIGTERM, as shells report it; it stops a run as Ctrl-C does (`super::signals`).
+pub(crate) const TERMINATED: u8 = 143;
 
 /// The exit status of an episode that ended as `ending`.
 pub(crate) fn of_ending(ending: &Ending) -> u8 {
@@ -45,7 +51,7 @@ pub(crate) fn of_error(error: &Error) -> u8 {
         | Error::Endpoint(_)
         | Error::SettingsDiffer { .. }
         | Error::Physics(_)
-        | Error::Robots(_)
-        | Error::Internal(_) => BAD_INPUT,
+        | Error::Robots(_) => BAD_INPUT,
+        Error::Internal(_) => INTERNAL,
     }
 }

@@ -3,7 +3,9 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::session::engine::shown;
+use crate::session::engine::{
+    DEFAULT_MAX_RESULTS_BYTES, DEFAULT_MAX_TRANSCRIPT_BYTES, MIB, ReadLimits, shown,
+};
 use clap::Args;
 
 use crate::session::view::{self, Holds, Shown, serve};
@@ -25,12 +27,22 @@ pub(crate) struct ViewArgs {
     /// The port to serve on (0: any free one).
     #[arg(long, default_value_t = 0, requires = "serve")]
     port: u16,
+    /// The most a results file may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_RESULTS_BYTES / MIB)]
+    max_results_mib: u64,
+    /// The most each transcript may hold, in MiB.
+    #[arg(long, value_name = "MIB", default_value_t = DEFAULT_MAX_TRANSCRIPT_BYTES / MIB)]
+    max_transcript_mib: u64,
 }
 
 pub(crate) fn view(args: &ViewArgs) -> Result<u8, String> {
+    let limits = ReadLimits {
+        results_bytes: args.max_results_mib.saturating_mul(MIB),
+        transcript_bytes: args.max_transcript_mib.saturating_mul(MIB),
+    };
     if let Some(dir) = &args.serve {
-        let results = serve::results_in(dir)?;
-        let server = serve::Server::bind(&results, args.port)?;
+        let results = serve::results_in(dir, limits)?;
+        let server = serve::Server::bind(&results, args.port, limits)?;
         println!(
             "serving {} on http://{}/ (Ctrl-C stops)",
             shown(&results.display().to_string()),
@@ -40,9 +52,9 @@ pub(crate) fn view(args: &ViewArgs) -> Result<u8, String> {
         return Ok(0);
     }
     match args.files.as_slice() {
-        [one] => match view::holds(one)? {
+        [one] => match view::holds(one, limits)? {
             Holds::Transcript => {
-                let (task, t) = view::read_episode(one)?;
+                let (task, t) = view::read_episode(one, limits.transcript_bytes)?;
                 let html = view::episode_html(&Shown {
                     task: &task,
                     transcript: &t,
@@ -61,7 +73,7 @@ pub(crate) fn view(args: &ViewArgs) -> Result<u8, String> {
                     .clone()
                     .unwrap_or_else(|| one.with_extension("view"));
                 let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-                let site = view::results_site(one, &dir, threads)?;
+                let site = view::results_site(one, &dir, threads, limits)?;
                 for why in &site.missing {
                     eprintln!("warning: no page for {why}");
                 }
@@ -74,15 +86,15 @@ pub(crate) fn view(args: &ViewArgs) -> Result<u8, String> {
         },
         [a, b] => {
             for path in [a, b] {
-                if view::holds(path)? != Holds::Transcript {
+                if view::holds(path, limits)? != Holds::Transcript {
                     return Err(format!(
                         "{}: side by side shows two transcripts, and this is a results file",
                         shown(&path.display().to_string())
                     ));
                 }
             }
-            let (task_a, ta) = view::read_episode(a)?;
-            let (task_b, tb) = view::read_episode(b)?;
+            let (task_a, ta) = view::read_episode(a, limits.transcript_bytes)?;
+            let (task_b, tb) = view::read_episode(b, limits.transcript_bytes)?;
             let html = view::compare_html(
                 &Shown {
                     task: &task_a,

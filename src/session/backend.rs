@@ -11,8 +11,10 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::bench::{EpisodeKey, read_results};
+use coherent_agents::backends::address::redacted;
+use coherent_agents::bench::{EpisodeKey, ReadLimits, read_results_within};
 use coherent_agents::llm::Backend;
+use coherent_agents::transcript;
 use coherent_agents::{ApiKey, OpenAiConfig};
 use coherent_agents::{BackendInfo, BackendKind, BuiltinBackend, ErrorRates, OpenAiClient};
 use coherent_core::planner::Limits;
@@ -53,6 +55,8 @@ pub struct BackendRequest {
     pub sim_errors: Option<ErrorRates>,
     /// An earlier results file whose transcripts a replay answers from.
     pub replay_from: Option<PathBuf>,
+    /// How much of that results file and of each transcript may be read.
+    pub limits: ReadLimits,
 }
 
 /// Which backend answers the model-using methods.
@@ -77,6 +81,8 @@ pub struct RecordedRun {
     pub transcripts: HashMap<EpisodeKey, PathBuf>,
     /// The backend of the recordings (the first one's, when they differ).
     pub backend: BackendInfo,
+    /// The most each transcript may hold.
+    pub max_transcript_bytes: u64,
 }
 
 impl RecordedRun {
@@ -88,9 +94,12 @@ impl RecordedRun {
         names
     }
 
-    /// The final episodes of the results file `results`.
-    pub fn read(results: &Path) -> Result<RecordedRun, Error> {
-        let file = read_results(results)?;
+    /// The final episodes of the results file `results`, read within `limits`; every
+    /// transcript they name is checked before any episode starts: a transcript that is
+    /// gone, no regular file (a device that never ends) or too large would stop the run
+    /// midway.
+    pub fn read(results: &Path, limits: ReadLimits) -> Result<RecordedRun, Error> {
+        let file = read_results_within(results, limits.results_bytes)?;
         let mut backend = None;
         let mut transcripts = HashMap::new();
         for line in file.lines.iter().filter(|l| l.is_final()) {
@@ -106,10 +115,30 @@ impl RecordedRun {
                 message: "no finished episodes to replay".into(),
             });
         }
+        let limit = transcript::limit(limits.transcript_bytes);
+        for path in transcripts.values() {
+            let meta = std::fs::metadata(path).map_err(|e| Error::File {
+                file: path.display().to_string(),
+                line: None,
+                message: e.to_string(),
+            })?;
+            if !meta.is_file() {
+                return Err(Error::File {
+                    file: path.display().to_string(),
+                    line: None,
+                    message: "not a regular file (a device? a folder?): a transcript must be one"
+                        .into(),
+                });
+            }
+            if meta.len() > limit.bytes {
+                return Err(coherent_agents::Error::file(limit.exceeded(path)).into());
+            }
+        }
         Ok(RecordedRun {
             results: results.to_owned(),
             transcripts,
             backend: backend.unwrap_or_else(BackendInfo::none),
+            max_transcript_bytes: limits.transcript_bytes,
         })
     }
 }
@@ -135,9 +164,9 @@ impl BackendRequest {
             return Err(BackendProblem::RatesNeedSimulated.into());
         }
         match (name, self.replay_from) {
-            (BackendName::Replay, Some(file)) => {
-                Ok(BackendChoice::Replay(Arc::new(RecordedRun::read(&file)?)))
-            }
+            (BackendName::Replay, Some(file)) => Ok(BackendChoice::Replay(Arc::new(
+                RecordedRun::read(&file, self.limits)?,
+            ))),
             (BackendName::Replay, None) => Err(BackendProblem::ReplayNeedsFile.into()),
             (_, Some(_)) => Err(BackendProblem::FileNeedsReplay.into()),
             (BackendName::Simulated, None) => Ok(BackendChoice::Simulated(
@@ -179,7 +208,11 @@ pub fn complete(mut config: OpenAiConfig) -> Result<Option<OpenAiConfig>, Error>
     if config.model.is_empty() {
         return Err(Error::Endpoint(format!(
             "an endpoint is configured ({}) but no model: pass --model or set COHERENT_MODEL",
-            base_urls.join(",")
+            base_urls
+                .iter()
+                .map(|u| redacted(u))
+                .collect::<Vec<_>>()
+                .join(",")
         )));
     }
     config.base_urls = base_urls;

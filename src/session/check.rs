@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use coherent_core::makespan::{self, Makespan};
 use coherent_core::planner::{self, Analysis, Limits, Stop};
+use coherent_core::text::{file_name_part, shown};
 use coherent_core::{Error, Task, native, validate};
 use coherent_sim::PlanReport;
 
@@ -32,19 +33,23 @@ pub fn findings(task: &Task, limits: &Limits) -> Vec<String> {
 /// What `coherent plan` does besides the shortest plan.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PlanOptions {
-    /// Carry the plan out in Rapier, checking it against the rules after every step.
+    /// Carry the plan out in Rapier, checking it against the rules after every step;
+    /// with `parallel`, the makespan plan too, each joint step's robots moving at once.
     pub physics: bool,
     /// Also find the fewest joint steps (`--parallel`, docs/planner.md, "Parallel plans").
     pub parallel: bool,
 }
 
-/// A task's optimal plan, and, when asked, its fewest joint steps and that plan carried
-/// out in Rapier.
+/// A task's optimal plan, and, when asked, its fewest joint steps and those plans
+/// carried out in Rapier.
 #[derive(Debug)]
 pub struct Planned {
     pub analysis: Analysis,
     pub makespan: Option<Makespan>,
+    /// The sequential plan in Rapier.
     pub physics: Option<PlanReport>,
+    /// The makespan plan in Rapier (`steps_done` counts joint steps).
+    pub makespan_physics: Option<PlanReport>,
 }
 
 impl Planned {
@@ -70,18 +75,57 @@ impl Planned {
             value["makespan_ms"] = ((m.elapsed.as_secs_f64() * 1e6).round() / 1e3).into();
         }
         if let Some(r) = &self.physics {
-            value["physics_ok"] = r.physics_ok.into();
-            value["physics_error"] = r.physics_error.clone().into();
-            value["sim_seconds"] = r.sim_seconds.into();
-            value["physics_wall_ms"] = ((r.wall_ms * 1e3).round() / 1e3).into();
+            physics_json(&mut value, "", r);
+        }
+        if let Some(r) = &self.makespan_physics {
+            physics_json(&mut value, "makespan_", r);
         }
         value
     }
+
+    /// Whether a plan carried out in Rapier failed there.
+    pub fn physics_failed(&self) -> bool {
+        [&self.physics, &self.makespan_physics]
+            .iter()
+            .any(|r| r.as_ref().is_some_and(|r| !r.physics_ok))
+    }
+
+    /// The plans' runs in Rapier for `coherent plan`'s text, a line each:
+    /// `  physics: ok, 59.3 s simulated in 210 ms`, `  parallel physics: ...`, or the
+    /// failure (it names the step, or joint step, and the numbers); empty without physics.
+    pub fn physics_text(&self) -> String {
+        let runs = [
+            ("physics", &self.physics),
+            ("parallel physics", &self.makespan_physics),
+        ];
+        let mut text = String::new();
+        for (label, run) in runs {
+            let Some(r) = run else { continue };
+            text.push_str(&match &r.physics_error {
+                None => format!(
+                    "\n  {label}: ok, {:.1} s simulated in {:.0} ms",
+                    r.sim_seconds, r.wall_ms
+                ),
+                Some(e) => format!("\n  {label}: failed: {}", shown(e)),
+            });
+        }
+        text
+    }
+}
+
+/// A plan's run in Rapier as the keys `physics_ok`, `physics_error`, `sim_seconds` and
+/// `physics_wall_ms`, each after `prefix`.
+fn physics_json(value: &mut serde_json::Value, prefix: &str, r: &PlanReport) {
+    value[format!("{prefix}physics_ok")] = r.physics_ok.into();
+    value[format!("{prefix}physics_error")] = r.physics_error.clone().into();
+    value[format!("{prefix}sim_seconds")] = r.sim_seconds.into();
+    value[format!("{prefix}physics_wall_ms")] = ((r.wall_ms * 1e3).round() / 1e3).into();
 }
 
 /// Plans `task` optimally; with `parallel`, also finds its fewest joint steps from the
 /// shortest plan; with `physics`, also carries the plan out in Rapier and checks it
-/// against the rules after every step.
+/// against the rules after every step, and with both the makespan plan as well, after
+/// every joint step.
 pub fn plan(task: &Task, limits: &Limits, options: PlanOptions) -> Planned {
     let analysis = planner::analyse(task, limits);
     let makespan = options.parallel.then(|| {
@@ -94,14 +138,21 @@ pub fn plan(task: &Task, limits: &Limits, options: PlanOptions) -> Planned {
             limits,
         )
     });
-    let physics = match (&analysis.plan, options.physics) {
-        (Some(plan), true) => Some(coherent_sim::execute_plan(&Arc::new(task.clone()), plan)),
+    let shared = options.physics.then(|| Arc::new(task.clone()));
+    let physics = match (&analysis.plan, &shared) {
+        (Some(plan), Some(task)) => Some(coherent_sim::execute_plan(task, plan)),
+        _ => None,
+    };
+    let joint = makespan.as_ref().and_then(|m| m.plan.as_ref());
+    let makespan_physics = match (joint, &shared) {
+        (Some(plan), Some(task)) => Some(coherent_sim::execute_joint_plan(task, plan)),
         _ => None,
     };
     Planned {
         analysis,
         makespan,
         physics,
+        makespan_physics,
     }
 }
 
@@ -115,13 +166,15 @@ fn stop_name(stop: Stop) -> &'static str {
     }
 }
 
-/// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`; returns the
+/// Writes each task as a native task file, `<out>/<scene>/task-<id>.json`, the scene's
+/// folder named in safe characters only (no `..`, no `/`, no control character; a hash
+/// when its name had to change, `coherent_core::text::file_name_part`); returns the
 /// files written.
 pub fn import(tasks: &[Task], out: &Path) -> Result<Vec<PathBuf>, Error> {
     let mut written = HashSet::new();
     let mut files = Vec::new();
     for t in tasks {
-        let dir = out.join(&t.meta.scene);
+        let dir = out.join(file_name_part(&t.meta.scene, 64).as_ref());
         let path = dir.join(format!("task-{:03}.json", t.meta.task_id));
         if !written.insert(path.clone()) {
             return Err(Error::Io {

@@ -12,13 +12,19 @@ pub use coherent_core::load::load_tasks;
 pub use coherent_core::makespan::Makespan;
 pub use coherent_core::planner::{Analysis, Limits, Stop};
 pub use coherent_core::task::predicate_holds;
-pub use coherent_core::text::{shown, shown_lines};
+pub use coherent_core::text::{number, shown, shown_lines};
 pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
 pub use coherent_core::{feasibility, native, original};
 
 // What a run records: the transcript, its rounds and summary, the step budget.
 pub use coherent_agents::episode::{Budget, HISTORY_WINDOW};
 pub use coherent_agents::transcript::{Round, RoundOutcome, Status, Summary, Transcript};
+
+// The limits on what is read back, in MiB as their flags give them: a transcript, a
+// results file.
+pub use coherent_agents::bench::{DEFAULT_MAX_RESULTS_BYTES, ReadLimits, read_results_within};
+pub use coherent_agents::transcript::DEFAULT_MAX_BYTES as DEFAULT_MAX_TRANSCRIPT_BYTES;
+pub use coherent_core::files::MIB;
 
 // Which method runs: a built-in one, or one written outside the crates (Python), with
 // what it is shown each step and what it answers.
@@ -33,6 +39,8 @@ pub use coherent_agents::llm::{Answer, BoxFuture, Finish, LlmError, Message, Rol
 pub use coherent_agents::retry::Backoff;
 pub use coherent_agents::transcript::Call;
 pub use coherent_agents::{ApiKey, Backend, Chat, OpenAiClient, OpenAiConfig, OutputMode};
+// A base URL as it may be shown: no user or password, query values redacted.
+pub use coherent_agents::backends::address::redacted;
 
 // What a run is given besides its task: the simulated backend's mistakes, the prompt
 // set and its errors, the price table.

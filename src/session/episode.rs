@@ -124,14 +124,16 @@ pub struct ReplayRequest {
     pub prices: PriceSource,
     /// The folder the replay's transcript goes to.
     pub out: PathBuf,
+    /// The most the transcript may hold.
+    pub max_bytes: u64,
 }
 
 impl ReplayRequest {
-    /// The replay, ready to run.
+    /// The replay, ready to run; a transcript of more than `max_bytes` is refused.
     pub fn prepare(self) -> Result<Prepared, Error> {
         let prices = self.prices.read()?;
         let path = self.transcript;
-        let recorded = transcript::read(&path)?;
+        let recorded = transcript::read_within(&path, self.max_bytes)?;
         if recorded.summary.is_none() {
             return Err(Error::File {
                 file: path.display().to_string(),
@@ -263,9 +265,9 @@ pub struct Recorded {
     pub path: PathBuf,
 }
 
-/// The episode recorded in the transcript at `path`.
-pub fn recorded(path: &Path) -> Result<Recorded, Error> {
-    let transcript = transcript::read(path)?;
+/// The episode recorded in the transcript at `path`, of at most `max_bytes`.
+pub fn recorded(path: &Path, max_bytes: u64) -> Result<Recorded, Error> {
+    let transcript = transcript::read_within(path, max_bytes)?;
     let task = Arc::new(episode::recorded_task(&transcript, path)?);
     Ok(Recorded {
         task,

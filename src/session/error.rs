@@ -6,6 +6,7 @@ use std::fmt;
 
 use coherent_agents::PromptError;
 use coherent_agents::bench::{Difference, Setting};
+use coherent_core::text::shown;
 
 /// Why the session could not do what it was asked.
 #[derive(Debug)]
@@ -148,7 +149,7 @@ pub fn settings_differ(
         let method = d
             .method
             .as_ref()
-            .map_or(String::new(), |m| format!(" of {m}"));
+            .map_or(String::new(), |m| format!(" of {}", shown(m)));
         text.push_str(&format!("\n  {}{method}: {d}", name(d.setting)));
     }
     text.push_str(&format!(
@@ -195,6 +196,15 @@ impl fmt::Display for BackendProblem {
             }
         })
     }
+}
+
+/// What a caught panic said: its message, when it has one (`panic!` with text does).
+pub(crate) fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    payload
+        .downcast_ref::<&str>()
+        .map(|s| (*s).to_owned())
+        .or_else(|| payload.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "no message".to_owned())
 }
 
 /// The session's results.

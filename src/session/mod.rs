@@ -51,17 +51,38 @@ pub fn block_on<F: Future>(future: F) -> Result<F::Output> {
 /// The runtime of the engine's async work (model calls, timers, concurrent episodes, the
 /// robots' DDS traffic), built once per process on first use: the one place a runtime
 /// is built. Multi-threaded, so that a benchmark's episodes use every core.
+///
+/// Building it takes file descriptors (epoll, an eventfd, a socket pair and its copy for
+/// signals) and threads; when the process may have no more (`ulimit -n`, `ulimit -u`),
+/// the error says which part failed and the OS's words, and every later call gets it too.
 pub fn runtime() -> Result<&'static tokio::runtime::Runtime> {
     static RUNTIME: OnceLock<std::result::Result<tokio::runtime::Runtime, String>> =
         OnceLock::new();
     RUNTIME
         .get_or_init(|| {
-            tokio::runtime::Builder::new_multi_thread()
-                .thread_name("coherent")
-                .enable_all()
-                .build()
-                .map_err(|e| format!("cannot start the async runtime: {e}"))
+            build_runtime().map_err(|why| format!("cannot start the async runtime: {why}"))
         })
         .as_ref()
         .map_err(|why| Error::Internal(why.clone()))
+}
+
+/// Builds the runtime, with tokio's panics as errors: tokio returns most failures, but
+/// panics on some (the signal driver's socket pair, "failed to create UnixStream"; a
+/// worker thread the OS will not start), and a panic must not be what a user sees.
+fn build_runtime() -> std::result::Result<tokio::runtime::Runtime, String> {
+    // The default hook would print the panic (and a backtrace) before the error that
+    // explains it; silenced for the build only, which happens once per process.
+    let hook = std::panic::take_hook();
+    std::panic::set_hook(Box::new(|_| {}));
+    let built = std::panic::catch_unwind(|| {
+        tokio::runtime::Builder::new_multi_thread()
+            .thread_name("coherent")
+            .enable_all()
+            .build()
+    });
+    std::panic::set_hook(hook);
+    match built {
+        Ok(result) => result.map_err(|e| e.to_string()),
+        Err(panic) => Err(error::panic_message(panic.as_ref())),
+    }
 }

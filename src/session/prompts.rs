@@ -74,6 +74,21 @@ impl PriceSource {
     }
 }
 
+/// A warning for each template of `prompts` (read from `origin`) that holds nothing but
+/// white space, which a write cut short (a full disk) leaves: its prompts say nothing.
+pub fn blank_warnings(origin: &Path, prompts: &Prompts) -> Vec<String> {
+    prompts
+        .blank_names()
+        .into_iter()
+        .map(|name| {
+            format!(
+                "{}: the template is blank, so its prompts tell the model nothing",
+                origin.join(name).display()
+            )
+        })
+        .collect()
+}
+
 /// Writes every template of the set `from` names (the built-in one by default) into
 /// `dir` (made when missing), one file each, and overwrites templates already there when
 /// `overwrite`; returns the files written.

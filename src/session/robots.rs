@@ -2,6 +2,7 @@
 //! physics) or robots over ROS 2, one action server per robot; and the reference robot
 //! servers (`coherent robots serve`).
 
+use coherent_core::text::number;
 use std::future::Future;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -28,8 +29,12 @@ impl Robots {
     /// seconds of silence in a step, all awaited `server_wait` seconds before the first.
     pub fn ros2(namespace: &str, robot_timeout: f64, server_wait: f64) -> Result<Robots, Error> {
         let seconds = |what: &str, s: f64| {
-            std::time::Duration::try_from_secs_f64(s)
-                .map_err(|_| Error::Invalid(format!("{what} must be seconds >= 0, not {s}")))
+            std::time::Duration::try_from_secs_f64(s).map_err(|_| {
+                Error::Invalid(format!(
+                    "{what} must be seconds from 0 to 1.8e19, not {}",
+                    number(s)
+                ))
+            })
         };
         let namespace =
             coherent_ros::wire::namespace(namespace).map_err(|e| Error::Invalid(e.to_string()))?;
@@ -99,8 +104,8 @@ pub fn serve(
         faults: Faults {
             delay: Duration::try_from_secs_f64(request.delay).map_err(|_| {
                 Error::Invalid(format!(
-                    "--delay must be seconds >= 0, not {}",
-                    request.delay
+                    "--delay must be seconds from 0 to 1.8e19, not {}",
+                    number(request.delay)
                 ))
             })?,
             fail_rate: request.fail_rate,

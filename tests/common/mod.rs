@@ -73,29 +73,65 @@ pub fn released_task(scene: &str, id: i64) -> std::sync::Arc<coherent::session::
     std::sync::Arc::new(task)
 }
 
-/// One HTTP/1.1 request's JSON body: the headers up to the blank line, then
-/// `Content-Length` bytes. `None` when the client closed the connection or sent
+/// One HTTP/1.1 request as a server sees it.
+pub struct Request {
+    /// `POST /v1/chat/completions HTTP/1.1`.
+    pub line: String,
+    /// Each header's name (lower case) and value, in order.
+    pub headers: Vec<(String, String)>,
+    pub body: Value,
+}
+
+impl Request {
+    /// The values of the header `name` (lower case).
+    pub fn header(&self, name: &str) -> Vec<&str> {
+        self.headers
+            .iter()
+            .filter(|(n, _)| n == name)
+            .map(|(_, v)| v.as_str())
+            .collect()
+    }
+}
+
+/// One HTTP/1.1 request: the request line, the headers up to the blank line, then
+/// `Content-Length` bytes of JSON. `None` when the client closed the connection or sent
 /// something else.
-pub fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
+pub fn read_whole_request(reader: &mut BufReader<TcpStream>) -> Option<Request> {
+    let mut line = String::new();
+    if reader.read_line(&mut line).ok()? == 0 {
+        return None;
+    }
+    let mut headers = Vec::new();
     let mut length = 0;
     loop {
-        let mut line = String::new();
-        if reader.read_line(&mut line).ok()? == 0 {
+        let mut header = String::new();
+        if reader.read_line(&mut header).ok()? == 0 {
             return None;
         }
-        let line = line.trim_end();
-        if line.is_empty() {
+        let header = header.trim_end();
+        if header.is_empty() {
             break;
         }
-        if let Some((name, value)) = line.split_once(':')
-            && name.eq_ignore_ascii_case("content-length")
-        {
-            length = value.trim().parse().ok()?;
+        if let Some((name, value)) = header.split_once(':') {
+            let (name, value) = (name.trim().to_ascii_lowercase(), value.trim().to_owned());
+            if name == "content-length" {
+                length = value.parse().ok()?;
+            }
+            headers.push((name, value));
         }
     }
     let mut body = vec![0; length];
     reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
+    Some(Request {
+        line: line.trim_end().to_owned(),
+        headers,
+        body: serde_json::from_slice(&body).ok()?,
+    })
+}
+
+/// One HTTP/1.1 request's JSON body ([`read_whole_request`]).
+pub fn read_request(reader: &mut BufReader<TcpStream>) -> Option<Value> {
+    read_whole_request(reader).map(|r| r.body)
 }
 
 /// A valid answer to whichever role asks, from the schema it sent: the first robot, or
@@ -116,4 +152,25 @@ pub fn answer(request: &Value) -> String {
         }),
     }
     .to_string()
+}
+
+/// A model server on loopback that reads requests and never answers, for runs that must
+/// stay busy until they are stopped: its URL, and a channel that hears of each request.
+pub fn silent_server() -> (String, std::sync::mpsc::Receiver<()>) {
+    let listener = std::net::TcpListener::bind("127.0.0.1:0").expect("bind loopback");
+    let url = format!("http://{}/v1", listener.local_addr().expect("address"));
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for socket in listener.incoming().flatten() {
+            let tx = tx.clone();
+            std::thread::spawn(move || {
+                let mut reader = BufReader::new(socket.try_clone().expect("a second handle"));
+                while read_request(&mut reader).is_some() {
+                    let _ = tx.send(());
+                }
+                drop(socket);
+            });
+        }
+    });
+    (url, rx)
 }

@@ -49,6 +49,15 @@ impl Error {
         }
     }
 
+    /// A file of the crate's formats that `coherent_core::files` could not read (gone, a
+    /// folder, more than its limit): an [`Error::Io`] about it.
+    pub fn file(e: coherent_core::Error) -> Error {
+        match e {
+            coherent_core::Error::Io { file, message } => Error::Io { file, message },
+            other => Error::Task(other),
+        }
+    }
+
     /// An [`Error::Format`] about line `line` (counted from 1) of `file`.
     pub fn at_line(file: &std::path::Path, line: usize, message: impl Into<String>) -> Error {
         Error::Format {

@@ -2,6 +2,7 @@
 //! results file read back, and report numbers worked out by hand. (Runs, resumed and
 //! cancelled: the root package's `tests/bench_runs.rs`.)
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use coherent_agents::PriceTable;
@@ -294,6 +295,116 @@ fn a_bad_line_in_the_middle_is_an_error_naming_the_file_line_and_field() {
         .to_string();
     assert!(e.contains("r.jsonl: line 2"), "{e}");
     assert!(e.contains("$.steps"), "{e}");
+}
+
+/// A transcript whose episode still runs elsewhere (its writer holds it) is never taken
+/// for one left over by a kill, while a leftover beside it is; and a second run on the
+/// same results file, or on one that shares its transcripts folder, is refused naming
+/// the first run's process.
+#[test]
+fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_results_file() {
+    let dir = scratch("owned");
+    let out = dir.join("results.jsonl");
+    let seed0 = bench::transcripts_dir(&out).join("seed0");
+    let task = &common::scenes(&[0])[0];
+    let live = seed0.join("env0-task0-pefa-live.jsonl");
+    let header = coherent_agents::transcript::Header {
+        format: coherent_agents::transcript::FORMAT.into(),
+        version: coherent_agents::transcript::VERSION,
+        coherent: "test".into(),
+        task: coherent_core::native::to_value(task),
+        task_name: task.meta.name.clone(),
+        method: "pefa".into(),
+        history: 5,
+        max_steps: 10,
+        gt_steps: task.meta.gt_steps,
+        physics: false,
+        robots: coherent_agents::transcript::RobotsRecord::Local,
+        backend: BackendInfo {
+            kind: BackendKind::Builtin,
+            model: String::new(),
+            base_url: None,
+        },
+        temperature: None,
+        seed: None,
+        prompts: None,
+        started_ms: 0,
+        external: false,
+    };
+    let writer = coherent_agents::transcript::Writer::create(&live, header).expect("created");
+    let left = seed0.join("env0-task4-pefa-left.jsonl");
+    std::fs::write(&left, "{\"type\": \"header\"}\n").expect("write");
+    let marked = bench::mark_orphans(&out, &[]).expect("marked");
+    assert_eq!(marked, [left.with_extension("jsonl.unfinished")]);
+    assert!(live.exists(), "the live transcript keeps its name");
+    drop(writer);
+    let ledger = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("the first");
+    for other in [out.clone(), dir.join("results.json")] {
+        let e = bench::Ledger::open(&other, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+            .expect_err("a second run")
+            .to_string();
+        let pid = std::process::id();
+        assert!(
+            e.contains("another benchmark run is using it")
+                && e.contains(&format!("process {pid}")),
+            "{e}"
+        );
+    }
+    drop(ledger);
+    bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("free again");
+}
+
+/// A run's one read of an existing results file does both checks, in this order: its
+/// size within the limit first (a file too large is refused for that, whatever its
+/// settings), then its settings, and both only under the lock (a file held by another run
+/// is refused for that); a refused file is left as it was.
+#[test]
+fn resuming_reads_the_file_once_under_the_lock_size_first_then_settings() {
+    let dir = scratch("limits-then-settings");
+    let out = dir.join("results.jsonl");
+    // Written before lines had settings: other settings than any run's now.
+    let text = Hand::default().jsonl();
+    std::fs::write(&out, &text).expect("write");
+    let settings = bench::RunSettings {
+        backend: BackendKind::Builtin,
+        model: None,
+        sim_errors: None,
+        temperature: None,
+        model_seed: None,
+        seeds: 1,
+        prompts: "built-in".into(),
+        history: 5,
+        max_steps: None,
+        max_states: 100_000,
+        physics: false,
+        robots: "local".into(),
+        coherent: "test".into(),
+        method: BTreeMap::new(),
+    };
+    let now = BTreeMap::from([("pefa".to_owned(), settings)]);
+    let small = (text.len() - 1) as u64;
+    let e = bench::Ledger::open(&out, small, &now)
+        .expect_err("too large")
+        .to_string();
+    assert!(
+        e.contains("--max-results-mib") && !e.contains("other settings"),
+        "{e}"
+    );
+    // Another run (of no settings to compare) holds the file: the lock is asked first.
+    let holder = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &BTreeMap::new())
+        .expect("the holder");
+    let e = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &now)
+        .expect_err("held")
+        .to_string();
+    assert!(e.contains("another benchmark run is using it"), "{e}");
+    drop(holder);
+    let e = bench::Ledger::open(&out, bench::DEFAULT_MAX_RESULTS_BYTES, &now)
+        .expect_err("other settings")
+        .to_string();
+    assert!(e.contains("holds episodes run with other settings"), "{e}");
+    assert_eq!(std::fs::read_to_string(&out).expect("read"), text);
 }
 
 /// A results line with a key twice is refused, naming the line and the key (serde_json

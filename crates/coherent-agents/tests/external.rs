@@ -251,3 +251,85 @@ fn names_are_checked() {
     let fine = External::new("My_Method-2.0", make).expect("a valid name");
     assert_eq!(fine.name(), "My_Method-2.0");
 }
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_methods_texts_of_any_length_are_cut_so_that_its_transcript_reads_back() {
+    let out = scratch("long-texts");
+    let task = common::task("env0", 0);
+    let views = Arc::new(Mutex::new(Vec::new()));
+    let long_note = Choice {
+        robot: Some(NodeId(22)),
+        action: Some(format!("[takeoff_from] <{}>(3)", "x".repeat(1 << 20))),
+        note: "n".repeat(3 << 20),
+        ..Choice::default()
+    };
+    let traceback = format!("{}\nValueError: at the end", "  frame\n".repeat(1 << 18));
+    let method = scripted("long", vec![Ok(long_note), Err(traceback.into())], &views);
+    let path = episode::transcript_path(&out, &task, method.name());
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let (e, _) = episode::run(
+        &task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(10),
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs");
+    // 64 KiB kept (docs/architecture.md), and the note of the whole length.
+    let limit = (64 << 10) + 64;
+    let chosen = e.rounds[0].external.as_ref().expect("the method's choice");
+    assert!(chosen.note.len() < limit && chosen.note.ends_with("bytes in all]"));
+    assert!(chosen.action.as_ref().expect("an action").len() < limit);
+    let error = e.summary.error.as_deref().expect("the method's error");
+    assert!(error.len() < limit, "{} bytes", error.len());
+    assert!(
+        error.ends_with("ValueError: at the end"),
+        "the exception is kept"
+    );
+    let back = transcript::read(&path).expect("reads back");
+    assert_eq!(back.rounds, e.rounds);
+}
+
+/// Never answers: its step's future stays pending.
+struct Silent;
+
+impl Policy for Silent {
+    fn act(&mut self, _view: Arc<StepView>) -> BoxFuture<'_, Act> {
+        Box::pin(std::future::pending())
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_step_over_the_time_limit_ends_the_episode_as_the_methods_error() {
+    let out = scratch("step-timeout");
+    let task = common::task("env0", 0);
+    let make: Arc<MakePolicy> = Arc::new(|_: &Arc<Task>| Ok(Box::new(Silent) as Box<dyn Policy>));
+    let method = External::new("silent", make)
+        .expect("a valid name")
+        .with_step_timeout(Some(std::time::Duration::from_millis(200)));
+    let path = episode::transcript_path(&out, &task, method.name());
+    let mut env = SymbolicEnv::new(Arc::clone(&task));
+    let (e, _) = episode::run(
+        &task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(10),
+        &path,
+        &Cancel::default(),
+        &mut |_| {},
+    )
+    .await
+    .expect("the episode runs");
+    assert_eq!(e.summary.status, Status::Error);
+    assert_eq!(e.rounds.len(), 1);
+    let error = e.summary.error.as_deref().expect("why");
+    assert!(
+        error.contains("took longer than its time limit of 0.2 s"),
+        "{error}"
+    );
+}

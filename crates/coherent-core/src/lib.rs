@@ -12,6 +12,7 @@ pub mod describe;
 pub mod env;
 pub mod error;
 pub mod feasibility;
+pub mod files;
 pub mod footprint;
 pub mod geometry;
 pub mod graph;

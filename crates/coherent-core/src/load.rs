@@ -6,7 +6,16 @@ use std::path::{Path, PathBuf};
 use serde_json::Value;
 
 use crate::error::{Error, Result};
+use crate::files::{self, Limit, MIB};
 use crate::task::Task;
+
+/// The most a task file may hold: the released files of the paper are under 400 KiB, and
+/// a scene hundreds of times larger would be beyond the planner anyway.
+pub const TASK_FILE_LIMIT: Limit = Limit {
+    bytes: 64 * MIB,
+    what: "a task file",
+    raise: None,
+};
 
 /// Every task found at `path` (a file of either format, or a folder searched for
 /// `*.json` files, recursively, in name order). The outer result fails when a file
@@ -35,6 +44,8 @@ pub fn load_tasks(path: &Path) -> Result<Vec<Task>> {
 }
 
 /// The JSON files at `path`: the file itself, or a folder's `*.json` files, recursively.
+/// A `*.json` entry of a folder that is not a regular file (a pipe, a device, a link to
+/// one) is refused: reading it could block or never end.
 pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
     let meta = std::fs::metadata(path).map_err(|e| io_error(path, &e))?;
     if !meta.is_dir() {
@@ -49,6 +60,14 @@ pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
             if p.is_dir() {
                 stack.push(p);
             } else if p.extension().is_some_and(|e| e == "json") {
+                let meta = std::fs::metadata(&p).map_err(|e| io_error(&p, &e))?;
+                if !meta.is_file() {
+                    return Err(Error::Io {
+                        file: p.display().to_string(),
+                        message: "not a regular file (a pipe, a device?): a task file must be one"
+                            .to_owned(),
+                    });
+                }
                 files.push(p);
             }
         }
@@ -63,10 +82,11 @@ pub fn task_files(path: &Path) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-/// The tasks of one file: a list (original format) or an object (native format).
+/// The tasks of one file: a list (original format) or an object (native format); a
+/// file of more than [`TASK_FILE_LIMIT`] is refused.
 pub fn read_file(path: &Path) -> Result<Vec<Result<Task>>> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|e| io_error(path, &e))?;
+    let bytes = files::read(path, &TASK_FILE_LIMIT)?;
     let value = crate::json::parse(&file, &bytes)?;
     let scene = path
         .file_stem()

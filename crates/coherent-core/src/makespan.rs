@@ -11,9 +11,17 @@
 //! at most `n` of the actions [`crate::planner::lower_bound`] counts, and at most one of
 //! the actions one goal subject still needs (they follow one another).
 //!
+//! Among the plans of the fewest joint steps it finds one of the fewest actions: costs
+//! and `f` are compared joint steps first, then actions (lexicographic A*), the actions'
+//! heuristic being the sequential planner's, which one action lowers by at most one. A
+//! plan is never longer in joint steps for it, and no robot acts where it need not (a
+//! quadrotor landing and taking off again while it waits).
+//!
 //! The search starts from an upper bound, the sequential optimum scheduled as soon as
-//! possible ([`schedule`]), and looks only for shorter plans; when it stops at a limit
-//! it still has that plan, and the frontier's `f` is a lower bound.
+//! possible ([`schedule`]), and looks only for cheaper plans; when it stops at a limit
+//! it still has that plan, and the frontier's `f` is a lower bound. A limit met only
+//! while it looked among the plans of the fewest joint steps for fewer actions leaves
+//! the joint steps proven.
 
 use std::ops::ControlFlow;
 use std::time::{Duration, Instant};
@@ -202,6 +210,55 @@ struct Span {
     len: u32,
 }
 
+/// A cost or an estimate, compared joint steps first, then actions.
+type Cost = (usize, usize);
+
+/// The open states by `f` in joint steps, then by `f` in actions: `layers[steps][actions]`
+/// holds the indices of the states queued at that cost, popped from the lowest.
+#[derive(Default)]
+struct Open {
+    layers: Vec<Vec<Vec<u32>>>,
+    /// Every bucket below it is empty.
+    at: Cost,
+    bytes: usize,
+}
+
+impl Open {
+    fn push(&mut self, f: Cost, i: u32) {
+        let (steps, actions) = f;
+        if self.layers.len() <= steps {
+            self.bytes += (steps + 1 - self.layers.len()) * size_of::<Vec<Vec<u32>>>();
+            self.layers.resize_with(steps + 1, Vec::new);
+        }
+        let layer = &mut self.layers[steps];
+        if layer.len() <= actions {
+            self.bytes += (actions + 1 - layer.len()) * size_of::<Vec<u32>>();
+            layer.resize_with(actions + 1, Vec::new);
+        }
+        let bucket = &mut layer[actions];
+        let before = bucket.capacity();
+        bucket.push(i);
+        self.bytes += (bucket.capacity() - before) * size_of::<u32>();
+        // A consistent heuristic never queues below the state expanded; kept safe anyway.
+        self.at = self.at.min(f);
+    }
+
+    /// A state of the lowest cost queued, with that cost.
+    fn pop(&mut self) -> Option<(u32, Cost)> {
+        loop {
+            let (steps, actions) = self.at;
+            let layer = self.layers.get_mut(steps)?;
+            match layer.get_mut(actions) {
+                None => self.at = (steps + 1, 0),
+                Some(bucket) => match bucket.pop() {
+                    Some(i) => return Some((i, self.at)),
+                    None => self.at.1 += 1,
+                },
+            }
+        }
+    }
+}
+
 /// One search: its tables, the best plan known, its counters.
 struct Search<'a> {
     task: &'a Task,
@@ -209,14 +266,19 @@ struct Search<'a> {
     goal: &'a [GoalPredicate],
     limits: &'a Limits,
     useful: Useful,
+    /// The states; `g` and `h` of their info count joint steps.
     t: Tables<Span>,
+    /// Per state as in `t`: the actions of the best path known to it, and the fewest
+    /// actions still needed ([`planner::lower_bound`]).
+    actions: Vec<(u16, u16)>,
+    open: Open,
     /// The actions of every joint step stored, one after the other.
     arena: Vec<Step>,
-    /// The best plan known, and its length (`usize::MAX` while there is none).
+    /// The best plan known, and its cost (`usize::MAX` each while there is none).
     best: Option<Vec<JointStep>>,
-    best_len: usize,
+    best_cost: Cost,
     expanded: usize,
-    /// The lowest `f` still open when the search stopped.
+    /// The joint steps of the lowest `f` still open when the search stopped.
     frontier: usize,
 }
 
@@ -230,9 +292,13 @@ impl<'a> Search<'a> {
         limits: &'a Limits,
     ) -> Search<'a> {
         let best = sequential.map(|plan| schedule(task, start, plan, goal));
-        let best_len = best.as_ref().map_or(usize::MAX, Vec::len);
-        let n = robots.len() as u16;
-        let h = bound(planner::needs(task, start, goal), n, 0);
+        let best_cost = best.as_ref().map_or((usize::MAX, usize::MAX), |plan| {
+            (plan.len(), plan.iter().map(Vec::len).sum())
+        });
+        let needs = planner::needs(task, start, goal);
+        let h = bound(needs, robots.len() as u16, 0);
+        let mut open = Open::default();
+        open.push((usize::from(h), usize::from(needs.0)), 0);
         Search {
             task,
             robots,
@@ -240,9 +306,11 @@ impl<'a> Search<'a> {
             limits,
             useful: Useful::new(task, start, goal),
             t: Tables::new(start, h, Span { at: 0, len: 0 }),
+            actions: vec![(0, needs.0)],
+            open,
             arena: Vec::new(),
             best,
-            best_len,
+            best_cost,
             expanded: 0,
             frontier: usize::from(h),
         }
@@ -261,24 +329,31 @@ impl<'a> Search<'a> {
             .collect()
     }
 
-    /// A* in order of `f`, below the best plan's length; `Break` with the limit that
-    /// stopped it, or `Continue` when it decided.
+    /// State `i`'s `f`: joint steps, then actions.
+    fn f(&self, i: usize) -> Cost {
+        let (info, (g, h)) = (self.t.info[i], self.actions[i]);
+        (
+            usize::from(info.g) + usize::from(info.h),
+            usize::from(g) + usize::from(h),
+        )
+    }
+
+    /// A* in order of `f` (joint steps, then actions), below the best plan's cost;
+    /// `Break` with the limit that stopped it, or `Continue` when it decided.
     fn run(&mut self) -> ControlFlow<Stop> {
         if self.holds(&self.t.states[0]) {
             self.best = Some(Vec::new());
-            self.best_len = 0;
+            self.best_cost = (0, 0);
             return ControlFlow::Continue(());
         }
-        let mut f = 0;
-        while f < self.t.buckets.len() && f < self.best_len {
-            self.frontier = f;
-            let Some(i) = self.t.buckets[f].pop() else {
-                f += 1;
-                continue;
-            };
+        while let Some((i, f)) = self.open.pop() {
+            if f >= self.best_cost {
+                break;
+            }
+            self.frontier = f.0;
             let i = i as usize;
             let info = self.t.info[i];
-            if info.closed || usize::from(info.g) + usize::from(info.h) != f {
+            if info.closed || self.f(i) != f {
                 continue;
             }
             self.t.info[i].closed = true;
@@ -288,7 +363,7 @@ impl<'a> Search<'a> {
             }
             if self.holds(&self.t.states[i]) {
                 self.best = Some(self.plan_to(i));
-                self.best_len = usize::from(info.g);
+                self.best_cost = (usize::from(info.g), usize::from(self.actions[i].0));
                 return ControlFlow::Continue(());
             }
             let Some(gc) = info.g.checked_add(1) else {
@@ -300,12 +375,11 @@ impl<'a> Search<'a> {
                 ControlFlow::Continue(_) => {}
             }
         }
-        self.frontier = self.frontier.max(f);
         ControlFlow::Continue(())
     }
 
     /// Every joint step from state `i` whose result may still beat the best plan.
-    fn expand(&mut self, i: usize, gc: u16, f: usize) -> ControlFlow<Halt, usize> {
+    fn expand(&mut self, i: usize, gc: u16, f: Cost) -> ControlFlow<Halt, Cost> {
         let s = self.t.states[i].clone();
         let contents = Contents::new(self.task, &s);
         let lists: Vec<Vec<(Action, Footprint)>> = self
@@ -328,27 +402,33 @@ impl<'a> Search<'a> {
             lists: &lists,
             levels: vec![(s, needs); self.robots.len() + 1],
             chosen: SmallVec::new(),
-            cost: usize::from(gc),
-            limit: self.best_len,
+            cost: (usize::from(gc), usize::from(self.actions[i].0)),
+            limit: self.best_cost,
         };
-        walk.level(0, &mut |state, step| self.child(i, gc, f, state, step))
+        walk.level(0, &mut |state, needs, step| {
+            self.child(i, gc, f, (state, needs), step)
+        })
     }
 
-    /// Records the state a joint step leads to, unless it cannot beat the best plan or
-    /// is known at no greater cost.
-    /// Returns the length a plan must now beat.
+    /// Records the state a joint step leads to (with its [`planner::needs`]), unless it
+    /// cannot beat the best plan or is known at no greater cost; `f` is the parent's.
+    /// Returns the cost a plan must now beat.
     fn child(
         &mut self,
         parent: usize,
         gc: u16,
-        f: usize,
-        child: &State,
+        f: Cost,
+        (child, needs): (&State, (u16, u16)),
         step: &[Step],
-    ) -> ControlFlow<Halt, usize> {
-        let h = lower_bound(self.task, child, self.goal, self.robots.len());
-        if usize::from(gc) + usize::from(h) >= self.best_len {
-            return ControlFlow::Continue(self.best_len);
+    ) -> ControlFlow<Halt, Cost> {
+        let h = bound(needs, self.robots.len() as u16, 0);
+        let ga = usize::from(self.actions[parent].0) + step.len();
+        if (usize::from(gc) + usize::from(h), ga + usize::from(needs.0)) >= self.best_cost {
+            return ControlFlow::Continue(self.best_cost);
         }
+        let Ok(ga16) = u16::try_from(ga) else {
+            return ControlFlow::Break(Halt::Limit(Stop::Depth));
+        };
         let span = Span {
             at: self.arena.len() as u32,
             len: step.len() as u32,
@@ -357,37 +437,54 @@ impl<'a> Search<'a> {
         let c = match self.t.find(hash, child) {
             Some(j) => {
                 let seen = &mut self.t.info[j];
-                if seen.closed || seen.g <= gc {
-                    return ControlFlow::Continue(self.best_len);
+                if seen.closed || (seen.g, self.actions[j].0) <= (gc, ga16) {
+                    return ControlFlow::Continue(self.best_cost);
                 }
                 (seen.g, seen.parent, seen.step) = (gc, parent as u32, span);
-                self.arena.extend_from_slice(step);
-                self.t.queue(j as u32);
+                self.actions[j].0 = ga16;
                 j
             }
             None => {
                 let kept = child.clone();
-                let arena = (self.arena.capacity() + step.len()) * size_of::<Step>();
-                if self.t.bytes(Some(kept.heap_bytes())) + arena > self.limits.max_memory {
+                if self.bytes(Some(kept.heap_bytes()), step.len()) > self.limits.max_memory {
                     return ControlFlow::Break(Halt::Limit(Stop::Memory));
                 }
-                self.arena.extend_from_slice(step);
                 self.t.insert(kept, hash, parent as u32, span, gc, h);
+                self.actions.push((ga16, needs.0));
                 self.t.states.len() - 1
             }
         };
+        self.arena.extend_from_slice(step);
+        self.open.push(self.f(c), c as u32);
         if h == 0 && self.holds(child) {
             self.best = Some(self.plan_to(c));
-            self.best_len = usize::from(gc);
+            self.best_cost = (usize::from(gc), ga);
         }
         // A goal at cost f cannot be beaten: every open state has f' >= f.
-        if self.best_len <= f {
+        if self.best_cost <= f {
             return ControlFlow::Break(Halt::Proven);
         }
         if self.t.states.len() >= self.limits.max_states {
             return ControlFlow::Break(Halt::Limit(Stop::States));
         }
-        ControlFlow::Continue(self.best_len)
+        ControlFlow::Continue(self.best_cost)
+    }
+
+    /// The search's bytes, as [`Tables::bytes`] counts them (with `more`, after adding a
+    /// state whose own block takes `more` bytes, reached by a step of `actions` actions).
+    fn bytes(&self, more: Option<usize>, actions: usize) -> usize {
+        let grown = |len: usize, cap: usize| if len == cap { cap.max(4) * 2 } else { cap };
+        let (arena, per_state) = match more {
+            Some(_) => (
+                (self.arena.capacity() + actions) * size_of::<Step>(),
+                grown(self.actions.len(), self.actions.capacity()),
+            ),
+            None => (
+                self.arena.capacity() * size_of::<Step>(),
+                self.actions.capacity(),
+            ),
+        };
+        self.t.bytes(more) + arena + per_state * size_of::<(u16, u16)>() + self.open.bytes
     }
 
     fn finish(self, stop: ControlFlow<Stop>, elapsed: Duration) -> Makespan {
@@ -395,26 +492,29 @@ impl<'a> Search<'a> {
             ControlFlow::Break(s) => Some(s),
             ControlFlow::Continue(()) => None,
         };
-        let proven = stop.is_none();
-        let lower = match (proven, self.best.as_ref()) {
-            (true, Some(plan)) => plan.len(),
-            _ => self.frontier.min(self.best_len),
+        let lower = match (stop, self.best.as_ref()) {
+            (None, Some(plan)) => plan.len(),
+            _ => self.frontier.min(self.best_cost.0),
         };
+        // A limit met while the search looked among the plans of the fewest joint steps
+        // for one of fewer actions leaves the joint steps proven.
+        let proven = stop.is_none() || (self.best.is_some() && lower == self.best_cost.0);
         Makespan {
             proven,
             lower,
             stop,
             states_expanded: self.expanded,
             states_seen: self.t.states.len(),
-            memory: self.t.bytes(None) + self.arena.capacity() * size_of::<Step>(),
+            memory: self.bytes(None, 0),
             plan: self.best,
             elapsed,
         }
     }
 }
 
-/// Takes a joint step and the state it leads to; answers the plan length to beat.
-type Emit<'e> = dyn FnMut(&State, &[Step]) -> ControlFlow<Halt, usize> + 'e;
+/// Takes a joint step and the state it leads to, with that state's [`planner::needs`];
+/// answers the cost to beat.
+type Emit<'e> = dyn FnMut(&State, (u16, u16), &[Step]) -> ControlFlow<Halt, Cost> + 'e;
 
 /// The robot-by-robot enumeration of one state's joint steps.
 struct Walk<'w> {
@@ -428,23 +528,30 @@ struct Walk<'w> {
     levels: Vec<(State, (u16, u16))>,
     /// `(robot, action index)` of the actions chosen so far.
     chosen: SmallVec<[(usize, usize); 4]>,
-    /// The cost of the states the steps lead to, and the plan length they must beat.
-    cost: usize,
-    limit: usize,
+    /// The joint steps of the states the steps lead to, and the actions before the step.
+    cost: Cost,
+    /// The cost a plan must beat.
+    limit: Cost,
 }
 
 impl Walk<'_> {
     /// Whether a step completed from level `k` (its state and needs in `levels[k]`,
-    /// robots `k..` still free) could still lead to a plan shorter than the limit.
-    fn promising(&self, k: usize) -> bool {
+    /// robots `k..` still free, `chosen` actions in the step so far) could still lead
+    /// to a plan cheaper than the limit: fewer joint steps, or as many and fewer actions.
+    fn promising(&self, k: usize, chosen: usize) -> bool {
         let left = (self.robots.len() - k) as u16;
-        let h = bound(self.levels[k].1, self.robots.len() as u16, left);
-        self.cost + usize::from(h) < self.limit
+        let needs = self.levels[k].1;
+        let h = bound(needs, self.robots.len() as u16, left);
+        let f = (
+            self.cost.0 + usize::from(h),
+            self.cost.1 + chosen + usize::from(needs.0),
+        );
+        f < self.limit
     }
 
     /// Chooses for robot `k` and those after it; `emit` gets each complete, non-empty
-    /// joint step with the state it leads to, and answers the length to beat.
-    fn level(&mut self, k: usize, emit: &mut Emit<'_>) -> ControlFlow<Halt, usize> {
+    /// joint step with the state it leads to, and answers the cost to beat.
+    fn level(&mut self, k: usize, emit: &mut Emit<'_>) -> ControlFlow<Halt, Cost> {
         if k == self.robots.len() {
             if !self.chosen.is_empty() {
                 let step: SmallVec<[Step; 4]> = self
@@ -455,7 +562,8 @@ impl Walk<'_> {
                         action: self.lists[r][j].0,
                     })
                     .collect();
-                self.limit = emit(&self.levels[k].0, &step)?;
+                let (state, needs) = &self.levels[k];
+                self.limit = emit(state, *needs, &step)?;
             }
             return ControlFlow::Continue(self.limit);
         }
@@ -463,7 +571,7 @@ impl Walk<'_> {
         let (done, next) = self.levels.split_at_mut(k + 1);
         next[0].0.clone_from(&done[k].0);
         next[0].1 = done[k].1;
-        if self.promising(k + 1) {
+        if self.promising(k + 1, self.chosen.len()) {
             self.level(k + 1, emit)?;
         }
         for j in 0..self.lists[k].len() {
@@ -479,7 +587,7 @@ impl Walk<'_> {
             next[0].0.clone_from(&done[k].0);
             rules::apply(self.task, &mut next[0].0, self.robots[k], a);
             next[0].1 = planner::needs(self.task, &next[0].0, self.goal);
-            if !self.promising(k + 1) {
+            if !self.promising(k + 1, self.chosen.len() + 1) {
                 continue;
             }
             self.chosen.push((k, j));

@@ -142,6 +142,7 @@ pub fn search_from(
 ) -> Search {
     let holds = |s: &State| goal.iter().all(|p| predicate_holds(s, p));
     let mut t = Tables::new(start, lower_bound(task, start, goal), None);
+    t.queue(0);
     if holds(start) {
         return t.result(Some(Vec::new()), 0, None);
     }
@@ -201,6 +202,7 @@ pub fn search_from(
                         }
                         let h = lower_bound(task, &kept, goal);
                         t.insert(kept, hash, i as u32, step, gc, h);
+                        t.queue(t.states.len() as u32 - 1);
                         t.states.len() - 1
                     }
                 };

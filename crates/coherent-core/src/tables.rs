@@ -1,8 +1,9 @@
 //! The tables of an A* search over [`State`]s: every state met, by index, with what the
-//! search knows of it; a hash table of indices that finds duplicates; the open list, a
+//! search knows of it; a hash table of indices that finds duplicates; an open list, a
 //! bucket queue on `f`; and an estimate of the bytes they take, which
 //! [`crate::planner::Limits::max_memory`] bounds. The sequential planner and the
-//! makespan search share them.
+//! makespan search share them; the makespan search orders its open states by joint
+//! steps, then actions, in an open list of its own, and leaves these buckets empty.
 
 use std::hash::BuildHasher;
 
@@ -41,7 +42,7 @@ pub(crate) struct Tables<P> {
 const BLOCK_OVERHEAD: usize = 16;
 
 impl<P: Copy> Tables<P> {
-    /// The tables with the start state, reached by `root`, queued.
+    /// The tables with the start state, reached by `root`, as state 0 (not queued).
     pub fn new(start: &State, h: u16, root: P) -> Tables<P> {
         let mut t = Tables {
             states: Vec::new(),
@@ -61,6 +62,7 @@ impl<P: Copy> Tables<P> {
             .map(|&j| j as usize)
     }
 
+    /// Adds a state met for the first time (the caller queues it).
     pub fn insert(&mut self, s: State, hash: u64, parent: u32, step: P, g: u16, h: u16) {
         let j = self.states.len() as u32;
         let info = &self.info;
@@ -76,7 +78,6 @@ impl<P: Copy> Tables<P> {
             h,
             closed: false,
         });
-        self.queue(j);
     }
 
     /// Puts state `i` in the bucket of its `f`.

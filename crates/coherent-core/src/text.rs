@@ -1,6 +1,7 @@
 //! Text from outside — a task file, a model's answer, a server's error — as it may be
 //! shown on a terminal or written to a log: nothing in it can move the cursor, clear
 //! the screen, start a new line or reorder what follows. Transcripts keep the raw text.
+//! The same text in a file name ([`file_name_part`]) is made of safe characters only.
 
 use std::borrow::Cow;
 use std::fmt::Write;
@@ -14,6 +15,45 @@ fn unsafe_char(c: char) -> bool {
             c,
             '\u{061C}' | '\u{200E}' | '\u{200F}' | '\u{202A}'..='\u{202E}' | '\u{2066}'..='\u{2069}'
         )
+}
+
+/// Whether `text` holds a character that a terminal acts on ([`shown`] escapes them).
+pub fn has_unsafe(text: &str) -> bool {
+    text.chars().any(unsafe_char)
+}
+
+/// `text` as part of a file name: ASCII letters, digits, `-`, `_` and `.` (not first),
+/// at most `max` bytes (`max` >= 16). Any other character is `_`; when anything had to
+/// change, the part ends in `-` and 8 hex digits of a hash of the whole text, so that
+/// two texts that differ still give two names. Borrowed when `text` is already one.
+pub fn file_name_part(text: &str, max: usize) -> Cow<'_, str> {
+    let safe = |c: char| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.');
+    if !text.is_empty() && text.len() <= max && text.chars().all(safe) && !text.starts_with('.') {
+        return Cow::Borrowed(text);
+    }
+    // FNV-1a, 32 bits: stable across runs and versions, unlike the standard hasher.
+    let hash = text.bytes().fold(0x811c_9dc5_u32, |h, b| {
+        (h ^ u32::from(b)).wrapping_mul(0x0100_0193)
+    });
+    let mut out: String = text
+        .chars()
+        .map(|c| if safe(c) { c } else { '_' })
+        .take(max.saturating_sub(9))
+        .collect();
+    if out.starts_with('.') {
+        out.replace_range(..1, "_");
+    }
+    Cow::Owned(format!("{out}-{hash:08x}"))
+}
+
+/// A number of a flag or a file as it may be echoed: as written for usual sizes, in
+/// exponent form beyond (`1e300`, not its three hundred digits).
+pub fn number(x: f64) -> String {
+    if x == 0.0 || (1e-4..1e15).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 /// `text` with every unsafe character escaped: `\n`, `\r` and `\t` as such, the others
@@ -60,6 +100,24 @@ pub fn cut(text: &str, max: usize) -> Cow<'_, str> {
     ))
 }
 
+/// `text` cut to its last `max` bytes or fewer (at a character boundary), after a note
+/// of the whole length when it was longer: for an error whose end says the most, such
+/// as a traceback.
+pub fn cut_front(text: &str, max: usize) -> Cow<'_, str> {
+    if text.len() <= max {
+        return Cow::Borrowed(text);
+    }
+    let mut start = text.len() - max;
+    while !text.is_char_boundary(start) {
+        start += 1;
+    }
+    Cow::Owned(format!(
+        "[cut: {} bytes in all] …{}",
+        text.len(),
+        &text[start..]
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -70,6 +128,37 @@ mod tests {
         assert_eq!(cut("abcdef", 3), "abc… [cut: 6 bytes in all]");
         // "é" is two bytes: a cut inside it moves back before it.
         assert_eq!(cut("aé", 2), "a… [cut: 3 bytes in all]");
+        assert_eq!(cut_front("abcdef", 3), "[cut: 6 bytes in all] …def");
+        assert_eq!(cut_front("éa", 2), "[cut: 3 bytes in all] …a");
+        assert_eq!(cut_front("short", 10), "short");
+    }
+
+    #[test]
+    fn file_name_parts_are_safe_short_and_distinct() {
+        assert_eq!(file_name_part("env0", 64), "env0");
+        assert_eq!(file_name_part("s1-apartment_2.b", 64), "s1-apartment_2.b");
+        let evil = file_name_part("a\u{1b}[2J/../b\u{7}", 64);
+        assert!(
+            evil.starts_with("a__2J_.._b_-") && evil.len() == 20,
+            "{evil}"
+        );
+        assert_ne!(file_name_part("a/b", 64), file_name_part("a_b", 64));
+        assert!(file_name_part("..", 64).starts_with("_."));
+        let long = "x".repeat(300);
+        let part = file_name_part(&long, 64);
+        assert_eq!(part.len(), 64);
+        assert_ne!(part, file_name_part(&"x".repeat(301), 64));
+        assert_eq!(file_name_part("", 64).len(), 9);
+        assert_eq!(file_name_part("é", 64).len(), 10);
+    }
+
+    #[test]
+    fn numbers_are_echoed_short() {
+        assert_eq!(number(1e300), "1e300");
+        assert_eq!(number(0.2), "0.2");
+        assert_eq!(number(-1.0), "-1");
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(f64::NAN), "NaN");
     }
 
     #[test]

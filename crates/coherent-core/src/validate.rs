@@ -1,11 +1,12 @@
 //! Semantic checks of a well-formed task: problems that make it unsolvable, trivial or
 //! inconsistent. (Malformed input is rejected earlier, by the loaders.)
 
-use crate::error::clip;
+use crate::error::{clip, quoted};
 use crate::graph::{Idx, NodeKind, RobotKind};
 use crate::planner::Analysis;
 use crate::rules::room_of;
 use crate::task::{MAX_GROUND_TRUTH, Task, predicate_holds};
+use crate::text::has_unsafe;
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// Everything semantically wrong with `task`, in words; empty when it is clean.
@@ -51,6 +52,25 @@ pub fn findings(task: &Task, analysis: &Analysis) -> Vec<String> {
                 .into_iter()
                 .map(|m| format!("{}: {m}", task.node(n).short_label())),
         );
+    }
+    // Names reach terminals, progress lines, table headers and file names.
+    let names = [("scene", &task.meta.scene), ("name", &task.meta.name)]
+        .into_iter()
+        .map(|(what, text)| (what.to_owned(), text.clone()))
+        .chain(task.indices().map(|n| {
+            (
+                format!("node {}", task.node(n).id.0),
+                task.node(n).class_name.clone(),
+            )
+        }));
+    for (what, text) in names {
+        if has_unsafe(&text) {
+            out.push(format!(
+                "{what}: the name {} holds control or direction characters, which a terminal \
+                 acts on",
+                quoted(&text)
+            ));
+        }
     }
     let listed = task.init_edges.len();
     let distinct = task.init.edges().len();

@@ -130,6 +130,22 @@ fn seconds(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Duration> {
     })
 }
 
+/// `step_timeout` of `run`, `run_bench` and the Ray worker: the longest one step of a
+/// method written in Python may take, or None for no limit.
+pub(crate) fn step_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Option<Duration>> {
+    optional(obj, |o| {
+        let limit = seconds(o, "step_timeout")?;
+        if limit.is_zero() {
+            return Err(errors::argument(
+                "step_timeout",
+                o,
+                "0 seconds: no step could end",
+            ));
+        }
+        Ok(limit)
+    })
+}
+
 /// `connect_timeout` of `LLM`.
 pub(crate) fn connect_timeout(obj: &Bound<'_, PyAny>) -> PyResult<Duration> {
     seconds(obj, "connect_timeout")

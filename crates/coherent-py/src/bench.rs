@@ -5,13 +5,14 @@
 use std::ffi::CString;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
 use coherent::session::bench::{self as session_bench, BenchConfig, EpisodesRequest, TableFormat};
 use coherent::session::engine::{
-    BenchOutcome, Cancel, Event, HISTORY_WINDOW, Limits, MethodSpec, Progress, Report, ResultLine,
-    Setting, Style, Subset, read_results as read_results_file, select as select_tasks,
-    setting_field,
+    BenchOutcome, Cancel, DEFAULT_MAX_RESULTS_BYTES, Event, HISTORY_WINDOW, Limits, MethodSpec,
+    Progress, Report, ResultLine, Setting, Style, Subset, read_results as read_results_file,
+    select as select_tasks, setting_field,
 };
 use coherent::session::error::BackendProblem;
 use coherent::session::{self, Error};
@@ -219,6 +220,7 @@ pub(crate) fn run_backend(
         endpoint,
         sim_errors: crate::run::error_rates(sim_errors)?,
         replay_from,
+        ..BackendRequest::default()
     })
 }
 
@@ -254,7 +256,7 @@ pub(crate) fn settings_err(py: Python<'_>, e: Error) -> PyErr {
     concurrency = 4, history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES,
     max_steps = None, out = None, progress = None, prompts = None,
     prices = None, physics = false, robots = "local", namespace = None, robot_timeout = 10.0,
-    server_wait = 10.0
+    server_wait = 10.0, step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run_bench<'py>(
@@ -278,6 +280,7 @@ pub(crate) fn run_bench<'py>(
     namespace: Option<&str>,
     robot_timeout: f64,
     server_wait: f64,
+    #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let style = progress_style(py, progress)?;
     let prompts_given = prompts.is_some();
@@ -293,7 +296,7 @@ pub(crate) fn run_bench<'py>(
         ..EpisodesRequest::new(Vec::new())
     };
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
-    let mut python = Methods::new(py)?;
+    let mut python = Methods::new(py, step_timeout)?;
     let replay = replaying(backend, replay_from.as_deref());
     let methods = run_methods(py, &methods, seeds, &objects, &mut python, replay)?;
     let settings = EpisodesRequest { methods, ..request }
@@ -306,6 +309,7 @@ pub(crate) fn run_bench<'py>(
         seeds,
         concurrency: concurrency.max(1),
         out,
+        max_results_bytes: DEFAULT_MAX_RESULTS_BYTES,
     };
     if let Some(note) = config.concurrency_note() {
         let message = CString::new(note).unwrap_or_default();

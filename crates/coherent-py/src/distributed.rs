@@ -7,11 +7,12 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session::bench::{EpisodesRequest, RunTasks, Worker, default_out};
 use coherent::session::engine::{
-    Cancel, EpisodeKey, EpisodeResult, Event, HISTORY_WINDOW, Ledger, Limits, PriceTable, Progress,
-    ResultLine, Style, native,
+    Cancel, DEFAULT_MAX_RESULTS_BYTES, EpisodeKey, EpisodeResult, Event, HISTORY_WINDOW, Ledger,
+    Limits, PriceTable, Progress, ResultLine, Style, native,
 };
 use coherent::session::prompts::{PriceSource, PromptSource};
 use pyo3::exceptions::PyValueError;
@@ -107,7 +108,7 @@ impl PyLedger {
         };
         // The methods written in Python are only named here; the workers run them.
         let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();
-        let mut python = Methods::new(py)?;
+        let mut python = Methods::new(py, None)?;
         let replay = replaying(backend, replay_from.as_deref());
         let methods = run_methods(py, &methods, seeds, &objects, &mut python, replay);
         python.close(py)?;
@@ -120,7 +121,7 @@ impl PyLedger {
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
         RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
         let out = out.unwrap_or_else(|| default_out(&settings, seeds));
-        let mut ledger = Ledger::open(&out, &settings.record(seeds))
+        let mut ledger = Ledger::open(&out, DEFAULT_MAX_RESULTS_BYTES, &settings.record(seeds))
             .map_err(|e| errors::session_err(py, e.into()))?;
         let pending = ledger.plan(&tasks, &settings.methods, seeds);
         let mut progress = progress_style(py, progress)?.map(Progress::new);
@@ -243,7 +244,7 @@ impl PyWorker {
     #[pyo3(signature = (
         tasks, methods, *, backend = None, sim_errors = None, replay_from = None,
         history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-        physics = false, out, prompts, prices
+        physics = false, out, prompts, prices, step_timeout = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -260,6 +261,7 @@ impl PyWorker {
         #[pyo3(from_py_with = args::out)] out: PathBuf,
         prompts: &Bound<'_, PyDict>,
         prices: &Bound<'_, PyDict>,
+        #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
     ) -> PyResult<PyWorker> {
         let mut read = Vec::new();
         for (i, text) in tasks.iter().enumerate() {
@@ -273,7 +275,7 @@ impl PyWorker {
             .iter()
             .map(|t| Py::new(py, PyTask::shared(Arc::clone(t))))
             .collect::<PyResult<Vec<_>>>()?;
-        let mut python = Methods::new(py)?;
+        let mut python = Methods::new(py, step_timeout)?;
         let replay = replaying(backend, replay_from.as_deref());
         let methods = run_methods(py, &methods, 1, &objects, &mut python, replay)?;
         // The driver refused a prompt set with a replay; the prompt set and the price

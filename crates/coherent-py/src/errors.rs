@@ -50,7 +50,9 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
         let base = make(
             "CoherentError",
             vec![py.get_type::<PyException>()],
-            "Base class of every error raised by coherent.",
+            "Base class of every error raised by coherent; raised itself when coherent\n\
+             fails whatever the input (its async runtime cannot start: the process may\n\
+             open no more files or start no more threads; an episode's thread panicked).",
         )?;
         let sub = |name: &str, value: bool, doc: &str| {
             let mut bases = vec![base.bind(py).clone()];

@@ -17,6 +17,7 @@ mod method;
 mod prompts;
 mod run;
 mod scene;
+mod stepper;
 mod task;
 mod view;
 
@@ -100,17 +101,20 @@ fn benchmark_tasks(
 }
 
 /// Plans `task` optimally: one line of `coherent plan --json`, as a dict; with
-/// `parallel`, of `coherent plan --parallel --json` (the fewest joint steps too).
+/// `parallel`, of `coherent plan --parallel --json` (the fewest joint steps too); with
+/// `physics`, of `--physics` (the plans carried out in Rapier, the makespan plan too
+/// with `parallel`).
 ///
 /// The default `max_states` is `Limits::DEFAULT_MAX_STATES` (Python shows it as `...` in
 /// the signature; the module has it as `DEFAULT_MAX_STATES`).
 #[pyfunction]
-#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES, parallel = false))]
+#[pyo3(signature = (task, max_states = Limits::DEFAULT_MAX_STATES, parallel = false, physics = false))]
 fn plan<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
     #[pyo3(from_py_with = args::max_states)] max_states: usize,
     parallel: bool,
+    physics: bool,
 ) -> PyResult<Bound<'py, PyAny>> {
     let task = Arc::clone(&task.get().task);
     let cancel = Arc::new(AtomicBool::new(false));
@@ -123,10 +127,7 @@ fn plan<'py>(
         py,
         move || stop.store(true, Ordering::Relaxed),
         move || {
-            let options = check::PlanOptions {
-                physics: false,
-                parallel,
-            };
+            let options = check::PlanOptions { physics, parallel };
             check::plan(&task, &limits, options).to_json(&task)
         },
     )?;
@@ -184,7 +185,7 @@ fn cli_main(
     py: Python<'_>,
     #[pyo3(from_py_with = args::argv)] argv: Vec<OsString>,
 ) -> PyResult<u8> {
-    let methods = Mutex::new(Methods::new(py)?);
+    let methods = Mutex::new(Methods::new(py, None)?);
     let load = |spec: &str| -> Result<External, Error> {
         Python::attach(|py| {
             let found = method::helpers(py)?.call_method1("load", (spec,))?;

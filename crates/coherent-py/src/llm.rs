@@ -10,7 +10,7 @@ use std::time::Duration;
 
 use coherent::session::engine::{
     Answer, ApiKey, Backend, Backoff, Call, Chat, Finish, LlmError, Message, OpenAiClient,
-    OpenAiConfig, OutputMode, Role,
+    OpenAiConfig, OutputMode, Role, redacted,
 };
 use coherent::session::{self, backend};
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
@@ -264,14 +264,15 @@ impl PyLlm {
         Ok(d)
     }
 
+    /// The base URLs as shown anywhere: without user or password, query values redacted.
     fn __repr__(&self, py: Python<'_>) -> String {
         let base_url = match self.config.base_urls.as_slice() {
-            [one] => py_repr(py, one),
+            [one] => py_repr(py, &redacted(one)),
             several => format!(
                 "[{}]",
                 several
                     .iter()
-                    .map(|u| py_repr(py, u))
+                    .map(|u| py_repr(py, &redacted(u)))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),

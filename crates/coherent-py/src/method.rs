@@ -1,13 +1,15 @@
 //! Methods written in Python: a class (or any callable) `M` becomes a method of the
 //! engine (an `External` method of the session's engine): `M(task)` once per episode, then
 //! `act(view)` once per step, given a `View` and answering a `Decision` or a
-//! `(robot, action)` tuple. A plain `act` runs on the episode's thread with the GIL held
-//! for the call only; a coroutine that `act` returns runs on the run's event loop
-//! (`coherent._methods.Loop`), where those of concurrent episodes overlap, while the
-//! episode waits without the GIL.
+//! `(robot, action)` tuple. `M(task)` and a plain `act` run on the episode's method
+//! thread (`crate::stepper`), with the GIL held for the call only, while the episode
+//! waits without it (and may stop waiting: Ctrl-C, the step's time limit); a coroutine
+//! that `act` returns runs on the run's event loop (`coherent._methods.Loop`), where
+//! those of concurrent episodes overlap.
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, PoisonError};
+use std::time::{Duration, Instant};
 
 use std::path::Path;
 
@@ -16,7 +18,7 @@ use coherent::session::backend::RecordedRun;
 use coherent::session::bench::recorded_method;
 use coherent::session::engine::{
     Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
-    Policy, RobotView, StepView, Task,
+    Policy, ReadLimits, RobotView, StepView, Task,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
@@ -26,6 +28,7 @@ use tokio::sync::oneshot;
 
 use crate::convert::{json_at, py_repr, to_py};
 use crate::errors;
+use crate::stepper::{Stepper, Threads};
 use crate::task::PyTask;
 
 /// `coherent._methods`, imported once.
@@ -279,6 +282,8 @@ pub(crate) struct PythonMethod {
     runner: Py<PyAny>,
     /// The last exception the method raised, to chain when `run` raises.
     last_error: Mutex<Option<PyErr>>,
+    /// The threads its episodes' calls run on.
+    threads: Threads,
 }
 
 impl PythonMethod {
@@ -290,16 +295,22 @@ impl PythonMethod {
             .take()
     }
 
-    /// `error` as the text of the transcript and results line, kept for `run` to chain.
+    /// `error` as the text of the transcript and results line, kept for `run` to chain
+    /// (unless it is the interruption of a call the episode stopped waiting for).
     fn failed(&self, py: Python<'_>, error: PyErr) -> String {
         let text = helpers(py)
             .and_then(|h| h.call_method1("describe", (error.value(py), error.traceback(py))))
             .and_then(|t| t.extract::<String>())
             .unwrap_or_else(|_| error.to_string());
-        *self
-            .last_error
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner) = Some(error);
+        let stopped = helpers(py)
+            .and_then(|h| h.getattr("StepStopped"))
+            .is_ok_and(|t| error.get_type(py).is(&t));
+        if !stopped {
+            *self
+                .last_error
+                .lock()
+                .unwrap_or_else(PoisonError::into_inner) = Some(error);
+        }
         text
     }
 
@@ -315,13 +326,16 @@ impl PythonMethod {
 pub(crate) struct Methods {
     runner: Py<PyAny>,
     pub methods: Vec<Arc<PythonMethod>>,
+    /// The longest one step of each may take (`step_timeout=`).
+    step_timeout: Option<Duration>,
 }
 
 impl Methods {
-    pub(crate) fn new(py: Python<'_>) -> PyResult<Methods> {
+    pub(crate) fn new(py: Python<'_>, step_timeout: Option<Duration>) -> PyResult<Methods> {
         Ok(Methods {
             runner: helpers(py)?.getattr("Loop")?.call0()?.unbind(),
             methods: Vec::new(),
+            step_timeout,
         })
     }
 
@@ -354,48 +368,48 @@ impl Methods {
             tasks: tasks.iter().map(|t| t.clone_ref(py)).collect(),
             runner: self.runner.clone_ref(py),
             last_error: Mutex::new(None),
+            threads: Threads::default(),
         });
         let maker = Arc::clone(&shared);
+        // The object is made on the episode's method thread, at its first step: a
+        // constructor that never returns is stopped as a step would be.
         let make: Arc<MakePolicy> = Arc::new(move |task: &Arc<Task>| {
-            Python::attach(|py| {
-                let made = maker
-                    .task_object(py, task)
-                    .and_then(|t| maker.factory.call1(py, (t,)));
-                match made {
-                    Ok(object) if object.bind(py).hasattr("act").unwrap_or(false) => {
-                        Ok(Box::new(PythonPolicy {
-                            object,
-                            method: Arc::clone(&maker),
-                        }) as Box<dyn Policy>)
-                    }
-                    Ok(object) => Err(MethodFailure(format!(
-                        "TypeError: {} has no act(view) method",
-                        object
-                            .bind(py)
-                            .repr()
-                            .map_or("the method".into(), |r| r.to_string())
-                    ))),
-                    Err(e) => Err(MethodFailure(maker.failed(py, e))),
-                }
-            })
+            Ok(Box::new(PythonPolicy {
+                method: Arc::clone(&maker),
+                task: Arc::clone(task),
+                object: Arc::new(Mutex::new(None)),
+                stepper: Stepper::start(&maker.threads).map_err(MethodFailure)?,
+            }) as Box<dyn Policy>)
         });
         let external = External::new(&name, make)
             .map_err(|e| errors::session_err(py, Error::from(e)))?
+            .with_step_timeout(self.step_timeout)
             .with_settings(settings);
         self.methods.push(shared);
         Ok(external)
     }
 
-    /// Stops the run's event loop (coroutines still running are cancelled).
+    /// Stops the run's event loop (coroutines still running are cancelled), and gives
+    /// the methods' threads still ending a stopped call two seconds to end.
     pub(crate) fn close(&self, py: Python<'_>) -> PyResult<()> {
+        let deadline = Instant::now() + Duration::from_secs(2);
+        py.detach(|| {
+            for m in &self.methods {
+                m.threads.settle(deadline);
+            }
+        });
         self.runner.call_method0(py, "close").map(drop)
     }
 }
 
-/// The policy of one episode: the object `M(task)` made.
+/// The policy of one episode: the object `M(task)`, made at the first step, and the
+/// thread its calls run on.
 struct PythonPolicy {
-    object: Py<PyAny>,
     method: Arc<PythonMethod>,
+    task: Arc<Task>,
+    /// `M(task)`, once made (only the stepper's thread touches it).
+    object: Arc<Mutex<Option<Py<PyAny>>>>,
+    stepper: Stepper,
 }
 
 /// A step's answer: at once, or from the event loop.
@@ -404,61 +418,98 @@ enum Started {
     Later(oneshot::Receiver<Result<Choice, String>>, Py<PyAny>),
 }
 
-impl PythonPolicy {
-    /// Calls `act(view)` with the step's recorder current; a coroutine goes to the loop.
-    fn start(
-        &self,
-        py: Python<'_>,
-        view: Arc<StepView>,
-        recorder: &Py<Recorder>,
-    ) -> PyResult<Started> {
-        let task = self.method.task_object(py, &view.task)?;
-        let view = Py::new(py, PyView { view, task })?;
-        let step = helpers(py)?.getattr("_step")?;
-        let token = step.call_method1("set", (recorder,))?;
-        let answer = self.object.call_method1(py, "act", (view,));
-        step.call_method1("reset", (token,))?;
-        let answer = match answer {
-            Ok(a) => a.into_bound(py),
-            Err(e) => return Ok(Started::Now(Err(self.method.failed(py, e)))),
-        };
-        if !answer.hasattr("__await__")? {
-            return Ok(Started::Now(choice_of(&answer)));
-        }
-        let (tx, rx) = oneshot::channel();
-        let done = Done {
-            tx: Mutex::new(Some(tx)),
-            method: Arc::clone(&self.method),
-        };
-        let runner = self.method.runner.bind(py);
-        let future = runner.call_method1("submit", (answer, recorder, done))?;
-        Ok(Started::Later(rx, future.unbind()))
+/// The episode's object `M(task)`, made on its first call (in `slot` afterwards); an
+/// error is the step's, in the words of the transcript.
+fn made(
+    py: Python<'_>,
+    method: &PythonMethod,
+    slot: &Mutex<Option<Py<PyAny>>>,
+    task: &Arc<Task>,
+) -> Result<Py<PyAny>, String> {
+    let mut slot = slot.lock().unwrap_or_else(PoisonError::into_inner);
+    if let Some(object) = slot.as_ref() {
+        return Ok(object.clone_ref(py));
     }
+    let object = method
+        .task_object(py, task)
+        .and_then(|t| method.factory.call1(py, (t,)))
+        .map_err(|e| method.failed(py, e))?;
+    if !object.bind(py).hasattr("act").unwrap_or(false) {
+        return Err(format!(
+            "TypeError: {} has no act(view) method",
+            object
+                .bind(py)
+                .repr()
+                .map_or("the method".into(), |r| r.to_string())
+        ));
+    }
+    *slot = Some(object.clone_ref(py));
+    Ok(object)
+}
+
+/// Calls `object.act(view)` with the step's recorder current; a coroutine goes to the
+/// loop.
+fn start(
+    py: Python<'_>,
+    object: &Py<PyAny>,
+    method: &Arc<PythonMethod>,
+    view: Arc<StepView>,
+    recorder: &Py<Recorder>,
+) -> PyResult<Started> {
+    let task = method.task_object(py, &view.task)?;
+    let view = Py::new(py, PyView { view, task })?;
+    let step = helpers(py)?.getattr("_step")?;
+    let token = step.call_method1("set", (recorder,))?;
+    let answer = object.call_method1(py, "act", (view,));
+    step.call_method1("reset", (token,))?;
+    let answer = match answer {
+        Ok(a) => a.into_bound(py),
+        Err(e) => return Ok(Started::Now(Err(method.failed(py, e)))),
+    };
+    if !answer.hasattr("__await__")? {
+        return Ok(Started::Now(choice_of(&answer)));
+    }
+    let (tx, rx) = oneshot::channel();
+    let done = Done {
+        tx: Mutex::new(Some(tx)),
+        method: Arc::clone(method),
+    };
+    let runner = method.runner.bind(py);
+    let future = runner.call_method1("submit", (answer, recorder, done))?;
+    Ok(Started::Later(rx, future.unbind()))
 }
 
 impl Policy for PythonPolicy {
     fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         Box::pin(async move {
             let calls = Arc::new(Mutex::new(Vec::new()));
-            let started = Python::attach(|py| {
-                let recorder = Py::new(
-                    py,
-                    Recorder {
-                        calls: Arc::clone(&calls),
-                    },
-                )?;
-                self.start(py, view, &recorder)
-            });
+            let (method, slot, task) = (
+                Arc::clone(&self.method),
+                Arc::clone(&self.object),
+                Arc::clone(&self.task),
+            );
+            let recorded = Arc::clone(&calls);
+            let started = self
+                .stepper
+                .run(move |py| -> Result<Started, String> {
+                    let object = made(py, &method, &slot, &task)?;
+                    let recorder = Py::new(py, Recorder { calls: recorded });
+                    recorder
+                        .and_then(|r| start(py, &object, &method, view, &r))
+                        .map_err(|e| method.failed(py, e))
+                })
+                .await;
             let choice = match started {
-                Ok(Started::Now(choice)) => choice,
-                Ok(Started::Later(rx, future)) => {
+                Some(Ok(Started::Now(choice))) => choice,
+                Some(Ok(Started::Later(rx, future))) => {
                     // Dropped (the episode cancelled) before it ends: cancel the coroutine.
                     let mut pending = CancelOnDrop(Some(future));
                     let answer = rx.await;
                     pending.0 = None;
                     answer.unwrap_or_else(|_| Err("the coroutine of act was cancelled".into()))
                 }
-                Err(e) => Err(Python::attach(|py| self.method.failed(py, e))),
+                Some(Err(why)) => Err(why),
+                None => Err("the method's thread has ended".into()),
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
             Act {
@@ -565,7 +616,7 @@ impl MethodArg {
                     .call_method1("method_name", (found,))?
                     .extract()?,
                 Err(e) => {
-                    let names = RecordedRun::read(results)
+                    let names = RecordedRun::read(results, ReadLimits::default())
                         .map(|r| r.methods().join(", "))
                         .map_err(|e| errors::session_err(py, e))?;
                     return Err(errors::invalid(
@@ -582,6 +633,7 @@ impl MethodArg {
                 .call_method1("method_name", (object,))?
                 .extract()?,
         };
-        recorded_method(results, &name).map_err(|e| errors::session_err(py, e))
+        recorded_method(results, &name, ReadLimits::default())
+            .map_err(|e| errors::session_err(py, e))
     }
 }

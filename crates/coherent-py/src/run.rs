@@ -4,9 +4,12 @@
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent::session::backend::{BackendRequest, EndpointSource};
-use coherent::session::engine::{Cancel, ErrorRates, Limits, PriceTable, Summary, Transcript};
+use coherent::session::engine::{
+    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Limits, PriceTable, Summary, Transcript,
+};
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
 use coherent::session::tasks::TaskSource;
 use coherent::session::view;
@@ -37,7 +40,8 @@ impl PyEpisode {
     /// Reads the transcript at `path`; it must hold a finished episode. Its cost is at
     /// the built-in prices, by the same rule as the episode's when it ran.
     fn read(py: Python<'_>, path: &Path) -> PyResult<PyEpisode> {
-        let recorded = episode::recorded(path).map_err(|e| errors::session_err(py, e))?;
+        let recorded = episode::recorded(path, DEFAULT_MAX_TRANSCRIPT_BYTES)
+            .map_err(|e| errors::session_err(py, e))?;
         let summary = recorded
             .finished()
             .map_err(|e| errors::session_err(py, e))?
@@ -299,7 +303,7 @@ fn finished(
     history = coherent::session::engine::HISTORY_WINDOW, max_steps = None, physics = false,
     seed = None, out = PathBuf::from("runs"), max_states = Limits::DEFAULT_MAX_STATES,
     prompts = None, prices = None, robots = "local", namespace = None, robot_timeout = 10.0,
-    server_wait = 10.0
+    server_wait = 10.0, step_timeout = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
@@ -320,11 +324,12 @@ pub(crate) fn run(
     namespace: Option<&str>,
     robot_timeout: f64,
     server_wait: f64,
+    #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
 ) -> PyResult<Py<PyEpisode>> {
     let prompts = prompt_source(prompts)?;
     let prices = price_source(prices)?;
     let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
-    let mut methods = Methods::new(py)?;
+    let mut methods = Methods::new(py, step_timeout)?;
     let method = method.spec(py, &mut methods, &[task.clone().unbind()])?;
     let request = RunRequest {
         backend: BackendRequest {
@@ -367,6 +372,7 @@ pub(crate) fn replay(
         task: None,
         prices: price_source(prices)?,
         out,
+        max_bytes: DEFAULT_MAX_TRANSCRIPT_BYTES,
     };
     let ran = episode_off_the_gil(py, move |_| request.prepare())?;
     let task = Py::new(py, PyTask::shared(Arc::clone(&ran.task)))?;

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent::session::engine::{Task, Transcript, read_results};
+use coherent::session::engine::{ReadLimits, Task, Transcript, read_results_within};
 use coherent::session::view::{self, Holds, Shown, page};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -71,13 +71,16 @@ pub(crate) fn view_page(
 ) -> PyResult<String> {
     let first = source(source_, "source")?;
     let second = other.map(|o| source(o, "other")).transpose()?;
+    // The Python API reads with the command line's default limits.
+    let limits = ReadLimits::default();
     py.detach(move || -> Result<String, String> {
         let episode = |s: Source| -> Result<Given, String> {
             match s {
                 Source::Episode(g) => Ok(*g),
-                Source::Path(path) => match view::holds(&path)? {
+                Source::Path(path) => match view::holds(&path, limits)? {
                     Holds::Transcript => {
-                        let (task, transcript) = view::read_episode(&path)?;
+                        let (task, transcript) =
+                            view::read_episode(&path, limits.transcript_bytes)?;
                         Ok(Given {
                             task,
                             transcript,
@@ -92,8 +95,10 @@ pub(crate) fn view_page(
             }
         };
         match (first, second) {
-            (Source::Path(path), None) if view::holds(&path)? == Holds::Results => {
-                let lines = read_results(&path).map_err(|e| e.to_string())?.lines;
+            (Source::Path(path), None) if view::holds(&path, limits)? == Holds::Results => {
+                let lines = read_results_within(&path, limits.results_bytes)
+                    .map_err(|e| e.to_string())?
+                    .lines;
                 view::results_html(&path, &lines, &[], None)
             }
             (a, None) => view::episode_html(&episode(a)?.shown()),

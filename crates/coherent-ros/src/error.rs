@@ -15,6 +15,13 @@ pub enum Error {
         namespace: String,
         waited: Duration,
     },
+    /// A robot has more than one action server: each would carry out every goal.
+    Several {
+        robot: String,
+        namespace: String,
+        /// The servers' DDS participants, as `participant 0f1e...`.
+        servers: Vec<String>,
+    },
     /// DDS could not be set up.
     Dds(String),
     /// The robots' physical world cannot be built for the task.
@@ -48,6 +55,18 @@ impl std::fmt::Display for Error {
         match self {
             Error::Invalid(why) => f.write_str(why),
             Error::Missing { .. } => f.write_str(&self.with_wait_named("--server-wait")),
+            Error::Several {
+                robot,
+                namespace,
+                servers,
+            } => write!(
+                f,
+                "{} ROS 2 action servers for {robot} under {namespace} ({}): each would carry \
+                 out every goal, and the robot's world and the rules' would part; stop all \
+                 but one",
+                servers.len(),
+                servers.join(", ")
+            ),
             Error::Dds(why) => write!(f, "ROS 2: {why}"),
             Error::Physics(e) => write!(f, "physics: {e}"),
         }

@@ -29,7 +29,7 @@ impl Faults {
         if !(0.0..=1.0).contains(&self.fail_rate) {
             return Err(Error::Invalid(format!(
                 "the failure rate must be between 0 and 1, not {}",
-                self.fail_rate
+                coherent_core::text::number(self.fail_rate)
             )));
         }
         let unknown: Vec<&str> = self

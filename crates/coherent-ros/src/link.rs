@@ -1,33 +1,58 @@
-//! The bridge's side of DDS: one node with one action client per robot, spun on the
-//! runtime the caller hands in (the session's, the one place a runtime is built), and
-//! the exchange of one step's goals, one per robot acting, all in flight at once (send
-//! each, follow its feedback, take its result; cancel it on Ctrl-C or when its robot
-//! falls silent) as a blocking call that works inside an async runtime as well as
-//! outside one.
+//! The bridge's side of DDS: for each robot, the ends of its `Execute` action (the
+//! requests and replies of its goal, result and cancel services, and its feedback
+//! topic), made on the DDS participant itself rather than through an action client, so
+//! that every reply and feedback sample is seen with the participant that wrote it and
+//! each reader holds a few samples at most; and the exchange of one step's goals, one
+//! per robot acting, all in flight at once (send each, follow its feedback, take its
+//! result; cancel it on Ctrl-C or when its robot falls silent) as a blocking call on the
+//! runtime the caller hands in (the session's, the one place a runtime is built), which
+//! works inside an async runtime as well as outside one.
+//!
+//! A robot is one server. Two servers for one robot at the start is an error that names
+//! them; during an episode, only the server that accepted a goal is heard about it (its
+//! result, its feedback as a sign of life), and a second server accepting the same goal
+//! stops the bridge, since the robots' world and the rules' would part.
 
+use std::collections::{HashMap, HashSet};
 use std::future::Future;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use futures::StreamExt;
-use ros2_client::action::{ActionClient, GoalId, GoalStatusEnum};
+use ros2_client::action::{
+    CancelGoalResponse, FeedbackMessage, GetResultRequest, GetResultResponse, GoalId, GoalInfo,
+    GoalStatusEnum, SendGoalRequest, SendGoalResponse,
+};
 use ros2_client::builtin_interfaces::Time;
-use ros2_client::{Node, NodeName, NodeOptions, ServiceMapping};
+use ros2_client::dds::rustdds::no_key::{DataWriter, SimpleDataReader};
+use ros2_client::dds::rustdds::policy::{Durability, History, Reliability, ResourceLimits};
+use ros2_client::dds::rustdds::{
+    CDRDeserializerAdapter, CDRSerializerAdapter, DomainParticipant,
+    DomainParticipantStatusEvent as Event, GUID, Publisher, QosPolicies, QosPolicyBuilder,
+    RTPSEntity, SampleIdentity, StatusEvented, Subscriber, Timestamp, TopicKind,
+    WriteOptionsBuilder,
+};
+use ros2_client::unique_identifier_msgs::UUID;
 use tokio::runtime::Handle;
-use tokio::task::JoinHandle;
 use tokio::time::{Instant, sleep, sleep_until, timeout};
 
 use crate::error::Error;
-use crate::wire::{self, ExecuteResult, Feedback, Goal};
-
-type Client = ActionClient<Goal, ExecuteResult, Feedback>;
+use crate::wire::{self, CancelRequest, ExecuteResult, Feedback, Goal};
 
 /// How often the wait for the robots' servers looks again.
 const RECHECK: Duration = Duration::from_millis(100);
+/// How long discovery is given, once every robot has a server, to find a second one.
+const SETTLE: Duration = Duration::from_millis(500);
 /// How often a goal in flight looks at the cancel flag.
 const CANCEL_POLL: Duration = Duration::from_millis(20);
 /// How long a cancelled goal waits for the robot's acknowledgement, then its result.
 const CANCEL_WAIT: Duration = Duration::from_secs(2);
+/// The samples each reader keeps: the replies to one goal and a little feedback. DDS
+/// would keep 64 of every topic by default, whatever their size.
+const READER_DEPTH: i32 = 4;
+
+type Writer<T> = DataWriter<T, CDRSerializerAdapter<T>>;
+type Reader<T> = SimpleDataReader<T, CDRDeserializerAdapter<T>>;
 
 /// How one goal ended, seen from the bridge.
 #[derive(Debug)]
@@ -39,12 +64,13 @@ pub(crate) enum Exchange {
     },
     /// The server refused the goal.
     Rejected,
-    /// Nothing came for the silence allowed: no answer to the goal, no feedback, no
-    /// result; `last` is what was heard last.
+    /// Nothing came from the server that accepted the goal for the silence allowed: no
+    /// answer to the goal, no feedback, no result; `last` is what was heard last.
     Silent { last: String },
     /// Cancelled (Ctrl-C) before a result came; whether the robot acknowledged it.
     Cancelled { acknowledged: bool },
-    /// DDS could not send or receive.
+    /// DDS could not send or receive, or the robot's servers did what one server never
+    /// does (two accepted the goal, a result too large to be one).
     Failed(String),
 }
 
@@ -56,26 +82,219 @@ impl Exchange {
     }
 }
 
-/// The bridge's DDS participant: a node and the robots' action clients.
+/// One robot's ends of its action.
+struct Ends {
+    goal: Writer<SendGoalRequest<Goal>>,
+    goal_replies: Reader<SendGoalResponse>,
+    result: Writer<GetResultRequest>,
+    result_replies: Reader<GetResultResponse<ExecuteResult>>,
+    cancel: Writer<CancelRequest>,
+    cancel_replies: Reader<CancelGoalResponse>,
+    feedback: Reader<FeedbackMessage<Feedback>>,
+}
+
+/// Which remote endpoints each of the bridge's own has been matched with, from the
+/// participant's events: what tells that a robot's server is there, and how many.
+#[derive(Default)]
+struct Matches(HashMap<GUID, HashSet<GUID>>);
+
+impl Matches {
+    /// Takes in the events that came since the last look.
+    fn update(&mut self, participant: &DomainParticipant) {
+        let listener = participant.status_listener();
+        while let Some(event) = listener.try_recv_status() {
+            match event {
+                Event::RemoteReaderMatched {
+                    local_writer: local,
+                    remote_reader: remote,
+                }
+                | Event::RemoteWriterMatched {
+                    local_reader: local,
+                    remote_writer: remote,
+                } => {
+                    self.0.entry(local).or_default().insert(remote);
+                }
+                Event::ReaderLost { guid, .. } | Event::WriterLost { guid, .. } => {
+                    self.0.values_mut().for_each(|remotes| {
+                        remotes.remove(&guid);
+                    });
+                }
+                _ => {}
+            }
+        }
+    }
+
+    fn any(&self, local: GUID) -> bool {
+        self.0
+            .get(&local)
+            .is_some_and(|remotes| !remotes.is_empty())
+    }
+}
+
+/// The bridge's DDS ends, robot by robot, and the runtime to wait on them.
 pub(crate) struct Link {
-    clients: Vec<Client>,
-    node: Node,
+    robots: Vec<Ends>,
+    /// The participant, which lives as long as a handle to it does.
+    _participant: DomainParticipant,
     runtime: Handle,
-    spinner: JoinHandle<()>,
 }
 
 impl std::fmt::Debug for Link {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Link")
-            .field("node", &self.node.fully_qualified_name())
-            .field("clients", &self.clients.len())
-            .finish()
+            .field("robots", &self.robots.len())
+            .finish_non_exhaustive()
     }
 }
 
+/// The QoS of the requests the bridge writes, as ROS 2 gives an action's services.
+fn request_qos() -> QosPolicies {
+    QosPolicyBuilder::new()
+        .reliability(Reliability::Reliable {
+            max_blocking_time: ros2_client::dds::rustdds::Duration::from_millis(100),
+        })
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 10 })
+        .build()
+}
+
+/// The QoS of the replies and feedback the bridge reads: reliable and volatile, as the
+/// servers offer them, and a few samples kept at most, whatever a participant sends.
+fn reader_qos() -> QosPolicies {
+    QosPolicyBuilder::new()
+        .reliability(Reliability::Reliable {
+            max_blocking_time: ros2_client::dds::rustdds::Duration::from_millis(100),
+        })
+        .durability(Durability::Volatile)
+        .history(History::KeepLast {
+            depth: READER_DEPTH,
+        })
+        .resource_limits(ResourceLimits {
+            max_samples: READER_DEPTH,
+            max_instances: 1,
+            max_samples_per_instance: READER_DEPTH,
+        })
+        .build()
+}
+
+/// A DDS failure to make `what`, as the bridge's error.
+fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> Error + '_ {
+    move |e| Error::Dds(format!("{what}: {e:?}"))
+}
+
+impl Ends {
+    /// The ends of `robot`'s action under `namespace`.
+    fn make(
+        participant: &DomainParticipant,
+        publisher: &Publisher,
+        subscriber: &Subscriber,
+        namespace: &str,
+        robot: &str,
+    ) -> Result<Ends, Error> {
+        let names = wire::dds_names(namespace, robot).map_err(Error::Dds)?;
+        // A topic's QoS sets how many samples the participant's cache keeps of it (64
+        // without resource limits), whatever its readers ask for.
+        let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
+            participant
+                .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
+                .map_err(dds(name))
+        };
+        let writer = |name: &str, type_name: &str| -> Result<_, Error> {
+            Ok((topic(name, type_name, &request_qos())?, Some(request_qos())))
+        };
+        let (goal_topic, q) = writer(&names.goal_request, &names.goal_request_type)?;
+        let goal = publisher
+            .create_datawriter_no_key(&goal_topic, q)
+            .map_err(dds(&names.goal_request))?;
+        let (result_topic, q) = writer(&names.result_request, &names.result_request_type)?;
+        let result = publisher
+            .create_datawriter_no_key(&result_topic, q)
+            .map_err(dds(&names.result_request))?;
+        let (cancel_topic, q) = writer(&names.cancel_request, &names.cancel_request_type)?;
+        let cancel = publisher
+            .create_datawriter_no_key(&cancel_topic, q)
+            .map_err(dds(&names.cancel_request))?;
+        let reader = |name: &str, type_name: &str| -> Result<_, Error> {
+            Ok((topic(name, type_name, &reader_qos())?, Some(reader_qos())))
+        };
+        let (t, q) = reader(&names.goal_reply, &names.goal_reply_type)?;
+        let goal_replies = subscriber
+            .create_simple_datareader_no_key(&t, q)
+            .map_err(dds(&names.goal_reply))?;
+        let (t, q) = reader(&names.result_reply, &names.result_reply_type)?;
+        let result_replies = subscriber
+            .create_simple_datareader_no_key(&t, q)
+            .map_err(dds(&names.result_reply))?;
+        let (t, q) = reader(&names.cancel_reply, &names.cancel_reply_type)?;
+        let cancel_replies = subscriber
+            .create_simple_datareader_no_key(&t, q)
+            .map_err(dds(&names.cancel_reply))?;
+        let (t, q) = reader(&names.feedback, &names.feedback_type)?;
+        let feedback = subscriber
+            .create_simple_datareader_no_key(&t, q)
+            .map_err(dds(&names.feedback))?;
+        Ok(Ends {
+            goal,
+            goal_replies,
+            result,
+            result_replies,
+            cancel,
+            cancel_replies,
+            feedback,
+        })
+    }
+
+    /// Whether a server reads each of the robot's requests and writes each of its
+    /// replies: the bridge's ends are matched with one.
+    fn served(&self, matches: &Matches) -> bool {
+        [self.goal.guid(), self.result.guid(), self.cancel.guid()]
+            .into_iter()
+            .chain([
+                self.goal_replies.guid(),
+                self.result_replies.guid(),
+                self.cancel_replies.guid(),
+            ])
+            .all(|local| matches.any(local))
+    }
+
+    /// The participants (as shown) that write the robot's goal replies: its servers.
+    fn servers(&self, matches: &Matches) -> Vec<String> {
+        let mut servers: Vec<String> = matches
+            .0
+            .get(&self.goal_replies.guid())
+            .into_iter()
+            .flatten()
+            .map(|&writer| participant_of(writer))
+            .collect();
+        servers.sort();
+        servers.dedup();
+        servers
+    }
+}
+
+/// A DDS participant as messages name it: `participant` and its GUID prefix in hex.
+fn participant_of(guid: GUID) -> String {
+    let bytes = guid.to_bytes();
+    let hex: String = bytes[..12].iter().map(|b| format!("{b:02x}")).collect();
+    format!("participant {hex}")
+}
+
+/// Whether `guid` belongs to the participant `prefix` ([`participant_of`]).
+fn same_participant(guid: GUID, prefix: &[u8; 12]) -> bool {
+    guid.to_bytes()[..12] == prefix[..]
+}
+
+fn prefix_of(guid: GUID) -> [u8; 12] {
+    let mut prefix = [0; 12];
+    prefix.copy_from_slice(&guid.to_bytes()[..12]);
+    prefix
+}
+
 impl Link {
-    /// Joins DDS, makes an action client for each of `robots` under `namespace`, spins
-    /// the node on `runtime`, and waits up to `wait` for every robot's server to appear.
+    /// Joins DDS, makes the ends of each of `robots`' actions under `namespace`, waits up
+    /// to `wait` for every robot's server to appear, then a moment more for a second
+    /// one: a robot with two servers is an error that names them. Goals are followed on
+    /// `runtime`.
     pub(crate) fn connect(
         namespace: &str,
         robots: &[String],
@@ -83,58 +302,58 @@ impl Link {
         runtime: Handle,
     ) -> Result<Link, Error> {
         let context = wire::context().map_err(Error::Dds)?;
-        let name = NodeName::new(namespace, "coherent_bridge")
-            .map_err(|e| Error::Dds(format!("node name: {e:?}")))?;
-        let mut node = context
-            .new_node(name, NodeOptions::new().enable_rosout(false))
-            .map_err(|e| Error::Dds(format!("cannot make a node: {e:?}")))?;
-        let spinner = node
-            .spinner()
-            .map_err(|e| Error::Dds(format!("cannot spin the node: {e:?}")))?;
-        let spinner = runtime.spawn(async move {
-            let _ = spinner.spin().await;
-        });
-        let mut clients = Vec::with_capacity(robots.len());
-        for robot in robots {
-            let action = wire::ros_action_name(namespace, robot).map_err(Error::Dds)?;
-            let client = node
-                .create_action_client(
-                    ServiceMapping::Enhanced,
-                    &action,
-                    &wire::action_type(),
-                    wire::client_qos(),
-                )
-                .map_err(|e| Error::Dds(format!("action client {robot}: {e:?}")))?;
-            clients.push(client);
-        }
+        let participant = context.domain_participant();
+        let qos = request_qos();
+        let publisher = participant
+            .create_publisher(&qos)
+            .map_err(dds("a publisher"))?;
+        let subscriber = participant
+            .create_subscriber(&qos)
+            .map_err(dds("a subscriber"))?;
+        let ends = robots
+            .iter()
+            .map(|r| Ends::make(&participant, &publisher, &subscriber, namespace, r))
+            .collect::<Result<Vec<_>, _>>()?;
         let link = Link {
-            clients,
-            node,
+            robots: ends,
+            _participant: participant.clone(),
             runtime,
-            spinner,
         };
-        let found = link.block(async {
-            let each = link
-                .clients
-                .iter()
-                .map(|c| timeout(wait, served(c, &link.node)));
-            futures::future::join_all(each).await
-        });
+        let mut matches = Matches::default();
+        let start = std::time::Instant::now();
+        loop {
+            matches.update(&participant);
+            if link.robots.iter().all(|e| e.served(&matches)) || start.elapsed() >= wait {
+                break;
+            }
+            std::thread::sleep(RECHECK);
+        }
         let missing: Vec<String> = robots
             .iter()
-            .zip(found)
-            .filter(|(_, found)| found.is_err())
+            .zip(&link.robots)
+            .filter(|(_, e)| !e.served(&matches))
             .map(|(r, _)| r.clone())
             .collect();
-        if missing.is_empty() {
-            Ok(link)
-        } else {
-            Err(Error::Missing {
+        if !missing.is_empty() {
+            return Err(Error::Missing {
                 robots: missing,
                 namespace: namespace.to_owned(),
                 waited: wait,
-            })
+            });
         }
+        std::thread::sleep(SETTLE);
+        matches.update(&participant);
+        for (robot, e) in robots.iter().zip(&link.robots) {
+            let servers = e.servers(&matches);
+            if servers.len() > 1 {
+                return Err(Error::Several {
+                    robot: robot.clone(),
+                    namespace: namespace.to_owned(),
+                    servers,
+                });
+            }
+        }
+        Ok(link)
     }
 
     /// Sends each goal to its robot (by number) at once and waits for every one's end:
@@ -149,7 +368,7 @@ impl Link {
     ) -> Vec<Exchange> {
         let each = goals
             .into_iter()
-            .map(|(robot, goal)| follow_goal(&self.clients[robot], goal, silence, cancel));
+            .map(|(robot, goal)| follow_goal(&self.robots[robot], goal, silence, cancel));
         self.block(futures::future::join_all(each))
     }
 
@@ -165,31 +384,6 @@ impl Link {
     }
 }
 
-impl Drop for Link {
-    /// Stops the spinner without waiting (allowed inside a runtime).
-    fn drop(&mut self) {
-        self.node.stop_spinner();
-        self.spinner.abort();
-    }
-}
-
-/// Resolves once the robot's goal, result and cancel services have a server. A wait of
-/// ros2-client sees the matches made before it starts and then only the graph events
-/// that reach it (its queue drops some in a burst of discovery), so it is started anew
-/// every [`RECHECK`] until all three are there.
-async fn served(client: &Client, node: &Node) {
-    loop {
-        let all = async {
-            client.goal_client().wait_for_service(node).await;
-            client.result_client().wait_for_service(node).await;
-            client.cancel_client().wait_for_service(node).await;
-        };
-        if timeout(RECHECK, all).await.is_ok() {
-            return;
-        }
-    }
-}
-
 /// Resolves once `flag` is raised; never without one.
 async fn raised(flag: Option<&AtomicBool>) {
     match flag {
@@ -202,10 +396,25 @@ async fn raised(flag: Option<&AtomicBool>) {
     }
 }
 
-/// Sends `goal` to `client`'s robot and follows it to its end: its feedback, its result,
-/// a refusal, `silence` without a word, or `cancel` raised (the goal is then cancelled).
+/// Writes `request` with a source timestamp, as ROS 2's clients do; its identity is what
+/// the server's reply names.
+fn send<T>(writer: &Writer<T>, request: T) -> Result<SampleIdentity, String>
+where
+    T: serde::Serialize + std::fmt::Debug,
+{
+    let options = WriteOptionsBuilder::new()
+        .source_timestamp(Timestamp::now())
+        .build();
+    writer
+        .write_with_options(request, options)
+        .map_err(|e| format!("cannot send a request: {e:?}"))
+}
+
+/// Sends `goal` to the robot of `ends` and follows it to its end: the result of the
+/// server that took it, a refusal, `silence` without a word from that server, or
+/// `cancel` raised (the goal is then cancelled).
 async fn follow_goal(
-    client: &Client,
+    ends: &Ends,
     goal: Goal,
     silence: Duration,
     cancel: Option<&AtomicBool>,
@@ -217,70 +426,164 @@ async fn follow_goal(
     }
     let cancelled = raised(cancel);
     tokio::pin!(cancelled);
+    let goal_id = UUID::new_random();
     // Sent at once, so that the goal's id is known should it have to be cancelled.
-    let (request, goal_id) = match client.send_goal(goal) {
-        Ok(sent) => sent,
-        Err(e) => return Exchange::Failed(format!("cannot send the goal: {e}")),
+    let request = match send(&ends.goal, SendGoalRequest { goal_id, goal }) {
+        Ok(id) => id,
+        Err(why) => return Exchange::Failed(why),
     };
-    let response = tokio::select! {
-        answer = client.goal_client().async_receive_response(request) => match answer {
-            Ok(response) => response,
-            Err(e) => return Exchange::Failed(format!("cannot read the goal's answer: {e}")),
-        },
-        () = sleep(silence) => {
-            let _ = client.cancel_goal(goal_id);
-            return Exchange::Silent { last: "nothing: the goal was never answered".into() };
-        }
-        () = &mut cancelled => {
-            return cancel_goal(client, goal_id, client.async_request_result(goal_id)).await;
+    let goal_replies = ends.goal_replies.as_async_stream();
+    tokio::pin!(goal_replies);
+    // The first answer to this goal names its server; no other is heard about it.
+    let (server, accepted) = loop {
+        tokio::select! {
+            reply = goal_replies.next() => match reply {
+                Some(Ok(r)) if r.related_sample_identity() == Some(request) => {
+                    break (prefix_of(r.writer_guid()), r.sample.accepted);
+                }
+                Some(Ok(_)) => {}
+                Some(Err(e)) => return Exchange::Failed(format!("cannot read the goal's answer: {e:?}")),
+                None => return Exchange::Failed("the goal's answers ended".into()),
+            },
+            () = sleep(silence) => {
+                let _ = send(&ends.cancel, cancel_request(goal_id));
+                return Exchange::Silent { last: "nothing: the goal was never answered".into() };
+            }
+            () = &mut cancelled => return cancel_goal(ends, goal_id, None).await,
         }
     };
-    if !response.accepted {
+    if !accepted {
         return Exchange::Rejected;
     }
-    let result = client.async_request_result(goal_id);
-    tokio::pin!(result);
-    let feedback = client.feedback_stream(goal_id);
+    let asked = match send(&ends.result, GetResultRequest { goal_id }) {
+        Ok(id) => id,
+        Err(why) => return Exchange::Failed(why),
+    };
+    let results = ends.result_replies.as_async_stream();
+    tokio::pin!(results);
+    let feedback = ends.feedback.as_async_stream();
     tokio::pin!(feedback);
     let mut last = "the goal's acceptance".to_owned();
     let mut deadline = Instant::now() + silence;
     loop {
         tokio::select! {
-            r = &mut result => {
-                return match r {
-                    Ok((status, result)) => Exchange::Result { status, result },
-                    Err(e) => Exchange::Failed(format!("cannot read the result: {e}")),
-                };
-            }
-            Some(f) = feedback.next() => {
-                if let Ok(f) = f {
-                    last = format!("feedback {:?} at {:.0}%", f.stage, f.progress * 100.0);
+            reply = results.next() => match reply {
+                Some(Ok(r)) if r.related_sample_identity() == Some(asked)
+                    && same_participant(r.writer_guid(), &server) =>
+                {
+                    let GetResultResponse { status, result } = r.sample;
+                    return match wire::checked(result) {
+                        Ok(result) => Exchange::Result { status, result },
+                        Err(why) => Exchange::Failed(why),
+                    };
                 }
-                deadline = Instant::now() + silence;
+                Some(Ok(_)) => {}
+                Some(Err(e)) => return Exchange::Failed(format!("cannot read the result: {e:?}")),
+                None => return Exchange::Failed("the results ended".into()),
+            },
+            sample = feedback.next() => {
+                // A sign of life only from the server that took the goal, about this goal,
+                // and in a shape a robot sends.
+                if let Some(Ok(f)) = sample
+                    && f.sample.goal_id == goal_id
+                    && same_participant(f.writer_guid(), &server)
+                    && let Some(heard) = wire::feedback_text(&f.sample.feedback)
+                {
+                    last = heard;
+                    deadline = Instant::now() + silence;
+                }
+            }
+            reply = goal_replies.next() => {
+                if let Some(Ok(r)) = reply
+                    && r.related_sample_identity() == Some(request)
+                    && !same_participant(r.writer_guid(), &server)
+                    && r.sample.accepted
+                {
+                    let _ = send(&ends.cancel, cancel_request(goal_id));
+                    return Exchange::Failed(format!(
+                        "two servers accepted the goal, {} and {}: each carries it out, and \
+                         the robot's world and the rules' would part",
+                        participant_of(GUID::from_bytes(pad(server))),
+                        participant_of(r.writer_guid())
+                    ));
+                }
             }
             () = sleep_until(deadline) => {
                 // Best effort: a robot that wakes up should not go on with it.
-                let _ = client.cancel_goal(goal_id);
+                let _ = send(&ends.cancel, cancel_request(goal_id));
                 return Exchange::Silent { last };
             }
-            () = &mut cancelled => return cancel_goal(client, goal_id, result).await,
+            () = &mut cancelled => return cancel_goal(ends, goal_id, Some((server, asked))).await,
         }
     }
 }
 
-/// Cancels `goal_id` and waits a little for the robot's acknowledgement and its result;
+/// A participant's GUID prefix as a whole GUID (its entity id zero), to name it.
+fn pad(prefix: [u8; 12]) -> [u8; 16] {
+    let mut bytes = [0; 16];
+    bytes[..12].copy_from_slice(&prefix);
+    bytes
+}
+
+fn cancel_request(goal_id: GoalId) -> CancelRequest {
+    CancelRequest {
+        goal_info: GoalInfo {
+            goal_id,
+            stamp: Time::ZERO,
+        },
+    }
+}
+
+/// Cancels `goal_id` and waits a little for the acknowledgement and, once a server took
+/// the goal (`taken`: the server and the identity of the result request), its result;
 /// a result other than "cancelled" that comes all the same (the robot finished first,
 /// or refused to stop) is the goal's result.
 async fn cancel_goal(
-    client: &Client,
+    ends: &Ends,
     goal_id: GoalId,
-    result: impl Future<Output = Result<(GoalStatusEnum, ExecuteResult), impl std::fmt::Display>>,
+    taken: Option<([u8; 12], SampleIdentity)>,
 ) -> Exchange {
-    let answer = timeout(CANCEL_WAIT, client.async_cancel_goal(goal_id, Time::ZERO)).await;
-    let acknowledged = matches!(answer, Ok(Ok(r)) if !r.goals_canceling.is_empty());
+    let Ok(request) = send(&ends.cancel, cancel_request(goal_id)) else {
+        return Exchange::Cancelled {
+            acknowledged: false,
+        };
+    };
+    let replies = ends.cancel_replies.as_async_stream();
+    tokio::pin!(replies);
+    let acknowledgement = async {
+        while let Some(reply) = replies.next().await {
+            if let Ok(r) = reply
+                && r.related_sample_identity() == Some(request)
+                && taken.is_none_or(|(server, _)| same_participant(r.writer_guid(), &server))
+            {
+                return !r.sample.goals_canceling.is_empty();
+            }
+        }
+        false
+    };
+    let acknowledged = timeout(CANCEL_WAIT, acknowledgement).await.unwrap_or(false);
+    let Some((server, asked)) = taken else {
+        return Exchange::Cancelled { acknowledged };
+    };
+    let results = ends.result_replies.as_async_stream();
+    tokio::pin!(results);
+    let result = async {
+        while let Some(reply) = results.next().await {
+            if let Ok(r) = reply
+                && r.related_sample_identity() == Some(asked)
+                && same_participant(r.writer_guid(), &server)
+            {
+                return Some(r.sample);
+            }
+        }
+        None
+    };
     match timeout(CANCEL_WAIT, result).await {
-        Ok(Ok((status, result))) if status != GoalStatusEnum::Canceled => {
-            Exchange::Result { status, result }
+        Ok(Some(GetResultResponse { status, result })) if status != GoalStatusEnum::Canceled => {
+            match wire::checked(result) {
+                Ok(result) => Exchange::Result { status, result },
+                Err(why) => Exchange::Failed(why),
+            }
         }
         _ => Exchange::Cancelled { acknowledged },
     }

@@ -10,6 +10,7 @@ use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Duration;
 
 use coherent_core::feasibility::{Infeasible, Reason};
+use coherent_core::text::{cut, shown};
 use coherent_core::{Environment, Idx, NodeId, State, SymbolicEnv, Task};
 use coherent_sim::PhysicalEnv;
 use ros2_client::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus};
@@ -202,7 +203,21 @@ impl Robot<'_> {
             let Some(goal) = self.server.get_new_goal(handle.clone()) else {
                 continue;
             };
-            let said = format!("{name} step {} {}", goal.step, goal.action);
+            // A goal comes from any participant: what is logged of it is shown escaped
+            // and short, and an action longer than any of the grammar is refused.
+            let said = format!(
+                "{name} step {} {}",
+                goal.step,
+                shown(&cut(&goal.action, wire::MAX_WORD_BYTES))
+            );
+            if goal.action.len() > wire::MAX_WORD_BYTES {
+                let _ = self.server.reject_goal(handle).await;
+                (self.log)(&format!(
+                    "{said} -> refused: an action of {} bytes",
+                    goal.action.len()
+                ));
+                continue;
+            }
             if self.faults.refuses(name) {
                 let _ = self.server.reject_goal(handle).await;
                 (self.log)(&format!("{said} -> refused (--refuse)"));

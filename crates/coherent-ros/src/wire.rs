@@ -7,7 +7,7 @@
 //! names of robots and actions, the DDS context (`ROS_DOMAIN_ID`) and the QoS profiles
 //! ROS 2 gives actions are here too, so that the bridge and the servers agree on them.
 
-use ros2_client::action::{ActionClientQosPolicies, ActionServerQosPolicies};
+use ros2_client::action::ActionServerQosPolicies;
 use ros2_client::qos::{Durability, History};
 use ros2_client::{ActionTypeName, Context, ContextOptions, Message, Name, QosProfile};
 use serde::{Deserialize, Serialize};
@@ -73,6 +73,14 @@ pub struct Relation {
 
 /// The relation word for a node's state.
 pub const IS: &str = "IS";
+
+/// `action_msgs/srv/CancelGoal`'s request, as the bridge writes it (ros2-client's own
+/// type cannot be made outside its action client): the goal and a time stamp, zero for
+/// that goal alone.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(crate) struct CancelRequest {
+    pub goal_info: ros2_client::action::GoalInfo,
+}
 
 impl Message for Goal {}
 impl Message for Feedback {}
@@ -183,20 +191,180 @@ pub(crate) fn server_qos() -> ActionServerQosPolicies {
     }
 }
 
-/// A volatile status subscription matches the servers' transient-local status writer.
-pub(crate) fn client_qos() -> ActionClientQosPolicies {
-    ActionClientQosPolicies {
-        goal_service: services(),
-        result_service: services(),
-        cancel_service: services(),
-        feedback_subscription: services(),
-        status_subscription: services(),
+/// The DDS topics of one robot's action and their types, as ROS 2 names them: an
+/// action's services are `rq/<action>/_action/<service>Request` and
+/// `rr/.../<service>Reply`, its feedback `rt/<action>/_action/feedback`.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct DdsNames {
+    pub goal_request: String,
+    pub goal_request_type: String,
+    pub goal_reply: String,
+    pub goal_reply_type: String,
+    pub result_request: String,
+    pub result_request_type: String,
+    pub result_reply: String,
+    pub result_reply_type: String,
+    pub cancel_request: String,
+    pub cancel_request_type: String,
+    pub cancel_reply: String,
+    pub cancel_reply_type: String,
+    pub feedback: String,
+    pub feedback_type: String,
+}
+
+/// The DDS topics of `robot`'s action under `namespace` (absolute).
+pub(crate) fn dds_names(namespace: &str, robot: &str) -> Result<DdsNames, String> {
+    // Checked as ROS checks a name, though built by hand below.
+    ros_action_name(namespace, robot)?;
+    let base = format!("{}/_action", action_name(namespace, robot));
+    let action = format!("{PACKAGE}::action::dds_::{ACTION_TYPE}");
+    let cancel = "action_msgs::srv::dds_::CancelGoal";
+    Ok(DdsNames {
+        goal_request: format!("rq{base}/send_goalRequest"),
+        goal_request_type: format!("{action}_SendGoal_Request_"),
+        goal_reply: format!("rr{base}/send_goalReply"),
+        goal_reply_type: format!("{action}_SendGoal_Response_"),
+        result_request: format!("rq{base}/get_resultRequest"),
+        result_request_type: format!("{action}_GetResult_Request_"),
+        result_reply: format!("rr{base}/get_resultReply"),
+        result_reply_type: format!("{action}_GetResult_Response_"),
+        cancel_request: format!("rq{base}/cancel_goalRequest"),
+        cancel_request_type: format!("{cancel}_Request_"),
+        cancel_reply: format!("rr{base}/cancel_goalReply"),
+        cancel_reply_type: format!("{cancel}_Response_"),
+        feedback: format!("rt{base}/feedback"),
+        feedback_type: format!("{action}_FeedbackMessage_"),
+    })
+}
+
+/// The most bytes of a result's message the bridge keeps.
+pub const MAX_MESSAGE_BYTES: usize = 4096;
+/// The most bytes of a result's reason, of a feedback's stage, and of each part of a
+/// relation.
+pub const MAX_WORD_BYTES: usize = 256;
+/// The most relations a result may list: a robot observes a few dozen.
+pub const MAX_RELATIONS: usize = 4096;
+
+/// A result as the bridge keeps it: its message cut at [`MAX_MESSAGE_BYTES`], or an error
+/// when it is larger than a robot's result can be (a reason or a relation's word of more
+/// than [`MAX_WORD_BYTES`], more than [`MAX_RELATIONS`] relations).
+pub(crate) fn checked(mut result: ExecuteResult) -> Result<ExecuteResult, String> {
+    let too_long = |what: &str, text: &str| {
+        format!(
+            "the robot's result is malformed: its {what} has {} bytes (at most {MAX_WORD_BYTES})",
+            text.len()
+        )
+    };
+    if result.reason.len() > MAX_WORD_BYTES {
+        return Err(too_long("reason", &result.reason));
     }
+    if result.relations.len() > MAX_RELATIONS {
+        return Err(format!(
+            "the robot's result is malformed: it lists {} relations (at most {MAX_RELATIONS})",
+            result.relations.len()
+        ));
+    }
+    for r in &result.relations {
+        for word in [&r.subject, &r.relation, &r.object] {
+            if word.len() > MAX_WORD_BYTES {
+                return Err(too_long("relation", word));
+            }
+        }
+    }
+    result.message = coherent_core::text::cut(&result.message, MAX_MESSAGE_BYTES).into_owned();
+    Ok(result)
+}
+
+/// What a feedback sample says, as the bridge reports it last heard, or `None` for one
+/// no robot sends (a stage longer than [`MAX_WORD_BYTES`], a progress that is no number).
+pub(crate) fn feedback_text(f: &Feedback) -> Option<String> {
+    (f.stage.len() <= MAX_WORD_BYTES && f.progress.is_finite()).then(|| {
+        format!(
+            "feedback \"{}\" at {:.0}%",
+            coherent_core::text::shown(&f.stage),
+            f.progress * 100.0
+        )
+    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_dds_names_are_ros2s() {
+        let names = dds_names("/lab", "robot_arm_6").expect("valid");
+        assert_eq!(
+            names.goal_request,
+            "rq/lab/robot_arm_6/execute/_action/send_goalRequest"
+        );
+        assert_eq!(
+            names.result_reply,
+            "rr/lab/robot_arm_6/execute/_action/get_resultReply"
+        );
+        assert_eq!(
+            names.feedback,
+            "rt/lab/robot_arm_6/execute/_action/feedback"
+        );
+        assert_eq!(
+            names.goal_reply_type,
+            "coherent_msgs::action::dds_::Execute_SendGoal_Response_"
+        );
+        assert_eq!(
+            names.cancel_request_type,
+            "action_msgs::srv::dds_::CancelGoal_Request_"
+        );
+    }
+
+    #[test]
+    fn results_and_feedback_are_capped() {
+        let relation = |word: &str| Relation {
+            subject: word.into(),
+            relation: "ON".into(),
+            object: "<table>(3)".into(),
+        };
+        let result = ExecuteResult {
+            success: true,
+            reason: String::new(),
+            message: "m".repeat(10 << 20),
+            relations: vec![relation("<mug>(7)")],
+        };
+        let kept = checked(result.clone()).expect("a result");
+        assert!(kept.message.len() < MAX_MESSAGE_BYTES + 64);
+        assert!(kept.message.ends_with("[cut: 10485760 bytes in all]"));
+        let many = ExecuteResult {
+            relations: vec![relation("<mug>(7)"); MAX_RELATIONS + 1],
+            ..result.clone()
+        };
+        assert!(
+            checked(many)
+                .expect_err("too many")
+                .contains("4097 relations")
+        );
+        let long = ExecuteResult {
+            relations: vec![relation(&"x".repeat(10 << 20))],
+            ..result
+        };
+        assert!(
+            checked(long)
+                .expect_err("too long")
+                .contains("relation has 10485760 bytes")
+        );
+        let feedback = |stage: &str, progress: f32| Feedback {
+            stage: stage.into(),
+            progress,
+        };
+        assert_eq!(
+            feedback_text(&feedback("working", 0.5)).as_deref(),
+            Some("feedback \"working\" at 50%")
+        );
+        assert_eq!(feedback_text(&feedback(&"x".repeat(10 << 20), 0.5)), None);
+        assert_eq!(feedback_text(&feedback("working", f32::NAN)), None);
+        assert_eq!(
+            feedback_text(&feedback("\u{1b}[2J", 1.0)).as_deref(),
+            Some("feedback \"\\u{1b}[2J\" at 100%")
+        );
+    }
 
     #[test]
     fn namespaces_are_absolute_and_checked() {

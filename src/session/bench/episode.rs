@@ -8,18 +8,19 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
-use coherent_agents::bench::{EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
+use coherent_agents::bench::{self, EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
 use coherent_agents::episode::{Budget, NoPlan, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::{BackendInfo, BackendKind, Cancel, MethodSpec, Replay, transcript};
 use coherent_core::Task;
 use coherent_core::planner::{self, Limits};
+use coherent_core::text::cut;
 use tokio::sync::OnceCell;
 
 use super::settings::EpisodeSettings;
 use crate::session::backend::BackendChoice;
 use crate::session::episode::{self, EpisodeSpec, Ran};
-use crate::session::error::Error;
+use crate::session::error::{Error, panic_message};
 use crate::session::waiting::Waiting;
 
 /// What the planner says about a task, once per task: its type and optimum for the
@@ -150,7 +151,8 @@ pub async fn run_one(
                 )));
             };
             // A replay runs with the recorded settings and budget.
-            let replay = Replay::prepare(&transcript::read(path)?, path)?;
+            let read = transcript::read_within(path, recorded.max_transcript_bytes)?;
+            let replay = Replay::prepare(&read, path)?;
             EpisodeSpec {
                 task: Arc::clone(task),
                 settings: replay.settings.clone(),
@@ -236,14 +238,10 @@ async fn on_its_own_thread(
         .map_err(|e| Error::Internal(format!("cannot start an episode's thread: {e}")))?;
     match result.await {
         Ok(Ok(value)) => Ok(value),
-        Ok(Err(panic)) => {
-            let message = panic
-                .downcast_ref::<&str>()
-                .map(|s| (*s).to_owned())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(Error::Internal(format!("an episode panicked: {message}")))
-        }
+        Ok(Err(panic)) => Err(Error::Internal(format!(
+            "an episode panicked: {}",
+            panic_message(panic.as_ref())
+        ))),
         Err(_) => Err(Error::Internal(
             "an episode's thread ended without a result".into(),
         )),
@@ -286,7 +284,10 @@ fn line(
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
         backend: line_backend(&settings.backend, method, ran),
         uses_model: ran.model_use.uses_model(),
-        error: mismatch.or_else(|| s.error.clone()),
+        // Cut, so that the line stays within what a results file may hold.
+        error: mismatch
+            .or_else(|| s.error.clone())
+            .map(|e| cut(&e, bench::ERROR_BYTES).into_owned()),
         transcript: ran.path.display().to_string(),
         // The run's settings are the driver's to record (`Ledger::record`).
         settings: None,

@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use coherent_agents::bench::{
-    self, BenchOutcome, EpisodeKey, EpisodeResult, Event, Ledger, ResultLine, Selection, Subset,
+    self, BenchOutcome, EpisodeKey, EpisodeResult, Event, Ledger, ReadLimits, ResultLine,
+    Selection, Subset,
 };
 use coherent_agents::report::{self, Mixed, Report};
 use coherent_agents::{Cancel, MethodSpec};
@@ -57,9 +58,14 @@ pub fn subset_file(path: &Path) -> Result<Subset, Error> {
 
 /// The method `name` of the earlier results file `results`, as its replay runs it: the
 /// recorded one, so that a method written in Python replays by its name, without its
-/// code. An error names the methods the file has when it has none of that name.
-pub fn recorded_method(results: &Path, name: &str) -> Result<MethodSpec, Error> {
-    let recorded = RecordedRun::read(results)?;
+/// code. An error names the methods the file has when it has none of that name. The
+/// results file and the transcript are read within `limits`.
+pub fn recorded_method(
+    results: &Path,
+    name: &str,
+    limits: ReadLimits,
+) -> Result<MethodSpec, Error> {
+    let recorded = RecordedRun::read(results, limits)?;
     let Some((_, path)) = recorded.transcripts.iter().find(|(k, _)| k.method == name) else {
         return Err(Error::Invalid(format!(
             "method {name:?}: {} has no finished episode of it; its methods are {}",
@@ -67,7 +73,7 @@ pub fn recorded_method(results: &Path, name: &str) -> Result<MethodSpec, Error> 
             recorded.methods().join(", ")
         )));
     };
-    let transcript = coherent_agents::transcript::read(path)?;
+    let transcript = coherent_agents::transcript::read_within(path, limits.transcript_bytes)?;
     Ok(coherent_agents::recorded_settings(&transcript)?.0.method)
 }
 
@@ -137,6 +143,8 @@ pub struct BenchConfig {
     pub concurrency: usize,
     /// The results file; transcripts go to [`bench::transcripts_dir`] of it.
     pub out: PathBuf,
+    /// The most the results file may hold when read back to resume.
+    pub max_results_bytes: u64,
 }
 
 impl BenchConfig {
@@ -178,7 +186,11 @@ pub async fn run(
         return Err(Error::Invalid("seeds must be at least 1".into()));
     }
     let run_tasks = Arc::new(RunTasks::new(tasks)?);
-    let mut ledger = Ledger::open(&config.out, &config.episodes.record(config.seeds))?;
+    let mut ledger = Ledger::open(
+        &config.out,
+        config.max_results_bytes,
+        &config.episodes.record(config.seeds),
+    )?;
     let keys = ledger.plan(tasks, &config.episodes.methods, config.seeds);
     progress(Event::Start {
         to_run: keys.len(),

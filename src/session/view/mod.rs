@@ -22,9 +22,11 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use coherent_agents::bench::{ResultLine, read_results};
+use coherent_agents::bench::{ReadLimits, ResultLine, read_results_within};
+use coherent_agents::transcript;
 use coherent_agents::transcript::Transcript;
 use coherent_core::Task;
+use coherent_core::files::Lines;
 use coherent_core::text::shown;
 
 use self::compare::Episodes;
@@ -49,16 +51,16 @@ pub enum Holds {
     Results,
 }
 
-/// Whether `path` is a transcript or a results file, by its first line.
-pub fn holds(path: &Path) -> Result<Holds, String> {
-    use std::io::BufRead;
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    for line in std::io::BufReader::new(file).lines() {
-        let line = line.map_err(|e| format!("{}: {e}", path.display()))?;
-        if line.trim().is_empty() {
+/// Whether `path` is a transcript or a results file, by its first line (read within the
+/// transcript's limit: a header line is the longest first line either may have).
+pub fn holds(path: &Path, limits: ReadLimits) -> Result<Holds, String> {
+    let limit = transcript::limit(limits.transcript_bytes);
+    let mut lines = Lines::open(path, limit, limit).map_err(|e| e.to_string())?;
+    while let Some(line) = lines.next_line().map_err(|e| e.to_string())? {
+        if line.bytes.trim_ascii().is_empty() {
             continue;
         }
-        let first: serde_json::Value = serde_json::from_str(&line)
+        let first: serde_json::Value = serde_json::from_slice(line.bytes)
             .map_err(|e| format!("{}: line 1: not JSON: {e}", path.display()))?;
         return Ok(
             if first.get("type").and_then(|t| t.as_str()) == Some("header") {
@@ -74,9 +76,10 @@ pub fn holds(path: &Path) -> Result<Holds, String> {
     ))
 }
 
-/// A recorded episode read from `path`: its task and transcript.
-pub fn read_episode(path: &Path) -> Result<(Arc<Task>, Transcript), String> {
-    let recorded = super::episode::recorded(path).map_err(|e| e.to_string())?;
+/// A recorded episode read from `path` (a transcript of at most `max_bytes`): its task
+/// and transcript.
+pub fn read_episode(path: &Path, max_bytes: u64) -> Result<(Arc<Task>, Transcript), String> {
+    let recorded = super::episode::recorded(path, max_bytes).map_err(|e| e.to_string())?;
     Ok((recorded.task, recorded.transcript))
 }
 
@@ -153,8 +156,9 @@ pub fn results_html(
     page::html(&title, &view, &[], Script::Results, origin)
 }
 
-/// The page of a results line's episode, from its transcript (priced as the line).
-pub fn line_html(results: &Path, line: &ResultLine) -> Result<String, String> {
+/// The page of a results line's episode, from its transcript of at most `max_bytes`
+/// (priced as the line).
+pub fn line_html(results: &Path, line: &ResultLine, max_bytes: u64) -> Result<String, String> {
     let path = results::transcript_of(results, line).ok_or_else(|| {
         format!(
             "{}: the transcript {} is not there",
@@ -162,7 +166,7 @@ pub fn line_html(results: &Path, line: &ResultLine) -> Result<String, String> {
             shown(&line.transcript)
         )
     })?;
-    let (task, t) = read_episode(&path)?;
+    let (task, t) = read_episode(&path, max_bytes)?;
     episode_html(&Shown {
         task: &task,
         transcript: &t,
@@ -180,9 +184,17 @@ pub struct Site {
 }
 
 /// Writes the index of the results file `results` to `dir/index.html` and each
-/// episode's page under `dir/episodes/`, `threads` pages at once.
-pub fn results_site(results: &Path, dir: &Path, threads: usize) -> Result<Site, String> {
-    let lines = read_results(results).map_err(|e| e.to_string())?.lines;
+/// episode's page under `dir/episodes/`, `threads` pages at once, reading each file
+/// within `limits`.
+pub fn results_site(
+    results: &Path,
+    dir: &Path,
+    threads: usize,
+    limits: ReadLimits,
+) -> Result<Site, String> {
+    let lines = read_results_within(results, limits.results_bytes)
+        .map_err(|e| e.to_string())?
+        .lines;
     let written: Vec<std::sync::Mutex<Option<Result<(), String>>>> =
         lines.iter().map(|_| std::sync::Mutex::new(None)).collect();
     let next = AtomicUsize::new(0);
@@ -192,7 +204,7 @@ pub fn results_site(results: &Path, dir: &Path, threads: usize) -> Result<Site, 
                 loop {
                     let i = next.fetch_add(1, Ordering::Relaxed);
                     let Some(line) = lines.get(i) else { break };
-                    let done = line_html(results, line).and_then(|html| {
+                    let done = line_html(results, line, limits.transcript_bytes).and_then(|html| {
                         let path = dir.join(results::page_name(line));
                         write(&path, &html)
                     });

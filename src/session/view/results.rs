@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 use coherent_agents::bench::{ResultLine, transcripts_dir};
 use coherent_agents::report::{self, Report};
-use coherent_core::text::shown;
+use coherent_core::text::{file_name_part, shown};
 use serde::Serialize;
 
 /// The index page's data.
@@ -119,25 +119,19 @@ pub fn transcript_of(results: &Path, line: &ResultLine) -> Option<PathBuf> {
 }
 
 /// The page of `line`'s episode, relative to the index: `episodes/<seed folder>/<the
-/// transcript's name>.html`, with any character that is not a letter, a digit, `-`,
-/// `_` or `.` made `_` (a name from the file never leaves the folder).
+/// transcript's name>.html`, the name made of safe characters and at most 200 bytes
+/// ([`file_name_part`]: a name from the file never leaves the folder nor is too long
+/// for it).
 pub fn page_name(line: &ResultLine) -> String {
-    let named = Path::new(&line.transcript);
-    let safe = |s: &str| -> String {
-        let s: String = s
-            .chars()
-            .map(|c| {
-                if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
-                    c
-                } else {
-                    '_'
-                }
-            })
-            .collect();
-        s.trim_start_matches('.').to_owned()
-    };
-    let stem = named
+    let stem = Path::new(&line.transcript)
         .file_stem()
-        .map_or_else(String::new, |s| safe(&s.to_string_lossy()));
-    format!("episodes/seed{}/{stem}.html", line.seed)
+        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+    format!(
+        "episodes/seed{}/{}.html",
+        line.seed,
+        file_name_part(&stem, MAX_PAGE_NAME)
+    )
 }
+
+/// The longest page name, in bytes, short of the usual 255 with room for `.html`.
+const MAX_PAGE_NAME: usize = 200;

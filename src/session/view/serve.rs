@@ -13,7 +13,7 @@ use std::net::{Ipv4Addr, SocketAddr, TcpListener, TcpStream};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use coherent_agents::bench::{ResultLine, read_results};
+use coherent_agents::bench::{ReadLimits, ResultLine, read_results_within};
 
 use super::page::script_json;
 use super::{Holds, holds, line_html, results, results_html};
@@ -32,10 +32,12 @@ type Lines = (Vec<ResultLine>, Vec<Option<String>>, u64);
 pub struct Server {
     listener: TcpListener,
     results: PathBuf,
+    limits: ReadLimits,
 }
 
-/// The results file in `path`: the file itself, or the one results file in a folder.
-pub fn results_in(path: &Path) -> Result<PathBuf, String> {
+/// The results file in `path`: the file itself, or the one results file in a folder
+/// (each `.jsonl` in it read within `limits` to tell).
+pub fn results_in(path: &Path, limits: ReadLimits) -> Result<PathBuf, String> {
     if !path.is_dir() {
         return Ok(path.to_owned());
     }
@@ -43,7 +45,7 @@ pub fn results_in(path: &Path) -> Result<PathBuf, String> {
     let entries = std::fs::read_dir(path).map_err(|e| format!("{}: {e}", path.display()))?;
     for entry in entries.flatten() {
         let p = entry.path();
-        if p.extension().is_some_and(|x| x == "jsonl") && holds(&p) == Ok(Holds::Results) {
+        if p.extension().is_some_and(|x| x == "jsonl") && holds(&p, limits) == Ok(Holds::Results) {
             found.push(p);
         }
     }
@@ -67,13 +69,15 @@ pub fn results_in(path: &Path) -> Result<PathBuf, String> {
 }
 
 impl Server {
-    /// Binds `127.0.0.1:port` (0: any free port) for the results file `results`.
-    pub fn bind(results: &Path, port: u16) -> Result<Server, String> {
+    /// Binds `127.0.0.1:port` (0: any free port) for the results file `results`, read
+    /// (with its transcripts) within `limits`.
+    pub fn bind(results: &Path, port: u16, limits: ReadLimits) -> Result<Server, String> {
         let listener = TcpListener::bind((Ipv4Addr::LOCALHOST, port))
             .map_err(|e| format!("127.0.0.1:{port}: {e}"))?;
         Ok(Server {
             listener,
             results: results.to_owned(),
+            limits,
         })
     }
 
@@ -131,7 +135,8 @@ impl Server {
         if !self.results.exists() {
             return Ok((Vec::new(), Vec::new(), 0));
         }
-        let file = read_results(&self.results).map_err(|e| e.to_string())?;
+        let file = read_results_within(&self.results, self.limits.results_bytes)
+            .map_err(|e| e.to_string())?;
         let version = file.good_len + file.truncated_bytes;
         let lines = file.lines;
         let links = lines
@@ -163,7 +168,7 @@ impl Server {
         let name = path.strip_prefix('/')?;
         let (lines, _, _) = self.lines().ok()?;
         let line = lines.iter().find(|l| results::page_name(l) == name)?;
-        Some(line_html(&self.results, line))
+        Some(line_html(&self.results, line, self.limits.transcript_bytes))
     }
 }
 

@@ -7,25 +7,18 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 use std::time::{Duration, Instant};
 
+use crate::backends::address::Address;
 use crate::backends::retry::Backoff;
 
 /// The endpoints of a client and how busy and healthy each is.
 #[derive(Debug)]
 pub(crate) struct Endpoints {
-    targets: Vec<Target>,
+    targets: Vec<Address>,
     loads: Mutex<Vec<Load>>,
     /// Where the search for the least busy endpoint starts, moved on at each pick, so
     /// that endpoints equally busy take turns.
     turn: AtomicUsize,
     backoff: Backoff,
-}
-
-#[derive(Debug)]
-struct Target {
-    /// The chat completions URL requests are posted to.
-    url: String,
-    /// The base URL as transcripts record it (no user or password).
-    shown: String,
 }
 
 #[derive(Debug, Default)]
@@ -53,15 +46,11 @@ pub(crate) struct Lease<'a> {
 }
 
 impl Endpoints {
-    /// `(url, shown)` pairs: the URL posted to and the base URL transcripts name; at
-    /// least one.
-    pub(crate) fn new(targets: Vec<(String, String)>, backoff: Backoff) -> Endpoints {
+    /// The endpoints of `targets`, at least one.
+    pub(crate) fn new(targets: Vec<Address>, backoff: Backoff) -> Endpoints {
         let loads = targets.iter().map(|_| Load::default()).collect();
         Endpoints {
-            targets: targets
-                .into_iter()
-                .map(|(url, shown)| Target { url, shown })
-                .collect(),
+            targets,
             loads: Mutex::new(loads),
             turn: AtomicUsize::new(0),
             backoff,
@@ -97,8 +86,9 @@ impl Endpoints {
 }
 
 impl Lease<'_> {
-    pub(crate) fn url(&self) -> &str {
-        &self.pool.targets[self.index].url
+    /// The endpoint's address: where to post, and whether its URL carries credentials.
+    pub(crate) fn address(&self) -> &Address {
+        &self.pool.targets[self.index]
     }
 
     /// The base URL, as the transcript records it.
@@ -145,12 +135,7 @@ mod tests {
 
     fn pool(n: usize) -> Endpoints {
         let targets = (0..n)
-            .map(|i| {
-                (
-                    format!("http://e{i}/v1/chat/completions"),
-                    format!("http://e{i}/v1"),
-                )
-            })
+            .map(|i| Address::parse(&format!("http://e{i}/v1")).expect("a URL"))
             .collect();
         Endpoints::new(
             targets,

@@ -187,9 +187,10 @@ impl LlmError {
     }
 }
 
-impl fmt::Display for LlmError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let kind = match self.kind {
+impl LlmError {
+    /// What kind of failure it is, in words: `HTTP 429`, `timed out`.
+    pub fn kind_text(&self) -> String {
+        match self.kind {
             LlmErrorKind::Connect => "connection failed".to_owned(),
             LlmErrorKind::Timeout => "timed out".to_owned(),
             LlmErrorKind::Status(code) => format!("HTTP {code}"),
@@ -197,8 +198,13 @@ impl fmt::Display for LlmError {
             LlmErrorKind::Replay => "replay diverged".to_owned(),
             LlmErrorKind::Config => "configuration".to_owned(),
             LlmErrorKind::Internal => "internal error".to_owned(),
-        };
-        write!(f, "{kind}: {}", self.message)?;
+        }
+    }
+}
+
+impl fmt::Display for LlmError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.kind_text(), self.message)?;
         if self.attempts > 1 {
             write!(f, " (after {} attempts)", self.attempts)?;
         }

@@ -15,6 +15,7 @@ use tokio::sync::Semaphore;
 
 use coherent_core::text::cut;
 
+use crate::backends::address::{Address, redacted};
 use crate::backends::endpoints::{Endpoints, Lease};
 use crate::backends::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
@@ -197,6 +198,10 @@ impl Chat {
 pub struct OpenAiClient {
     http: reqwest::Client,
     config: OpenAiConfig,
+    /// The config's backoff, its pauses capped at the longest a request may take.
+    backoff: Backoff,
+    /// The key and the secrets of the base URLs, scrubbed from every text kept.
+    secrets: Vec<ApiKey>,
     endpoints: Endpoints,
     limit: Semaphore,
     /// The answer format currently asked for (an [`OutputMode`] index); it only ever
@@ -223,23 +228,28 @@ impl OpenAiClient {
             return Err(LlmError::new(LlmErrorKind::Config, "no base URL"));
         }
         let mut targets = Vec::new();
+        let mut secrets: Vec<ApiKey> = config.api_key.iter().cloned().collect();
         for base in &config.base_urls {
-            let url = format!("{}/chat/completions", base.trim_end_matches('/'));
-            if reqwest::Url::parse(&url).is_err() {
-                return Err(LlmError::new(
-                    LlmErrorKind::Config,
-                    format!("base URL {base:?} is not a URL"),
-                ));
-            }
-            targets.push((url, shown_url(base, config.api_key.as_ref())));
+            let address =
+                Address::parse(base).map_err(|e| LlmError::new(LlmErrorKind::Config, e))?;
+            secrets.extend(address.secrets.iter().map(ApiKey::new));
+            targets.push(address);
         }
         // reqwest takes rustls's process-wide crypto provider, `ring` here (Cargo.toml says
         // why). Installing it a second time fails harmlessly: one is there already.
         let _ = rustls::crypto::ring::default_provider().install_default();
+        // No wait longer than one request may take, whatever a server asks.
+        let backoff = Backoff {
+            cap: config.backoff.cap.min(config.total_timeout),
+            ..config.backoff
+        };
+        // A redirect would send the whole prompt (and the key) elsewhere, and a 302 would
+        // turn the request into a GET: it is the server's answer, an error.
         let http = reqwest::Client::builder()
             .connect_timeout(config.connect_timeout)
             .read_timeout(config.read_timeout)
             .timeout(config.total_timeout)
+            .redirect(reqwest::redirect::Policy::none())
             .build()
             .map_err(|e| LlmError::new(LlmErrorKind::Config, e.to_string()))?;
         let seed = SystemTime::now()
@@ -248,7 +258,9 @@ impl OpenAiClient {
         let first = MODES.iter().position(|&m| m == config.output).unwrap_or(0);
         Ok(OpenAiClient {
             http,
-            endpoints: Endpoints::new(targets, config.backoff),
+            endpoints: Endpoints::new(targets, backoff),
+            backoff,
+            secrets,
             limit: Semaphore::new(config.concurrency.max(1)),
             mode: AtomicU8::new(first as u8),
             jitter: Mutex::new(Rng::new(seed)),
@@ -261,11 +273,11 @@ impl OpenAiClient {
         &self.config
     }
 
+    /// `text` without the key or any secret of the base URLs.
     fn scrub(&self, text: &str) -> String {
-        match &self.config.api_key {
-            Some(k) => k.scrub(text),
-            None => text.to_owned(),
-        }
+        self.secrets
+            .iter()
+            .fold(text.to_owned(), |text, secret| secret.scrub(&text))
     }
 
     fn body(&self, q: &Chat, mode: OutputMode) -> Value {
@@ -293,19 +305,24 @@ impl OpenAiClient {
         body
     }
 
-    /// One POST of `body` to the endpoint at `url`: the status, `Retry-After` if any, and
-    /// the whole body.
-    async fn post(
-        &self,
-        url: &str,
-        body: &Value,
-    ) -> Result<(StatusCode, Option<Duration>, Vec<u8>), LlmError> {
-        let mut request = self.http.post(url).json(body);
-        if let Some(key) = &self.config.api_key {
+    /// One POST of `body` to the endpoint at `address`: the status, `Retry-After` if any,
+    /// and the whole body (for a redirect, where it points).
+    async fn post(&self, address: &Address, body: &Value) -> Result<Exchanged, LlmError> {
+        let mut request = self.http.post(address.post.clone()).json(body);
+        // One credential: the URL's user and password (basic auth, which the HTTP
+        // client takes from the URL), else the key.
+        if let (Some(key), false) = (&self.config.api_key, address.has_credentials) {
             request = request.bearer_auth(&key.0);
         }
-        let response = request.send().await.map_err(|e| self.transport(&e))?;
+        let response = request.send().await.map_err(|e| self.transport(e))?;
         let status = response.status();
+        if status.is_redirection() {
+            let to = response
+                .headers()
+                .get(reqwest::header::LOCATION)
+                .map(|v| redacted(&String::from_utf8_lossy(v.as_bytes())));
+            return Ok(Exchanged::Redirect(status, to));
+        }
         let retry_after = response
             .headers()
             .get(reqwest::header::RETRY_AFTER)
@@ -326,16 +343,19 @@ impl OpenAiClient {
         // Read it chunk by chunk, so that a body that never ends stops at the limit.
         let mut body = Vec::new();
         let mut response = response;
-        while let Some(chunk) = response.chunk().await.map_err(|e| self.transport(&e))? {
+        while let Some(chunk) = response.chunk().await.map_err(|e| self.transport(e))? {
             if body.len() + chunk.len() > cap {
                 return Err(too_large("longer".into()));
             }
             body.extend_from_slice(&chunk);
         }
-        Ok((status, retry_after, body))
+        Ok(Exchanged::Body(status, retry_after, body))
     }
 
-    fn transport(&self, e: &reqwest::Error) -> LlmError {
+    /// A failed exchange as an error; the URL is left out (it may hold a secret, and the
+    /// call records the endpoint as shown).
+    fn transport(&self, e: reqwest::Error) -> LlmError {
+        let e = e.without_url();
         let kind = if e.is_timeout() {
             LlmErrorKind::Timeout
         } else {
@@ -343,7 +363,7 @@ impl OpenAiClient {
         };
         // The error's own text is terse ("error sending request"); its sources say why.
         let mut message = e.to_string();
-        let mut source = std::error::Error::source(e);
+        let mut source = std::error::Error::source(&e);
         while let Some(s) = source {
             message.push_str(": ");
             message.push_str(&s.to_string());
@@ -392,15 +412,30 @@ impl OpenAiClient {
                 Attempt::Failed(error, retry_after) => (error, retry_after),
             };
             error.attempts = attempts;
-            if !error.retryable() || retries >= self.config.backoff.max_retries {
+            if !error.retryable() || retries >= self.backoff.max_retries {
                 let result = Err(error);
                 return Response { result, endpoint };
             }
             let wait = !lease.another_ready();
+            let shown = lease.shown().to_owned();
             drop(lease);
             if wait {
                 let unit = self.jitter.lock().map_or(0.5, |mut j| j.unit());
-                tokio::time::sleep(self.config.backoff.pause(retries, retry_after, unit)).await;
+                let pause = self.backoff.pause(retries, retry_after, unit);
+                if let Some(asked) = retry_after.filter(|a| *a >= Duration::from_secs(1)) {
+                    // Said, so that a long wait is never a silent one.
+                    eprintln!(
+                        "note: {} answered {} and asked to wait {} s (Retry-After); waiting \
+                         {:.1} s, retry {} of {}",
+                        shown,
+                        error.kind_text(),
+                        asked.as_secs(),
+                        pause.as_secs_f64(),
+                        retries + 1,
+                        self.backoff.max_retries
+                    );
+                }
+                tokio::time::sleep(pause).await;
             }
             retries += 1;
         }
@@ -409,15 +444,24 @@ impl OpenAiClient {
     /// One attempt at the endpoint `lease` holds, which hears how it went: a failure
     /// worth a retry rests it, any other response counts as an answer.
     async fn attempt(&self, lease: &Lease<'_>, q: &Chat, mode: OutputMode) -> Attempt {
-        let (status, retry_after, bytes) = match self.post(lease.url(), &self.body(q, mode)).await {
-            Ok(posted) => posted,
-            Err(e) => {
-                if e.retryable() {
-                    lease.failed(None);
+        let (status, retry_after, bytes) =
+            match self.post(lease.address(), &self.body(q, mode)).await {
+                Ok(Exchanged::Body(status, retry_after, bytes)) => (status, retry_after, bytes),
+                Ok(Exchanged::Redirect(status, to)) => {
+                    lease.answered();
+                    let to =
+                        to.map_or_else(|| "nowhere (no Location)".to_owned(), |u| self.scrub(&u));
+                    let message = format!("redirect to {to}, not followed");
+                    let error = LlmError::new(LlmErrorKind::Status(status.as_u16()), message);
+                    return Attempt::Failed(error, None);
                 }
-                return Attempt::Failed(e, None);
-            }
-        };
+                Err(e) => {
+                    if e.retryable() {
+                        lease.failed(None);
+                    }
+                    return Attempt::Failed(e, None);
+                }
+            };
         if status.is_success() {
             lease.answered();
             return match parse_completion(&bytes) {
@@ -466,6 +510,14 @@ impl OpenAiClient {
     }
 }
 
+/// What one HTTP exchange gave.
+enum Exchanged {
+    /// The status, the server's `Retry-After` if any, and the body.
+    Body(StatusCode, Option<Duration>, Vec<u8>),
+    /// A redirect (3xx), not followed, and where it pointed (as shown).
+    Redirect(StatusCode, Option<String>),
+}
+
 /// How one attempt went.
 enum Attempt {
     Answered(Answer),
@@ -473,20 +525,6 @@ enum Attempt {
     Downgraded,
     /// No answer, and maybe the server's `Retry-After`.
     Failed(LlmError, Option<Duration>),
-}
-
-/// The base URL as transcripts and logs show it: without a user or password, and
-/// scrubbed of the key.
-fn shown_url(base: &str, key: Option<&ApiKey>) -> String {
-    let shown = match reqwest::Url::parse(base) {
-        Ok(mut url) if !url.username().is_empty() || url.password().is_some() => {
-            let _ = url.set_username("");
-            let _ = url.set_password(None);
-            url.as_str().to_owned()
-        }
-        _ => base.to_owned(),
-    };
-    key.map_or_else(|| shown.clone(), |k| k.scrub(&shown))
 }
 
 /// A 400 or 422 whose body names the answer format: the server does not support it.
@@ -679,20 +717,6 @@ mod tests {
         assert_eq!(body["response_format"]["json_schema"]["name"], "answer");
         let body = client.body(&chat, OutputMode::JsonObject);
         assert_eq!(body["response_format"]["type"], "json_object");
-    }
-
-    #[test]
-    fn endpoints_are_shown_without_credentials() {
-        let key = ApiKey::new("sk-in-the-url-123");
-        assert_eq!(
-            shown_url("http://user:pw@10.0.0.2:8000/v1", None),
-            "http://10.0.0.2:8000/v1"
-        );
-        assert_eq!(
-            shown_url("http://127.0.0.1:8000/v1?k=sk-in-the-url-123", Some(&key)),
-            "http://127.0.0.1:8000/v1?k=[api key]"
-        );
-        assert_eq!(shown_url("http://h/v1", None), "http://h/v1");
     }
 
     #[test]

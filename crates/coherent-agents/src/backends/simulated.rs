@@ -3,6 +3,7 @@
 //! for offline study of how methods recover. It is labelled `simulated` wherever its
 //! results appear.
 
+use coherent_core::text::number;
 use coherent_core::{Idx, Task};
 
 use crate::error::Error;
@@ -82,7 +83,10 @@ impl ErrorRates {
     pub fn label(&self) -> String {
         format!(
             "hallucinate={},wrong_robot={},malformed={},suboptimal={}",
-            self.hallucinate, self.wrong_robot, self.malformed, self.suboptimal
+            number(self.hallucinate),
+            number(self.wrong_robot),
+            number(self.malformed),
+            number(self.suboptimal)
         )
     }
 

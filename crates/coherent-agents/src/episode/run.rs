@@ -7,6 +7,7 @@ use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use coherent_core::planner::Limits;
+use coherent_core::text::file_name_part;
 use coherent_core::{Environment, Task, native};
 
 use crate::backends::llm::{Backend, BackendInfo};
@@ -23,17 +24,23 @@ use crate::methods::optimal;
 use crate::methods::pefa::{self, PefaConfig};
 use crate::records::transcript::{self, Header, Record, Round, Writer};
 
+/// The most bytes of a scene's or a method's name that a transcript's file name holds
+/// (the whole name stays well under the 255 bytes file systems allow).
+const NAME_PART_BYTES: usize = 64;
+
 /// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists;
-/// `method` is the method's name.
+/// `method` is the method's name. The scene and the method are written in safe
+/// characters only and shortened, with a hash when either had to change
+/// ([`file_name_part`]).
 pub fn transcript_path(out: &Path, task: &Task, method: &str) -> PathBuf {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
         .map_or(0, |d| d.as_secs());
     let stem = format!(
         "{}-task{}-{}-{}",
-        task.meta.scene.replace(['/', '\\'], "_"),
+        file_name_part(&task.meta.scene, NAME_PART_BYTES),
         task.meta.task_id,
-        method,
+        file_name_part(method, NAME_PART_BYTES),
         utc_stamp(secs)
     );
     let mut path = out.join(format!("{stem}.jsonl"));
@@ -130,7 +137,8 @@ pub async fn run(
         MethodSpec::Builtin(method) => *method,
         MethodSpec::External(method) => {
             let made = method.make(task);
-            let episode = external::run(env, task, made, steps, cancel, &mut on_round).await;
+            let limit = method.step_timeout();
+            let episode = external::run(env, task, made, steps, limit, cancel, &mut on_round).await;
             return finish(episode.map_err(io)?, header, &mut writer, transcript);
         }
     };

@@ -4,6 +4,7 @@
 use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
+use std::time::Duration;
 
 use coherent_core::Task;
 
@@ -75,6 +76,9 @@ impl Method {
 pub struct External {
     name: String,
     make: Arc<MakePolicy>,
+    /// The longest one step may take (the policy's `act`, and its making at the first
+    /// step); `None` for no limit.
+    step_timeout: Option<Duration>,
     /// What the method declares of its own settings, recorded in each results line.
     settings: BTreeMap<String, serde_json::Value>,
 }
@@ -98,8 +102,16 @@ impl External {
         Ok(External {
             name: name.to_owned(),
             make,
+            step_timeout: None,
             settings: BTreeMap::new(),
         })
+    }
+
+    /// The method with each step limited to `limit` (`None`: no limit): a step that takes
+    /// longer ends as the method's error.
+    pub fn with_step_timeout(mut self, limit: Option<Duration>) -> External {
+        self.step_timeout = limit;
+        self
     }
 
     /// The method with its own settings declared (recorded in every results line, so
@@ -111,6 +123,11 @@ impl External {
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// The longest one step may take.
+    pub fn step_timeout(&self) -> Option<Duration> {
+        self.step_timeout
     }
 
     /// Its own settings, as declared.
@@ -128,17 +145,19 @@ impl fmt::Debug for External {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("External")
             .field("name", &self.name)
+            .field("step_timeout", &self.step_timeout)
             .field("settings", &self.settings)
             .finish_non_exhaustive()
     }
 }
 
 /// Two are the same method when they have the same name, the same maker and the same
-/// settings.
+/// step limit and settings.
 impl PartialEq for External {
     fn eq(&self, other: &External) -> bool {
         self.name == other.name
             && Arc::ptr_eq(&self.make, &other.make)
+            && self.step_timeout == other.step_timeout
             && self.settings == other.settings
     }
 }

@@ -4,7 +4,7 @@
 
 use std::collections::{BTreeMap, HashSet};
 use std::fs::{File, OpenOptions};
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -12,8 +12,11 @@ use coherent_core::Task;
 
 use crate::episode::settings::MethodSpec;
 use crate::error::Error;
-use crate::harness::results::{EpisodeKey, ResultLine, mark_orphans, read_results, repair};
+use crate::harness::results::{
+    EpisodeKey, ResultLine, mark_orphans, read_results_within, repair, transcripts_dir,
+};
 use crate::harness::run_settings::{Difference, RunSettings, Setting, method_text};
+use crate::records::lock;
 use crate::records::transcript::Status;
 
 /// What came of one episode, as an executor hands it to the driver.
@@ -77,10 +80,15 @@ pub struct BenchOutcome {
     pub orphaned: Vec<PathBuf>,
 }
 
-/// A run's results file, open for appending.
+/// A run's results file, open for appending, and the lock that makes the run its only
+/// writer (and the only one to rename transcripts in its folder).
 #[derive(Debug)]
 pub struct Ledger {
     out: PathBuf,
+    /// Held while the ledger lives ([`crate::records::lock`]).
+    _lock: File,
+    /// The most the results file may hold when read back.
+    max_bytes: u64,
     file: File,
     /// Episodes with a final line: in the file before the run, or written by it.
     done: HashSet<EpisodeKey>,
@@ -94,14 +102,22 @@ pub struct Ledger {
 impl Ledger {
     /// Opens the results file `out` (and its folder) for appending: a last line cut off
     /// mid-write is dropped, transcripts no line points to are marked unfinished, and the
-    /// episodes with a final line are known to be done. A file whose lines were run with
-    /// other settings than `now` (each method's, by name) is refused before anything is
-    /// changed ([`Error::SettingsDiffer`]).
-    pub fn open(out: &Path, now: &BTreeMap<String, RunSettings>) -> Result<Ledger, Error> {
+    /// episodes with a final line are known to be done. A results file of more than
+    /// `max_bytes` is refused. Another run on the same results file, or on one whose
+    /// transcripts share the folder, is refused naming its process. A file whose lines
+    /// were run with other settings than `now` (each method's, by name) is refused before
+    /// anything is changed ([`Error::SettingsDiffer`]); the file is read once, under the
+    /// lock, for both.
+    pub fn open(
+        out: &Path,
+        max_bytes: u64,
+        now: &BTreeMap<String, RunSettings>,
+    ) -> Result<Ledger, Error> {
+        let lock = take_lock(out)?;
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
         if out.exists() {
-            let file = read_results(out)?;
+            let file = read_results_within(out, max_bytes)?;
             let differences = mismatch(&file.lines, now);
             if !differences.is_empty() {
                 return Err(Error::SettingsDiffer {
@@ -128,6 +144,8 @@ impl Ledger {
             .map_err(|e| Error::io(out, &e))?;
         Ok(Ledger {
             out: out.to_owned(),
+            _lock: lock,
+            max_bytes,
             file,
             done,
             written: HashSet::new(),
@@ -202,10 +220,16 @@ impl Ledger {
     /// points to, as resuming does: a worker that died mid-episode left them, and its
     /// episodes ran again elsewhere. They are added to the outcome's `orphaned`.
     pub fn mark_orphans(&mut self) -> Result<(), Error> {
-        let lines = read_results(&self.out)?.lines;
+        let lines = read_results_within(&self.out, self.max_bytes)?.lines;
         let marked = mark_orphans(&self.out, &lines)?;
         self.outcome.orphaned.extend(marked);
         Ok(())
+    }
+
+    /// The file whose lock makes a run the only one on `out` (in its transcripts
+    /// folder, which two results files of the same stem share).
+    pub fn lock_path(out: &Path) -> PathBuf {
+        transcripts_dir(out).join(".lock")
     }
 
     /// What the run did so far.
@@ -218,6 +242,48 @@ impl Ledger {
         self.outcome.interrupted = interrupted;
         self.outcome
     }
+}
+
+/// Locks the run's lock file of `out` ([`Ledger::lock_path`]) and writes this process's
+/// id into it; when another run holds it, an error names that run's process.
+fn take_lock(out: &Path) -> Result<File, Error> {
+    let path = Ledger::lock_path(out);
+    let io = |e: std::io::Error| Error::io(&path, &e);
+    if let Some(dir) = path.parent() {
+        std::fs::create_dir_all(dir).map_err(io)?;
+    }
+    let mut file = OpenOptions::new()
+        .read(true)
+        .write(true)
+        .create(true)
+        .truncate(false)
+        .open(&path)
+        .map_err(io)?;
+    if !lock::try_exclusive(&file).map_err(io)? {
+        // A process id is a few digits: read no more than that could be, whatever the
+        // file has become (a link to a device, say).
+        let mut holder = String::new();
+        let _ = (&mut file).take(64).read_to_string(&mut holder);
+        let holder = holder.trim();
+        let holder = if holder.is_empty() || holder.len() > 20 {
+            "another process".to_owned()
+        } else {
+            format!("process {holder}")
+        };
+        return Err(Error::Io {
+            file: out.display().to_string(),
+            message: format!(
+                "another benchmark run is using it ({holder} holds {}): wait for it to end, \
+                 or give this run another --out",
+                path.display()
+            ),
+        });
+    }
+    file.set_len(0)
+        .and_then(|()| writeln!(file, "{}", std::process::id()))
+        .and_then(|()| file.flush())
+        .map_err(io)?;
+    Ok(file)
 }
 
 /// Why the lines already in a results file cannot be resumed by a run whose methods have

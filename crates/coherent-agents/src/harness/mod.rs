@@ -18,8 +18,10 @@ pub use ledger::{BenchOutcome, EpisodeResult, Ledger, episode_keys};
 pub use prices::{ModelUse, PriceTable};
 pub use progress::{Event, Progress, Style, worth_a_line};
 pub use report::Group;
+pub use results::{DEFAULT_MAX_BYTES as DEFAULT_MAX_RESULTS_BYTES, ERROR_BYTES};
 pub use results::{
-    EpisodeKey, ResultLine, ResultsFile, mark_orphans, read_results, repair, transcripts_dir,
+    EpisodeKey, ReadLimits, ResultLine, ResultsFile, mark_orphans, read_results,
+    read_results_within, repair, transcripts_dir,
 };
 pub use run_settings::{Difference, RunSettings, Setting};
 pub use subset::{PAPER40, Selection, Subset, same_key_twice, select};

@@ -7,6 +7,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
+use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
@@ -49,14 +50,29 @@ impl Price {
         if prices
             .into_iter()
             .flatten()
-            .all(|p| p.is_finite() && p >= 0.0)
+            .all(|p| p.is_finite() && (0.0..=MAX_PRICE).contains(&p))
         {
             Ok(())
         } else {
-            Err(format!("{model:?}: prices must be numbers of 0 or more"))
+            Err(format!(
+                "{model:?}: prices must be numbers from 0 to {MAX_PRICE} (USD per million \
+                 tokens)"
+            ))
         }
     }
 }
+
+/// The highest price a table may give, USD per million tokens (a dollar a token): the
+/// dearest hosted models cost a few hundred; a higher number is a mistake, and one near
+/// the largest float would make every cost infinite.
+pub const MAX_PRICE: f64 = 1e6;
+
+/// The most a price table file may hold: a table of every hosted model is a few KiB.
+pub const FILE_LIMIT: Limit = Limit {
+    bytes: MIB,
+    what: "a price table",
+    raise: None,
+};
 
 /// Prices by model name.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -75,10 +91,17 @@ impl PriceTable {
     }
 
     /// A table in JSON: `{"MODEL": {"input": .., "cached_input": .., "output": ..}, ...}`;
-    /// errors name `file`.
+    /// errors name `file`. A model listed twice is refused, as TOML refuses it.
     pub fn parse_json(text: &str, file: &str) -> Result<PriceTable, Error> {
+        // The path of a key twice, as in task files: serde_json alone keeps the last.
+        let value = coherent_core::json::parse(file, text.as_bytes()).map_err(|e| match e {
+            coherent_core::Error::Malformed { path, message, .. } => {
+                format_error(file, format!("{path}: {message}"))
+            }
+            other => format_error(file, other.to_string()),
+        })?;
         let table: PriceTable =
-            serde_json::from_str(text).map_err(|e| format_error(file, e.to_string()))?;
+            serde_json::from_value(value).map_err(|e| format_error(file, e.to_string()))?;
         table.checked(file)
     }
 
@@ -97,10 +120,13 @@ impl PriceTable {
         Ok(self)
     }
 
-    /// The table in the file at `path`: TOML when its name ends in `.toml`, else JSON.
+    /// The table in the file at `path`: TOML when its name ends in `.toml`, else JSON; a
+    /// file of more than [`FILE_LIMIT`] is refused.
     pub fn read(path: &Path) -> Result<PriceTable, Error> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
+        let bytes = files::read(path, &FILE_LIMIT).map_err(Error::file)?;
+        let text =
+            String::from_utf8(bytes).map_err(|e| format_error(&file, format!("not UTF-8: {e}")))?;
         if path.extension().is_some_and(|e| e == "toml") {
             PriceTable::parse_toml(&text, &file)
         } else {

@@ -4,6 +4,8 @@
 
 use std::time::{Duration, Instant};
 
+use coherent_core::text::shown;
+
 use crate::harness::results::ResultLine;
 use crate::records::transcript::{Status, headline};
 
@@ -111,13 +113,16 @@ impl Progress {
                 let head = self.head(self.start.elapsed());
                 let episode = format!(
                     "{} {} task {} seed {}",
-                    line.method, line.scene, line.task_id, line.seed
+                    shown(&line.method),
+                    shown(&line.scene),
+                    line.task_id,
+                    line.seed
                 );
                 let error = (line.status == Status::Error).then(|| {
                     format!(
                         "{episode}: error: {}; traceback in {}",
-                        headline(line.error.as_deref().unwrap_or("")),
-                        line.transcript
+                        shown(&headline(line.error.as_deref().unwrap_or(""))),
+                        shown(&line.transcript)
                     )
                 });
                 Some(match (self.style, error) {

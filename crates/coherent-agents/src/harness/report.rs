@@ -9,6 +9,7 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
+use coherent_core::text::shown;
 use serde::Serialize;
 
 use crate::episode::settings::Method;
@@ -526,20 +527,27 @@ fn column_name(c: &str) -> String {
     }
 }
 
+/// A name from a results line in a Markdown cell: escaped for a terminal ([`shown`]),
+/// and its `|` escaped, which would end the cell.
+fn md(name: &str) -> String {
+    shown(name).replace('|', "\\|")
+}
+
 /// The tables in Markdown, the paper's layout: one row per method, `SR / AS` per column.
+/// Names from the results (methods, scenes, backends) are shown escaped.
 pub fn markdown(r: &Report) -> String {
     let mut out = String::new();
     for t in [&r.table1, &r.table2] {
         out.push_str(&format!("### {}\n\n", t.title));
         for h in header_lines(r) {
-            out.push_str(&format!("{h}  \n"));
+            out.push_str(&format!("{}  \n", shown(&h)));
         }
         out.push('\n');
         let heads: Vec<String> = t
             .columns
             .iter()
             .zip(&t.tasks)
-            .map(|(c, n)| format!("{} (n={n}) SR / AS", column_name(c)))
+            .map(|(c, n)| format!("{} (n={n}) SR / AS", md(&column_name(c))))
             .collect();
         out.push_str(&format!("| Method | {} |\n", heads.join(" | ")));
         out.push_str(&format!("|---|{}\n", "---|".repeat(heads.len())));
@@ -552,7 +560,11 @@ pub fn markdown(r: &Report) -> String {
                     None => "-".into(),
                 })
                 .collect();
-            out.push_str(&format!("| {} | {} |\n", row.method, cells.join(" | ")));
+            out.push_str(&format!(
+                "| {} | {} |\n",
+                md(&row.method),
+                cells.join(" | ")
+            ));
         }
         let gt: Vec<String> =
             t.gt.iter()
@@ -562,7 +574,7 @@ pub fn markdown(r: &Report) -> String {
     }
     out.push_str(&failures_markdown(r));
     out.push_str("### LLM calls, tokens and cost per method\n\n");
-    out.push_str(&format!("{}  \n", header_lines(r)[0]));
+    out.push_str(&format!("{}  \n", shown(&header_lines(r)[0])));
     out.push_str(
         "Cached: the share of prompt tokens the servers read from their prompt caches. Cost \
          in USD from each episode's `cost_usd` (cached tokens at the cached input price); - \
@@ -573,7 +585,7 @@ pub fn markdown(r: &Report) -> String {
         let opt = |x: Option<f64>, d: usize| x.map_or("-".into(), |x| format!("{x:.d$}"));
         out.push_str(&format!(
             "| {} | {} | {} | {:.2} | {:.0} | {} | {} | {} | {} | {} |\n",
-            c.method,
+            md(&c.method),
             c.episodes,
             c.steps,
             c.calls_per_episode,
@@ -588,11 +600,14 @@ pub fn markdown(r: &Report) -> String {
     out
 }
 
+/// A field of the CSV: escaped for a terminal ([`shown`]: no line break or control
+/// character stays raw), quoted when it holds a comma or a quote.
 fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n']) {
+    let s = shown(s);
+    if s.contains([',', '"']) {
         format!("\"{}\"", s.replace('"', "\"\""))
     } else {
-        s.to_owned()
+        s.into_owned()
     }
 }
 
@@ -620,8 +635,9 @@ pub fn csv(r: &Report) -> String {
             for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
                 let Some(cell) = cell else { continue };
                 out.push_str(&format!(
-                    "{name},{},{c},{n},{},{},{},{},{},,,,,,,,{seeds},{backend},\n",
+                    "{name},{},{},{n},{},{},{},{},{},,,,,,,,{seeds},{backend},\n",
                     csv_field(&row.method),
+                    csv_field(c),
                     cell.episodes,
                     num(Some(cell.sr.mean)),
                     num(cell.sr.ci95),
@@ -632,7 +648,8 @@ pub fn csv(r: &Report) -> String {
         }
         for ((c, n), gt) in t.columns.iter().zip(&t.tasks).zip(&t.gt) {
             out.push_str(&format!(
-                "{name},ground truth,{c},{n},,,,,,{},,,,,,,{seeds},{backend},\n",
+                "{name},ground truth,{},{n},,,,,,{},,,,,,,{seeds},{backend},\n",
+                csv_field(c),
                 num(*gt)
             ));
         }

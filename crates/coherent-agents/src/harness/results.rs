@@ -3,16 +3,18 @@
 //! the last line short.
 
 use std::collections::HashSet;
-use std::fs::{File, OpenOptions};
+use std::fs::OpenOptions;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::{BackendInfo, Usage};
 use crate::error::Error;
 use crate::harness::prices::PriceTable;
 use crate::harness::run_settings::RunSettings;
+use crate::records::lock;
 use crate::records::transcript::Status;
 
 /// One finished episode: a line of the results file.
@@ -110,25 +112,63 @@ pub struct ResultsFile {
     pub good_len: u64,
 }
 
-/// Reads a results file. A last line without its newline that does not parse is a write
-/// cut short (reported in `truncated_bytes`); any other bad line is an error naming the
-/// file, the line and the JSON path.
+/// The most a results file may hold unless told otherwise: about a million episodes'
+/// lines.
+pub const DEFAULT_MAX_BYTES: u64 = 1024 * MIB;
+
+/// The most one line of a results file may hold: a line is well under 2 KiB, its error
+/// cut at [`ERROR_BYTES`] when it is written.
+pub const MAX_LINE_BYTES: u64 = MIB;
+
+/// The most of an episode's error a results line keeps (the transcript has all of it).
+pub const ERROR_BYTES: usize = 64 << 10;
+
+/// How much a run may read back of the files it was given: its results file (to resume,
+/// to replay from, to report) and each transcript it replays.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ReadLimits {
+    pub results_bytes: u64,
+    pub transcript_bytes: u64,
+}
+
+impl Default for ReadLimits {
+    fn default() -> ReadLimits {
+        ReadLimits {
+            results_bytes: DEFAULT_MAX_BYTES,
+            transcript_bytes: crate::records::transcript::DEFAULT_MAX_BYTES,
+        }
+    }
+}
+
+/// The limits of a results file of at most `bytes`.
+fn limits(bytes: u64) -> (Limit, Limit) {
+    let line = Limit {
+        bytes: MAX_LINE_BYTES,
+        what: "a results file",
+        raise: None,
+    };
+    let total = Limit {
+        bytes,
+        what: "a results file",
+        raise: Some("--max-results-mib"),
+    };
+    (line, total)
+}
+
+/// Reads a results file of at most [`DEFAULT_MAX_BYTES`] ([`read_results_within`]).
 pub fn read_results(path: &Path) -> Result<ResultsFile, Error> {
-    let mut text = Vec::new();
-    File::open(path)
-        .and_then(|mut f| f.read_to_end(&mut text))
-        .map_err(|e| Error::io(path, &e))?;
+    read_results_within(path, DEFAULT_MAX_BYTES)
+}
+
+/// Reads a results file of at most `max_bytes`. A last line without its newline that
+/// does not parse is a write cut short (reported in `truncated_bytes`); any other bad
+/// line is an error naming the file, the line and the JSON path.
+pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, Error> {
+    let (line_limit, total) = limits(max_bytes);
+    let mut lines = Lines::open(path, line_limit, total).map_err(Error::file)?;
     let mut out = ResultsFile::default();
-    let mut start = 0;
-    let mut number = 0;
-    while start < text.len() {
-        number += 1;
-        let (end, complete) = match text[start..].iter().position(|&b| b == b'\n') {
-            Some(i) => (start + i + 1, true),
-            None => (text.len(), false),
-        };
-        let raw = &text[start..end];
-        let parsed = std::str::from_utf8(raw)
+    while let Some(line) = lines.next_line().map_err(Error::file)? {
+        let parsed = std::str::from_utf8(line.bytes)
             .map_err(|e| e.to_string())
             .and_then(|s| {
                 if s.trim().is_empty() {
@@ -138,17 +178,16 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, Error> {
                 parse_line(de).map(Some)
             });
         match parsed {
-            Ok(line) => {
-                out.lines.extend(line);
+            Ok(parsed) => {
+                out.lines.extend(parsed);
                 // A complete record missing only its newline is kept; repair adds it.
-                out.good_len = end as u64;
+                out.good_len = line.end();
             }
-            Err(_) if !complete => {
-                out.truncated_bytes = (end - start) as u64;
+            Err(_) if !line.complete() => {
+                out.truncated_bytes = line.bytes.len() as u64;
             }
-            Err(e) => return Err(Error::at_line(path, number, e)),
+            Err(e) => return Err(Error::at_line(path, line.number, e)),
         }
-        start = end;
     }
     Ok(out)
 }
@@ -224,7 +263,9 @@ pub fn repair(path: &Path, file: &ResultsFile) -> Result<(), Error> {
 
 /// Renames to `*.jsonl.unfinished` every transcript under [`transcripts_dir`] of `out`
 /// that none of `lines` points to: an episode killed mid-run (or between its last round
-/// and its results line) left it, and the episode runs again. Returns the new names.
+/// and its results line) left it, and the episode runs again. A transcript whose writer
+/// still holds it (an episode running in another process) is left alone. Returns the
+/// new names.
 pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, Error> {
     let dir = transcripts_dir(out);
     if !dir.is_dir() {
@@ -245,6 +286,7 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, Er
                 folders.push(path);
             } else if path.extension().is_some_and(|x| x == "jsonl")
                 && !pointed.contains(&path.canonicalize().map_err(|e| io(&path, e))?)
+                && !being_written(&path).map_err(|e| io(&path, e))?
             {
                 let mut renamed = path.clone().into_os_string();
                 renamed.push(".unfinished");
@@ -256,6 +298,13 @@ pub fn mark_orphans(out: &Path, lines: &[ResultLine]) -> Result<Vec<PathBuf>, Er
     }
     marked.sort();
     Ok(marked)
+}
+
+/// Whether the transcript at `path` is locked by its writer, which is still running.
+fn being_written(path: &Path) -> io::Result<bool> {
+    let file = std::fs::File::open(path)?;
+    // Taken and, as the file closes, released at once: only a writer's lock stays.
+    Ok(!lock::try_exclusive(&file)?)
 }
 
 /// `results.jsonl` -> `results.transcripts/`, next to it.

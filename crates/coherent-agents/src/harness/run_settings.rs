@@ -9,6 +9,7 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
+use coherent_core::text::shown;
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::BackendKind;
@@ -84,9 +85,16 @@ pub struct Difference {
     pub now: String,
 }
 
+/// Both values shown escaped: the file's come from whatever wrote it (a model's name, a
+/// method's own settings).
 impl fmt::Display for Difference {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{} in the file, {} now", self.file, self.now)
+        write!(
+            f,
+            "{} in the file, {} now",
+            shown(&self.file),
+            shown(&self.now)
+        )
     }
 }
 

@@ -6,6 +6,14 @@ use std::path::Path;
 use std::sync::Arc;
 
 use coherent_core::Task;
+use coherent_core::files::{self, Limit, MIB};
+
+/// The most a subset file may hold: tens of thousands of `scene task_id` lines.
+pub const FILE_LIMIT: Limit = Limit {
+    bytes: MIB,
+    what: "a subset file",
+    raise: None,
+};
 
 use crate::error::Error;
 
@@ -46,9 +54,14 @@ impl Subset {
         }
     }
 
-    /// Reads a subset file; errors name the file and the line.
+    /// Reads a subset file of at most [`FILE_LIMIT`]; errors name the file and the line.
     pub fn read_file(path: &Path) -> Result<Subset, Error> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, &e))?;
+        let bytes = files::read(path, &FILE_LIMIT).map_err(Error::file)?;
+        let text = String::from_utf8(bytes).map_err(|e| Error::Format {
+            file: path.display().to_string(),
+            line: None,
+            message: format!("not UTF-8: {e}"),
+        })?;
         let mut pairs = Vec::new();
         for (i, line) in text.lines().enumerate() {
             let line = line.split('#').next().unwrap_or("").trim();

@@ -7,28 +7,31 @@
 //! Faults are steps like any: an action outside the robot's list is run as written, so
 //! that the feasibility check gives the reason; a robot that is not in the team is a
 //! failed step that says so; no robot is no action (the step still counts). A policy
-//! that fails (raises, in Python) ends the episode with status `error` and its words.
+//! that fails (raises, in Python) ends the episode with status `error` and its words,
+//! and so does a step that takes longer than the method's step limit.
 
 use std::io;
 use std::sync::Arc;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
+use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
-use crate::episode::policy::{Act, MethodFailure, PastStep, Policy, StepView};
+use crate::episode::policy::{Act, Choice, MethodFailure, PastStep, Policy, StepView};
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::{decision, feedback};
 use crate::records::transcript::{Round, RoundOutcome};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
-/// spent, the policy fails, or `cancel` fires. A policy that could not be made fails
-/// the first step.
+/// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
+/// fires. A policy that could not be made fails the first step.
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     made: Result<Box<dyn Policy>, MethodFailure>,
     max_steps: u32,
+    step_timeout: Option<Duration>,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
 ) -> io::Result<Episode> {
@@ -45,10 +48,23 @@ pub async fn run(
                     max_steps,
                     &history.entries(),
                 ));
+                let act = policy.act(view);
+                // Without a limit, a step may take as long as it takes (a sleep of
+                // Duration::MAX would overflow the clock).
+                let limit = async {
+                    match step_timeout {
+                        Some(limit) => tokio::time::sleep(limit).await,
+                        None => std::future::pending().await,
+                    }
+                };
                 tokio::select! {
                     biased;
                     () = cancel.cancelled() => return Ok(None),
-                    act = policy.act(view) => act,
+                    act = act => act,
+                    () = limit => Act {
+                        choice: Err(out_of_time(step_timeout.unwrap_or_default())),
+                        calls: Vec::new(),
+                    },
                 }
             }
             Err(why) => Act {
@@ -58,7 +74,7 @@ pub async fn run(
         };
         let mut round = Round::new(step);
         round.calls = act.calls;
-        match act.choice {
+        match bounded(act.choice) {
             Ok(choice) => {
                 round.external = Some(choice.clone());
                 let action = choice.action.unwrap_or_default();
@@ -78,6 +94,32 @@ pub async fn run(
         Ok(Some(round))
     };
     rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// The failure of a step that took longer than `limit`.
+fn out_of_time(limit: Duration) -> MethodFailure {
+    MethodFailure(format!(
+        "the step took longer than its time limit of {} s (--step-timeout, step_timeout=), \
+         and was stopped",
+        number(limit.as_secs_f64())
+    ))
+}
+
+/// The most of a method's note, action or error a round keeps: what a method says is
+/// text of any length, and the transcript must stay readable.
+pub const MAX_TEXT_BYTES: usize = 64 << 10;
+
+/// `choice` with its texts cut at [`MAX_TEXT_BYTES`]: the note and the action at their
+/// end, an error at its start (a traceback ends with the exception).
+fn bounded(choice: Result<Choice, MethodFailure>) -> Result<Choice, MethodFailure> {
+    match choice {
+        Ok(mut c) => {
+            c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
+            c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
+            Ok(c)
+        }
+        Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
+    }
 }
 
 /// Runs `robot`'s `action` as the round's decision; a robot that is not in the team is a

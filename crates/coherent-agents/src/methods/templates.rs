@@ -21,9 +21,18 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::digest;
+
+/// The most a template may hold: the built-in ones are a few KiB, and a prompt of a MiB
+/// is already past any model's context.
+pub const TEMPLATE_LIMIT: Limit = Limit {
+    bytes: MIB,
+    what: "a prompt template",
+    raise: None,
+};
 
 /// The name of the built-in set in the paper's layout (`--prompts paper-layout`).
 pub const PAPER_LAYOUT: &str = "paper-layout";
@@ -191,6 +200,17 @@ pub enum PromptError {
 }
 
 impl PromptError {
+    /// A reading error of `coherent_core` (a file that cannot be read, or holds too much).
+    fn from_core(e: coherent_core::Error) -> PromptError {
+        match e {
+            coherent_core::Error::Io { file, message } => PromptError::Io { file, message },
+            other => PromptError::Io {
+                file: String::new(),
+                message: other.to_string(),
+            },
+        }
+    }
+
     /// The file the error is about, when it is about one.
     pub fn file(&self) -> Option<&str> {
         match self {
@@ -314,13 +334,18 @@ impl Prompts {
 
     /// The built-in templates, with those of `files` (`(name, text)`, the name a
     /// template's file name) in their place; each is checked, and errors name the file
-    /// as `origin/name`. A file with the built-in text replaces nothing.
+    /// as `origin/name`. A file with the built-in text replaces nothing; one of more than
+    /// [`TEMPLATE_LIMIT`] is refused.
     pub fn from_texts(origin: &Path, files: Vec<(String, String)>) -> Result<Prompts, PromptError> {
         let mut replaced = BTreeMap::new();
         for (name, text) in files {
-            let file = origin.join(&name).display().to_string();
+            let path = origin.join(&name);
+            let file = path.display().to_string();
             let template = Template::from_file_name(&name)
                 .ok_or(PromptError::UnknownFile { file: file.clone() })?;
+            if text.len() as u64 > TEMPLATE_LIMIT.bytes {
+                return Err(PromptError::from_core(TEMPLATE_LIMIT.exceeded(&path)));
+            }
             check(template, &text, &file)?;
             if text != template.builtin() {
                 replaced.insert(template, text);
@@ -331,7 +356,9 @@ impl Prompts {
 
     /// The built-in templates, with the files of folder `dir` that are named after one in
     /// their place. Other `.txt` files are refused (a misspelt name would silently leave
-    /// the built-in template in use); anything else in the folder is ignored.
+    /// the built-in template in use), and so is a `.txt` that is not a regular file (a
+    /// folder, a pipe, a link to a device or to nothing) or holds more than
+    /// [`TEMPLATE_LIMIT`]; anything else in the folder is ignored.
     pub fn read_dir(dir: &Path) -> Result<Prompts, PromptError> {
         let io = |file: &Path, e: std::io::Error| PromptError::Io {
             file: file.display().to_string(),
@@ -348,10 +375,23 @@ impl Prompts {
             let Some(name) = path.file_name().and_then(|n| n.to_str()) else {
                 continue;
             };
-            if !is_txt || name.starts_with('.') || !path.is_file() {
+            if !is_txt || name.starts_with('.') {
                 continue;
             }
-            let text = std::fs::read_to_string(&path).map_err(|e| io(&path, e))?;
+            let meta = std::fs::metadata(&path).map_err(|e| io(&path, e))?;
+            if !meta.is_file() {
+                return Err(PromptError::Io {
+                    file: path.display().to_string(),
+                    message: "not a regular file (a folder, a pipe, a device?): a template \
+                              must be one"
+                        .into(),
+                });
+            }
+            let bytes = files::read(&path, &TEMPLATE_LIMIT).map_err(PromptError::from_core)?;
+            let text = String::from_utf8(bytes).map_err(|e| PromptError::Io {
+                file: path.display().to_string(),
+                message: format!("not UTF-8: {e}"),
+            })?;
             files.push((name.to_owned(), text));
         }
         Prompts::from_texts(dir, files)
@@ -419,6 +459,17 @@ impl Prompts {
         self.0.replaced.keys().map(|t| t.file_name()).collect()
     }
 
+    /// The file names of the replacing templates that hold nothing but white space (a
+    /// write cut short, say): worth a warning, since their prompts say nothing.
+    pub fn blank_names(&self) -> Vec<&'static str> {
+        self.0
+            .replaced
+            .iter()
+            .filter(|(_, text)| text.trim().is_empty())
+            .map(|(t, _)| t.file_name())
+            .collect()
+    }
+
     /// What a transcript's header records of the set.
     pub fn record(&self) -> PromptRecord {
         PromptRecord {
@@ -443,7 +494,10 @@ pub struct PromptRecord {
 }
 
 /// Writes every template of `set` into `dir` (made when missing), one file each; an
-/// existing file is an error unless `overwrite`. Returns the files written.
+/// existing file is an error unless `overwrite`, and a symbolic link is one always (an
+/// export writes regular files, never through a link to elsewhere). Each file is written
+/// to a temporary file that is renamed once complete, so that a full disk leaves no
+/// empty template behind. Returns the files written.
 pub fn export(dir: &Path, overwrite: bool, set: &Prompts) -> Result<Vec<PathBuf>, PromptError> {
     let io = |file: &Path, e: std::io::Error| PromptError::Io {
         file: file.display().to_string(),
@@ -454,16 +508,52 @@ pub fn export(dir: &Path, overwrite: bool, set: &Prompts) -> Result<Vec<PathBuf>
         .iter()
         .map(|t| dir.join(t.file_name()))
         .collect();
-    if !overwrite && let Some(there) = paths.iter().find(|p| p.exists()) {
+    for path in &paths {
+        // Not `exists()`, which follows a link and calls a dangling one absent.
+        let Ok(meta) = std::fs::symlink_metadata(path) else {
+            continue;
+        };
+        let refused = if meta.file_type().is_symlink() {
+            "is a symbolic link: export writes regular files only; remove it first"
+        } else if !overwrite {
+            "exists already (pass --force to overwrite)"
+        } else if !meta.is_file() {
+            "exists and is not a regular file"
+        } else {
+            continue;
+        };
         return Err(PromptError::Io {
-            file: there.display().to_string(),
-            message: "exists already (pass --force to overwrite)".into(),
+            file: path.display().to_string(),
+            message: refused.into(),
         });
     }
     for (t, path) in Template::ALL.iter().zip(&paths) {
-        std::fs::write(path, set.text(*t)).map_err(|e| io(path, e))?;
+        write_whole(path, set.text(*t)).map_err(|e| io(path, e))?;
     }
     Ok(paths)
+}
+
+/// Writes `text` to `path` through a temporary file beside it, synced and then renamed,
+/// so that `path` holds either its old content or all of `text`.
+fn write_whole(path: &Path, text: &str) -> std::io::Result<()> {
+    use std::io::Write;
+    let name = path
+        .file_name()
+        .map_or_else(Default::default, |n| n.to_string_lossy());
+    let temporary = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+    let written = (|| {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&temporary)?;
+        file.write_all(text.as_bytes())?;
+        file.sync_all()?;
+        std::fs::rename(&temporary, path)
+    })();
+    if written.is_err() {
+        let _ = std::fs::remove_file(&temporary);
+    }
+    written
 }
 
 #[cfg(test)]

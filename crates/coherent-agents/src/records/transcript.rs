@@ -5,10 +5,11 @@
 //! ([`crate::records::replay`]).
 
 use std::fs::File;
-use std::io::{self, BufRead, BufReader, Write};
+use std::io::{self, Write};
 use std::path::Path;
 
 use coherent_core::RobotReport;
+use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
 use coherent_core::{NodeId, Task};
@@ -16,6 +17,7 @@ use coherent_core::{NodeId, Task};
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
 use crate::error::Error;
 use crate::methods::templates::PromptRecord;
+use crate::records::lock;
 
 pub const FORMAT: &str = "coherent-transcript";
 pub const VERSION: u32 = 1;
@@ -306,21 +308,23 @@ pub enum Record {
     Summary(Summary),
 }
 
-/// Writes a transcript line by line, flushing each.
+/// Writes a transcript line by line, flushing each; the file is locked while it is
+/// written ([`crate::records::lock`]), so that no benchmark takes it for one left over.
 #[derive(Debug)]
 pub struct Writer {
     file: File,
 }
 
 impl Writer {
-    /// Creates the file (and its folder) and writes the header.
+    /// Creates the file (and its folder), locks it and writes the header.
     pub fn create(path: &Path, header: Header) -> io::Result<Writer> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)?;
         }
-        let mut w = Writer {
-            file: File::create(path)?,
-        };
+        let file = File::create(path)?;
+        // A file just made is nobody else's: the lock is only for the others to see.
+        lock::try_exclusive(&file)?;
+        let mut w = Writer { file };
         w.write(&Record::Header(Box::new(header)))?;
         Ok(w)
     }
@@ -342,19 +346,39 @@ pub struct Transcript {
     pub summary: Option<Summary>,
 }
 
-/// Reads a transcript; errors name the file and the line.
+/// The most a transcript may hold unless told otherwise: a PEFA episode of 100 steps
+/// with the built-in prompts takes a few MiB.
+pub const DEFAULT_MAX_BYTES: u64 = 64 * MIB;
+
+/// The limit of a transcript of at most `bytes` (any one line as much).
+pub fn limit(bytes: u64) -> Limit {
+    Limit {
+        bytes,
+        what: "a transcript",
+        raise: Some("--max-transcript-mib"),
+    }
+}
+
+/// Reads a transcript of at most [`DEFAULT_MAX_BYTES`]; errors name the file and the
+/// line.
 pub fn read(path: &Path) -> Result<Transcript, Error> {
-    let file = File::open(path).map_err(|e| Error::io(path, &e))?;
+    read_within(path, DEFAULT_MAX_BYTES)
+}
+
+/// Reads a transcript of at most `max_bytes`; errors name the file and the line.
+pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
+    let mut lines = Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(Error::file)?;
     let mut header = None;
     let mut rounds = Vec::new();
     let mut summary = None;
-    for (i, line) in BufReader::new(file).lines().enumerate() {
+    while let Some(line) = lines.next_line().map_err(Error::file)? {
+        let i = line.number - 1;
         let at = |message: String| Error::at_line(path, i + 1, message);
-        let line = line.map_err(|e| at(e.to_string()))?;
+        let line = std::str::from_utf8(line.bytes).map_err(|e| at(e.to_string()))?;
         if line.trim().is_empty() {
             continue;
         }
-        let record: Record = serde_json::from_str(&line).map_err(|e| at(e.to_string()))?;
+        let record: Record = serde_json::from_str(line).map_err(|e| at(e.to_string()))?;
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || h.version != VERSION {

@@ -3,6 +3,12 @@
 //! inserted, deleted or cut off; numbers made huge, negative or fractional; values of the
 //! wrong type; members dropped; keys repeated; strings made long; ids pointed at other
 //! nodes. Each mutation says what it did, so that a failure can be replayed by hand.
+//! Files that are not one JSON document get mutations of their own: plain text
+//! ([`mutate_text`], prompt templates) and JSON lines ([`mutate_lines`], transcripts
+//! and results files).
+
+// Each test file that includes this module uses the mutations of its inputs only.
+#![allow(dead_code)]
 
 use serde_json::Value;
 
@@ -67,6 +73,59 @@ pub fn mutate(rng: &mut Rng, text: &str) -> (Vec<u8>, String) {
             (text.into_bytes(), what)
         }
     }
+}
+
+/// `text` (plain text, a prompt template) with one mutation: a byte flipped, inserted
+/// or deleted, the text cut off, a placeholder of no template added, or a line repeated
+/// into a long text.
+pub fn mutate_text(rng: &mut Rng, text: &str) -> (Vec<u8>, String) {
+    match rng.below(6) {
+        0 => flip_byte(rng, text),
+        1 => insert_byte(rng, text),
+        2 => delete_bytes(rng, text),
+        3 => cut_off(rng, text),
+        4 => {
+            let at = rng.below(text.len() + 1);
+            let at = (0..=at)
+                .rev()
+                .find(|&i| text.is_char_boundary(i))
+                .unwrap_or(0);
+            let mut out = text.to_owned();
+            out.insert_str(at, "{{no_such_placeholder}}");
+            (out.into_bytes(), format!("an unknown placeholder at {at}"))
+        }
+        _ => {
+            // Up to about 4 MiB: past every limit on a template, well within a transcript's.
+            let times = 1 + rng.below((4 << 20) / text.len().max(1));
+            (
+                text.repeat(times).into_bytes(),
+                format!("the text {times} times"),
+            )
+        }
+    }
+}
+
+/// `text` (JSON lines) with one of its lines mutated as a JSON document ([`mutate`]),
+/// or, one time in four, the whole file's bytes mutated as text ([`mutate_text`]).
+pub fn mutate_lines(rng: &mut Rng, text: &str) -> (Vec<u8>, String) {
+    let lines: Vec<&str> = text.lines().collect();
+    if lines.is_empty() || rng.below(4) == 0 {
+        let (bytes, what) = mutate_text(rng, text);
+        return (bytes, format!("the whole file: {what}"));
+    }
+    let n = rng.below(lines.len());
+    let (line, what) = mutate(rng, lines[n]);
+    // A pretty-printed mutation goes back on one line (JSON allows a space there).
+    let line = match String::from_utf8(line) {
+        Ok(text) => text.replace('\n', " ").into_bytes(),
+        Err(e) => e.into_bytes(),
+    };
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        out.extend_from_slice(if i == n { &line } else { l.as_bytes() });
+        out.push(b'\n');
+    }
+    (out, format!("line {}: {what}", n + 1))
 }
 
 fn flip_byte(rng: &mut Rng, text: &str) -> (Vec<u8>, String) {
