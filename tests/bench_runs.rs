@@ -11,9 +11,9 @@ use coherent::session::backend::{BackendName, BackendRequest};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
     Act, BenchOutcome, BoxFuture, Cancel, Choice, DEFAULT_MAX_RESULTS_BYTES,
-    DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Event, External, MakePolicy, Method, MethodFailure,
-    MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task, Transcript,
-    read_results, transcripts_dir,
+    DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Event, Execution, External, MakePolicy, Method,
+    MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task,
+    Transcript, read_results, transcripts_dir,
 };
 use coherent::session::episode;
 use coherent_agents::BackendKind;
@@ -93,6 +93,7 @@ fn hand_line(
 ) -> ResultLine {
     ResultLine {
         method: "pefa".into(),
+        execution: Execution::Sequential,
         scene: task.meta.scene.clone(),
         task_id: task.meta.task_id,
         task_type: Some("mono".into()),
@@ -104,12 +105,16 @@ fn hand_line(
         gt_steps: task.meta.gt_steps,
         optimal_steps: None,
         max_steps: 99,
+        makespan: None,
+        optimal_makespan: None,
+        actions: None,
         llm_calls: 0,
         prompt_tokens: 0,
         completion_tokens: 0,
         cached_tokens: 0,
         cost_usd: None,
         wall_ms: 0.0,
+        sim_seconds: None,
         backend: BackendInfo {
             kind: BackendKind::Builtin,
             model: "optimal-planner".into(),
@@ -297,7 +302,7 @@ impl Policy for FollowPlan {
         };
         Box::pin(async move {
             Act {
-                choice: Ok(choice),
+                choices: Ok(vec![choice]),
                 calls: Vec::new(),
             }
         })
@@ -463,6 +468,8 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
                 l.transcript
             );
         }
+        // Physics times each episode; the rules alone do not.
+        assert!(got.iter().all(|l| l.sim_seconds.is_some() == physics));
         // The lines record physics on or off, and are the same otherwise.
         assert!(
             got.iter()
@@ -473,6 +480,7 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
             .map(|l| ResultLine {
                 wall_ms: 0.0,
                 transcript: String::new(),
+                sim_seconds: None,
                 settings: None,
                 ..l
             })

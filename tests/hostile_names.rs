@@ -94,12 +94,15 @@ fn a_scene_with_escapes_is_flagged_and_shown_escaped_in_every_output_and_no_file
     for name in names(&dir) {
         assert!(safe_name(&name), "an unsafe file name: {name:?}");
     }
-    // A results line whose method holds escapes, in both table formats.
+    // A results line whose method holds escapes, in both table formats; its episode in
+    // parallel too, so that the makespan table names it as well.
     let text = std::fs::read_to_string(&results).expect("the results");
     let mut line: Value = serde_json::from_str(text.lines().next().expect("a line")).expect("JSON");
     line["method"] = json!("pe\u{1b}[31mfa|x,\"y\"\u{7}");
+    let mut parallel = line.clone();
+    parallel["execution"] = json!("parallel");
     let forged = dir.join("forged.jsonl");
-    std::fs::write(&forged, format!("{line}\n")).expect("written");
+    std::fs::write(&forged, format!("{line}\n{parallel}\n")).expect("written");
     for format in ["markdown", "csv"] {
         let out = coherent(&["bench", "--report", utf8(&forged), "--format", format]);
         assert_eq!(out.status.code(), Some(0), "{}", show(&out));

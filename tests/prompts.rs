@@ -123,10 +123,14 @@ fn export_writes_every_template_and_does_not_overwrite_unasked() {
     assert_eq!(
         names,
         [
+            "assigner_parallel_system.txt",
+            "assigner_parallel_user.txt",
             "assigner_system.txt",
             "assigner_user.txt",
             "central.txt",
+            "central_parallel.txt",
             "dmrs_speaker.txt",
+            "dmrs_speaker_parallel.txt",
             "executor_quadrotor.txt",
             "executor_robot_arm.txt",
             "executor_robot_dog.txt",

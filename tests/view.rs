@@ -167,3 +167,105 @@ fn the_robot_a_central_method_names_in_its_decision_is_the_one_that_moves() {
     let drawn = std::fs::read_to_string(&svg).expect("the picture");
     assert!(drawn.contains("class=\"path\""), "no path drawn");
 }
+
+#[test]
+fn a_parallel_episode_page_shows_every_robots_part_of_each_joint_step() {
+    let dir = scratch("view-parallel");
+    let out = coherent(&[
+        "run",
+        utf8(&demo()),
+        "--execution",
+        "parallel",
+        "--out",
+        utf8(&dir),
+    ]);
+    assert!(out.status.success(), "{}", show(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    // Each step as printed: its line, then its robots' indented lines under it.
+    let mut printed: Vec<String> = Vec::new();
+    for l in stdout.lines() {
+        if l.starts_with("step ") {
+            printed.push(l.to_owned());
+        } else if l.starts_with("  ") {
+            let step = printed.last_mut().expect("a robot's line under a step");
+            step.push('\n');
+            step.push_str(l);
+        }
+    }
+    let transcript = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("transcript: "))
+        .expect("the transcript line");
+    let page = dir.join("parallel.html");
+    let out = coherent(&["view", transcript, "-o", utf8(&page)]);
+    assert!(out.status.success(), "{}", show(&out));
+    let data = embedded(&page);
+    let ep = &data["episodes"][0];
+    assert_eq!(ep["header"]["execution"], "parallel");
+    let steps = ep["steps"].as_array().expect("steps");
+    let lines: Vec<&str> = steps
+        .iter()
+        .map(|s| s["line"].as_str().expect("a line"))
+        .collect();
+    assert_eq!(lines, printed);
+    let rounds: Vec<Value> = std::fs::read_to_string(transcript)
+        .expect("the transcript")
+        .lines()
+        .map(|l| serde_json::from_str::<Value>(l).expect("JSON"))
+        .filter(|r| r["type"] == "round")
+        .collect();
+    let moments = ep["scene"]["moments"].as_array().expect("moments");
+    let at = |m: &Value, robot: &Value| {
+        let robots = m["robots"].as_array().expect("robots");
+        let r = robots.iter().find(|r| &r["id"] == robot).expect("placed");
+        r["at"]
+            .as_array()
+            .expect("drawn")
+            .iter()
+            .map(|v| v.as_f64().expect("a number"))
+            .collect::<Vec<f64>>()
+    };
+    let mut together = 0;
+    for (k, (step, round)) in steps.iter().zip(&rounds).enumerate() {
+        let entries = step["robots"].as_array().expect("robots");
+        let parts = round["parts"].as_array().expect("parts");
+        assert!(!parts.is_empty(), "step {}: a robot with a subtask", k + 1);
+        assert_eq!(
+            entries.len(),
+            parts.len(),
+            "an entry per part, step {}",
+            k + 1
+        );
+        let mut acted = 0;
+        for (entry, part) in entries.iter().zip(parts) {
+            assert_eq!(entry["robot"], part["robot"]);
+            assert_eq!(entry["decision"]["action"], part["decision"]["action"]);
+            let executed = part["outcome"]["kind"] == "executed";
+            acted += usize::from(executed);
+            let action = part["decision"]["action"].as_str().unwrap_or("");
+            let (before, after) = (
+                at(&moments[k], &part["robot"]),
+                at(&moments[k + 1], &part["robot"]),
+            );
+            let moved = before
+                .iter()
+                .zip(&after)
+                .map(|(a, b)| (a - b).powi(2))
+                .sum::<f64>()
+                > 0.25;
+            // A robot's own move takes it elsewhere; a landing may shift it onto the
+            // surface below; nothing else moves a robot on the floor plan.
+            if executed && action.starts_with("[movetowards]") {
+                assert!(moved, "step {}: {action}", k + 1);
+            }
+            if moved {
+                let its_own = ["[movetowards]", "[land_on]"]
+                    .iter()
+                    .any(|a| action.starts_with(a));
+                assert!(executed && its_own, "step {}: {action}", k + 1);
+            }
+        }
+        together += usize::from(acted >= 2);
+    }
+    assert!(together > 0, "some step moves several robots");
+}

@@ -328,6 +328,7 @@ class _Summary(TypedDict):
     cached_tokens: int
     wall_ms: float
     error: str | None
+    sim_seconds: NotRequired[float]
 
 class _BenchOutcome(TypedDict):
     # total = skipped + finished + unfinished
@@ -456,7 +457,11 @@ class View:
         """The step about to be taken, from 1."""
     @property
     def max_steps(self) -> int:
-        """The step budget (2 x GT unless set)."""
+        """The step budget (2 x GT unless set; 2 x the fewest joint steps in parallel)."""
+    @property
+    def execution(self) -> Literal["sequential", "parallel"]:
+        """``"parallel"``: ``act`` answers a list, one decision per robot that acts, all
+        carried out at once as one joint step."""
     @property
     def robots(self) -> list[int]:
         """Node ids of the robots."""
@@ -468,7 +473,8 @@ class View:
     @property
     def history(self) -> list[_History]:
         """Every earlier step, oldest first: ``(robot, action, ok, reason)``; robot and
-        action None for a step without an action, reason None when it ran."""
+        action None for a step without an action, reason None when it ran; of a parallel
+        step, one for each robot given an action in it."""
     def observation(self, robot: int) -> _Observation:
         """What ``robot`` sees, as :meth:`Env.observe` gives it."""
     def observation_text(self, robot: int | None = None) -> str:
@@ -543,6 +549,17 @@ class Episode:
     @property
     def wall_ms(self) -> float: ...
     @property
+    def execution(self) -> Literal["sequential", "parallel"]: ...
+    @property
+    def makespan(self) -> int | None:
+        """The joint steps it took to reach the goal (its steps); None when it did not."""
+    @property
+    def actions(self) -> int:
+        """The actions carried out (several a step in a parallel episode)."""
+    @property
+    def sim_seconds(self) -> float | None:
+        """The simulated seconds it took, with physics; None otherwise."""
+    @property
     def error(self) -> str | None: ...
     @property
     def backend(self) -> _Backend: ...
@@ -566,6 +583,7 @@ def run(
     task: Task,
     method: str | _MethodFactory = "pefa",
     *,
+    execution: Literal["sequential", "parallel"] = "sequential",
     llm: LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
     history: int = 5,
@@ -592,11 +610,13 @@ def run(
     runs); ``prices`` adds to the built-in price table (``Episode.cost_usd``, the same as
     :func:`load_episode` gives for the transcript at the same prices). With
     ``robots="ros2"`` one ROS 2 action server per robot under ``namespace`` carries the
-    actions out, as for :class:`Env`. Raises :class:`BackendError` when the server fails
-    for good, :class:`MethodError` when the method raises or one of its steps (``M(task)``
-    and ``act``) takes longer than ``step_timeout`` seconds, :class:`RobotError` when a
-    robot stops answering; Ctrl-C stops the episode, whatever ``act`` is doing, and raises
-    ``KeyboardInterrupt``."""
+    actions out, as for :class:`Env`. ``execution="parallel"`` runs the robots in joint
+    steps (the budget is 2 x the fewest joint steps; MCTS and LLM-MCTS are sequential
+    only and raise :class:`ArgumentError`). Raises :class:`BackendError` when the server
+    fails for good, :class:`MethodError` when the method raises or one of its steps
+    (``M(task)`` and ``act``) takes longer than ``step_timeout`` seconds,
+    :class:`RobotError` when a robot stops answering; Ctrl-C stops the episode, whatever
+    ``act`` is doing, and raises ``KeyboardInterrupt``."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set
@@ -615,6 +635,7 @@ def run_bench(
     tasks: Sequence[Task],
     methods: Sequence[str | _MethodFactory],
     *,
+    execution: str | Sequence[str] = "sequential",
     backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
     sim_errors: str | Mapping[str, float] | None = None,
     replay_from: _PathLike | None = None,
@@ -649,6 +670,7 @@ class _BenchLedger:
         *,
         seeds: int,
         out: _PathLike | None,
+        execution: str | Sequence[str] = "sequential",
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
@@ -663,8 +685,8 @@ class _BenchLedger:
     @property
     def out(self) -> str:
         """The results file (the name the settings give when ``out`` was None)."""
-    def pending(self) -> list[tuple[str, str, int, int]]:
-        """The episodes to run: ``(method, scene, task_id, seed)``."""
+    def pending(self) -> list[tuple[str, str, int, int, str]]:
+        """The episodes to run: ``(method, scene, task_id, seed, execution)``."""
     def worker_settings(self) -> dict[str, Any]:
         """``prompts`` (the replaced templates by file name) and ``prices`` (the whole
         table) as data, for the workers."""
@@ -681,6 +703,7 @@ class _BenchWorker:
         tasks: Sequence[str],
         methods: Sequence[str | _MethodFactory],
         *,
+        execution: str | Sequence[str] = "sequential",
         backend: Literal["builtin", "simulated", "replay"] | LLM | None = None,
         sim_errors: str | Mapping[str, float] | None = None,
         replay_from: _PathLike | None = None,
@@ -693,7 +716,7 @@ class _BenchWorker:
         prices: Mapping[str, Mapping[str, Any]],
         step_timeout: float | None = None,
     ) -> None: ...
-    def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
+    def run(self, key: tuple[str, str, int, int, str]) -> tuple[str, str | None]:
         """``("line", json)``, ``("skipped", why)`` or ``("not_started", None)``."""
 
 def read_results(path: _PathLike, prices: _PathLike | Mapping[str, Mapping[str, Any]] | None = None) -> list[dict[str, Any]]:

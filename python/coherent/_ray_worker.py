@@ -78,6 +78,7 @@ class EpisodeRunner:
         """This actor's process id; calling it also waits until the actor is up."""
         return os.getpid()
 
-    def run(self, key: tuple[str, str, int, int]) -> tuple[str, str | None]:
-        """Runs the episode `(method, scene, task_id, seed)`; what the driver records."""
+    def run(self, key: tuple[str, str, int, int, str]) -> tuple[str, str | None]:
+        """Runs the episode `(method, scene, task_id, seed, execution)`; what the driver
+        records."""
         return self._worker.run(tuple(key))

@@ -45,6 +45,7 @@ _SETTINGS_FIELDS = (
     "physics",
     "robots",
     "coherent",
+    "executions",
     "method",
 )
 # The settings columns that hold ints, none negative, kept ints (pandas's nullable
@@ -107,6 +108,9 @@ def _lines(data: Results) -> list[dict[str, Any]]:
             line["settings"] = settings if settings["backend"] is not None else None
             if line["settings"] is not None and line["settings"]["method"] is None:
                 line["settings"]["method"] = {}
+            # A sequential run records no executions (NA in its column).
+            if line["settings"] is not None and line["settings"]["executions"] is None:
+                del line["settings"]["executions"]
         lines.append(line)
     return lines
 
@@ -124,6 +128,7 @@ def bench(
     tasks: PathLike | Iterable[Task],
     methods: Sequence[str | Callable[[Task], Any]],
     *,
+    execution: Literal["sequential", "parallel"] | Sequence[str] = "sequential",
     backend: Literal["builtin", "simulated", "replay"] | LLM = "builtin",
     sim_errors: str | Mapping[str, float] | None = None,
     replay_from: PathLike | None = None,
@@ -177,6 +182,12 @@ def bench(
     or ``M(task)`` at the first step) as that method's error, and the run goes on.
     ``max_steps`` sets every episode's budget (2 x GT by default).
 
+    ``execution``: ``"sequential"`` (one robot's action a step, the paper's),
+    ``"parallel"`` (joint steps: every robot at most one action, all at once; the budget
+    is 2 x the fewest joint steps) or both, ``["sequential", "parallel"]``: each method
+    runs in each, the lines say which (``execution``), and :func:`report` compares them
+    (``Report.makespan``). MCTS and LLM-MCTS are sequential only (``ArgumentError``).
+
     ``prompts`` (a folder of template files, or ``{file name: text}``) replaces built-in
     prompt templates; a template with an unknown placeholder raises
     :class:`~coherent.PromptError` before anything runs. ``prices`` (a JSON or TOML price
@@ -214,6 +225,7 @@ def bench(
     else:
         chosen = list(tasks)
     settings: dict[str, Any] = {
+        "execution": execution,
         "backend": backend,
         "sim_errors": sim_errors,
         "replay_from": replay_from,
@@ -291,12 +303,20 @@ class Report:
     step, the prompt tokens the servers read from their caches (``cached_tokens``) and
     their share of all prompt tokens (``cached_share``, NaN without prompt tokens), and
     the cost in USD (cached tokens at the cached input price) in all, per task
-    (episode) and per success (NaN where a model has no price).
+    (episode) and per success (NaN where a model has no price). A method's parallel
+    episodes are rows of their own, ``"<method> (parallel)"``, and ``makespan`` (empty
+    without parallel episodes) has a row per method, execution and task type (``mono``,
+    ``dual``, ``trio``, ``Avg``): SR, the mean makespan of the successful episodes and
+    the optimal makespan of their tasks, actions per episode, LLM calls per action,
+    simulated seconds (physics), and the speed-up over the same method run sequentially
+    (its steps over the parallel ones', on the (task, seed) pairs both solved; ``pairs``
+    says how many).
     """
 
     table1: pd.DataFrame
     table2: pd.DataFrame
     costs: pd.DataFrame
+    makespan: pd.DataFrame
     backends: list[str]
     seeds: list[int]
     unfinished: int
@@ -348,10 +368,17 @@ def report(data: Results, *, prices: Prices | None = None) -> Report:
         # A model without a price leaves None: NaN, as in the results' cost_usd; so does
         # a method without prompt tokens its cached share.
         costs = costs.astype({name: float for name in (*_COST_COLUMNS, "cached_share")})
+    speed = r.get("makespan", [])
+    makespan = (
+        pandas.DataFrame(speed).set_index(["method", "execution", "column"]) if speed else pandas.DataFrame()
+    )
+    if not makespan.empty:
+        makespan = makespan.astype({name: float for name in _MAKESPAN_COLUMNS})
     return Report(
         table1=_table(pandas, r["table1"]),
         table2=_table(pandas, r["table2"]),
         costs=costs,
+        makespan=makespan,
         backends=r["backends"],
         seeds=r["seeds"],
         unfinished=r["unfinished"],
@@ -371,6 +398,9 @@ def _priced(lines: list[dict[str, Any]], prices: Prices) -> list[dict[str, Any]]
 
 # The report's cost columns, in USD (None where a model has no price).
 _COST_COLUMNS = ("cost_usd", "cost_per_task", "cost_per_success")
+
+# The makespan table's columns that may be None (NaN in the DataFrame).
+_MAKESPAN_COLUMNS = ("makespan", "optimal_makespan", "actions", "calls_per_action", "sim_seconds", "speedup")
 
 
 def _table(pandas: ModuleType, t: dict[str, Any]) -> pd.DataFrame:
@@ -405,37 +435,51 @@ def episode_frame(episode: Episode) -> pd.DataFrame:
     ``method_error``) and why, whether the executor
     judged the subtask complete, whether the goal holds after it, the model calls and
     tokens (those the server read from its prompt cache apart), and the time
-    (``calls_frame`` has one row per call)."""
+    (``calls_frame`` has one row per call). A parallel episode's joint step has a row per
+    robot that had a part in it (the step's calls, tokens and time on its first row), or
+    one row for the step when none had."""
     pandas = _pandas("Episode.to_dataframe (coherent.analysis.episode_frame)")
     types = episode.task.robot_types
     rows = []
     for r in episode.transcript:
-        proposal, decision, outcome = r["proposal"], r["decision"], r["outcome"]
         answers = [c["answer"] for c in r["calls"] if c["answer"] is not None]
-        external = r.get("external")
-        robot = proposal["robot"] if proposal else (external["robot"] if external else None)
-        rows.append(
-            {
-                "step": r["step"],
-                "robot": robot,
-                "robot_type": types.get(robot) if robot is not None else None,
-                "subtask": proposal["subtask"] if proposal else None,
-                "action": decision["action"] if decision else None,
-                "outcome": outcome["kind"],
-                "reason": outcome.get("reason") or outcome.get("why") or outcome.get("message"),
-                "subtask_complete": bool(decision and decision["subtask_complete"]),
-                "done": r["done"],
-                # With what a method written in Python reported of its own clients.
-                "llm_calls": len(r["calls"]) + (external["calls"] if external else 0),
-                "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers)
-                + (external["prompt_tokens"] if external else 0),
-                "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers)
-                + (external["completion_tokens"] if external else 0),
-                "cached_tokens": sum(a["usage"].get("cached_tokens", 0) for a in answers),
-                "latency_ms": sum(a["latency_ms"] for a in answers),
-                "wall_ms": r["wall_ms"],
-            }
-        )
+        # What a method written in Python reported of its own clients' calls.
+        reports = [p["external"] for p in r.get("parts", []) if p.get("external")]
+        if r.get("external"):
+            reports.append(r["external"])
+        step = {
+            "done": r["done"],
+            "llm_calls": len(r["calls"]) + sum(e["calls"] for e in reports),
+            "prompt_tokens": sum(a["usage"]["prompt_tokens"] for a in answers) + sum(e["prompt_tokens"] for e in reports),
+            "completion_tokens": sum(a["usage"]["completion_tokens"] for a in answers)
+            + sum(e["completion_tokens"] for e in reports),
+            "cached_tokens": sum(a["usage"].get("cached_tokens", 0) for a in answers),
+            "latency_ms": sum(a["latency_ms"] for a in answers),
+            "wall_ms": r["wall_ms"],
+        }
+        parts = r.get("parts") or [None]
+        for i, part in enumerate(parts):
+            said = part if part is not None else r
+            proposal, decision, outcome = said.get("proposal"), said["decision"], said["outcome"]
+            external = said.get("external")
+            if part is not None:
+                robot = part["robot"]
+            else:
+                robot = proposal["robot"] if proposal else (external["robot"] if external else None)
+            counted = step if i == 0 else {k: (v if k == "done" else 0) for k, v in step.items()}
+            rows.append(
+                {
+                    "step": r["step"],
+                    "robot": robot,
+                    "robot_type": types.get(robot) if robot is not None else None,
+                    "subtask": proposal["subtask"] if proposal else None,
+                    "action": decision["action"] if decision else None,
+                    "outcome": outcome["kind"],
+                    "reason": outcome.get("reason") or outcome.get("why") or outcome.get("message"),
+                    "subtask_complete": bool(decision and decision["subtask_complete"]),
+                    **counted,
+                }
+            )
     frame = pandas.DataFrame(rows, columns=_EPISODE_COLUMNS)
     return frame.astype({"robot": "Int64"})
 

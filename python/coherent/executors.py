@@ -26,8 +26,8 @@ from ._extras import needs
 if TYPE_CHECKING:
     from ._ray_worker import NodeEndpoints
 
-# An episode's key: (method, scene, task_id, seed index).
-Key = tuple[str, str, int, int]
+# An episode's key: (method, scene, task_id, seed index, execution).
+Key = tuple[str, str, int, int, str]
 
 
 def _import_ray() -> Any:
@@ -82,6 +82,7 @@ class RayExecutor:
         prompts: str | os.PathLike[str] | Mapping[str, str] | None,
         prices: str | os.PathLike[str] | Mapping[str, Mapping[str, Any]] | None,
         physics: bool = False,
+        execution: str | Sequence[str] = "sequential",
         step_timeout: float | None = None,
     ) -> dict[str, Any]:
         """Runs the benchmark as :func:`coherent.bench` describes; returns its outcome,
@@ -96,6 +97,7 @@ class RayExecutor:
             list(methods),
             seeds=seeds,
             out=None if out is None else os.path.abspath(out),
+            execution=execution,
             backend=backend,
             sim_errors=sim_errors,
             replay_from=replay_from,
@@ -127,6 +129,7 @@ class RayExecutor:
             "max_states": max_states,
             "max_steps": max_steps,
             "physics": physics,
+            "execution": execution,
             "step_timeout": step_timeout,
             "out": out,
             # A folder or a price file of this machine's, as data: the workers' machines

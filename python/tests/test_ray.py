@@ -97,6 +97,25 @@ def test_ray_gives_the_local_lines(cluster: Path, paper40: list[coherent.Task], 
     assert coherent.report(again).markdown() == coherent.report(local_run).markdown()
 
 
+def test_ray_runs_both_executions_as_the_local_executor_does(
+    cluster: Path, paper40: list[coherent.Task], tmp_path: Path
+) -> None:
+    # An episode's key holds its execution: the workers run the one the driver names.
+    both = {"execution": ["sequential", "parallel"]}
+    local = _bench(paper40[:4], tmp_path / "local.jsonl", **both)
+    on_ray = _bench(paper40[:4], tmp_path / "ray.jsonl", executor="ray", **both)
+    assert len(on_ray) == 4 * 2 * 3 * 2
+    assert on_ray.attrs["outcome"]["written"] == 48
+    assert set(on_ray["execution"]) == {"sequential", "parallel"}
+    order = [*KEY, "execution"]
+    pd.testing.assert_frame_equal(
+        local.drop(columns=VARYING).sort_values(order).reset_index(drop=True),
+        on_ray.drop(columns=VARYING).sort_values(order).reset_index(drop=True),
+    )
+    again = _bench(paper40[:4], tmp_path / "ray.jsonl", executor="ray", **both)
+    assert again.attrs["outcome"]["skipped"] == 48
+
+
 def _descendants(pid: int) -> set[int]:
     """The processes below `pid` (this test's Ray cluster: its raylet and workers)."""
     parents: dict[int, int] = {}

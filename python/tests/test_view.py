@@ -164,6 +164,62 @@ def test_refused_steps_are_marked_with_the_engines_reason(coherent_exe: str, tmp
     w.assert_quiet()
 
 
+def test_a_parallel_step_shows_every_robots_part_and_moves_them_together(
+    coherent_exe: str, tmp_path: Path, browser: Any
+) -> None:
+    done = subprocess.run(
+        [coherent_exe, "run", str(DEMO), "--execution", "parallel", "--out", str(tmp_path / "runs")],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    # Each joint step as printed: its line, then its robots' indented lines.
+    printed: list[str] = []
+    for line in done.stdout.splitlines():
+        if line.startswith("step "):
+            printed.append(line)
+        elif line.startswith("  "):
+            printed[-1] += "\n" + line
+    transcript = Path(next(line for line in done.stdout.splitlines() if line.startswith("transcript: ")).split(": ", 1)[1])
+    page_file = tmp_path / "parallel.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    page = w.page
+    task = coherent.load_tasks(DEMO)[0]
+    env = coherent.Env(task)
+    rects = room_rects(page, task)
+    recorded = rounds(transcript)
+    assert len(printed) == len(recorded) > 0
+    assert "parallel" in (page.text_content(".header") or "")
+    together = 0
+    for k, (text, rnd) in enumerate(zip(printed, recorded), start=1):
+        page.keyboard.press("ArrowRight")
+        assert page.text_content(".detail pre.line") == text
+        shown = page.eval_on_selector_all(".detail .entry", "es => es.map(e => Number(e.dataset.robot))")
+        assert shown == [p["robot"] for p in rnd["parts"]], "an entry per robot's part"
+        acting = {
+            p["robot"]: p["decision"]["action"] for p in rnd["parts"] if p["outcome"]["kind"] == "executed"
+        }
+        if rnd["outcome"]["kind"] == "executed":
+            oks, _, _ = env.step(acting)
+            assert all(oks)
+        together += len(acting) >= 2
+        expected = rooms_by_the_rules(env)
+        listed = dict(
+            page.eval_on_selector_all(
+                ".scene li[data-robot]", "ls => ls.map(l => [Number(l.dataset.robot), Number(l.dataset.room)])"
+            )
+        )
+        assert listed == expected, k
+        for robot, (x, y) in drawn(page).items():
+            x0, y0, x1, y1 = rects[expected[robot]]
+            assert x0 <= x <= x1 and y0 <= y <= y1, (k, robot)
+    assert together > 0, "some step moves several robots"
+    assert env.goal_satisfied()
+    w.assert_quiet()
+
+
 def first_differing_round(a: Path, b: Path) -> int | None:
     """Where two transcripts' decisions (robot and action) first differ, read here."""
 

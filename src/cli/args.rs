@@ -1,8 +1,9 @@
 //! What `run` and `bench` share: the model endpoint's flags (one struct both flatten, so
 //! that the same setting has the same flag, its defaults those of the endpoint settings,
 //! [`OpenAiConfig::default`]), `--prompts` and `--prices`, the robots' flags
-//! (`--robots ros2` and its namespace and waits), `--sim-errors`, the method names (and
-//! `MODULE:CLASS`, a method written in Python, which the Python package loads).
+//! (`--robots ros2` and its namespace and waits), `--sim-errors`, `--execution`, the
+//! method names (and `MODULE:CLASS`, a method written in Python, which the Python
+//! package loads).
 
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -13,11 +14,28 @@ use crate::session::Error;
 use crate::session::backend::{EndpointSource, RecordedRun};
 use crate::session::bench::recorded_method;
 use crate::session::engine::{
-    ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, External, Method, MethodSpec, OpenAiConfig,
-    OutputMode, ReadLimits, number,
+    ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, Execution, External, Method, MethodSpec,
+    OpenAiConfig, OutputMode, ReadLimits, number,
 };
 use crate::session::prompts::{PriceSource, PromptSource};
 use crate::session::robots::Robots;
+
+/// How the robots take their steps: `sequential`, one robot's action a step (the
+/// paper's), or `parallel`, joint steps in which every robot may act at once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExecutionFlag {
+    Sequential,
+    Parallel,
+}
+
+impl From<ExecutionFlag> for Execution {
+    fn from(e: ExecutionFlag) -> Execution {
+        match e {
+            ExecutionFlag::Sequential => Execution::Sequential,
+            ExecutionFlag::Parallel => Execution::Parallel,
+        }
+    }
+}
 
 /// The answer format asked for first; a server that refuses it gets the next one.
 #[derive(Clone, Copy, Debug, ValueEnum)]

@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use clap::{Args, ValueEnum};
 
 use super::args::{
-    LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec, sim_errors,
+    ExecutionFlag, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
+    sim_errors,
 };
 use super::signals::Stop;
 use super::status;
@@ -39,6 +40,11 @@ pub struct BenchArgs {
     /// file, and its class; from the Python package's `coherent` only).
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,
+    /// Comma-separated: sequential (one robot's action a step, the paper's), parallel
+    /// (joint steps, every robot at once), or both: each method runs in each, and the
+    /// tables compare them.
+    #[arg(long, value_delimiter = ',', value_enum, default_value = "sequential")]
+    execution: Vec<ExecutionFlag>,
     /// Who answers the model-using methods; `auto`: an OpenAI-compatible endpoint when one
     /// is configured (flags or environment), else `simulated` with --sim-errors, else `builtin`;
     /// `replay`: the transcripts of --replay-from.
@@ -202,6 +208,7 @@ fn flag_of(setting: Setting) -> &'static str {
         Setting::MaxStates => "--max-states",
         Setting::Physics => "--physics",
         Setting::Robots => "--robots",
+        Setting::Execution => "--execution",
         Setting::Version => "coherent's version",
         Setting::Method => "the method's own settings",
         Setting::Unrecorded => "settings",
@@ -261,6 +268,7 @@ fn episodes(args: &BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<EpisodesR
         max_steps: args.max_steps,
         physics: args.physics,
         robots: args.robots.robots()?,
+        executions: args.execution.iter().map(|&e| e.into()).collect(),
         ..EpisodesRequest::new(methods)
     })
 }
@@ -325,7 +333,7 @@ async fn run_async(args: BenchArgs, load: Option<&LoadMethod<'_>>) -> Result<u8,
         info.base_url
             .map_or(String::new(), |u| format!(" at {}", shown(&u)))
     );
-    if let Some(line) = prompts::describe(&config.episodes.prompts) {
+    if let Some(line) = prompts::describe(&config.episodes.prompts, &config.episodes.executions) {
         println!("{line}");
     }
     if let Some(dir) = &args.inputs.prompts {

@@ -355,9 +355,15 @@ fn parallel_text(t: &Task, m: &Makespan, limits: &Limits) -> String {
     };
     // Stopped early, the plan is an upper bound (at worst the sequential optimum
     // scheduled by its dependencies) and the open frontier a lower one.
-    let verdict = match m.stop {
-        None => "the fewest".to_owned(),
-        Some(stop) => format!(
+    let verdict = match (m.stop, m.proven) {
+        (None, _) => "the fewest".to_owned(),
+        // Stopped while it looked among the plans of this many joint steps for fewer
+        // actions: the joint steps are proven, the actions may not be the fewest.
+        (Some(stop), true) => format!(
+            "the fewest; the search for fewer actions stopped at {}",
+            stopped_at(stop, limits)
+        ),
+        (Some(stop), false) => format!(
             "not proven the fewest: at least {}; the search stopped at {}",
             m.lower,
             stopped_at(stop, limits)

@@ -12,15 +12,15 @@ use clap::Args;
 use serde_json::json;
 
 use super::args::{
-    AnswerFormat, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name, method_spec,
-    sim_errors,
+    AnswerFormat, ExecutionFlag, LlmArgs, LoadMethod, PromptPriceArgs, RobotFlags, method_name,
+    method_spec, sim_errors,
 };
 use super::signals::Stop;
 use super::status;
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::engine::{
-    Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, HISTORY_WINDOW, Limits, MIB, MethodSpec, Round,
-    Status, Summary, shown, worth_a_line,
+    Budget, Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, Execution, HISTORY_WINDOW, Limits, MIB,
+    MethodSpec, Round, Status, Summary, executed_actions, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
 use crate::session::tasks::TaskSource;
@@ -40,6 +40,11 @@ pub(crate) struct RunArgs {
     /// .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,
+    /// sequential: one robot's action a step, as in the paper; parallel: joint steps, every
+    /// robot at most one action, all at once (the budget is then 2 x the fewest joint
+    /// steps).
+    #[arg(long, value_enum, default_value_t = ExecutionFlag::Sequential)]
+    execution: ExecutionFlag,
     /// The longest one step of a method written in Python may take, in seconds (its
     /// act, and making it at the first step); a longer step ends as the method's error.
     #[arg(long, value_name = "SECONDS")]
@@ -128,6 +133,11 @@ fn prepare(
     });
     if let Some(transcript) = &args.replay {
         args.inputs.no_prompts_for_a_replay("--replay")?;
+        if args.execution != ExecutionFlag::Sequential {
+            return Err(Error::Invalid(
+                "--replay runs the episode as recorded: --execution does not go with it".into(),
+            ));
+        }
         let request = ReplayRequest {
             transcript: transcript.clone(),
             task,
@@ -154,6 +164,7 @@ fn prepare(
         seed: args.llm.seed,
         max_states: args.max_states,
         out: args.out.clone(),
+        execution: args.execution.into(),
         ..RunRequest::new(
             task,
             method_spec(&args.method, load, args.step_timeout, None)?,
@@ -175,7 +186,8 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         MethodSpec::Builtin(_) => format!("backend: none ({} asks no model)", method.name()),
     });
     lines.say(&task_line(&prepared));
-    if let Some(line) = prompts::describe(&prepared.settings().prompts) {
+    let settings = prepared.settings();
+    if let Some(line) = prompts::describe(&settings.prompts, &[settings.execution]) {
         lines.say(&line);
     }
     if let Some(dir) = &args.inputs.prompts {
@@ -186,6 +198,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     let stop = Stop::watch(&cancel);
     let task = Arc::clone(prepared.task());
     let max = prepared.budget().steps();
+    let execution = prepared.settings().execution;
     let mut prepared = prepared;
     let drawn = Arc::new(AtomicBool::new(false));
     let ticker = tokio::spawn(tell_waiting(prepared.watch(), Arc::clone(&drawn)));
@@ -194,7 +207,9 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
         if drawn.swap(false, Ordering::Relaxed) {
             eprint!("\r\x1b[2K");
         }
-        lines.say(&session::lines::step(&task, r, max));
+        for line in session::lines::round(&task, r, max, execution) {
+            lines.say(&line);
+        }
     };
     let result = prepared.run(&cancel, &mut progress).await;
     ticker.abort();
@@ -203,7 +218,14 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
     }
     let ran = result?;
     let s = ran.summary();
-    lines.say(&summary_line(s, ran.goal_satisfied, ran.cost_usd));
+    let actions = executed_actions(&ran.transcript.rounds);
+    lines.say(&summary_line(
+        s,
+        execution,
+        actions,
+        ran.goal_satisfied,
+        ran.cost_usd,
+    ));
     lines.say(&format!(
         "transcript: {}",
         shown(&ran.path.display().to_string())
@@ -223,7 +245,10 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
             json!({
                 "success": s.success,
                 "status": s.status,
+                "execution": execution,
                 "steps": s.steps,
+                "makespan": s.success.then_some(s.steps),
+                "actions": actions,
                 "gt_steps": s.gt_steps,
                 "max_steps": s.max_steps,
                 "llm_calls": s.llm_calls,
@@ -232,6 +257,7 @@ async fn run_prepared(prepared: Prepared, args: &RunArgs, cancel: Cancel) -> Res
                 "cached_tokens": s.cached_tokens,
                 "cost_usd": ran.cost_usd,
                 "wall_ms": s.wall_ms,
+                "sim_seconds": s.sim_seconds,
                 "error": s.error,
                 "backend": info,
                 "transcript": ran.path.display().to_string(),
@@ -280,9 +306,17 @@ fn task_line(p: &Prepared) -> String {
         Budget::TwiceGroundTruth(n) => format!("{n} steps (2 x GT)"),
         Budget::Given(n) => format!("{n} steps"),
         Budget::TwiceOptimum(n) => format!("{n} steps (no GT: 2 x the planner's optimum)"),
+        Budget::TwiceMakespan(n) => format!("{n} joint steps (2 x the optimal makespan)"),
+        Budget::TwiceMakespanBound(n) => format!(
+            "{n} joint steps (2 x the best makespan found; the search stopped before proving it)"
+        ),
+    };
+    let execution = match p.settings().execution {
+        Execution::Sequential => String::new(),
+        Execution::Parallel => " | execution parallel".to_owned(),
     };
     format!(
-        "task: {} task {} \"{}\" | method {} | GT {gt} | budget {budget_note}",
+        "task: {} task {} \"{}\" | method {}{execution} | GT {gt} | budget {budget_note}",
         shown(&task.meta.scene),
         task.meta.task_id,
         shown(&task.meta.instruction),
@@ -318,7 +352,13 @@ fn replay_line(path: &Path, model: &str) -> String {
     )
 }
 
-fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> String {
+fn summary_line(
+    s: &Summary,
+    execution: Execution,
+    actions: u32,
+    goal_satisfied: bool,
+    cost_usd: Option<f64>,
+) -> String {
     let result = match (s.status, &s.error) {
         (Status::Success, _) => "success".to_owned(),
         (Status::Failure, _) => "failure: step budget spent".to_owned(),
@@ -339,6 +379,16 @@ fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> Str
     let cost = cost_usd
         .filter(|_| s.llm_calls > 0)
         .map_or(String::new(), |c| format!(" | cost ${c:.6}"));
+    let steps = match execution {
+        Execution::Sequential => format!("steps {} (GT {gt}, budget {})", s.steps, s.max_steps),
+        Execution::Parallel => format!(
+            "makespan {} joint steps, {actions} actions (GT {gt} sequential steps, budget {})",
+            s.steps, s.max_steps
+        ),
+    };
+    let sim = s
+        .sim_seconds
+        .map_or(String::new(), |t| format!(" | simulated {t:.2} s"));
     // The cached part, which the cost prices apart, so that it can be checked by hand.
     let cached = if s.cached_tokens > 0 {
         format!(" ({} cached)", s.cached_tokens)
@@ -346,9 +396,7 @@ fn summary_line(s: &Summary, goal_satisfied: bool, cost_usd: Option<f64>) -> Str
         String::new()
     };
     format!(
-        "{result} | goal {goal} | steps {} (GT {gt}, budget {}) | LLM calls {} | tokens {} prompt{cached} + {} completion{cost} | wall {:.2} s",
-        s.steps,
-        s.max_steps,
+        "{result} | goal {goal} | {steps} | LLM calls {} | tokens {} prompt{cached} + {} completion{cost}{sim} | wall {:.2} s",
         s.llm_calls,
         s.prompt_tokens,
         s.completion_tokens,

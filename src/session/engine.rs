@@ -17,8 +17,10 @@ pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task}
 pub use coherent_core::{feasibility, native, original};
 
 // What a run records: the transcript, its rounds and summary, the step budget.
-pub use coherent_agents::episode::{Budget, HISTORY_WINDOW};
-pub use coherent_agents::transcript::{Round, RoundOutcome, Status, Summary, Transcript};
+pub use coherent_agents::episode::{Budget, Execution, HISTORY_WINDOW};
+pub use coherent_agents::transcript::{
+    RobotPart, Round, RoundOutcome, Status, Summary, Transcript, actions as executed_actions,
+};
 
 // The limits on what is read back, in MiB as their flags give them: a transcript, a
 // results file.

@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, HISTORY_WINDOW, MethodSpec, Settings};
+use coherent_agents::episode::{self, Budget, Execution, HISTORY_WINDOW, MethodSpec, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::transcript::{self, Round, Status, Transcript};
 use coherent_agents::{BackendInfo, Cancel, Episode, ModelUse, PriceTable, Replay};
@@ -30,6 +30,8 @@ use crate::session::waiting::Waiting;
 pub struct RunRequest {
     pub task: TaskSource,
     pub method: MethodSpec,
+    /// One robot's action a step (the paper's), or joint steps.
+    pub execution: Execution,
     /// Who answers the method's questions.
     pub backend: BackendRequest,
     pub prompts: PromptSource,
@@ -38,7 +40,7 @@ pub struct RunRequest {
     pub robots: Robots,
     /// Every action in Rapier too.
     pub physics: bool,
-    /// Overrides the budget of 2 x GT.
+    /// Overrides the budget of 2 x GT (2 x the makespan in joint steps).
     pub max_steps: Option<u32>,
     /// Rounds of history the methods see.
     pub history: usize,
@@ -53,13 +55,14 @@ pub struct RunRequest {
 }
 
 impl RunRequest {
-    /// `method` on `task` with the defaults: the backend the environment configures, the
-    /// built-in prompts and prices, local robots, no physics, 2 x GT steps, the history
-    /// window, transcripts into `runs/`.
+    /// `method` on `task` with the defaults: sequential, the backend the environment
+    /// configures, the built-in prompts and prices, local robots, no physics, 2 x GT
+    /// steps, the history window, transcripts into `runs/`.
     pub fn new(task: TaskSource, method: MethodSpec) -> RunRequest {
         RunRequest {
             task,
             method,
+            execution: Execution::Sequential,
             backend: BackendRequest::default(),
             prompts: PromptSource::default(),
             prices: PriceSource::default(),
@@ -77,6 +80,7 @@ impl RunRequest {
     /// costs nothing; sizing the budget may plan (`cancel` stops it); over ROS 2 the
     /// robots' servers are awaited.
     pub fn prepare(self, cancel: &Cancel) -> Result<Prepared, Error> {
+        self.method.check_runs(self.execution)?;
         let prompts = self.prompts.read()?;
         let prices = self.prices.read()?;
         let task = self.task.task()?;
@@ -85,10 +89,11 @@ impl RunRequest {
             cancel: Some(cancel.flag()),
             ..Limits::max_states(self.max_states)
         };
-        let budget = Budget::searched(&task, self.max_steps, &limits)?;
+        let budget = Budget::searched(&task, self.execution, self.max_steps, &limits)?;
         let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
         let settings = Settings {
             method: self.method,
+            execution: self.execution,
             history: self.history,
             temperature: choice.temperature(),
             seed: self.seed,

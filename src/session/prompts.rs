@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use coherent_agents::{PriceTable, Prompts, templates};
+use coherent_agents::{Execution, PriceTable, Prompts, templates};
 
 use crate::session::error::Error;
 
@@ -97,14 +97,22 @@ pub fn export(dir: &Path, overwrite: bool, from: PromptSource) -> Result<Vec<Pat
 }
 
 /// One line about a prompt set that replaces built-in templates (`None` for the
-/// built-in set): the files and the set's hash, as the transcript records them.
-pub fn describe(prompts: &Prompts) -> Option<String> {
+/// built-in set): the files and the set's hash, as the transcripts of `executions`
+/// record it (a parallel episode's hash covers the parallel templates too).
+pub fn describe(prompts: &Prompts, executions: &[Execution]) -> Option<String> {
     let replaced = prompts.replaced_names();
+    let sets: Vec<String> = match executions {
+        [one] => vec![prompts.hash(*one).to_owned()],
+        several => several
+            .iter()
+            .map(|e| format!("{} {e}", prompts.hash(*e)))
+            .collect(),
+    };
     (!replaced.is_empty()).then(|| {
         format!(
             "prompts: {} in place of the built-in templates (set {})",
             replaced.join(", "),
-            prompts.hash()
+            sets.join(", ")
         )
     })
 }

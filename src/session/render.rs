@@ -61,13 +61,29 @@ pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
     let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
     for round in &t.rounds {
-        let Some((robot, action)) = round.executed(task) else {
-            continue;
+        let actions = round.carried_out(task);
+        // A joint step's robots move at once; a sequential round's one action alone.
+        let failed = if round.parts.is_empty() {
+            match actions.first() {
+                Some(&(robot, action)) => env
+                    .step(robot, action)?
+                    .infeasible
+                    .map(|why| (action.to_owned(), why)),
+                None => None,
+            }
+        } else if actions.is_empty() {
+            None
+        } else {
+            let outcome = env.step_joint(&actions)?;
+            outcome
+                .parts
+                .into_iter()
+                .find_map(|p| p.infeasible)
+                .map(|why| ("its joint step".to_owned(), why))
         };
-        let outcome = env.step(robot, action)?;
-        if let Some(why) = outcome.infeasible {
+        if let Some((what, why)) = failed {
             warning = Some(format!(
-                "round {}: {action} failed in physics, paths drawn up to there: {why}",
+                "round {}: {what} failed in physics, paths drawn up to there: {why}",
                 round.step
             ));
             break;

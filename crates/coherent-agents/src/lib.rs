@@ -6,7 +6,7 @@
 //! - [`methods`]: the planning methods. The paper's [`pefa`] loop
 //!   (Proposal-Execution-Feedback-Adjustment) with its two roles, [`TaskAssigner`]
 //!   (`methods/assigner.rs`) and [`RobotExecutor`] (`methods/executor.rs`); the baselines
-//!   [`cmrs`], [`dmrs`] and [`mcts`] over the team's [`joint`] action space; the
+//!   [`cmrs`], [`dmrs`] and [`mcts`] over the [`team_actions`], the team's action space; the
 //!   [`optimal`] plan, the tables' ground-truth row; and [`external`], the loop of a
 //!   method written outside the crate (a Python class) that answers through a
 //!   [`Policy`]. Their prompts are rendered from a prompt set, [`Prompts`]
@@ -32,7 +32,7 @@
 //!
 //! No file reaches back to one that uses it. From the bottom: [`llm`] is the vocabulary
 //! of a model call; the transcript records calls in it; the backends answer them (the
-//! replay one from a transcript; the built-in one picks from the [`joint`] action
+//! replay one from a transcript; the built-in one picks from the [`team_actions`]
 //! space); the episode loop asks backends and fills the records; the methods are built
 //! on the loop, and [`episode::run()`] on the methods; [`Replay`] prepares a run of it,
 //! and the harness keeps the books of many. [`rng`] is the crate's one random number
@@ -57,7 +57,8 @@ pub use backends::{builtin, llm, openai, replay, retry};
 pub use harness as bench;
 pub use harness::{prices, report};
 pub use methods::{
-    answer, central, cmrs, dmrs, external, feedback, joint, mcts, optimal, pefa, prompt, templates,
+    answer, central, cmrs, dmrs, external, feedback, mcts, optimal, pefa, pefa_parallel, prompt,
+    team_actions, templates,
 };
 pub use records::transcript;
 
@@ -69,8 +70,8 @@ pub use backends::openai::{ApiKey, Chat, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
 pub use episode::{
-    Budget, Cancel, Episode, External, HISTORY_WINDOW, History, Method, MethodSpec, Policy,
-    Settings, StepView,
+    Budget, Cancel, Episode, Execution, External, HISTORY_WINDOW, History, Method, MethodSpec,
+    Policy, Settings, StepView,
 };
 pub use error::Error;
 pub use harness::prices::{ModelUse, PriceTable};
@@ -79,4 +80,4 @@ pub use methods::executor::RobotExecutor;
 pub use methods::pefa::PefaConfig;
 pub use methods::templates::{PromptError, Prompts};
 pub use records::replay::{Replay, recorded_settings};
-pub use records::transcript::{RoundOutcome, Status, Summary, Transcript};
+pub use records::transcript::{RobotPart, RoundOutcome, Status, Summary, Transcript};

@@ -5,11 +5,11 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use coherent_agents::PriceTable;
 use coherent_agents::bench::{self, ResultLine, Subset};
 use coherent_agents::llm::{BackendInfo, BackendKind};
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
+use coherent_agents::{Execution, PriceTable};
 
 mod common;
 
@@ -95,6 +95,7 @@ impl Hand {
     fn line(self) -> ResultLine {
         ResultLine {
             method: self.method.into(),
+            execution: Execution::Sequential,
             scene: self.scene.into(),
             task_id: self.task_id,
             task_type: Some(self.task_type.into()),
@@ -106,12 +107,16 @@ impl Hand {
             gt_steps: Some(self.gt),
             optimal_steps: Some(self.gt),
             max_steps: self.gt.saturating_mul(2),
+            makespan: (self.status == Status::Success).then_some(self.steps),
+            optimal_makespan: None,
+            actions: Some(self.steps),
             llm_calls: self.calls,
             prompt_tokens: u64::from(self.calls) * 100,
             completion_tokens: u64::from(self.calls) * 10,
             cached_tokens: 0,
             cost_usd: None,
             wall_ms: 1.0,
+            sim_seconds: None,
             backend: BackendInfo {
                 kind: BackendKind::Simulated,
                 model:
@@ -315,6 +320,7 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
         task: coherent_core::native::to_value(task),
         task_name: task.meta.name.clone(),
         method: "pefa".into(),
+        execution: Execution::Sequential,
         history: 5,
         max_steps: 10,
         gt_steps: task.meta.gt_steps,
@@ -381,6 +387,7 @@ fn resuming_reads_the_file_once_under_the_lock_size_first_then_settings() {
         physics: false,
         robots: "local".into(),
         coherent: "test".into(),
+        executions: vec![Execution::Sequential],
         method: BTreeMap::new(),
     };
     let now = BTreeMap::from([("pefa".to_owned(), settings)]);

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::episode::{self, Budget, Execution, Method, Settings};
 use coherent_agents::llm::Role;
 use coherent_agents::transcript::{self, RoundOutcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Replay};
@@ -25,7 +25,8 @@ async fn run_builtin(
     task: &Arc<Task>,
     out: &Path,
 ) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
-    let budget = Budget::searched(task, None, &Limits::default()).expect("a budget");
+    let budget =
+        Budget::searched(task, Execution::Sequential, None, &Limits::default()).expect("a budget");
     let path = episode::transcript_path(out, task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     let e = episode::run(

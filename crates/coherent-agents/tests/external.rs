@@ -42,7 +42,7 @@ impl Policy for Scripted {
             .unwrap_or_else(|| Err("the script is over".into()));
         Box::pin(async move {
             Act {
-                choice,
+                choices: choice.map(|c| vec![c]),
                 calls: Vec::new(),
             }
         })

@@ -6,13 +6,13 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent_agents::answer::{match_line, read_line};
-use coherent_agents::joint::{JointAction, joint_actions};
 use coherent_agents::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
     OutputMode, Query, Role, Usage,
 };
 use coherent_agents::mcts::{self, MctsConfig, mix_prior, puct, softmax_q};
 use coherent_agents::rng::Rng;
+use coherent_agents::team_actions::{self, TeamAction};
 use coherent_agents::transcript::{RoundOutcome, Status};
 use coherent_agents::{Cancel, Episode};
 use coherent_core::planner::{self, Limits};
@@ -60,7 +60,7 @@ fn chosen(e: &Episode) -> Vec<String> {
 }
 
 /// A "model" that always answers the first step of a shortest plan from the state it is
-/// asked in, as a joint action line.
+/// asked in, as a team action line.
 #[derive(Debug, Default)]
 struct Oracle {
     known: Mutex<HashMap<State, String>>,
@@ -78,7 +78,7 @@ impl Oracle {
                         .unwrap_or_default();
                 plan.first().map_or_else(String::new, |step| {
                     let robot = *task.robot(step.robot).expect("a robot of the team");
-                    JointAction {
+                    TeamAction {
                         robot,
                         action: step.action,
                     }
@@ -216,7 +216,7 @@ fn the_prior_is_half_the_model_and_half_uniform() {
 }
 
 #[test]
-fn samples_are_matched_to_the_nearest_joint_action_or_dropped() {
+fn samples_are_matched_to_the_nearest_team_action_or_dropped() {
     let lines: Vec<String> = [
         "<quadrotor>(1): [takeoff_from] <table>(5)",
         "<robot dog>(2): [movetowards] <apple>(7)",
@@ -265,7 +265,7 @@ fn samples_are_matched_to_the_nearest_joint_action_or_dropped() {
 }
 
 /// The state one step before the goal of `task`'s shortest plan, and that last step.
-fn one_step_before_the_goal(task: &Task) -> (State, JointAction) {
+fn one_step_before_the_goal(task: &Task) -> (State, TeamAction) {
     let plan = planner::analyse(task, &Limits::default())
         .plan
         .expect("a solvable task");
@@ -278,7 +278,7 @@ fn one_step_before_the_goal(task: &Task) -> (State, JointAction) {
     let robot = *task.robot(last.robot).expect("a robot of the team");
     (
         s,
-        JointAction {
+        TeamAction {
             robot,
             action: last.action,
         },
@@ -289,7 +289,7 @@ fn one_step_before_the_goal(task: &Task) -> (State, JointAction) {
 fn one_step_from_the_goal_the_root_statistics_follow_the_formulas() {
     let task = common::task("env0", 1);
     let (s, last) = one_step_before_the_goal(&task);
-    let reaches = |a: &JointAction| {
+    let reaches = |a: &TeamAction| {
         let mut after = s.clone();
         rules::apply(&task, &mut after, a.robot, a.action);
         task.goal_satisfied(&after)
@@ -297,7 +297,7 @@ fn one_step_from_the_goal_the_root_statistics_follow_the_formulas() {
     let config = MctsConfig::default();
     let stats = mcts::search(&task, &s, None, &config, &mut Rng::new(0), None);
     assert_eq!(stats.simulations, 50);
-    assert_eq!(stats.actions, joint_actions(&task, &s));
+    assert_eq!(stats.actions, team_actions::offered(&task, &s));
     assert!(stats.actions.contains(&last));
     assert_eq!(
         stats.visits.iter().sum::<u32>(),
@@ -411,7 +411,7 @@ async fn primitive_mcts_solves_a_short_task() {
         let action = d.action.as_ref().expect("an action");
         assert!(
             r.actions.contains(action),
-            "the choice is one of the joint actions"
+            "the choice is one of the team actions"
         );
         assert_eq!(
             r.outcome,

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::episode::{self, Budget, Execution, Method, Settings};
 use coherent_agents::transcript::{RoundOutcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
 use coherent_core::planner::{self, Limits};
@@ -17,7 +17,8 @@ fn out(name: &str) -> PathBuf {
 }
 
 async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Episode {
-    let budget = Budget::searched(task, None, &Limits::default()).expect("a budget");
+    let budget =
+        Budget::searched(task, Execution::Sequential, None, &Limits::default()).expect("a budget");
     let path = episode::transcript_path(&out(method.name()), task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
     episode::run(

@@ -13,6 +13,8 @@ use pyo3::prelude::*;
 use pyo3::types::PyString;
 use tokio::sync::Semaphore;
 
+use coherent::session::engine::Execution;
+
 use crate::convert::{self, at_most, finite, optional, text, unsigned};
 use crate::errors;
 use crate::method::MethodArg;
@@ -228,6 +230,24 @@ fn method_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<MethodArg> {
             obj.get_type().name()?
         )))
     }
+}
+
+/// `execution` of `run` and `Env`: `"sequential"` or `"parallel"`.
+pub(crate) fn execution(obj: &Bound<'_, PyAny>) -> PyResult<Execution> {
+    convert::execution(obj, "execution")
+}
+
+/// `execution` of `bench` (`run_bench`, `_BenchLedger`, `_BenchWorker`): one execution's
+/// name, or a sequence of them (each method runs in each).
+pub(crate) fn executions(obj: &Bound<'_, PyAny>) -> PyResult<Vec<Execution>> {
+    if obj.is_instance_of::<PyString>() {
+        return Ok(vec![convert::execution(obj, "execution")?]);
+    }
+    let all = each(obj, "execution", convert::execution)?;
+    if all.is_empty() {
+        return Err(errors::argument("execution", obj, "an empty list"));
+    }
+    Ok(all)
 }
 
 /// `subset` of `benchmark_tasks`.

@@ -10,9 +10,9 @@ use std::time::Duration;
 use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
 use coherent::session::bench::{self as session_bench, BenchConfig, EpisodesRequest, TableFormat};
 use coherent::session::engine::{
-    BenchOutcome, Cancel, DEFAULT_MAX_RESULTS_BYTES, Event, HISTORY_WINDOW, Limits, MethodSpec,
-    Progress, Report, ResultLine, Setting, Style, Subset, read_results as read_results_file,
-    select as select_tasks, setting_field,
+    BenchOutcome, Cancel, DEFAULT_MAX_RESULTS_BYTES, Event, Execution, HISTORY_WINDOW, Limits,
+    MethodSpec, Progress, Report, ResultLine, Setting, Style, Subset,
+    read_results as read_results_file, select as select_tasks, setting_field,
 };
 use coherent::session::error::BackendProblem;
 use coherent::session::{self, Error};
@@ -252,7 +252,8 @@ pub(crate) fn settings_err(py: Python<'_>, e: Error) -> PyErr {
 /// over ROS 2 (one episode at a time). Returns what the run did.
 #[pyfunction]
 #[pyo3(signature = (
-    tasks, methods, *, backend = None, sim_errors = None, replay_from = None, seeds = 1,
+    tasks, methods, *, execution = vec![Execution::Sequential], backend = None,
+    sim_errors = None, replay_from = None, seeds = 1,
     concurrency = 4, history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES,
     max_steps = None, out = None, progress = None, prompts = None,
     prices = None, physics = false, robots = "local", namespace = None, robot_timeout = 10.0,
@@ -263,6 +264,7 @@ pub(crate) fn run_bench<'py>(
     py: Python<'py>,
     tasks: Vec<Bound<'py, PyTask>>,
     #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
+    #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
     backend: Option<&Bound<'py, PyAny>>,
     sim_errors: Option<&Bound<'py, PyAny>>,
     #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -293,6 +295,7 @@ pub(crate) fn run_bench<'py>(
         history,
         max_states,
         max_steps,
+        executions: execution,
         ..EpisodesRequest::new(Vec::new())
     };
     let objects: Vec<Py<PyTask>> = tasks.iter().map(|t| t.clone().unbind()).collect();

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
+use coherent::session::engine::Execution;
 use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::{PyOverflowError, PyRuntimeError, PyTypeError, PyUnicodeEncodeError};
 use pyo3::prelude::*;
@@ -271,4 +272,11 @@ where
             }
         }
     }
+}
+
+/// An execution's name: `"sequential"` or `"parallel"`, for the argument `name`.
+pub(crate) fn execution(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Execution> {
+    let given = text(obj, name)?;
+    Execution::from_name(given)
+        .ok_or_else(|| errors::argument(name, obj, "expected \"sequential\" or \"parallel\""))
 }

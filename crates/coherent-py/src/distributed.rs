@@ -11,8 +11,8 @@ use std::time::Duration;
 
 use coherent::session::bench::{EpisodesRequest, RunTasks, Worker, default_out};
 use coherent::session::engine::{
-    Cancel, DEFAULT_MAX_RESULTS_BYTES, EpisodeKey, EpisodeResult, Event, HISTORY_WINDOW, Ledger,
-    Limits, PriceTable, Progress, ResultLine, Style, native,
+    Cancel, DEFAULT_MAX_RESULTS_BYTES, EpisodeKey, EpisodeResult, Event, Execution, HISTORY_WINDOW,
+    Ledger, Limits, PriceTable, Progress, ResultLine, Style, native,
 };
 use coherent::session::prompts::{PriceSource, PromptSource};
 use pyo3::exceptions::PyValueError;
@@ -28,20 +28,23 @@ use crate::prompts::{price_source, prompt_source};
 use crate::task::PyTask;
 use crate::{args, errors};
 
-/// An episode's key as Python holds it: `(method, scene, task_id, seed)`.
-type Key = (String, String, i64, u32);
+/// An episode's key as Python holds it: `(method, scene, task_id, seed, execution)`.
+type Key = (String, String, i64, u32, String);
 
 /// What a worker hands the driver: `("line", <results line as JSON>)`,
 /// `("skipped", <why the task cannot run>)` or `("not_started", None)`.
 type Handed = (String, Option<String>);
 
-fn key_of((method, scene, task_id, seed): Key) -> EpisodeKey {
-    EpisodeKey {
+fn key_of(py: Python<'_>, (method, scene, task_id, seed, execution): Key) -> PyResult<EpisodeKey> {
+    let execution = Execution::from_name(&execution)
+        .ok_or_else(|| errors::invalid(py, format!("an episode's key: execution {execution:?}")))?;
+    Ok(EpisodeKey {
         method,
         scene,
         task_id,
         seed,
-    }
+        execution,
+    })
 }
 
 /// The driver's side of a run: checks the run's settings as `coherent.bench` does (the
@@ -73,9 +76,10 @@ impl PyLedger {
 impl PyLedger {
     #[new]
     #[pyo3(signature = (
-        tasks, methods, *, seeds, out, backend = None, sim_errors = None, replay_from = None,
-        history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-        physics = false, progress = None, prompts = None, prices = None
+        tasks, methods, *, seeds, out, execution = vec![Execution::Sequential], backend = None,
+        sim_errors = None, replay_from = None, history = HISTORY_WINDOW,
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, physics = false,
+        progress = None, prompts = None, prices = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
@@ -84,6 +88,7 @@ impl PyLedger {
         #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
         #[pyo3(from_py_with = args::seeds)] seeds: u32,
         #[pyo3(from_py_with = args::results_out)] out: Option<PathBuf>,
+        #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
         backend: Option<&Bound<'_, PyAny>>,
         sim_errors: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -100,6 +105,7 @@ impl PyLedger {
             prompts: prompt_source(prompts)?,
             prices: price_source(prices)?,
             backend: run_backend(backend, sim_errors, replay_from.clone(), prompts_given)?,
+            executions: execution,
             history,
             max_states,
             max_steps,
@@ -123,7 +129,7 @@ impl PyLedger {
         let out = out.unwrap_or_else(|| default_out(&settings, seeds));
         let mut ledger = Ledger::open(&out, DEFAULT_MAX_RESULTS_BYTES, &settings.record(seeds))
             .map_err(|e| errors::session_err(py, e.into()))?;
-        let pending = ledger.plan(&tasks, &settings.methods, seeds);
+        let pending = ledger.plan(&tasks, &settings.methods, &settings.executions, seeds);
         let mut progress = progress_style(py, progress)?.map(Progress::new);
         if let Some(p) = progress.as_mut() {
             let start = Event::Start {
@@ -137,7 +143,7 @@ impl PyLedger {
             ledger: Some(ledger),
             pending,
             progress,
-            prompts: settings.prompts.record().replaced,
+            prompts: settings.prompts.replaced_texts(),
             prices: settings.prices,
         })
     }
@@ -151,11 +157,20 @@ impl PyLedger {
         Ok(d)
     }
 
-    /// The episodes to run, in order: `(method, scene, task_id, seed)`.
+    /// The episodes to run, in order: `(method, scene, task_id, seed, execution)`.
     fn pending(&self) -> Vec<Key> {
         self.pending
             .iter()
-            .map(|k| (k.method.clone(), k.scene.clone(), k.task_id, k.seed))
+            .map(|k| {
+                let execution = k.execution.name().to_owned();
+                (
+                    k.method.clone(),
+                    k.scene.clone(),
+                    k.task_id,
+                    k.seed,
+                    execution,
+                )
+            })
             .collect()
     }
 
@@ -242,15 +257,17 @@ pub(crate) struct PyWorker {
 impl PyWorker {
     #[new]
     #[pyo3(signature = (
-        tasks, methods, *, backend = None, sim_errors = None, replay_from = None,
-        history = HISTORY_WINDOW, max_states = Limits::DEFAULT_MAX_STATES, max_steps = None,
-        physics = false, out, prompts, prices, step_timeout = None
+        tasks, methods, *, execution = vec![Execution::Sequential], backend = None,
+        sim_errors = None, replay_from = None, history = HISTORY_WINDOW,
+        max_states = Limits::DEFAULT_MAX_STATES, max_steps = None, physics = false, out,
+        prompts, prices, step_timeout = None
     ))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         tasks: Vec<String>,
         #[pyo3(from_py_with = args::methods)] methods: Vec<MethodArg>,
+        #[pyo3(from_py_with = args::executions)] execution: Vec<Execution>,
         backend: Option<&Bound<'_, PyAny>>,
         sim_errors: Option<&Bound<'_, PyAny>>,
         #[pyo3(from_py_with = args::replay_from)] replay_from: Option<PathBuf>,
@@ -297,6 +314,7 @@ impl PyWorker {
             max_states,
             max_steps,
             physics,
+            executions: execution,
             ..EpisodesRequest::new(methods)
         }
         .prepare()
@@ -308,10 +326,10 @@ impl PyWorker {
         })
     }
 
-    /// Runs the episode `(method, scene, task_id, seed)` with the GIL released (other
-    /// threads may run theirs meanwhile); returns what the driver records.
+    /// Runs the episode `(method, scene, task_id, seed, execution)` with the GIL released
+    /// (other threads may run theirs meanwhile); returns what the driver records.
     fn run(&self, py: Python<'_>, key: Key) -> PyResult<Handed> {
-        let key = key_of(key);
+        let key = key_of(py, key)?;
         let result = py
             .detach(|| self.worker.run(&key, &Cancel::default()))
             .map_err(|e| errors::session_err(py, e))?;

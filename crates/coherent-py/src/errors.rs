@@ -189,6 +189,7 @@ pub(crate) fn argument_of(setting: Setting) -> &'static str {
         Setting::MaxStates => "max_states",
         Setting::Physics => "physics",
         Setting::Robots => "robots",
+        Setting::Execution => "execution",
         Setting::Version => "coherent's version",
         Setting::Method => "the method's own settings (its `settings`)",
         Setting::Unrecorded => "settings",

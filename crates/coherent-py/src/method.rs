@@ -1,11 +1,12 @@
 //! Methods written in Python: a class (or any callable) `M` becomes a method of the
 //! engine (an `External` method of the session's engine): `M(task)` once per episode, then
 //! `act(view)` once per step, given a `View` and answering a `Decision` or a
-//! `(robot, action)` tuple. `M(task)` and a plain `act` run on the episode's method
-//! thread (`crate::stepper`), with the GIL held for the call only, while the episode
-//! waits without it (and may stop waiting: Ctrl-C, the step's time limit); a coroutine
-//! that `act` returns runs on the run's event loop (`coherent._methods.Loop`), where
-//! those of concurrent episodes overlap.
+//! `(robot, action)` tuple (in a parallel episode, a list of them, one per robot that
+//! acts). `M(task)` and a plain `act` run on the episode's method thread
+//! (`crate::stepper`), with the GIL held for the call only, while the episode waits
+//! without it (and may stop waiting: Ctrl-C, the step's time limit); a coroutine that
+//! `act` returns runs on the run's event loop (`coherent._methods.Loop`), where those of
+//! concurrent episodes overlap.
 
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex, PoisonError};
@@ -91,10 +92,17 @@ impl PyView {
         self.view.step
     }
 
-    /// The step budget (2 x GT unless set).
+    /// The step budget (2 x GT unless set; 2 x the fewest joint steps in parallel).
     #[getter]
     fn max_steps(&self) -> u32 {
         self.view.max_steps
+    }
+
+    /// `"sequential"` (`act` answers one decision a step) or `"parallel"` (a list: one
+    /// decision per robot that acts, all carried out at once).
+    #[getter]
+    fn execution(&self) -> &'static str {
+        self.view.execution.name()
     }
 
     /// Node ids of the robots, in the task's order.
@@ -124,7 +132,8 @@ impl PyView {
     }
 
     /// Every earlier step, oldest first: `(robot, action, ok, reason)`, robot and action
-    /// None for a step without an action, reason None when it ran.
+    /// None for a step without an action, reason None when it ran; of a parallel step,
+    /// one for each robot given an action in it, in team order.
     #[getter]
     fn history<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyList>> {
         let list = PyList::empty(py);
@@ -239,7 +248,20 @@ impl PyDecision {
     }
 }
 
-/// What `act` returned, as a choice; anything else is the method's error.
+/// What `act` answered: its decisions, one per robot that acts, or why none could be
+/// read (the method's own words).
+type Answered = Result<Vec<Choice>, String>;
+
+/// What `act` returned, as its choices: a list of decisions (several robots' in a
+/// parallel episode), or one; anything else is the method's error.
+fn choices_of(answer: &Bound<'_, PyAny>) -> Answered {
+    match answer.cast::<PyList>() {
+        Ok(list) => list.iter().map(|item| choice_of(&item)).collect(),
+        Err(_) => choice_of(answer).map(|c| vec![c]),
+    }
+}
+
+/// One decision `act` returned, as a choice; anything else is the method's error.
 fn choice_of(answer: &Bound<'_, PyAny>) -> Result<Choice, String> {
     if let Ok(d) = answer.cast::<PyDecision>() {
         let d = d.get();
@@ -265,7 +287,7 @@ fn choice_of(answer: &Bound<'_, PyAny>) -> Result<Choice, String> {
         }),
         _ => Err(format!(
             "act returned {}: expected a coherent.Decision or a (robot, action) tuple of an \
-             int (or None) and a str",
+             int (or None) and a str (or, in a parallel episode, a list of them)",
             answer
                 .repr()
                 .map_or_else(|_| "an object".into(), |r| r.to_string())
@@ -414,8 +436,8 @@ struct PythonPolicy {
 
 /// A step's answer: at once, or from the event loop.
 enum Started {
-    Now(Result<Choice, String>),
-    Later(oneshot::Receiver<Result<Choice, String>>, Py<PyAny>),
+    Now(Answered),
+    Later(oneshot::Receiver<Answered>, Py<PyAny>),
 }
 
 /// The episode's object `M(task)`, made on its first call (in `slot` afterwards); an
@@ -467,7 +489,7 @@ fn start(
         Err(e) => return Ok(Started::Now(Err(method.failed(py, e)))),
     };
     if !answer.hasattr("__await__")? {
-        return Ok(Started::Now(choice_of(&answer)));
+        return Ok(Started::Now(choices_of(&answer)));
     }
     let (tx, rx) = oneshot::channel();
     let done = Done {
@@ -513,7 +535,7 @@ impl Policy for PythonPolicy {
             };
             let calls = std::mem::take(&mut *calls.lock().unwrap_or_else(PoisonError::into_inner));
             Act {
-                choice: choice.map_err(MethodFailure),
+                choices: choice.map_err(MethodFailure),
                 calls,
             }
         })
@@ -537,7 +559,7 @@ impl Drop for CancelOnDrop {
 /// exception, goes to the waiting episode.
 #[pyclass(module = "coherent._coherent", frozen)]
 struct Done {
-    tx: Mutex<Option<oneshot::Sender<Result<Choice, String>>>>,
+    tx: Mutex<Option<oneshot::Sender<Answered>>>,
     method: Arc<PythonMethod>,
 }
 
@@ -546,7 +568,7 @@ impl Done {
     fn __call__(&self, future: &Bound<'_, PyAny>) {
         let py = future.py();
         let choice = match future.call_method0("result") {
-            Ok(answer) => choice_of(&answer),
+            Ok(answer) => choices_of(&answer),
             Err(e) => Err(self.method.failed(py, e)),
         };
         if let Some(tx) = self

@@ -8,7 +8,8 @@ use std::time::Duration;
 
 use coherent::session::backend::{BackendRequest, EndpointSource};
 use coherent::session::engine::{
-    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Limits, PriceTable, Summary, Transcript,
+    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Execution, Limits, PriceTable, Summary,
+    Transcript, executed_actions,
 };
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
 use coherent::session::tasks::TaskSource;
@@ -161,6 +162,30 @@ impl PyEpisode {
         self.summary.wall_ms
     }
 
+    /// `"sequential"` (one robot's action a step) or `"parallel"` (joint steps).
+    #[getter]
+    fn execution(&self) -> &'static str {
+        self.transcript.header.execution.name()
+    }
+
+    /// The joint steps it took to reach the goal (its steps); None when it did not.
+    #[getter]
+    fn makespan(&self) -> Option<u32> {
+        self.summary.success.then_some(self.summary.steps)
+    }
+
+    /// The actions carried out (in a parallel episode, several a step).
+    #[getter]
+    fn actions(&self) -> u32 {
+        executed_actions(&self.transcript.rounds)
+    }
+
+    /// The simulated seconds it took, with physics; None otherwise.
+    #[getter]
+    fn sim_seconds(&self) -> Option<f64> {
+        self.summary.sim_seconds
+    }
+
     /// Why the episode stopped early, when it did.
     #[getter]
     fn error(&self) -> Option<&str> {
@@ -299,7 +324,8 @@ fn finished(
 /// under `namespace` carries the actions out.
 #[pyfunction]
 #[pyo3(signature = (
-    task, method = MethodArg::Name("pefa".to_owned()), *, llm = None, sim_errors = None,
+    task, method = MethodArg::Name("pefa".to_owned()), *, execution = Execution::Sequential,
+    llm = None, sim_errors = None,
     history = coherent::session::engine::HISTORY_WINDOW, max_steps = None, physics = false,
     seed = None, out = PathBuf::from("runs"), max_states = Limits::DEFAULT_MAX_STATES,
     prompts = None, prices = None, robots = "local", namespace = None, robot_timeout = 10.0,
@@ -310,6 +336,7 @@ pub(crate) fn run(
     py: Python<'_>,
     task: &Bound<'_, PyTask>,
     #[pyo3(from_py_with = args::method)] method: MethodArg,
+    #[pyo3(from_py_with = args::execution)] execution: Execution,
     llm: Option<&Bound<'_, PyLlm>>,
     sim_errors: Option<&Bound<'_, PyAny>>,
     #[pyo3(from_py_with = args::history)] history: usize,
@@ -348,6 +375,7 @@ pub(crate) fn run(
         seed,
         max_states,
         out,
+        execution,
         ..RunRequest::new(TaskSource::Given(Arc::clone(&task.get().task)), method)
     };
     let ran = episode_off_the_gil(py, move |cancel| request.prepare(cancel));

@@ -9,10 +9,11 @@ use std::path::Path;
 use std::sync::Arc;
 
 use coherent_agents::bench::{self, EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
-use coherent_agents::episode::{Budget, NoPlan, Settings};
+use coherent_agents::episode::{Budget, Execution, NoPlan, PlannedMakespan, Settings};
 use coherent_agents::llm::Backend;
 use coherent_agents::{BackendInfo, BackendKind, Cancel, MethodSpec, Replay, transcript};
 use coherent_core::Task;
+use coherent_core::makespan;
 use coherent_core::planner::{self, Limits};
 use coherent_core::text::cut;
 use tokio::sync::OnceCell;
@@ -24,11 +25,14 @@ use crate::session::error::{Error, panic_message};
 use crate::session::waiting::Waiting;
 
 /// What the planner says about a task, once per task: its type and optimum for the
-/// results lines, and why it has no plan when it has none.
+/// results lines, and why it has no plan when it has none; in a run with parallel
+/// episodes, its makespan too (their budget, and the lines' `optimal_makespan`).
 #[derive(Clone, Debug)]
 struct TaskInfo {
     task_type: Option<String>,
     optimal: Result<u32, NoPlan>,
+    /// `None` when the run has no parallel episode (not searched).
+    makespan: Option<Result<PlannedMakespan, NoPlan>>,
 }
 
 /// What the planner says about a task, once the first of its episodes has asked.
@@ -121,17 +125,25 @@ pub async fn run_one(
         cancel: Some(cancel.flag()),
         ..Limits::max_states(settings.max_states)
     };
+    let parallel = settings.executions.contains(&Execution::Parallel);
     let info = info
         .get_or_try_init(|| async {
             let (task, limits) = (Arc::clone(task), limits.clone());
-            tokio::task::spawn_blocking(move || task_info(&task, &limits))
+            tokio::task::spawn_blocking(move || task_info(&task, &limits, parallel))
                 .await
                 .map_err(|e| Error::Internal(format!("the planner failed: {e}")))
         })
         .await?
         .clone();
     let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
-    let budget = match Budget::of(task, settings.max_steps, || info.optimal.clone()) {
+    let budget = match key.execution {
+        Execution::Sequential => Budget::of(task, settings.max_steps, || info.optimal.clone()),
+        Execution::Parallel => Budget::parallel(task, settings.max_steps, || {
+            let unsearched = || Err(NoPlan("the makespan was not searched".into()));
+            info.makespan.clone().unwrap_or_else(unsearched)
+        }),
+    };
+    let budget = match budget {
         Ok(budget) => budget,
         Err(why) => return Ok(EpisodeResult::TaskSkipped(format!("{name}: {why}"))),
     };
@@ -169,6 +181,7 @@ pub async fn run_one(
             task: Arc::clone(task),
             settings: Settings {
                 method: method.clone(),
+                execution: key.execution,
                 history: settings.history,
                 temperature: choice.temperature(),
                 seed: Some(seed),
@@ -265,6 +278,7 @@ fn line(
     };
     ResultLine {
         method: method.name().to_owned(),
+        execution: key.execution,
         scene: key.scene.clone(),
         task_id: key.task_id,
         task_type: info.task_type.clone(),
@@ -276,12 +290,20 @@ fn line(
         gt_steps: s.gt_steps,
         optimal_steps: info.optimal.clone().ok(),
         max_steps: s.max_steps,
+        makespan: s.success.then_some(s.steps),
+        optimal_makespan: info
+            .makespan
+            .as_ref()
+            .and_then(|m| m.as_ref().ok())
+            .map(|m| m.steps),
+        actions: Some(transcript::actions(&ran.transcript.rounds)),
         llm_calls: s.llm_calls,
         prompt_tokens: s.prompt_tokens,
         completion_tokens: s.completion_tokens,
         cached_tokens: s.cached_tokens,
         cost_usd: ran.cost_usd,
         wall_ms: (s.wall_ms * 1e3).round() / 1e3,
+        sim_seconds: s.sim_seconds,
         backend: line_backend(&settings.backend, method, ran),
         uses_model: ran.model_use.uses_model(),
         // Cut, so that the line stays within what a results file may hold.
@@ -313,9 +335,17 @@ fn line_backend(choice: &BackendChoice, method: &MethodSpec, ran: &Ran) -> Backe
     }
 }
 
-fn task_info(task: &Task, limits: &Limits) -> TaskInfo {
+fn task_info(task: &Task, limits: &Limits, parallel: bool) -> TaskInfo {
     let analysis = planner::analyse(task, limits);
+    let makespan = parallel.then(|| {
+        let (robots, goal) = (&task.robots, &task.goal);
+        let plan = analysis.plan.as_deref();
+        PlannedMakespan::of(&makespan::search_with(
+            task, &task.init, robots, goal, plan, limits,
+        ))
+    });
     TaskInfo {
+        makespan,
         task_type: analysis.task_type.map(|t| t.name().to_owned()),
         optimal: match &analysis.plan {
             Some(plan) => Ok(u32::try_from(plan.len()).unwrap_or(u32::MAX)),

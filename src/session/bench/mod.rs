@@ -191,7 +191,8 @@ pub async fn run(
         config.max_results_bytes,
         &config.episodes.record(config.seeds),
     )?;
-    let keys = ledger.plan(tasks, &config.episodes.methods, config.seeds);
+    let episodes = &config.episodes;
+    let keys = ledger.plan(tasks, &episodes.methods, &episodes.executions, config.seeds);
     progress(Event::Start {
         to_run: keys.len(),
         skipped: ledger.outcome().skipped,

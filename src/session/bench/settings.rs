@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use coherent_agents::bench::RunSettings;
 use coherent_agents::episode::HISTORY_WINDOW;
 use coherent_agents::transcript::RobotsRecord;
-use coherent_agents::{MethodSpec, PriceTable, Prompts};
+use coherent_agents::{Execution, MethodSpec, PriceTable, Prompts};
 use coherent_core::planner::Limits;
 
 use crate::session::backend::{BackendChoice, BackendRequest};
@@ -20,6 +20,9 @@ use crate::session::robots::Robots;
 pub struct EpisodesRequest {
     /// The run's methods; an episode's key names its method.
     pub methods: Vec<MethodSpec>,
+    /// How the robots take their steps, each method run in each (an episode's key names
+    /// it).
+    pub executions: Vec<Execution>,
     /// Who answers the model-using methods.
     pub backend: BackendRequest,
     pub prompts: PromptSource,
@@ -37,12 +40,13 @@ pub struct EpisodesRequest {
 }
 
 impl EpisodesRequest {
-    /// `methods` with the paper's settings: the backend the environment configures, the
-    /// built-in prompts and prices, the history window, the default planner bound,
-    /// 2 x GT steps, local robots without physics.
+    /// `methods` with the paper's settings: sequential, the backend the environment
+    /// configures, the built-in prompts and prices, the history window, the default
+    /// planner bound, 2 x GT steps, local robots without physics.
     pub fn new(methods: Vec<MethodSpec>) -> EpisodesRequest {
         EpisodesRequest {
             methods,
+            executions: vec![Execution::Sequential],
             backend: BackendRequest::default(),
             prompts: PromptSource::default(),
             prices: PriceSource::default(),
@@ -55,7 +59,8 @@ impl EpisodesRequest {
     }
 
     /// The settings, checked: the prompt set first (a bad template costs nothing), the
-    /// prices, distinct method names, the backend.
+    /// prices, distinct method names, the executions (each method must run each), the
+    /// backend.
     pub fn prepare(self) -> Result<EpisodeSettings, Error> {
         let prompts = self.prompts.read()?;
         let prices = self.prices.read()?;
@@ -63,8 +68,20 @@ impl EpisodesRequest {
             return Err(Error::Invalid("no methods to run".into()));
         }
         distinct_names(&self.methods)?;
+        let mut executions = self.executions;
+        executions.sort();
+        executions.dedup();
+        if executions.is_empty() {
+            return Err(Error::Invalid("no execution to run the methods in".into()));
+        }
+        for method in &self.methods {
+            for &execution in &executions {
+                method.check_runs(execution)?;
+            }
+        }
         Ok(EpisodeSettings {
             methods: self.methods,
+            executions,
             backend: self.backend.choose()?,
             history: self.history,
             max_states: self.max_states,
@@ -81,6 +98,8 @@ impl EpisodesRequest {
 #[derive(Clone, Debug)]
 pub struct EpisodeSettings {
     pub methods: Vec<MethodSpec>,
+    /// Sequential, parallel or both, in that order.
+    pub executions: Vec<Execution>,
     pub backend: BackendChoice,
     pub history: usize,
     pub max_states: usize,
@@ -117,7 +136,12 @@ impl EpisodeSettings {
             temperature: self.backend.temperature(),
             model_seed,
             seeds,
-            prompts: self.prompts.hash().to_owned(),
+            // The set of every template the run renders: the parallel set holds the
+            // sequential one's templates too.
+            prompts: self
+                .prompts
+                .hash(self.executions.iter().copied().max().unwrap_or_default())
+                .to_owned(),
             history: self.history,
             max_steps: self.max_steps,
             max_states: self.max_states,
@@ -127,6 +151,7 @@ impl EpisodeSettings {
                 RobotsRecord::Ros2 { .. } => "ros2".to_owned(),
             },
             coherent: coherent_agents::VERSION.to_owned(),
+            executions: self.executions.clone(),
             method: BTreeMap::new(),
         };
         self.methods

@@ -1,8 +1,8 @@
 //! Two episodes side by side: the same steps shown together, and the first round in
 //! which their decisions differ.
 
-use coherent_agents::transcript::{Round, Transcript};
-use coherent_core::Task;
+use coherent_agents::transcript::{RobotPart, Round, Transcript};
+use coherent_core::{NodeId, Task};
 use serde::Serialize;
 
 use super::episode::EpisodeView;
@@ -19,14 +19,14 @@ pub struct Episodes {
 }
 
 /// The step of the first round where `a` and `b` (episodes of `task_a` and `task_b`)
-/// decide differently: another robot, or another action ([`Round::chosen`]); when one
-/// ends earlier and they agree until then, the first round only the other has.
+/// decide differently: another robot, or another action ([`Round::chosen`]; in a joint
+/// step, any robot's); when one ends earlier and they agree until then, the first round only the other has.
 pub fn first_difference(
     (task_a, a): (&Task, &Transcript),
     (task_b, b): (&Task, &Transcript),
 ) -> Option<u32> {
     for (ra, rb) in a.rounds.iter().zip(&b.rounds) {
-        if ra.chosen(task_a) != rb.chosen(task_b) {
+        if decided(task_a, ra) != decided(task_b, rb) {
             return Some(ra.step);
         }
     }
@@ -37,4 +37,14 @@ pub fn first_difference(
         b
     };
     longer.rounds.get(common).map(|r: &Round| r.step)
+}
+
+/// What a round decided: the robot and action it chose, or each robot's part of a joint
+/// step and the action decided for it.
+fn decided<'r>(task: &Task, r: &'r Round) -> Vec<(Option<NodeId>, Option<&'r str>)> {
+    if r.parts.is_empty() {
+        return vec![r.chosen(task)];
+    }
+    let action = |p: &'r RobotPart| p.decision.as_ref().and_then(|d| d.action.as_deref());
+    r.parts.iter().map(|p| (Some(p.robot), action(p))).collect()
 }

@@ -9,12 +9,15 @@
 
 use std::sync::Arc;
 
-use coherent_agents::BackendKind;
 use coherent_agents::llm::{Answer, BackendInfo, Finish, Role};
-use coherent_agents::transcript::{Call, Round, RoundOutcome as Outcome, Status, Transcript};
+use coherent_agents::transcript::{
+    Call, Decision, ExternalDecision, Proposal, RobotPart, Round, RoundOutcome as Outcome, Status,
+    Transcript,
+};
+use coherent_agents::{BackendKind, Execution};
 use coherent_agents::{ModelUse, PriceTable};
 use coherent_core::text::{shown, shown_lines};
-use coherent_core::{NodeId, Task};
+use coherent_core::{NodeId, RobotReport, Task};
 use serde::Serialize;
 
 use super::scene::{self, Scene};
@@ -37,6 +40,8 @@ pub struct Header {
     pub name: String,
     pub instruction: String,
     pub method: String,
+    /// `sequential` (one robot's action a step) or `parallel` (joint steps).
+    pub execution: Execution,
     /// The backend and model, in words.
     pub backend: String,
     pub model: String,
@@ -76,12 +81,13 @@ pub struct Ending {
 #[derive(Debug, Serialize)]
 pub struct Step {
     pub step: u32,
-    /// The line `coherent run` printed for it.
+    /// The line `coherent run` printed for it (a joint step's lines, one under the
+    /// other: the step's, then each robot's part).
     pub line: String,
     /// `goal`, `ok`, `refused`, `declined`, `unusable` or `failed`.
     pub status: &'static str,
-    /// What each robot that acted (or was asked to) did; one today, several when a
-    /// step moves several robots.
+    /// What each robot that acted (or was asked to) did: the one robot of a sequential
+    /// step, every robot's part of a joint step.
     pub robots: Vec<Entry>,
     pub calls: Vec<CallView>,
     pub done: bool,
@@ -139,6 +145,7 @@ pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) 
         name: shown(&h.task_name).into_owned(),
         instruction: shown_lines(&task.meta.instruction),
         method: shown(&h.method).into_owned(),
+        execution: h.execution,
         backend: backend(&h.backend),
         model: shown(&h.backend.model).into_owned(),
         physics: h.physics,
@@ -201,7 +208,7 @@ pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) 
     let steps = t
         .rounds
         .iter()
-        .map(|r| step(task, r, h.max_steps))
+        .map(|r| step(task, r, h.max_steps, h.execution))
         .collect();
     EpisodeView {
         header,
@@ -240,7 +247,7 @@ fn backend(b: &BackendInfo) -> String {
     }
 }
 
-fn step(task: &Task, r: &Round, max_steps: u32) -> Step {
+fn step(task: &Task, r: &Round, max_steps: u32, execution: Execution) -> Step {
     let status = match &r.outcome {
         Outcome::Executed if r.done => "goal",
         Outcome::Executed => "ok",
@@ -251,9 +258,12 @@ fn step(task: &Task, r: &Round, max_steps: u32) -> Step {
     };
     Step {
         step: r.step,
-        line: lines::step(task, r, max_steps),
+        line: lines::round(task, r, max_steps, execution).join("\n"),
         status,
-        robots: vec![entry(task, r)],
+        robots: match execution {
+            Execution::Sequential => vec![entry(task, r)],
+            Execution::Parallel => r.parts.iter().map(|p| part(task, p)).collect(),
+        },
         calls: r.calls.iter().map(|c| call(task, c)).collect(),
         done: r.done,
         wall_ms: r.wall_ms,
@@ -263,12 +273,60 @@ fn step(task: &Task, r: &Round, max_steps: u32) -> Step {
 /// The round's robot and what it did.
 fn entry(task: &Task, r: &Round) -> Entry {
     let (robot, _) = r.chosen(task);
-    let name = robot.map_or("-".to_owned(), |id| match task.idx(id) {
+    let (outcome, reason) = outcome(&r.outcome, r.done);
+    Entry {
+        robot: robot.map(|id| id.0),
+        name: robot_name(task, robot),
+        subtask: r.proposal.as_ref().map(|p| shown_lines(&p.subtask)),
+        reasoning: r.proposal.as_ref().map(|p| shown_lines(&p.reasoning)),
+        decision: r.decision.as_ref().map(decision),
+        outcome,
+        reason,
+        feedback: shown_lines(&r.feedback),
+        actions: r.actions.iter().map(|a| shown(a).into_owned()).collect(),
+        external: r.external.as_ref().map(external),
+        report: r.robot.as_ref().map(report),
+    }
+}
+
+/// One robot's part of a joint step: its subtask (marked when kept from an earlier
+/// round), its decision, what came of its action, what it heard.
+fn part(task: &Task, p: &RobotPart) -> Entry {
+    let (outcome, reason) = outcome(&p.outcome, false);
+    let subtask = |proposal: &Proposal| {
+        let subtask = shown_lines(&proposal.subtask);
+        if p.kept {
+            format!("{subtask} (kept from an earlier step)")
+        } else {
+            subtask
+        }
+    };
+    Entry {
+        robot: Some(p.robot.0),
+        name: robot_name(task, Some(p.robot)),
+        subtask: p.proposal.as_ref().map(subtask),
+        reasoning: p.proposal.as_ref().map(|p| shown_lines(&p.reasoning)),
+        decision: p.decision.as_ref().map(decision),
+        outcome,
+        reason,
+        feedback: shown_lines(&p.feedback),
+        actions: p.actions.iter().map(|a| shown(a).into_owned()).collect(),
+        external: p.external.as_ref().map(external),
+        report: p.report.as_ref().map(report),
+    }
+}
+
+fn robot_name(task: &Task, robot: Option<NodeId>) -> String {
+    robot.map_or("-".to_owned(), |id| match task.idx(id) {
         Some(n) => shown(&task.node(n).label()).into_owned(),
         None => format!("unknown robot {}", id.0),
-    });
-    let (outcome, reason) = match &r.outcome {
-        Outcome::Executed if r.done => ("executed; the goal holds".to_owned(), None),
+    })
+}
+
+/// What came of an action, in words, and the engine's reason code when it was refused.
+fn outcome(o: &Outcome, done: bool) -> (String, Option<String>) {
+    match o {
+        Outcome::Executed if done => ("executed; the goal holds".to_owned(), None),
         Outcome::Executed => ("executed".to_owned(), None),
         Outcome::Infeasible { reason, message } => (
             format!("refused ({}): {}", shown(reason), shown_lines(message)),
@@ -287,40 +345,35 @@ fn entry(task: &Task, r: &Round) -> Entry {
         Outcome::MethodError { message } => {
             (format!("the method failed: {}", shown_lines(message)), None)
         }
-    };
-    Entry {
-        robot: robot.map(|id| id.0),
-        name,
-        subtask: r.proposal.as_ref().map(|p| shown_lines(&p.subtask)),
-        reasoning: r.proposal.as_ref().map(|p| shown_lines(&p.reasoning)),
-        decision: r.decision.as_ref().map(|d| DecisionView {
-            can_do: d.can_do,
-            action: d.action.as_deref().map(|a| shown(a).into_owned()),
-            subtask_complete: d.subtask_complete,
-            note: shown_lines(&d.note),
-        }),
-        outcome,
-        reason,
-        feedback: shown_lines(&r.feedback),
-        actions: r.actions.iter().map(|a| shown(a).into_owned()).collect(),
-        external: r.external.as_ref().map(|e| {
-            format!(
-                "{} (its own model use: {} calls, {} prompt + {} completion tokens)",
-                shown_lines(&e.note),
-                e.calls,
-                e.prompt_tokens,
-                e.completion_tokens
-            )
-        }),
-        report: r.robot.as_ref().map(|rep| {
-            format!(
-                "{} via {}: {}",
-                shown(&rep.robot),
-                shown(&rep.via),
-                shown_lines(&rep.message)
-            )
-        }),
     }
+}
+
+fn decision(d: &Decision) -> DecisionView {
+    DecisionView {
+        can_do: d.can_do,
+        action: d.action.as_deref().map(|a| shown(a).into_owned()),
+        subtask_complete: d.subtask_complete,
+        note: shown_lines(&d.note),
+    }
+}
+
+fn external(e: &ExternalDecision) -> String {
+    format!(
+        "{} (its own model use: {} calls, {} prompt + {} completion tokens)",
+        shown_lines(&e.note),
+        e.calls,
+        e.prompt_tokens,
+        e.completion_tokens
+    )
+}
+
+fn report(rep: &RobotReport) -> String {
+    format!(
+        "{} via {}: {}",
+        shown(&rep.robot),
+        shown(&rep.via),
+        shown_lines(&rep.message)
+    )
 }
 
 fn call(task: &Task, c: &Call) -> CallView {

@@ -100,7 +100,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
         Err(e) => {
             let mut moments = vec![moment(task, rules.state(), 0, None, None)];
             for round in &t.rounds {
-                if let Some((robot, action)) = round.executed(task) {
+                for (robot, action) in round.carried_out(task) {
                     let _ = rules.step(robot, action);
                 }
                 moments.push(moment(task, rules.state(), 0, None, None));
@@ -127,23 +127,18 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
     let first = pictures.of(&stage, rules.state(), ids);
     let mut moments = vec![moment(task, rules.state(), first, Some(&drawn), None)];
     for round in &t.rounds {
-        let mut sim_seconds = None;
-        if let Some((robot, action)) = round.executed(task) {
+        let actions = round.carried_out(task);
+        for &(robot, action) in &actions {
             let _ = rules.step(robot, action);
-            if let Ok(env) = &mut physics {
-                let stopped = match env.step_physical(robot, action) {
-                    Ok(Ok(report)) => {
-                        sim_seconds = Some(report.sim_seconds);
-                        drawn.update(&stage, env);
-                        None
-                    }
-                    Ok(Err(why)) => Some(format!(
-                        "the rules refuse {} in physics: {why}",
-                        shown(action)
-                    )),
-                    Err(e) => Some(e.message),
-                };
-                if let Some(why) = stopped {
+        }
+        let mut sim_seconds = None;
+        if let Ok(env) = &mut physics {
+            match in_physics(env, &actions, !round.parts.is_empty()) {
+                Ok(seconds) => {
+                    sim_seconds = seconds;
+                    drawn.update(&stage, env);
+                }
+                Err(why) => {
                     drawn.finish(&stage, env);
                     physics = Err(format!(
                         "from round {} on, the robots are drawn where physics left them: {}",
@@ -171,6 +166,33 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
         tracks: drawn.tracks,
         moments,
         warning: physics.err(),
+    }
+}
+
+/// Carries a round's executed actions out in physics: a joint step's together (its
+/// robots moving at once, as long as the slowest), a sequential round's one action
+/// alone; its simulated seconds (none when nothing was carried out), or why physics
+/// could not.
+fn in_physics(
+    env: &mut PhysicalEnv,
+    actions: &[(NodeId, &str)],
+    joint: bool,
+) -> Result<Option<f64>, String> {
+    match actions {
+        [] => Ok(None),
+        [(robot, action)] if !joint => match env.step_physical(*robot, action) {
+            Ok(Ok(report)) => Ok(Some(report.sim_seconds)),
+            Ok(Err(why)) => Err(format!(
+                "the rules refuse {} in physics: {why}",
+                shown(action)
+            )),
+            Err(e) => Err(e.message),
+        },
+        _ => match env.step_joint_physical(actions) {
+            Ok(Ok(report)) => Ok(Some(report.sim_seconds)),
+            Ok(Err(why)) => Err(format!("the rules refuse the joint step in physics: {why}")),
+            Err(e) => Err(e.message),
+        },
     }
 }
 

@@ -1,8 +1,11 @@
 //! The built-in backend: the optimal planner plays both roles, so that the loop runs
 //! on a fresh machine with no model. The assigner proposes the first step of a shortest
 //! plan from the current state; the executor takes that step when it is in its list; a
-//! central or dialogue method gets that step as its joint action. Its answers are the
-//! same JSON a model would give, and go through the same parsing.
+//! central or dialogue method gets that step as its team action. In a parallel episode
+//! the plan is one of the fewest joint steps (`coherent_core::makespan`): the assigner
+//! gives its first joint step's actions to the idle robots among them, a central model
+//! chooses that joint step, and each speaker of a dialogue its own action in it. Its
+//! answers are the same JSON a model would give, and go through the same parsing.
 //!
 //! The simulated backend ([`BuiltinBackend::simulated`]) is the same planner making the
 //! mistakes language models make, each at its own seeded rate
@@ -12,6 +15,7 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::Instant;
 
+use coherent_core::makespan::{self, JointStep};
 use coherent_core::planner::{self, Limits, Step};
 use coherent_core::task::predicate_holds;
 use coherent_core::{Idx, State, Task, rules};
@@ -22,13 +26,17 @@ use crate::backends::llm::{
     OutputMode, Query, Usage,
 };
 use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot};
-use crate::methods::joint::joint_actions;
+use crate::methods::team_actions;
 use crate::rng::Rng;
 
 /// The next step of a shortest plan from each state seen, per task, or why there is
 /// none. Planning once and following the plan costs one search per episode instead of
 /// one per round; a state off the plan is planned afresh.
 type Plans = HashMap<(usize, State), Result<Step, String>>;
+
+/// The first joint step of a plan of the fewest joint steps from each state seen, per
+/// task, or why there is none (planned once and followed, as [`Plans`]).
+type JointPlans = HashMap<(usize, State), Result<JointStep, String>>;
 
 #[derive(Debug, Default)]
 pub struct BuiltinBackend {
@@ -42,6 +50,7 @@ pub struct BuiltinBackend {
 struct Planner {
     limits: Limits,
     plans: Mutex<Plans>,
+    joint_plans: Mutex<JointPlans>,
     /// The tasks planned for, kept alive so that the addresses in the keys stay theirs.
     tasks: Mutex<Vec<Arc<Task>>>,
 }
@@ -79,26 +88,12 @@ impl Planner {
         {
             return known.clone();
         }
-        // A goal no action can ever reach (a goal container that is no container, say)
-        // is refused at once, without exhausting the state space. A predicate that holds
-        // already is no obstacle: nothing could have moved it there, nor can move it away.
-        let obstacle = task
-            .goal
-            .iter()
-            .filter(|p| !predicate_holds(state, p))
-            .find_map(|p| {
-                planner::static_obstacle(task, p)
-                    .map(|why| format!("{}: {why}", task.predicate_label(p)))
-            });
-        if let Some(why) = obstacle {
+        if let Some(why) = unreachable_goal(task, state) {
             return Err(why);
         }
         let search = planner::search_from(task, state, &task.robots, &task.goal, &self.limits);
         let mut plans = self.plans.lock().unwrap_or_else(PoisonError::into_inner);
-        let mut tasks = self.tasks.lock().unwrap_or_else(PoisonError::into_inner);
-        if !tasks.iter().any(|t| Arc::ptr_eq(t, task)) {
-            tasks.push(Arc::clone(task));
-        }
+        self.keep(task);
         let plan = match search.plan {
             Some(plan) if !plan.is_empty() => plan,
             Some(_) => return Err("the goal already holds".into()),
@@ -125,12 +120,156 @@ impl Planner {
         Ok(plan[0])
     }
 
+    /// Keeps `task` alive, so that the addresses in the keys of the plans stay its.
+    fn keep(&self, task: &Arc<Task>) {
+        let mut tasks = self.tasks.lock().unwrap_or_else(PoisonError::into_inner);
+        if !tasks.iter().any(|t| Arc::ptr_eq(t, task)) {
+            tasks.push(Arc::clone(task));
+        }
+    }
+
+    /// The first joint step of a plan of the fewest joint steps from `state` (the best
+    /// the search finds within the limits), or why there is none.
+    fn next_joint_step(&self, task: &Arc<Task>, state: &State) -> Result<JointStep, String> {
+        let key = (Arc::as_ptr(task) as usize, state.clone());
+        let known = self
+            .joint_plans
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        if let Some(known) = known.get(&key) {
+            return known.clone();
+        }
+        drop(known);
+        if let Some(why) = unreachable_goal(task, state) {
+            return Err(why);
+        }
+        let (robots, goal, limits) = (&task.robots, &task.goal, &self.limits);
+        let sequential = planner::search_from(task, state, robots, goal, limits);
+        let search = makespan::search_with(
+            task,
+            state,
+            robots,
+            goal,
+            sequential.plan.as_deref(),
+            limits,
+        );
+        self.keep(task);
+        let mut plans = self
+            .joint_plans
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner);
+        let plan = match search.plan {
+            Some(plan) if !plan.is_empty() => plan,
+            Some(_) => return Err("the goal already holds".into()),
+            None if search.stop.is_some() => {
+                return Err(format!(
+                    "the search stopped after {} states without a plan",
+                    search.states_expanded
+                ));
+            }
+            None => {
+                let why = "no plan reaches the goal from here".to_owned();
+                plans.insert(key, Err(why.clone()));
+                return Err(why);
+            }
+        };
+        let mut s = state.clone();
+        for joint in &plan {
+            plans.insert((key.0, s.clone()), Ok(joint.clone()));
+            for step in joint {
+                if let Some(robot) = task.robot(step.robot) {
+                    rules::apply(task, &mut s, *robot, step.action);
+                }
+            }
+        }
+        Ok(plan[0].clone())
+    }
+
+    /// The answer to a parallel episode's question (`proposals`, `joint_step`,
+    /// `own_action`): from the first joint step of a plan of the fewest joint steps,
+    /// unless `mistake` says which error to make instead.
+    fn joint_answer(&self, q: &Query, mistake: Option<(Mistake, &mut Rng)>) -> Answer {
+        let task = &q.situation.task;
+        let state = &q.situation.state;
+        let step = match self.next_joint_step(task, state) {
+            Ok(step) => step,
+            Err(why) => return answer(String::new(), Finish::Refusal(why)),
+        };
+        let listed = |robot: Idx| -> Vec<String> {
+            task.robot(robot)
+                .map(|r| {
+                    rules::actions(task, state, *r)
+                        .iter()
+                        .map(|a| a.render(task))
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        let free = |robot: Idx| {
+            q.situation.robots.is_empty() || q.situation.robots.contains(&task.id(robot))
+        };
+        let mut chosen: Vec<(Idx, String)> = step
+            .iter()
+            .filter(|s| free(s.robot))
+            .map(|s| (s.robot, s.action.render(task)))
+            .collect();
+        let wrong = matches!(mistake, Some((Mistake::WrongRobot, _)));
+        match mistake {
+            Some((Mistake::WrongRobot, rng)) if !chosen.is_empty() => {
+                chosen[0].0 = other_robot(task, chosen[0].0, rng);
+            }
+            Some((Mistake::Suboptimal, rng)) => {
+                let offered: Vec<(Idx, String)> = team_actions::offered(task, state)
+                    .into_iter()
+                    .filter(|a| free(a.robot.node))
+                    .map(|a| (a.robot.node, a.action.render(task)))
+                    .collect();
+                if !offered.is_empty() {
+                    chosen = vec![offered[rng.below(offered.len())].clone()];
+                }
+            }
+            Some((Mistake::Hallucinate, rng)) if !chosen.is_empty() => {
+                chosen[0].1 = hallucinated(task, &listed(chosen[0].0), rng);
+            }
+            _ => {}
+        }
+        let reasoning = "The first joint step of a plan of the fewest joint steps from here.";
+        let text = match q.schema_name {
+            "proposals" => {
+                let assignments: Vec<serde_json::Value> = chosen
+                    .iter()
+                    .map(|(r, a)| json!({"robot": task.node(*r).label(), "subtask": a}))
+                    .collect();
+                json!({"reasoning": reasoning, "assignments": assignments})
+            }
+            "joint_step" => {
+                let lines: Vec<String> = chosen
+                    .iter()
+                    .map(|(r, a)| format!("{}: {a}", task.node(*r).label()))
+                    .collect();
+                json!({"actions": lines})
+            }
+            // A speaker's own action: its part of the step (another robot's after a
+            // wrong-robot mistake), or none.
+            _ => {
+                let me = q.robot.and_then(|id| task.idx(id));
+                let action = chosen
+                    .iter()
+                    .find(|(r, _)| (Some(*r) == me) != wrong)
+                    .map_or("none".to_owned(), |(_, a)| a.clone());
+                json!({"message": reasoning, "action": action})
+            }
+        };
+        answer(text.to_string(), Finish::Stop)
+    }
+
     /// The answer to `q`: the first step of a shortest plan, as the request's schema
     /// wants it, unless `mistake` says which error to make instead.
     fn answer(&self, q: &Query, mistake: Option<(Mistake, &mut Rng)>) -> Answer {
         let task = &q.situation.task;
         let state = &q.situation.state;
         let text = match q.schema_name {
+            "proposals" | "joint_step" | "own_action" => return self.joint_answer(q, mistake),
             "decision" => {
                 let subtask = q.situation.subtask.as_deref().unwrap_or_default();
                 let actions: Vec<String> = q
@@ -164,7 +303,7 @@ impl Planner {
                 }
                 .to_string()
             }
-            // The assigner's proposal, or one joint action (CMRS, DMRS, LLM-MCTS).
+            // The assigner's proposal, or one team action (CMRS, DMRS, LLM-MCTS).
             kind => {
                 let step = match self.next_step(task, state) {
                     Ok(step) => step,
@@ -174,11 +313,11 @@ impl Planner {
                 match mistake {
                     Some((Mistake::WrongRobot, rng)) => robot = other_robot(task, robot, rng),
                     Some((Mistake::Suboptimal, rng)) => {
-                        let joint: Vec<(Idx, String)> = joint_actions(task, state)
+                        let team: Vec<(Idx, String)> = team_actions::offered(task, state)
                             .into_iter()
                             .map(|j| (j.robot.node, j.action.render(task)))
                             .collect();
-                        (robot, action) = joint[rng.below(joint.len())].clone();
+                        (robot, action) = team[rng.below(team.len())].clone();
                     }
                     Some((Mistake::Hallucinate, rng)) => {
                         let listed: Vec<String> = task
@@ -209,6 +348,20 @@ impl Planner {
         };
         answer(text, Finish::Stop)
     }
+}
+
+/// Why no action can ever reach the goal from `state`, when a predicate that does not
+/// hold has a static obstacle (a goal container that is no container, say): refused at
+/// once, without exhausting the state space. A predicate that holds already is no
+/// obstacle: nothing could have moved it there, nor can move it away.
+fn unreachable_goal(task: &Task, state: &State) -> Option<String> {
+    task.goal
+        .iter()
+        .filter(|p| !predicate_holds(state, p))
+        .find_map(|p| {
+            planner::static_obstacle(task, p)
+                .map(|why| format!("{}: {why}", task.predicate_label(p)))
+        })
 }
 
 fn answer(text: String, finish: Finish) -> Answer {

@@ -54,6 +54,9 @@ pub struct Situation {
     pub state: State,
     /// The executor's subtask, as the assigner wrote it.
     pub subtask: Option<String>,
+    /// The robots the answer is about, when not the whole team: a parallel assigner's
+    /// idle robots (those it may give a subtask).
+    pub robots: Vec<NodeId>,
 }
 
 impl Situation {
@@ -63,6 +66,7 @@ impl Situation {
             task: Arc::clone(task),
             state: env.state().clone(),
             subtask,
+            robots: Vec::new(),
         }
     }
 }

@@ -30,14 +30,20 @@ impl ReplayBackend {
         }
     }
 
-    /// The recorded call's answer (or error) and the endpoint it names.
+    /// The recorded call's answer (or error) and the endpoint it names: the next call
+    /// recorded, or, when a round asked several roles at once (a parallel round's
+    /// executors), the first call of that round for the same role and robot, whichever
+    /// of them is asked first.
     fn next(&self, q: &Query) -> Response {
-        let Some((step, call)) = self
-            .calls
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .pop_front()
-        else {
+        let mut calls = self.calls.lock().unwrap_or_else(PoisonError::into_inner);
+        let robot = q.robot.map(|r| r.0);
+        let at = calls.front().and_then(|&(step, _)| {
+            calls
+                .iter()
+                .take_while(|(s, _)| *s == step)
+                .position(|(_, c)| c.role == q.role && c.robot == robot)
+        });
+        let Some((step, call)) = calls.remove(at.unwrap_or(0)) else {
             return Response {
                 result: Err(LlmError::new(
                     LlmErrorKind::Replay,

@@ -2,6 +2,8 @@
 //! it, and the answer's text comes back unless it gives nothing to act on (empty,
 //! refused, filtered, or the backend failed).
 
+use futures_util::future::join_all;
+
 use crate::backends::llm::{Backend, Finish, LlmError, Query};
 use crate::episode::cancel::Cancel;
 use crate::records::transcript::{Call, RoundOutcome};
@@ -124,6 +126,23 @@ pub(crate) async fn ask(
     };
     calls.push(call);
     Some(reply)
+}
+
+/// Asks `backend` every one of `queries` at once (a parallel round's executors, one per
+/// robot), so that their calls are in flight together, and waits for all: each reply
+/// with the calls it made, in the order of `queries` whatever order they were answered
+/// in; `None` when cancelled.
+pub(crate) async fn ask_all(
+    backend: &dyn Backend,
+    queries: Vec<Query>,
+    cancel: &Cancel,
+) -> Option<Vec<(Vec<Call>, Result<Reply, Unusable>)>> {
+    let asks = queries.into_iter().map(|query| async move {
+        let mut calls = Vec::new();
+        let reply = ask(backend, query, cancel, &mut calls).await;
+        reply.map(|r| (calls, r))
+    });
+    join_all(asks).await.into_iter().collect()
 }
 
 fn excerpt(text: &str) -> String {

@@ -1,6 +1,6 @@
 //! A method written outside the crate (a Python class, say) as the episode loop sees it:
-//! a [`Policy`] that is asked once per step for one decision, given a [`StepView`] of
-//! where the episode stands. The loop that asks it is [`crate::methods::external`]; everything
+//! a [`Policy`] that is asked once per step for one decision (in a parallel episode, one
+//! per robot that acts), given a [`StepView`] of where the episode stands. The loop that asks it is [`crate::methods::external`]; everything
 //! else (the step budget, the feasibility check, the transcript, the benchmark) is the
 //! same as for the built-in methods.
 
@@ -10,7 +10,7 @@ use coherent_core::rules::Observation;
 use coherent_core::{Environment, NodeId, RobotKind, State, Task, describe};
 
 use crate::backends::llm::BoxFuture;
-use crate::records::transcript::Call;
+use crate::records::transcript::{Call, Execution};
 
 /// One robot as a method sees it at a step.
 #[derive(Clone, Debug)]
@@ -24,7 +24,7 @@ pub struct RobotView {
 }
 
 /// One earlier step as a method is shown it: who acted, what, whether it ran, and why
-/// not.
+/// not (of a parallel step, one for each robot that was given an action).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct PastStep {
     /// `None` when the method chose no action.
@@ -41,8 +41,10 @@ pub struct StepView {
     pub task: Arc<Task>,
     /// The step about to be taken, from 1.
     pub step: u32,
-    /// The step budget (2 x GT unless set).
+    /// The step budget (2 x GT unless set; 2 x the makespan in joint steps).
     pub max_steps: u32,
+    /// One decision a step, or joint steps (a decision per robot that acts).
+    pub execution: Execution,
     /// The team, in the task's order.
     pub robots: Vec<RobotView>,
     /// Every earlier step, oldest first.
@@ -52,12 +54,13 @@ pub struct StepView {
 }
 
 impl StepView {
-    /// Where `env` stands before step `step` of `max_steps`, after `history`.
+    /// Where `env` stands before step `step` of `max_steps` of an episode of
+    /// `execution`, after `history`.
     pub fn now(
         env: &(dyn Environment + Send),
         task: &Arc<Task>,
-        step: u32,
-        max_steps: u32,
+        (step, max_steps): (u32, u32),
+        execution: Execution,
         history: &[PastStep],
     ) -> StepView {
         let robots = task
@@ -81,6 +84,7 @@ impl StepView {
             task: Arc::clone(task),
             step,
             max_steps,
+            execution,
             robots,
             history: history.to_vec(),
             state: env.state().clone(),
@@ -132,11 +136,12 @@ impl std::fmt::Display for MethodFailure {
     }
 }
 
-/// A step's answer: the choice, or why the method failed, and the calls it made through
-/// the project's client meanwhile.
+/// A step's answer: the choices (one in a sequential episode, where none is no action;
+/// one per robot that acts in a parallel one), or why the method failed, and the calls it
+/// made through the project's client meanwhile.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Act {
-    pub choice: Result<Choice, MethodFailure>,
+    pub choices: Result<Vec<Choice>, MethodFailure>,
     pub calls: Vec<Call>,
 }
 

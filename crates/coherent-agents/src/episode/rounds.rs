@@ -90,8 +90,12 @@ pub(crate) async fn rounds(
                 k + a.usage.cached_tokens,
             )
         });
-    // What a method written outside the crate reported of its own clients' calls.
-    let reported = rounds.iter().filter_map(|r| r.external.as_ref());
+    // What a method written outside the crate reported of its own clients' calls (in a
+    // parallel round, with each robot's part).
+    let reported = rounds.iter().flat_map(|r| {
+        let parts = r.parts.iter().filter_map(|p| p.external.as_ref());
+        r.external.iter().chain(parts)
+    });
     let (prompt_tokens, completion_tokens, reported_calls) = reported
         .fold((prompt_tokens, completion_tokens, 0), |(p, c, n), e| {
             (p + e.prompt_tokens, c + e.completion_tokens, n + e.calls)
@@ -108,6 +112,7 @@ pub(crate) async fn rounds(
         cached_tokens,
         wall_ms: start.elapsed().as_secs_f64() * 1e3,
         error,
+        sim_seconds: env.sim_seconds(),
     };
     Ok(Episode { rounds, summary })
 }

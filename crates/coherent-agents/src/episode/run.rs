@@ -14,7 +14,7 @@ use crate::backends::llm::{Backend, BackendInfo};
 use crate::episode::budget::Budget;
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::Episode;
-use crate::episode::settings::{Method, MethodSpec, Settings};
+use crate::episode::settings::{Execution, Method, MethodSpec, Settings};
 use crate::error::Error;
 use crate::methods::cmrs::{self, CmrsConfig};
 use crate::methods::dmrs::{self, DmrsConfig};
@@ -22,6 +22,7 @@ use crate::methods::external;
 use crate::methods::mcts::{self, MctsConfig};
 use crate::methods::optimal;
 use crate::methods::pefa::{self, PefaConfig};
+use crate::methods::pefa_parallel;
 use crate::records::transcript::{self, Header, Record, Round, Writer};
 
 /// The most bytes of a scene's or a method's name that a transcript's file name holds
@@ -105,6 +106,7 @@ pub async fn run(
         task: native::to_value(task),
         task_name: task.meta.name.clone(),
         method: settings.method.name().into(),
+        execution: settings.execution,
         history,
         max_steps: budget.steps(),
         gt_steps: task.meta.gt_steps,
@@ -113,7 +115,7 @@ pub async fn run(
         backend: backend_info,
         temperature: settings.temperature,
         seed: settings.seed,
-        prompts: Some(settings.prompts.record()),
+        prompts: Some(settings.prompts.record(settings.execution)),
         started_ms: SystemTime::now()
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_millis() as u64),
@@ -133,15 +135,20 @@ pub async fn run(
         ..MctsConfig::default()
     };
     let steps = budget.steps();
+    let execution = settings.execution;
+    settings.method.check_runs(execution)?;
     let method = match &settings.method {
         MethodSpec::Builtin(method) => *method,
         MethodSpec::External(method) => {
             let made = method.make(task);
+            let budget = (execution, steps);
             let limit = method.step_timeout();
-            let episode = external::run(env, task, made, steps, limit, cancel, &mut on_round).await;
+            let episode =
+                external::run(env, task, made, budget, limit, cancel, &mut on_round).await;
             return finish(episode.map_err(io)?, header, &mut writer, transcript);
         }
     };
+    let parallel = execution == Execution::Parallel;
     let episode = match method {
         Method::Pefa | Method::PefaNoHistory => {
             let config = PefaConfig {
@@ -149,10 +156,18 @@ pub async fn run(
                 prompts,
                 ..PefaConfig::new(steps)
             };
-            pefa::run(env, task, backend, &config, cancel, &mut on_round).await
+            if parallel {
+                pefa_parallel::run(env, task, backend, &config, cancel, &mut on_round).await
+            } else {
+                pefa::run(env, task, backend, &config, cancel, &mut on_round).await
+            }
         }
         Method::Cmrs => {
-            let config = CmrsConfig { history, prompts };
+            let config = CmrsConfig {
+                history,
+                prompts,
+                execution,
+            };
             cmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
         }
         Method::Dmrs1d | Method::Dmrs2d => {
@@ -161,6 +176,7 @@ pub async fn run(
                 history,
                 seed: settings.seed.unwrap_or(0),
                 prompts,
+                execution,
             };
             dmrs::run(env, task, backend, &config, steps, cancel, &mut on_round).await
         }
@@ -174,7 +190,7 @@ pub async fn run(
                 cancel: Some(cancel.flag()),
                 ..Limits::default()
             };
-            optimal::run(env, task, &limits, steps, cancel, &mut on_round).await
+            optimal::run(env, task, &limits, execution, steps, cancel, &mut on_round).await
         }
     }
     .map_err(io)?;

@@ -8,6 +8,7 @@ use std::time::Duration;
 
 use coherent_core::Task;
 
+pub use crate::episode::execution::Execution;
 use crate::episode::policy::{MakePolicy, MethodFailure, Policy};
 use crate::episode::rounds::HISTORY_WINDOW;
 use crate::error::Error;
@@ -63,6 +64,13 @@ impl Method {
     /// Whether the method asks the episode's backend at all.
     pub fn asks_backend(self) -> bool {
         !matches!(self, Method::Mcts | Method::Optimal)
+    }
+
+    /// Whether the method can run `execution`: the tree searches, MCTS and LLM-MCTS,
+    /// are sequential only (their tree's edges are one robot's action; a tree over
+    /// joint steps is a method of its own, which the paper does not have).
+    pub fn runs(self, execution: Execution) -> bool {
+        execution == Execution::Sequential || !matches!(self, Method::Mcts | Method::LlmMcts)
     }
 
     pub fn from_name(name: &str) -> Option<Method> {
@@ -188,6 +196,24 @@ impl MethodSpec {
         }
     }
 
+    /// Whether the method can run `execution` (a method written outside the crate can:
+    /// its `act` answers a decision per robot).
+    pub fn runs(&self, execution: Execution) -> bool {
+        self.builtin().is_none_or(|m| m.runs(execution))
+    }
+
+    /// `Ok` when the method can run `execution`, else the error that says it cannot.
+    pub fn check_runs(&self, execution: Execution) -> Result<(), Error> {
+        if self.runs(execution) {
+            return Ok(());
+        }
+        Err(Error::Invalid(format!(
+            "{} is sequential only: its search tree takes one robot's action a step; \
+             run it with execution sequential",
+            self.name()
+        )))
+    }
+
     /// The method's own settings: what a method written outside the crate declares;
     /// none for a built-in one (its settings are the run's).
     pub fn own_settings(&self) -> BTreeMap<String, serde_json::Value> {
@@ -217,6 +243,8 @@ impl From<Method> for MethodSpec {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub method: MethodSpec,
+    /// One robot's action a step (the paper's), or joint steps.
+    pub execution: Execution,
     /// Rounds of history the assigner sees (ignored by `pefa-no-history`); for the
     /// baselines, the executed actions in their prompts (the paper: 5 for both).
     pub history: usize,
@@ -236,6 +264,7 @@ impl Settings {
     pub fn new(method: impl Into<MethodSpec>) -> Settings {
         Settings {
             method: method.into(),
+            execution: Execution::Sequential,
             history: HISTORY_WINDOW,
             temperature: None,
             seed: None,

@@ -10,7 +10,7 @@ use std::sync::Arc;
 
 use coherent_core::Task;
 
-use crate::episode::settings::MethodSpec;
+use crate::episode::settings::{Execution, MethodSpec};
 use crate::error::Error;
 use crate::harness::results::{
     EpisodeKey, ResultLine, mark_orphans, read_results_within, repair, transcripts_dir,
@@ -31,19 +31,28 @@ pub enum EpisodeResult {
     TaskSkipped(String),
 }
 
-/// Every episode of `methods` x `tasks` x seed indices `0..seeds`, task by task, seed by
-/// seed, method by method: the order a run starts them in.
-pub fn episode_keys(tasks: &[Arc<Task>], methods: &[MethodSpec], seeds: u32) -> Vec<EpisodeKey> {
+/// Every episode of `methods` x `executions` x `tasks` x seed indices `0..seeds`, task by
+/// task, seed by seed, execution by execution, method by method: the order a run starts
+/// them in.
+pub fn episode_keys(
+    tasks: &[Arc<Task>],
+    methods: &[MethodSpec],
+    executions: &[Execution],
+    seeds: u32,
+) -> Vec<EpisodeKey> {
     let mut keys = Vec::new();
     for task in tasks {
         for seed in 0..seeds {
-            for method in methods {
-                keys.push(EpisodeKey {
-                    method: method.name().to_owned(),
-                    scene: task.meta.scene.clone(),
-                    task_id: task.meta.task_id,
-                    seed,
-                });
+            for &execution in executions {
+                for method in methods {
+                    keys.push(EpisodeKey {
+                        method: method.name().to_owned(),
+                        scene: task.meta.scene.clone(),
+                        task_id: task.meta.task_id,
+                        seed,
+                        execution,
+                    });
+                }
             }
         }
     }
@@ -154,16 +163,17 @@ impl Ledger {
         })
     }
 
-    /// The episodes of `methods` x `tasks` x seed indices `0..seeds` that have no final
-    /// line yet, in the order they are to start ([`episode_keys`]); the others count as
-    /// skipped.
+    /// The episodes of `methods` x `executions` x `tasks` x seed indices `0..seeds` that
+    /// have no final line yet, in the order they are to start ([`episode_keys`]); the
+    /// others count as skipped.
     pub fn plan(
         &mut self,
         tasks: &[Arc<Task>],
         methods: &[MethodSpec],
+        executions: &[Execution],
         seeds: u32,
     ) -> Vec<EpisodeKey> {
-        let all = episode_keys(tasks, methods, seeds);
+        let all = episode_keys(tasks, methods, executions, seeds);
         self.outcome.total += all.len();
         let pending: Vec<EpisodeKey> = all.into_iter().filter(|k| !self.done.contains(k)).collect();
         self.outcome.skipped = self.outcome.total - pending.len();

@@ -3,7 +3,8 @@
 //! JSON line per finished episode ([`results`]), the driver's side of a run that resumes
 //! it and writes each result once ([`ledger`]), what a run reports as it goes
 //! ([`progress`]), what tokens cost ([`prices`]), the settings that make lines
-//! comparable ([`run_settings`]) and the paper's tables ([`report`]).
+//! comparable ([`run_settings`]) and the paper's tables ([`report`]), with the makespan
+//! table of runs with parallel episodes ([`speedup`]).
 //! The crate root names this module `bench` too, with its main types at hand.
 
 pub mod ledger;
@@ -12,6 +13,7 @@ pub mod progress;
 pub mod report;
 pub mod results;
 pub mod run_settings;
+pub mod speedup;
 pub mod subset;
 
 pub use ledger::{BenchOutcome, EpisodeResult, Ledger, episode_keys};

@@ -1,10 +1,12 @@
 //! The paper's tables from a results file ([`crate::harness::bench`]): Table I (success rate and
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
 //! scene), each with the ground-truth row, and each method's LLM calls, tokens and cost
-//! (per task and per success, from the lines' `cost_usd`).
+//! (per task and per success, from the lines' `cost_usd`). A method's parallel episodes
+//! are a row of their own, `<method> (parallel)`, and a run with parallel episodes adds
+//! the makespan table ([`crate::harness::speedup`]).
 //!
 //! AS counts a failed episode as 2 x GT + 1 steps (docs/semantics.md, "Steps, the budget and the scores"; for a task
-//! without GT, its budget plus one). With several seeds each cell is the mean over seeds of the
+//! without GT, and for a parallel episode, its budget plus one). With several seeds each cell is the mean over seeds of the
 //! per-seed value, with the half-width of a 95% confidence interval from Student's t.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
@@ -12,11 +14,11 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 use coherent_core::text::shown;
 use serde::Serialize;
 
-use crate::episode::settings::Method;
 use crate::harness::results::{EpisodeKey, ResultLine};
 use crate::harness::run_settings::{RunSettings, Setting, field, method_text};
-use crate::records::transcript::Status;
+use crate::harness::speedup::{self, SpeedRow, row_name, row_order};
 use crate::records::transcript::headline;
+use crate::records::transcript::{Execution, Status};
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
 /// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the
@@ -123,6 +125,9 @@ pub struct Report {
     pub errors: usize,
     /// Tasks the planner finds no plan for (task type null): in the average only.
     pub untyped_tasks: usize,
+    /// The makespan table, when some episode ran in parallel ([`speedup::build`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub makespan: Vec<SpeedRow>,
     /// The settings every line was run with (none for lines that record none).
     pub settings: Option<RunSettings>,
     /// The settings methods written outside the crate declared, by method.
@@ -178,7 +183,7 @@ pub fn counted_steps(l: &ResultLine) -> f64 {
     if l.success {
         f64::from(l.steps)
     } else {
-        match l.gt_steps {
+        match l.gt_steps.filter(|_| l.execution.is_sequential()) {
             Some(gt) => 2.0 * f64::from(gt) + 1.0,
             None => f64::from(l.max_steps) + 1.0,
         }
@@ -251,15 +256,8 @@ fn failures(errors: &[&ResultLine]) -> Vec<Failure> {
     out
 }
 
-fn method_order(name: &str) -> (usize, String) {
-    let at = Method::ALL
-        .iter()
-        .position(|m| m.name() == name)
-        .unwrap_or(Method::ALL.len());
-    (at, name.to_owned())
-}
-
-/// Builds both tables and the costs of lines of one set of settings; lines of several
+/// Builds both tables, the costs and the makespan table of lines of one set of
+/// settings; lines of several
 /// ([`groups`]) are refused, since one table would mix them.
 pub fn build(lines: &[ResultLine]) -> Result<Report, Mixed> {
     let groups = groups(lines);
@@ -284,9 +282,13 @@ pub fn empty() -> Report {
 /// The tables of lines that share `settings`.
 fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
     let (finals, unfinished) = final_lines(lines);
-    let mut methods: Vec<String> = finals.iter().map(|l| l.method.clone()).collect();
-    methods.sort_by_key(|m| method_order(m));
-    methods.dedup();
+    let mut rows: Vec<(String, Execution)> = finals
+        .iter()
+        .map(|l| (l.method.clone(), l.execution))
+        .collect();
+    rows.sort_by_key(|(m, e)| row_order(m, *e));
+    rows.dedup();
+    let methods: Vec<String> = rows.iter().map(|(m, e)| row_name(m, *e)).collect();
     let seeds: BTreeSet<u32> = finals.iter().map(|l| l.seed).collect();
     let backends: BTreeSet<String> = finals
         .iter()
@@ -326,7 +328,7 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
     let costs = methods
         .iter()
         .map(|m| {
-            let mine: Vec<&&ResultLine> = finals.iter().filter(|l| &l.method == m).collect();
+            let mine: Vec<&&ResultLine> = finals.iter().filter(|l| &row_of(l) == m).collect();
             let steps: u64 = mine.iter().map(|l| u64::from(l.steps)).sum();
             let calls: u64 = mine.iter().map(|l| u64::from(l.llm_calls)).sum();
             let prompt: u64 = mine.iter().map(|l| l.prompt_tokens).sum();
@@ -376,10 +378,16 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
         unfinished,
         errors: errors.len(),
         untyped_tasks,
+        makespan: speedup::build(&finals),
         settings,
         method_settings,
         failures: failures(&errors),
     }
+}
+
+/// The row of `l` in the tables: its method, and its execution when parallel.
+fn row_of(l: &ResultLine) -> String {
+    row_name(&l.method, l.execution)
 }
 
 fn table(
@@ -400,7 +408,7 @@ fn table(
                     let mine: Vec<&ResultLine> = finals
                         .iter()
                         .copied()
-                        .filter(|l| &l.method == m && belongs(l, c))
+                        .filter(|l| &row_of(l) == m && belongs(l, c))
                         .collect();
                     cell(&mine)
                 })
@@ -597,6 +605,10 @@ pub fn markdown(r: &Report) -> String {
             opt(c.cost_per_success, 6)
         ));
     }
+    if !r.makespan.is_empty() {
+        out.push('\n');
+        out.push_str(&speedup::markdown(&r.makespan, md));
+    }
     out
 }
 
@@ -614,7 +626,9 @@ fn csv_field(s: &str) -> String {
 /// One CSV: a row per (table, method, column), ground-truth rows with `method` =
 /// `ground truth`, and a `costs` row per method (with its cost per task and per success
 /// in USD, empty where a model has no price, and the share of its prompt tokens read
-/// from the servers' caches); every row has the seeds, the backend and the settings.
+/// from the servers' caches); every row has the seeds, the backend and the settings. A
+/// run with parallel episodes adds seven columns after those (`execution` and the
+/// makespan table's numbers) and a `makespan` row per method, execution and task type.
 pub fn csv(r: &Report) -> String {
     let backend = csv_field(&r.backends.join("; "));
     let settings = csv_field(
@@ -624,18 +638,26 @@ pub fn csv(r: &Report) -> String {
     );
     let backend = format!("{backend},{settings}");
     let mut out = String::from(
-        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend,settings,cached_share\n",
+        "table,method,column,tasks,episodes,sr,sr_ci95,as,as_ci95,gt,calls_per_episode,tokens_per_episode,calls_per_step,tokens_per_step,cost_per_task,cost_per_success,seeds,backend,settings,cached_share",
     );
+    if !r.makespan.is_empty() {
+        out.push_str(
+            ",execution,makespan,optimal_makespan,actions,calls_per_action,sim_seconds,speedup",
+        );
+    }
+    out.push('\n');
     let num = |x: Option<f64>| x.map_or(String::new(), |x| format!("{x:.6}"));
     // Dollars in full: a small model's cost per task is a millionth of one.
     let usd = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
     let seeds = r.seeds.len();
+    // The makespan table's columns, empty in the other tables' rows.
+    let pad = if r.makespan.is_empty() { "" } else { ",,,,,,," };
     for (name, t) in [("I", &r.table1), ("II", &r.table2)] {
         for row in &t.rows {
             for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
                 let Some(cell) = cell else { continue };
                 out.push_str(&format!(
-                    "{name},{},{},{n},{},{},{},{},{},,,,,,,,{seeds},{backend},\n",
+                    "{name},{},{},{n},{},{},{},{},{},,,,,,,,{seeds},{backend},{pad}\n",
                     csv_field(&row.method),
                     csv_field(c),
                     cell.episodes,
@@ -648,7 +670,7 @@ pub fn csv(r: &Report) -> String {
         }
         for ((c, n), gt) in t.columns.iter().zip(&t.tasks).zip(&t.gt) {
             out.push_str(&format!(
-                "{name},ground truth,{},{n},,,,,,{},,,,,,,{seeds},{backend},\n",
+                "{name},ground truth,{},{n},,,,,,{},,,,,,,{seeds},{backend},{pad}\n",
                 csv_field(c),
                 num(*gt)
             ));
@@ -656,7 +678,7 @@ pub fn csv(r: &Report) -> String {
     }
     for c in &r.costs {
         out.push_str(&format!(
-            "costs,{},all,,{},,,,,,{},{},{},{},{},{},{seeds},{backend},{}\n",
+            "costs,{},all,,{},,,,,,{},{},{},{},{},{},{seeds},{backend},{}{pad}\n",
             csv_field(&c.method),
             c.episodes,
             num(Some(c.calls_per_episode)),
@@ -666,6 +688,22 @@ pub fn csv(r: &Report) -> String {
             usd(c.cost_per_task),
             usd(c.cost_per_success),
             num(c.cached_share),
+        ));
+    }
+    for m in &r.makespan {
+        out.push_str(&format!(
+            "makespan,{},{},,{},{},,,,,,,,,,,{seeds},{backend},,{},{},{},{},{},{},{}\n",
+            csv_field(&row_name(&m.method, m.execution)),
+            m.column,
+            m.episodes,
+            num(Some(m.sr)),
+            m.execution,
+            num(m.makespan),
+            num(m.optimal_makespan),
+            num(m.actions),
+            num(m.calls_per_action),
+            num(m.sim_seconds),
+            num(m.speedup),
         ));
     }
     out

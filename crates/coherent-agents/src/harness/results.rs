@@ -15,12 +15,15 @@ use crate::error::Error;
 use crate::harness::prices::PriceTable;
 use crate::harness::run_settings::RunSettings;
 use crate::records::lock;
-use crate::records::transcript::Status;
+use crate::records::transcript::{Execution, Status};
 
 /// One finished episode: a line of the results file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ResultLine {
     pub method: String,
+    /// `sequential` (lines written before parallel episodes have none) or `parallel`.
+    #[serde(default)]
+    pub execution: Execution,
     pub scene: String,
     pub task_id: i64,
     /// `mono`, `dual` or `trio`; null when the planner finds no plan.
@@ -37,6 +40,18 @@ pub struct ResultLine {
     #[serde(default)]
     pub optimal_steps: Option<u32>,
     pub max_steps: u32,
+    /// The joint steps the episode took to reach the goal (its steps, one action each in a
+    /// sequential episode); null when it did not reach it.
+    #[serde(default)]
+    pub makespan: Option<u32>,
+    /// The fewest joint steps of the task, by the makespan search (the best plan's when
+    /// the search stops before proving it); null in a run without parallel episodes, or
+    /// when no plan is found.
+    #[serde(default)]
+    pub optimal_makespan: Option<u32>,
+    /// The actions carried out; null in lines written before it was kept.
+    #[serde(default)]
+    pub actions: Option<u32>,
     pub llm_calls: u32,
     pub prompt_tokens: u64,
     pub completion_tokens: u64,
@@ -48,6 +63,9 @@ pub struct ResultLine {
     #[serde(default)]
     pub cost_usd: Option<f64>,
     pub wall_ms: f64,
+    /// The simulated seconds the episode took (physics); null otherwise.
+    #[serde(default)]
+    pub sim_seconds: Option<f64>,
     /// The run's backend (even for a method that asks no model; see `uses_model`).
     pub backend: BackendInfo,
     #[serde(default = "yes")]
@@ -89,6 +107,7 @@ impl ResultLine {
             scene: self.scene.clone(),
             task_id: self.task_id,
             seed: self.seed,
+            execution: self.execution,
         }
     }
 }
@@ -100,6 +119,7 @@ pub struct EpisodeKey {
     pub scene: String,
     pub task_id: i64,
     pub seed: u32,
+    pub execution: Execution,
 }
 
 /// A results file as read.

@@ -13,6 +13,7 @@ use coherent_core::text::shown;
 use serde::{Deserialize, Serialize};
 
 use crate::backends::llm::BackendKind;
+use crate::episode::execution::Execution;
 use crate::methods::templates::Prompts;
 
 /// The settings one results line was run with.
@@ -44,6 +45,16 @@ pub struct RunSettings {
     pub robots: String,
     /// The version of coherent that ran the episode.
     pub coherent: String,
+    /// Every execution the run takes its episodes in (`bench --execution
+    /// sequential,parallel` is one run of both: its lines share these settings and differ
+    /// by their own `execution`, part of the episode key). Absent for the paper's
+    /// sequential alone, so that a sequential run records what it did before parallel
+    /// episodes.
+    #[serde(
+        default = "sequential_only",
+        skip_serializing_if = "is_sequential_only"
+    )]
+    pub executions: Vec<Execution>,
     /// The method's own settings: what a method written in Python declares (its
     /// `settings`); none for a built-in method, whose settings are the ones above.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
@@ -65,6 +76,8 @@ pub enum Setting {
     MaxStates,
     Physics,
     Robots,
+    /// The executions of the run.
+    Execution,
     /// The version of coherent.
     Version,
     /// A method's own settings.
@@ -127,6 +140,7 @@ impl RunSettings {
                 if self.physics { "on" } else { "off" }.to_owned(),
             ),
             (Setting::Robots, self.robots.clone()),
+            (Setting::Execution, executions_text(&self.executions)),
             (Setting::Version, self.coherent.clone()),
         ]
     }
@@ -167,7 +181,8 @@ impl RunSettings {
         self.shown()
             .into_iter()
             .filter(|(setting, value)| {
-                value != "none" || matches!(setting, Setting::Backend | Setting::SimErrors)
+                (value != "none" || matches!(setting, Setting::Backend | Setting::SimErrors))
+                    && !(*setting == Setting::Execution && value == "sequential")
             })
             .map(|(setting, value)| format!("{} {value}", field(setting)))
             .collect::<Vec<_>>()
@@ -190,10 +205,28 @@ pub fn field(setting: Setting) -> &'static str {
         Setting::MaxStates => "max_states",
         Setting::Physics => "physics",
         Setting::Robots => "robots",
+        Setting::Execution => "executions",
         Setting::Version => "coherent",
         Setting::Method => "method",
         Setting::Unrecorded => "settings",
     }
+}
+
+/// The executions as a flag writes them: `sequential,parallel`.
+pub fn executions_text(executions: &[Execution]) -> String {
+    executions
+        .iter()
+        .map(|e| e.name())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
+fn sequential_only() -> Vec<Execution> {
+    vec![Execution::Sequential]
+}
+
+fn is_sequential_only(executions: &[Execution]) -> bool {
+    executions == [Execution::Sequential]
 }
 
 /// A method's own settings as shown: JSON, or `none`.
@@ -207,7 +240,10 @@ pub fn method_text(own: &BTreeMap<String, serde_json::Value>) -> String {
 
 /// `built-in`, or the hash of a prompt set with other templates.
 fn prompt_set(hash: &str) -> String {
-    if hash == Prompts::builtin().hash() {
+    if Execution::ALL
+        .iter()
+        .any(|&e| hash == Prompts::builtin().hash(e))
+    {
         "built-in".to_owned()
     } else {
         format!("set {hash}")
@@ -226,15 +262,41 @@ mod tests {
             temperature: None,
             model_seed: None,
             seeds: 3,
-            prompts: Prompts::builtin().hash().to_owned(),
+            prompts: Prompts::builtin().hash(Execution::Sequential).to_owned(),
             history: 5,
             max_steps: None,
             max_states: 1000,
             physics: false,
             robots: "local".into(),
             coherent: "0.1.0".into(),
+            executions: sequential_only(),
             method: BTreeMap::new(),
         }
+    }
+
+    #[test]
+    fn a_sequential_run_records_no_executions_and_a_run_of_both_does() {
+        let json = serde_json::to_value(settings()).expect("settings as JSON");
+        assert!(json.get("executions").is_none(), "{json}");
+        let both = RunSettings {
+            executions: Execution::ALL.to_vec(),
+            ..settings()
+        };
+        let json = serde_json::to_value(&both).expect("settings as JSON");
+        assert_eq!(
+            json["executions"],
+            serde_json::json!(["sequential", "parallel"])
+        );
+        let back: RunSettings = serde_json::from_value(json).expect("read back");
+        assert_eq!(back, both);
+        let d = settings().differences(&both);
+        assert_eq!(d.len(), 1);
+        assert_eq!(
+            d[0].to_string(),
+            "sequential in the file, sequential,parallel now"
+        );
+        assert!(both.summary().contains("executions sequential,parallel"));
+        assert!(!settings().summary().contains("executions"));
     }
 
     #[test]

@@ -1,5 +1,5 @@
 //! Reading the models' answers: the JSON object the prompt asks for, wherever it sits in
-//! the text (code fences, chatter around it), and its fields, leniently typed; the joint
+//! the text (code fences, chatter around it), and its fields, leniently typed; the team
 //! action line an answer names ([`read_line`]) and, for LLM-MCTS, the line it comes
 //! nearest to ([`match_line`]). What each method makes of them is the method's
 //! ([`crate::methods::assigner`], [`crate::methods::executor`],
@@ -86,7 +86,7 @@ fn overlap(a: &[String], b: &[String]) -> f64 {
 /// The least token overlap at which an answer counts as meaning an action.
 const MIN_OVERLAP: f64 = 0.5;
 
-/// The joint action line of `lines` that `answer` means, or `None`. First an exact match
+/// The team action line of `lines` that `answer` means, or `None`. First an exact match
 /// (ignoring case and spacing); then, when the answer names a robot by its label (the
 /// first label in the text), the action of that robot whose words and ids overlap most
 /// with the rest of the answer, at least half of them; when it names no robot, the best

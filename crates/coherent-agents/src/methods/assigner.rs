@@ -19,7 +19,7 @@ use serde_json::{Value, json};
 use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::episode::environment::team_sight;
 use crate::methods::answer::{field_text, json_object, string_field};
-use crate::methods::prompt::{fill, team};
+use crate::methods::prompt::{fill, robot_label, team};
 use crate::methods::templates::{Prompts, Template};
 use crate::records::transcript::Proposal;
 
@@ -169,6 +169,227 @@ impl TaskAssigner {
             team_list(task)
         ))
     }
+}
+
+/// What a parallel assigner's answer gives: a subtask for each idle robot it names, and
+/// what of the answer could not be used (a robot that is not idle, named twice, or given
+/// no subtask), in words.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Assignments {
+    pub proposals: Vec<Proposal>,
+    pub unused: Vec<String>,
+}
+
+impl TaskAssigner {
+    /// The round's question in a parallel episode where `env` stands, with `history`:
+    /// `busy` are the robots still working on a subtask (with it, and the round it was
+    /// given in), `idle` those it may give one now.
+    pub fn query_parallel(
+        &self,
+        env: &(dyn Environment + Send),
+        history: &[String],
+        busy: &[(NodeId, String, u32)],
+        idle: &[NodeId],
+    ) -> Query {
+        let task = &self.task;
+        let lines = |lines: Vec<String>| {
+            if lines.is_empty() {
+                "(none)".to_owned()
+            } else {
+                lines.join("\n")
+            }
+        };
+        let busy = lines(
+            busy.iter()
+                .map(|(r, subtask, since)| {
+                    format!(
+                        "- {}: {subtask:?} (given in round {since})",
+                        robot_label(task, *r)
+                    )
+                })
+                .collect(),
+        );
+        let free = lines(
+            idle.iter()
+                .map(|r| format!("- {}", robot_label(task, *r)))
+                .collect(),
+        );
+        let sight = team_sight(env, task);
+        let view = AssignerView {
+            robots: &robot_lines(env, task),
+            seen: &sight.values(self.prompts.text(Template::AssignerParallelUser)),
+            history,
+        };
+        Query {
+            role: Role::Assigner,
+            robot: None,
+            messages: self.messages_parallel(&view, &busy, &free),
+            schema_name: "proposals",
+            schema: self.schema_parallel(idle),
+            max_tokens: self.max_tokens,
+            situation: Situation {
+                robots: idle.to_vec(),
+                ..Situation::now(task, env, None)
+            },
+        }
+    }
+
+    /// The parallel system prompt (the team) and user prompt (the round, the robots
+    /// still busy and the idle ones, one line each).
+    pub fn messages_parallel(
+        &self,
+        view: &AssignerView<'_>,
+        busy: &str,
+        idle: &str,
+    ) -> Vec<Message> {
+        let task = &self.task;
+        let history = if view.history.is_empty() {
+            "(none yet)".to_owned()
+        } else {
+            view.history.join("\n")
+        };
+        let system = self.prompts.text(Template::AssignerParallelSystem);
+        let mut values = vec![
+            ("instruction", task.meta.instruction.as_str()),
+            ("robots", view.robots),
+            ("history", &history),
+            ("busy", busy),
+            ("idle", idle),
+        ];
+        values.extend(view.seen.iter().map(|(k, v)| (*k, v.as_str())));
+        vec![
+            Message::system(fill(system, &[("team", &team(task))]).trim_end().to_owned()),
+            Message::user(
+                fill(self.prompts.text(Template::AssignerParallelUser), &values)
+                    .trim_end()
+                    .to_owned(),
+            ),
+        ]
+    }
+
+    /// The parallel answer: reasoning first, then a list of subtasks, each for one of
+    /// the `idle` robots.
+    pub fn schema_parallel(&self, idle: &[NodeId]) -> Value {
+        let task = &self.task;
+        let robots: Vec<String> = idle.iter().map(|r| robot_label(task, *r)).collect();
+        json!({
+            "type": "object",
+            "properties": {
+                "reasoning": {"type": "string"},
+                "assignments": {
+                    "type": "array",
+                    "items": {
+                        "type": "object",
+                        "properties": {
+                            "robot": {"type": "string", "enum": robots},
+                            "subtask": {"type": "string"},
+                        },
+                        "required": ["robot", "subtask"],
+                        "additionalProperties": false,
+                    },
+                },
+            },
+            "required": ["reasoning", "assignments"],
+            "additionalProperties": false,
+        })
+    }
+
+    /// The subtasks a parallel answer gives the `idle` robots: its JSON object's
+    /// `assignments` (or, without them, its one `robot` and `subtask`, as a sequential
+    /// answer has them); without an object, each line that names an idle robot by its
+    /// label, the subtask being what follows it. An entry for a robot that is not idle,
+    /// for one already given a subtask in the answer, or with no subtask is left out and
+    /// said so; an answer with no entry at all is an error.
+    pub(crate) fn parse_parallel(
+        &self,
+        text: &str,
+        idle: &[NodeId],
+    ) -> Result<Assignments, String> {
+        let task = &self.task;
+        let entries: Vec<(String, String)> = match json_object(text) {
+            Some(map) => match map.get("assignments").and_then(Value::as_array) {
+                Some(items) => items
+                    .iter()
+                    .map(|item| {
+                        let field = |name| {
+                            item.as_object()
+                                .and_then(|o| string_field(o, name))
+                                .unwrap_or_default()
+                        };
+                        (field("robot"), field("subtask"))
+                    })
+                    .collect(),
+                None => match string_field(&map, "robot") {
+                    Some(robot) => vec![(robot, string_field(&map, "subtask").unwrap_or_default())],
+                    None => return Err("the answer has no \"assignments\"".into()),
+                },
+            },
+            None => match named_lines(task, text, idle) {
+                found if found.is_empty() => {
+                    return Err(format!(
+                        "no JSON object and no line naming an idle robot ({})",
+                        idle.iter()
+                            .map(|r| robot_label(task, *r))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ));
+                }
+                found => found,
+            },
+        };
+        let reasoning = json_object(text)
+            .and_then(|m| string_field(&m, "reasoning"))
+            .unwrap_or_default();
+        let mut out = Assignments::default();
+        for (robot_text, subtask) in entries {
+            let Some(robot) = resolve_robot(task, &robot_text) else {
+                out.unused.push(format!(
+                    "{robot_text:?} is not a robot of the team ({})",
+                    team_list(task)
+                ));
+                continue;
+            };
+            let label = robot_label(task, robot);
+            if !idle.contains(&robot) {
+                out.unused
+                    .push(format!("{label} is not idle: it keeps its subtask"));
+            } else if out.proposals.iter().any(|p| p.robot == robot) {
+                out.unused
+                    .push(format!("{label} was given two subtasks: the first counts"));
+            } else if subtask.trim().is_empty() {
+                out.unused.push(format!("{label} was given no subtask"));
+            } else {
+                out.proposals.push(Proposal {
+                    robot,
+                    subtask,
+                    reasoning: reasoning.clone(),
+                });
+            }
+        }
+        if out.proposals.is_empty() && !out.unused.is_empty() {
+            return Err(out.unused.join("; "));
+        }
+        Ok(out)
+    }
+}
+
+/// Without a JSON object: each line that names one of `idle` by its label, as
+/// `(label, what follows it)`.
+fn named_lines(task: &Task, text: &str, idle: &[NodeId]) -> Vec<(String, String)> {
+    text.lines()
+        .map(str::trim)
+        .filter_map(|line| {
+            let (at, robot) = idle
+                .iter()
+                .filter_map(|&r| line.find(&robot_label(task, r)).map(|at| (at, r)))
+                .min()?;
+            let label = robot_label(task, robot);
+            let rest = line[at + label.len()..]
+                .trim_start_matches([':', '-', ',', ' '])
+                .trim();
+            Some((label, field_text(rest)))
+        })
+        .collect()
 }
 
 /// One line per robot: type, room, and what it stands on, hovers above or holds.

@@ -1,18 +1,18 @@
 //! The central prompt (the prompt set's `central.txt`), which CMRS answers once per step
 //! and LLM-MCTS samples for its prior: the team, the rules, the instruction, the team's
-//! observation, every joint action line ([`crate::methods::joint`]) and the last
-//! executed actions; and the line an answer chooses.
+//! observation, the last executed actions and every team action line
+//! ([`crate::methods::team_actions`]); and the line an answer chooses.
 
 use coherent_core::{NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::backends::llm::Message;
-use crate::methods::answer::{normal, read_line};
+use crate::methods::answer::{field_text, json_object, normal, read_line};
 use crate::methods::prompt::{self, Sight};
 use crate::methods::templates::{self, Prompts, Template};
 
 /// The central prompt: the team, the rules, the instruction, what `sight` shows the
-/// team, the last executed actions and every joint action line (CMRS, LLM-MCTS
+/// team, the last executed actions and every team action line (CMRS, LLM-MCTS
 /// samples), rendered from `prompts`.
 pub(crate) fn messages(
     prompts: &Prompts,
@@ -20,6 +20,11 @@ pub(crate) fn messages(
     lines: &[String],
     history: &[String],
 ) -> Vec<Message> {
+    render(prompts.text(Template::Central), sight, lines, history)
+}
+
+/// `text` (a system part, the user mark, a user part) filled.
+fn render(text: &str, sight: &Sight<'_>, lines: &[String], history: &[String]) -> Vec<Message> {
     let task = sight.task;
     let team = prompt::team(task);
     let history = if history.is_empty() {
@@ -28,7 +33,6 @@ pub(crate) fn messages(
         history.join("\n")
     };
     let actions = lines.join("\n");
-    let text = prompts.text(Template::Central);
     let seen = sight.values(text);
     let mut values = vec![
         ("team", team.as_str()),
@@ -48,7 +52,7 @@ pub(crate) fn messages(
     messages
 }
 
-/// The answer: one of the joint action lines.
+/// The answer: one of the team action lines.
 pub fn schema(lines: &[String]) -> Value {
     json!({
         "type": "object",
@@ -56,6 +60,73 @@ pub fn schema(lines: &[String]) -> Value {
         "required": ["action"],
         "additionalProperties": false,
     })
+}
+
+/// The central prompt of a parallel episode (CMRS in joint steps): as [`messages`], the
+/// model choosing at most one line per robot for the step.
+pub(crate) fn messages_parallel(
+    prompts: &Prompts,
+    sight: &Sight<'_>,
+    lines: &[String],
+    history: &[String],
+) -> Vec<Message> {
+    render(
+        prompts.text(Template::CentralParallel),
+        sight,
+        lines,
+        history,
+    )
+}
+
+/// The answer of a parallel episode: a list of the team action lines.
+pub fn schema_parallel(lines: &[String]) -> Value {
+    json!({
+        "type": "object",
+        "properties": {
+            "actions": {"type": "array", "items": {"type": "string", "enum": lines}},
+        },
+        "required": ["actions"],
+        "additionalProperties": false,
+    })
+}
+
+/// What a parallel answer chose, `(robot, action)` in its order, and the reasons for
+/// the lines that were left out.
+pub(crate) type Choices = (Vec<(NodeId, String)>, Vec<String>);
+
+/// The robots and actions a parallel answer chooses, at most one per robot (a robot's
+/// later lines are left out and said so), each read as [`choose`] reads one line: the
+/// `actions` list of its JSON object, else (an answer in the sequential form) the one
+/// line it names. Returns the choices in the answer's order and what was left out; an
+/// error when no line is usable.
+pub(crate) fn choose_several(task: &Task, lines: &[String], text: &str) -> Result<Choices, String> {
+    let said: Vec<String> = match json_object(text)
+        .as_ref()
+        .and_then(|m| m.get("actions"))
+        .and_then(Value::as_array)
+    {
+        Some(items) => items
+            .iter()
+            .map(|v| v.as_str().map(field_text).unwrap_or_default())
+            .collect(),
+        None => vec![read_line(text)],
+    };
+    let mut chosen: Vec<(NodeId, String)> = Vec::new();
+    let mut unused = Vec::new();
+    for line in said {
+        match choose(task, lines, &line) {
+            Ok((robot, _)) if chosen.iter().any(|(r, _)| *r == robot) => unused.push(format!(
+                "{} was given two actions: the first counts",
+                prompt::robot_label(task, robot)
+            )),
+            Ok(pick) => chosen.push(pick),
+            Err(why) => unused.push(why),
+        }
+    }
+    if chosen.is_empty() && !unused.is_empty() {
+        return Err(unused.join("; "));
+    }
+    Ok((chosen, unused))
 }
 
 /// The robot and action an answer chooses: one of `lines` (matched ignoring case and

@@ -5,6 +5,10 @@
 //! one `<robot>: <action>` line. The last speaker's proposal is checked and run.
 //! DMRS-1D has one dialogue round per step, DMRS-2D two (in the second every robot's
 //! list is known). One model call per robot per dialogue round.
+//!
+//! In a parallel episode each speaker proposes its own action (or none), hearing what the
+//! others said they will do; the dialogue ends in one action per robot, each robot's
+//! last proposal, carried out together as the step's joint step.
 
 use std::io;
 use std::sync::Arc;
@@ -17,12 +21,12 @@ use crate::backends::llm::{Backend, Message, Query, Role, Situation};
 use crate::episode::ask::{Side, Unusable, ask};
 use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, History, rounds};
-use crate::methods::answer::{field_text, json_object};
-use crate::methods::joint::joint_actions;
+use crate::methods::answer::{field_text, json_object, normal, read_line};
 use crate::methods::prompt::{self, Sight, robot_label};
+use crate::methods::team_actions;
 use crate::methods::templates::{self, Prompts, Template};
 use crate::methods::{central, decision, feedback};
-use crate::records::transcript::Round;
+use crate::records::transcript::{Execution, Round};
 use crate::rng::{Rng, seed_of};
 
 /// Most tokens of one turn (a sentence and a line).
@@ -37,8 +41,11 @@ pub struct DmrsConfig {
     pub history: usize,
     /// Seeds the speaking order of every step.
     pub seed: u64,
-    /// The speakers' template (`dmrs_speaker.txt`) comes from here.
+    /// The speakers' template (`dmrs_speaker.txt`; `dmrs_speaker_parallel.txt` in joint
+    /// steps) comes from here.
     pub prompts: Prompts,
+    /// One robot's action a step, or joint steps.
+    pub execution: Execution,
 }
 
 /// Runs DMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
@@ -55,7 +62,7 @@ pub async fn run(
     let mut history = History::new(config.history);
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
         let r = round(env, task, backend, config, cancel, &history.entries(), step).await;
-        if let Some(line) = r.as_ref().and_then(decision::executed_line) {
+        if let Some(line) = r.as_ref().and_then(|r| decision::executed_line(task, r)) {
             history.push(line);
         }
         Ok(r)
@@ -88,13 +95,22 @@ async fn round(
     step: u32,
 ) -> Option<Round> {
     let start = Instant::now();
-    let mut round = Round::new(step);
-    let all = joint_actions(task, env.state());
+    let round = Round::new(step);
     let mut order: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
     let mut rng = Rng::new(seed_of(config.seed, u64::from(step)));
     for i in (1..order.len()).rev() {
         order.swap(i, rng.below(i + 1));
     }
+    if config.execution == Execution::Parallel {
+        let turns = Turns {
+            order,
+            round,
+            start,
+        };
+        return parallel(env, task, backend, config, cancel, history, turns).await;
+    }
+    let mut round = round;
+    let all = team_actions::offered(task, env.state());
     let mut dialogue: Vec<String> = Vec::new();
     let mut heard: Vec<NodeId> = Vec::new();
     let mut proposal: Option<(NodeId, String)> = None;
@@ -112,7 +128,7 @@ async fn round(
                 role: Role::Executor,
                 robot: Some(speaker),
                 messages: speaker_messages(
-                    &config.prompts,
+                    config.prompts.text(Template::DmrsSpeaker),
                     env,
                     task,
                     speaker,
@@ -120,7 +136,7 @@ async fn round(
                     &dialogue,
                     &lines,
                 ),
-                schema_name: "joint_action",
+                schema_name: "team_action",
                 schema: speaker_schema(&lines),
                 max_tokens: MAX_TOKENS,
                 situation: Situation::now(task, env, None),
@@ -151,14 +167,158 @@ async fn round(
 /// A round that ends without an action.
 fn close(env: &(dyn Environment + Send), mut round: Round, why: Unusable, start: Instant) -> Round {
     round.outcome = why.outcome(Side::Executor);
-    round.feedback = feedback::joint("", &round.outcome);
+    round.feedback = feedback::team("", &round.outcome);
     round.done = env.goal_satisfied();
     round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
     round
 }
 
+/// A parallel round's speaking order, its record so far and when it started.
+struct Turns {
+    order: Vec<NodeId>,
+    round: Round,
+    start: Instant,
+}
+
+/// A round of a parallel episode: each speaker proposes its own action, hearing what the
+/// others said; each robot's last proposal is carried out, all together.
+async fn parallel(
+    env: &mut (dyn Environment + Send),
+    task: &Arc<Task>,
+    backend: &dyn Backend,
+    config: &DmrsConfig,
+    cancel: &Cancel,
+    history: &[String],
+    turns: Turns,
+) -> Option<Round> {
+    let Turns {
+        order,
+        mut round,
+        start,
+    } = turns;
+    let all = team_actions::offered(task, env.state());
+    let mut dialogue: Vec<String> = Vec::new();
+    let mut heard: Vec<NodeId> = Vec::new();
+    // Each speaker's last word: its own action (or none) and its message; `None` while
+    // its last answer gave nothing usable.
+    let mut last: Vec<(NodeId, Option<Word>)> = Vec::new();
+    for _ in 0..config.dialogue_rounds.max(1) {
+        for &speaker in &order {
+            if !heard.contains(&speaker) {
+                heard.push(speaker);
+            }
+            let lines: Vec<String> = all
+                .iter()
+                .filter(|a| heard.contains(&task.id(a.robot.node)))
+                .map(|a| a.line(task))
+                .collect();
+            let own = env.actions(speaker).unwrap_or_default();
+            let query = Query {
+                role: Role::Executor,
+                robot: Some(speaker),
+                messages: speaker_messages(
+                    config.prompts.text(Template::DmrsSpeakerParallel),
+                    env,
+                    task,
+                    speaker,
+                    history,
+                    &dialogue,
+                    &lines,
+                ),
+                schema_name: "own_action",
+                schema: own_schema(&own),
+                max_tokens: MAX_TOKENS,
+                situation: Situation::now(task, env, None),
+            };
+            let reply = ask(backend, query, cancel, &mut round.calls).await?;
+            let word =
+                match reply.and_then(|r| r.read(|text| own_action(task, speaker, &own, text))) {
+                    Ok(word) => Some(word),
+                    Err(Unusable::Failed(e)) => {
+                        return Some(close(env, round, Unusable::Failed(e), start));
+                    }
+                    Err(Unusable::Bad(_)) => None,
+                };
+            let proposed = match &word {
+                Some((Some(action), _)) => format!("It will do {action}."),
+                Some((None, _)) => "It will do nothing this step.".to_owned(),
+                None => "It proposed nothing usable.".to_owned(),
+            };
+            let message = word.as_ref().map_or("", |(_, m)| m.as_str());
+            dialogue.push(format!(
+                "{} said: {} {proposed}",
+                robot_label(task, speaker),
+                message.trim()
+            ));
+            last.retain(|(r, _)| *r != speaker);
+            last.push((speaker, word));
+        }
+    }
+    round.actions = all.iter().map(|a| a.line(task)).collect();
+    if last.iter().all(|(_, word)| word.is_none()) {
+        let why = "no speaker proposed anything usable".to_owned();
+        return Some(close(env, round, Unusable::Bad(why), start));
+    }
+    let parts = last
+        .into_iter()
+        .filter_map(|(robot, word)| {
+            let (action, message) = word?;
+            Some(decision::part(env, robot, action.as_deref()?, message))
+        })
+        .collect();
+    decision::act_jointly(env, task, &mut round, parts, None);
+    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
+    Some(round)
+}
+
+/// A speaker's own action in its answer (matched to the spelling of its list `own` when
+/// it is one of them, else as written for the feasibility check to judge; `none` for
+/// none, its own label in front allowed), and its message; an error when the answer
+/// names no action.
+/// A speaker's word in a parallel dialogue: its own action (or none), and its message.
+type Word = (Option<String>, String);
+
+fn own_action(task: &Task, speaker: NodeId, own: &[String], text: &str) -> Result<Word, String> {
+    let message = json_object(text)
+        .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
+        .unwrap_or_default();
+    let said = read_line(text);
+    let label = robot_label(task, speaker);
+    let said = said
+        .strip_prefix(&label)
+        .map_or(said.as_str(), |rest| rest.trim_start_matches([':', ' ']))
+        .trim();
+    if said.is_empty() {
+        return Err("the answer names no action".into());
+    }
+    if matches!(normal(said).as_str(), "none" | "null" | "nothing") {
+        return Ok((None, message));
+    }
+    let action = own
+        .iter()
+        .find(|a| normal(a) == normal(said))
+        .cloned()
+        .unwrap_or_else(|| field_text(said));
+    Ok((Some(action), message))
+}
+
+/// A parallel speaker's answer: a message, and one of its own actions or `none`.
+fn own_schema(own: &[String]) -> Value {
+    let mut choices: Vec<&str> = own.iter().map(String::as_str).collect();
+    choices.push("none");
+    json!({
+        "type": "object",
+        "properties": {
+            "message": {"type": "string"},
+            "action": {"type": "string", "enum": choices},
+        },
+        "required": ["message", "action"],
+        "additionalProperties": false,
+    })
+}
+
 fn speaker_messages(
-    prompts: &Prompts,
+    template: &str,
     env: &(dyn Environment + Send),
     task: &Task,
     speaker: NodeId,
@@ -169,7 +329,6 @@ fn speaker_messages(
     let kind = task
         .robot_by_id(speaker)
         .map_or(String::new(), |r| r.kind.to_string());
-    let text = prompts.text(Template::DmrsSpeaker);
     let sight = Sight {
         task,
         state: env.state(),
@@ -191,9 +350,9 @@ fn speaker_messages(
         ("dialogue", or_none(dialogue)),
         ("actions", or_none(lines)),
     ];
-    values.extend(sight.values(text));
+    values.extend(sight.values(template));
     let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
-    let (system, user) = templates::split(text);
+    let (system, user) = templates::split(template);
     vec![
         Message::system(prompt::fill(system, &values).trim().to_owned()),
         Message::user(prompt::fill(user, &values).trim().to_owned()),
@@ -245,7 +404,8 @@ mod tests {
         let prompts = crate::methods::prompt::every_placeholder(Template::DmrsSpeaker);
         let speaker = task.id(task.robots[0].node);
         let lines = ["a: b".to_owned()];
-        for m in &speaker_messages(&prompts, &env, &task, speaker, &[], &[], &lines) {
+        let template = prompts.text(Template::DmrsSpeaker);
+        for m in &speaker_messages(template, &env, &task, speaker, &[], &[], &lines) {
             assert!(!m.content.contains("{{"), "{}", m.content);
         }
     }

@@ -9,6 +9,9 @@
 //! failed step that says so; no robot is no action (the step still counts). A policy
 //! that fails (raises, in Python) ends the episode with status `error` and its words,
 //! and so does a step that takes longer than the method's step limit.
+//!
+//! In a parallel episode the policy answers a decision per robot that acts, carried out
+//! together as one joint step (two for one robot refuse the step, as the rules do).
 
 use std::io;
 use std::sync::Arc;
@@ -18,19 +21,22 @@ use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Environment, NodeId, Task};
 
 use crate::episode::cancel::Cancel;
+use crate::episode::joint;
 use crate::episode::policy::{Act, Choice, MethodFailure, PastStep, Policy, StepView};
 use crate::episode::rounds::{Episode, History, rounds};
+use crate::methods::prompt::robot_label;
 use crate::methods::{decision, feedback};
-use crate::records::transcript::{Round, RoundOutcome};
+use crate::records::transcript::{Execution, RobotPart, Round, RoundOutcome};
 
 /// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
 /// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
-/// fires. A policy that could not be made fails the first step.
+/// fires; in a parallel episode each step's choices (one per robot that acts) are
+/// carried out as one joint step. A policy that could not be made fails the first step.
 pub async fn run(
     env: &mut (dyn Environment + Send),
     task: &Arc<Task>,
     made: Result<Box<dyn Policy>, MethodFailure>,
-    max_steps: u32,
+    (execution, max_steps): (Execution, u32),
     step_timeout: Option<Duration>,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
@@ -41,14 +47,9 @@ pub async fn run(
         let start = Instant::now();
         let act = match &mut policy {
             Ok(policy) => {
-                let view = Arc::new(StepView::now(
-                    env,
-                    task,
-                    step,
-                    max_steps,
-                    &history.entries(),
-                ));
-                let act = policy.act(view);
+                let past = history.entries();
+                let view = StepView::now(env, task, (step, max_steps), execution, &past);
+                let act = policy.act(Arc::new(view));
                 // Without a limit, a step may take as long as it takes (a sleep of
                 // Duration::MAX would overflow the clock).
                 let limit = async {
@@ -62,20 +63,22 @@ pub async fn run(
                     () = cancel.cancelled() => return Ok(None),
                     act = act => act,
                     () = limit => Act {
-                        choice: Err(out_of_time(step_timeout.unwrap_or_default())),
+                        choices: Err(out_of_time(step_timeout.unwrap_or_default())),
                         calls: Vec::new(),
                     },
                 }
             }
             Err(why) => Act {
-                choice: Err(why.clone()),
+                choices: Err(why.clone()),
                 calls: Vec::new(),
             },
         };
         let mut round = Round::new(step);
         round.calls = act.calls;
-        match bounded(act.choice) {
-            Ok(choice) => {
+        match (bounded(act.choices), execution) {
+            (Ok(choices), Execution::Parallel) => jointly(env, task, &mut round, choices),
+            (Ok(mut choices), Execution::Sequential) if choices.len() <= 1 => {
+                let choice = choices.pop().unwrap_or_default();
                 round.external = Some(choice.clone());
                 let action = choice.action.unwrap_or_default();
                 match choice.robot {
@@ -83,17 +86,111 @@ pub async fn run(
                     None => decision::no_action(&mut round, choice.note),
                 }
             }
-            Err(MethodFailure(message)) => {
-                round.outcome = RoundOutcome::MethodError { message };
-                round.feedback = feedback::joint("", &round.outcome);
-            }
+            (Ok(choices), Execution::Sequential) => failed(
+                &mut round,
+                format!(
+                    "act gave {} decisions: a sequential episode takes one a step (run it \
+                     with execution parallel for one per robot)",
+                    choices.len()
+                ),
+            ),
+            (Err(MethodFailure(message)), _) => failed(&mut round, message),
         }
-        history.push(past_step(&round));
+        for past in past_steps(&round) {
+            history.push(past);
+        }
         round.done = env.goal_satisfied();
         round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
         Ok(Some(round))
     };
     rounds(env, task, max_steps, cancel, on_round, play).await
+}
+
+/// A round in which the method failed: the episode ends with its words.
+fn failed(round: &mut Round, message: String) {
+    round.outcome = RoundOutcome::MethodError { message };
+    round.feedback = feedback::team("", &round.outcome);
+}
+
+/// A parallel round: each choice that names a robot is that robot's part, carried out
+/// together; choices that name none are no action, what they report kept in the
+/// round's own [`Round::external`]. A robot that is not in the team refuses the step
+/// (`unknown_robot`, every other part `step_refused`), as the rules refuse any step
+/// with an action that cannot be.
+fn jointly(
+    env: &mut (dyn Environment + Send),
+    task: &Task,
+    round: &mut Round,
+    choices: Vec<Choice>,
+) {
+    let (acting, idle): (Vec<Choice>, Vec<Choice>) =
+        choices.into_iter().partition(|c| c.robot.is_some());
+    if !idle.is_empty() {
+        round.external = Some(Choice {
+            robot: None,
+            action: None,
+            note: idle
+                .iter()
+                .map(|c| c.note.as_str())
+                .filter(|n| !n.is_empty())
+                .collect::<Vec<_>>()
+                .join("; "),
+            prompt_tokens: idle.iter().map(|c| c.prompt_tokens).sum(),
+            completion_tokens: idle.iter().map(|c| c.completion_tokens).sum(),
+            calls: idle.iter().map(|c| c.calls).sum(),
+        });
+    }
+    let mut parts: Vec<RobotPart> = acting
+        .into_iter()
+        .filter_map(|c| {
+            let robot = c.robot?;
+            let action = c.action.clone().unwrap_or_default();
+            Some(RobotPart {
+                external: Some(c.clone()),
+                ..decision::part(env, robot, &action, c.note)
+            })
+        })
+        .collect();
+    let unknown: Vec<NodeId> = parts
+        .iter()
+        .map(|p| p.robot)
+        .filter(|r| task.robot_by_id(*r).is_err())
+        .collect();
+    if unknown.is_empty() {
+        return decision::act_jointly(env, task, round, parts, None);
+    }
+    for p in &mut parts {
+        p.outcome = match task.robot_by_id(p.robot) {
+            Err(e) => RoundOutcome::Infeasible {
+                reason: "unknown_robot".into(),
+                message: e.to_string(),
+            },
+            Ok(_) => RoundOutcome::Infeasible {
+                reason: "step_refused".into(),
+                message: "not carried out: the joint step names a robot that is not in the team"
+                    .into(),
+            },
+        };
+        let line = format!(
+            "{}: {}",
+            robot_label(task, p.robot),
+            p.action().unwrap_or_default()
+        );
+        p.feedback = feedback::team(&line, &p.outcome);
+    }
+    let outcome = RoundOutcome::Infeasible {
+        reason: "unknown_robot".into(),
+        message: format!(
+            "robot {} is not in the team",
+            unknown
+                .iter()
+                .map(ToString::to_string)
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+    };
+    let paragraph = joint::paragraph(None, &parts);
+    joint::close(env, round, parts, outcome, paragraph);
 }
 
 /// The failure of a step that took longer than `limit`.
@@ -109,15 +206,18 @@ fn out_of_time(limit: Duration) -> MethodFailure {
 /// text of any length, and the transcript must stay readable.
 pub const MAX_TEXT_BYTES: usize = 64 << 10;
 
-/// `choice` with its texts cut at [`MAX_TEXT_BYTES`]: the note and the action at their
+/// `choices` with their texts cut at [`MAX_TEXT_BYTES`]: each note and action at its
 /// end, an error at its start (a traceback ends with the exception).
-fn bounded(choice: Result<Choice, MethodFailure>) -> Result<Choice, MethodFailure> {
-    match choice {
-        Ok(mut c) => {
-            c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
-            c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
-            Ok(c)
-        }
+fn bounded(choices: Result<Vec<Choice>, MethodFailure>) -> Result<Vec<Choice>, MethodFailure> {
+    match choices {
+        Ok(choices) => Ok(choices
+            .into_iter()
+            .map(|mut c| {
+                c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
+                c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
+                c
+            })
+            .collect()),
         Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
     }
 }
@@ -147,24 +247,39 @@ fn take(
     }
 }
 
-/// The round as the next steps' views show it.
-fn past_step(round: &Round) -> PastStep {
-    let chosen = round.external.as_ref();
-    let (ok, reason) = match &round.outcome {
-        RoundOutcome::Executed => (true, None),
-        RoundOutcome::Infeasible { message, .. } => (false, Some(message.clone())),
-        RoundOutcome::Declined => (false, Some("no action was chosen".to_owned())),
-        RoundOutcome::NoProposal { why } | RoundOutcome::NoDecision { why } => {
-            (false, Some(why.clone()))
-        }
-        RoundOutcome::BackendError { message } | RoundOutcome::MethodError { message } => {
-            (false, Some(message.clone()))
+/// The round as the next steps' views show it: its one decision, or of a parallel round
+/// each robot's part.
+fn past_steps(round: &Round) -> Vec<PastStep> {
+    let seen = |robot: Option<NodeId>, action: Option<String>, outcome: &RoundOutcome| {
+        let (ok, reason) = match outcome {
+            RoundOutcome::Executed => (true, None),
+            RoundOutcome::Infeasible { message, .. } => (false, Some(message.clone())),
+            RoundOutcome::Declined => (false, Some("no action was chosen".to_owned())),
+            RoundOutcome::NoProposal { why } | RoundOutcome::NoDecision { why } => {
+                (false, Some(why.clone()))
+            }
+            RoundOutcome::BackendError { message } | RoundOutcome::MethodError { message } => {
+                (false, Some(message.clone()))
+            }
+        };
+        PastStep {
+            robot,
+            action,
+            ok,
+            reason,
         }
     };
-    PastStep {
-        robot: chosen.and_then(|c| c.robot),
-        action: chosen.and_then(|c| c.action.clone()),
-        ok,
-        reason,
+    if !round.parts.is_empty() {
+        return round
+            .parts
+            .iter()
+            .map(|p| seen(Some(p.robot), p.action().map(str::to_owned), &p.outcome))
+            .collect();
     }
+    let chosen = round.external.as_ref();
+    vec![seen(
+        chosen.and_then(|c| c.robot),
+        chosen.and_then(|c| c.action.clone()),
+        &round.outcome,
+    )]
 }

@@ -1,16 +1,16 @@
 //! Feedback: what a method's next rounds hear about a round, in words. PEFA's assigner
-//! hears the executor's self-reflection on the checked outcome ([`pefa`]), with the
-//! engine's reasons when the executor declined or gave no usable answer
-//! ([`obstacles`]), and keeps the last rounds as history lines ([`assigner_history`]);
-//! the central and dialogue baselines hear what ran ([`joint`]); MCTS records what its
-//! chosen action did ([`mcts`]). A transcript keeps each round's feedback, and a replay
-//! must give it back word for word.
+//! hears the executor's self-reflection on the checked outcome ([`pefa`]; a robot's part
+//! of a parallel round, [`pefa_part`]), with the engine's reasons when the executor
+//! declined or gave no usable answer ([`obstacles`]), and keeps the last rounds as
+//! history lines ([`assigner_history`]); the central and dialogue baselines hear what ran
+//! ([`team`]); MCTS records what its chosen action did ([`mcts`]). A transcript keeps
+//! each round's feedback, and a replay must give it back word for word.
 
 use coherent_core::reach::{self, Reach};
 use coherent_core::{NodeId, State, Task};
 
 use crate::methods::prompt::robot_label;
-use crate::records::transcript::{Round, RoundOutcome};
+use crate::records::transcript::{Decision, Proposal, RobotPart, Round, RoundOutcome};
 
 /// The most things of a subtask whose obstacles the feedback lists.
 pub const MAX_OBSTACLES: usize = 6;
@@ -21,12 +21,43 @@ pub const MAX_OBSTACLES: usize = 6;
 /// answer could not be used, one line more for each thing the subtask names that its
 /// robot cannot act on now ([`obstacles`]).
 pub fn pefa(task: &Task, s: &State, round: &Round, outcome: &RoundOutcome) -> String {
-    let said = reflection(task, round, outcome);
+    let said = reflection(
+        task,
+        round.proposal.as_ref().map(|p| p.robot),
+        &round.actions,
+        round.decision.as_ref(),
+        outcome,
+    );
+    explained(task, s, round.proposal.as_ref(), said, outcome)
+}
+
+/// What the assigner hears about one robot's part of a parallel round, in state `s`
+/// (where the step left the world), as [`pefa`] tells a sequential round.
+pub fn pefa_part(task: &Task, s: &State, part: &RobotPart) -> String {
+    let said = reflection(
+        task,
+        Some(part.robot),
+        &part.actions,
+        part.decision.as_ref(),
+        &part.outcome,
+    );
+    explained(task, s, part.proposal.as_ref(), said, &part.outcome)
+}
+
+/// `said`, with the obstacles of the subtask when the executor declined it or gave no
+/// usable answer.
+fn explained(
+    task: &Task,
+    s: &State,
+    proposal: Option<&Proposal>,
+    said: String,
+    outcome: &RoundOutcome,
+) -> String {
     let explained = matches!(
         outcome,
         RoundOutcome::Declined | RoundOutcome::NoDecision { .. }
     );
-    match &round.proposal {
+    match proposal {
         Some(p) if explained => {
             let lines = obstacles(task, s, p.robot, &p.subtask);
             if lines.is_empty() {
@@ -81,31 +112,28 @@ pub fn obstacles(task: &Task, s: &State, robot: NodeId, subtask: &str) -> Vec<St
         .collect()
 }
 
-/// The executor's self-reflection on the round.
-fn reflection(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
-    let robot = round
-        .proposal
-        .as_ref()
-        .map(|p| robot_label(task, p.robot))
-        .unwrap_or_default();
-    let action = round
-        .decision
-        .as_ref()
-        .and_then(|d| d.action.clone())
-        .unwrap_or_default();
+/// The executor's self-reflection: `robot` is the one the proposal named, `actions` its
+/// list, `decision` its executor's.
+fn reflection(
+    task: &Task,
+    robot: Option<NodeId>,
+    actions: &[String],
+    decision: Option<&Decision>,
+    outcome: &RoundOutcome,
+) -> String {
+    let robot = robot.map(|r| robot_label(task, r)).unwrap_or_default();
+    let action = decision.and_then(|d| d.action.clone()).unwrap_or_default();
     let can_do_now = || {
-        if round.actions.is_empty() {
+        if actions.is_empty() {
             format!("{robot} can do nothing now.")
         } else {
-            format!("{robot} can do now: {}.", round.actions.join("; "))
+            format!("{robot} can do now: {}.", actions.join("; "))
         }
     };
     match outcome {
         RoundOutcome::Executed => {
-            let done = round.decision.as_ref().is_some_and(|d| d.subtask_complete);
-            let note = round
-                .decision
-                .as_ref()
+            let done = decision.is_some_and(|d| d.subtask_complete);
+            let note = decision
                 .map(|d| d.note.trim().to_owned())
                 .unwrap_or_default();
             if done {
@@ -123,9 +151,7 @@ fn reflection(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
             )
         }
         RoundOutcome::Declined => {
-            let note = round
-                .decision
-                .as_ref()
+            let note = decision
                 .map(|d| d.note.trim().to_owned())
                 .filter(|n| !n.is_empty())
                 .unwrap_or_else(|| "no reason given".into());
@@ -147,8 +173,12 @@ fn reflection(task: &Task, round: &Round, outcome: &RoundOutcome) -> String {
     }
 }
 
-/// The line PEFA's assigner reads about a round in its history (the Adjustment).
+/// The line PEFA's assigner reads about a round in its history (the Adjustment); of a
+/// parallel round, what became of each robot's subtask.
 pub fn assigner_history(task: &Task, round: &Round) -> String {
+    if !round.parts.is_empty() {
+        return format!("Round {}: {}", round.step, round.feedback);
+    }
     match &round.proposal {
         Some(p) => format!(
             "Round {}: you asked {} to \"{}\". {}",
@@ -163,7 +193,7 @@ pub fn assigner_history(task: &Task, round: &Round) -> String {
 
 /// What a round of a central or dialogue method did (`line` is its `<robot>: <action>`),
 /// in a sentence.
-pub fn joint(line: &str, outcome: &RoundOutcome) -> String {
+pub fn team(line: &str, outcome: &RoundOutcome) -> String {
     match outcome {
         RoundOutcome::Executed => format!("{line} ran."),
         RoundOutcome::Infeasible { message, .. } => format!("{line} could not run: {message}"),

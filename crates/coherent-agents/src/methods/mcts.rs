@@ -2,7 +2,7 @@
 //! (`docs/methods.md`, `mcts` and `llm-mcts`).
 //!
 //! Each real step builds a fresh tree from the environment's current state and searches
-//! the joint action space: every `(robot, action)` pair that [`rules::actions`] offers
+//! the team action space: every `(robot, action)` pair that [`rules::actions`] offers
 //! any robot (one robot acts per step). The world model inside the search is the
 //! symbolic rules on cloned [`State`]s, with the ground-truth reward, as in the paper.
 //! The chosen action is then run through the [`Environment`], like any other method's.
@@ -20,7 +20,7 @@
 //! through `s` before this one, and `N(s, a)` those that took `a` there. Ties (all
 //! scores are 0 on a node's first visit) are broken uniformly at random with the seeded
 //! generator. When the chosen action leads to a node not in the tree yet, that node is
-//! added and a random rollout runs from it: uniform random joint actions until the goal
+//! added and a random rollout runs from it: uniform random team actions until the goal
 //! holds or the depth (20, counted from the root, tree part included) is spent. A node
 //! where the goal holds, where the depth is spent, or where no robot can act ends the
 //! walk with nothing after it.
@@ -57,7 +57,7 @@
 //! [`MctsConfig::samples`] (5) times with a CMRS-like prompt (the instruction, every
 //! robot's observation as facts, the union of the action lists as `<robot>: <action>`
 //! lines, the last executed actions: [`HISTORY_WINDOW`]), each answer is matched to the nearest valid
-//! joint action ([`match_line`]; an answer matching none is dropped), and
+//! team action ([`match_line`]; an answer matching none is dropped), and
 //! `P = 0.5 x (the empirical distribution of matched samples) + 0.5 x uniform`
 //! ([`mix_prior`]). Below the root the prior is uniform. Asking the model only at the
 //! root is this project's named simplification (LLM-MCTS as published asks its policy
@@ -78,7 +78,7 @@ use crate::episode::cancel::Cancel;
 use crate::episode::environment::{execute, team_sight};
 use crate::episode::rounds::{Episode, HISTORY_WINDOW, History, rounds};
 use crate::methods::answer::{match_line, read_line};
-use crate::methods::joint::{JointAction, joint_actions};
+use crate::methods::team_actions::{self, TeamAction};
 use crate::methods::templates::Prompts;
 use crate::methods::{central, decision, feedback};
 use crate::records::transcript::{Decision, Round, RoundOutcome};
@@ -168,8 +168,8 @@ pub fn mix_prior(counts: &[u32], llm_weight: f64) -> Vec<f64> {
 /// What the search saw at the root.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RootStats {
-    /// The root's joint actions, in [`joint_actions`] order.
-    pub actions: Vec<JointAction>,
+    /// The root's team actions, in [`team_actions::offered`] order.
+    pub actions: Vec<TeamAction>,
     pub prior: Vec<f64>,
     /// Simulations that took each action.
     pub visits: Vec<u32>,
@@ -196,12 +196,12 @@ struct Node {
 }
 
 struct Branch {
-    action: JointAction,
+    action: TeamAction,
     prior: f64,
     child: Option<usize>,
 }
 
-fn branches(actions: Vec<JointAction>, prior: Option<&[f64]>) -> Vec<Branch> {
+fn branches(actions: Vec<TeamAction>, prior: Option<&[f64]>) -> Vec<Branch> {
     let uniform = 1.0 / actions.len() as f64;
     actions
         .into_iter()
@@ -215,7 +215,7 @@ fn branches(actions: Vec<JointAction>, prior: Option<&[f64]>) -> Vec<Branch> {
 }
 
 /// Searches from `state` and picks the action to execute. `root_prior` is the prior
-/// over [`joint_actions`]`(task, state)`, in that order; `None`, or a list of another
+/// over [`team_actions::offered`]`(task, state)`, in that order; `None`, or a list of another
 /// length, means uniform. `cancel` stops the search between simulations.
 pub fn search(
     task: &Task,
@@ -225,7 +225,7 @@ pub fn search(
     rng: &mut Rng,
     cancel: Option<&AtomicBool>,
 ) -> RootStats {
-    let actions = joint_actions(task, state);
+    let actions = team_actions::offered(task, state);
     let root_prior = root_prior.filter(|p| p.len() == actions.len());
     let mut tree = vec![Node {
         state: state.clone(),
@@ -256,13 +256,13 @@ fn simulate(task: &Task, tree: &mut Vec<Node>, config: &MctsConfig, rng: &mut Rn
             break 0.0;
         }
         if tree[at].branches.is_none() {
-            let actions = joint_actions(task, &tree[at].state);
+            let actions = team_actions::offered(task, &tree[at].state);
             tree[at].branches = Some(branches(actions, None));
         }
         let Some(b) = select(tree, at, config, rng) else {
             break 0.0; // nobody can act here
         };
-        let Some((next, JointAction { robot, action })) = tree[at]
+        let Some((next, TeamAction { robot, action })) = tree[at]
             .branches
             .as_ref()
             .map(|bs| (bs[b].child, bs[b].action))
@@ -345,12 +345,12 @@ fn select(tree: &[Node], at: usize, config: &MctsConfig, rng: &mut Rng) -> Optio
     best
 }
 
-/// The discounted return of uniform random joint actions from `s` for at most `steps`
+/// The discounted return of uniform random team actions from `s` for at most `steps`
 /// steps, stopping at the goal.
 fn rollout(task: &Task, mut s: State, steps: u32, config: &MctsConfig, rng: &mut Rng) -> f64 {
     let mut discount = 1.0;
     for _ in 0..steps {
-        let actions = joint_actions(task, &s);
+        let actions = team_actions::offered(task, &s);
         if actions.is_empty() {
             break;
         }
@@ -412,7 +412,7 @@ pub async fn run(
     let mut history = History::new(config.history);
     let play = async |env: &mut (dyn Environment + Send), step: u32| {
         let r = round(env, task, backend, config, cancel, &history.entries(), step).await?;
-        if let Some(line) = r.as_ref().and_then(decision::executed_line) {
+        if let Some(line) = r.as_ref().and_then(|r| decision::executed_line(task, r)) {
             history.push(line);
         }
         Ok(r)
@@ -432,7 +432,7 @@ async fn round(
 ) -> io::Result<Option<Round>> {
     let start = Instant::now();
     let state = env.state().clone();
-    let actions = joint_actions(task, &state);
+    let actions = team_actions::offered(task, &state);
     let lines: Vec<String> = actions.iter().map(|a| a.line(task)).collect();
     let mut round = Round::new(step);
     round.actions = lines.clone();
@@ -451,7 +451,7 @@ async fn round(
                 role: Role::Assigner,
                 robot: None,
                 messages: messages.clone(),
-                schema_name: "joint_action",
+                schema_name: "team_action",
                 schema: central::schema(&lines),
                 max_tokens: config.max_tokens,
                 situation: Situation::now(task, env, None),
@@ -473,7 +473,7 @@ async fn round(
                 round.outcome = RoundOutcome::BackendError {
                     message: e.to_string(),
                 };
-                round.feedback = feedback::joint("", &round.outcome);
+                round.feedback = feedback::team("", &round.outcome);
                 return Ok(Some(close(env, round, start)));
             }
         }

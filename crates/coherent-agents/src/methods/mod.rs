@@ -2,9 +2,10 @@
 //! ([`crate::episode`]):
 //!
 //! - [`pefa`]: COHERENT's Proposal-Execution-Feedback-Adjustment loop, with its two
-//!   roles, the [`assigner::TaskAssigner`] and the [`executor::RobotExecutor`].
+//!   roles, the [`assigner::TaskAssigner`] and the [`executor::RobotExecutor`];
+//!   [`pefa_parallel`], the same loop in joint steps (robots acting at once).
 //! - The paper's baselines: [`cmrs`] (one central model), [`dmrs`] (decentralised
-//!   dialogue), [`mcts`] (primitive MCTS and LLM-MCTS); [`joint`] is the team's joint
+//!   dialogue), [`mcts`] (primitive MCTS and LLM-MCTS); [`team_actions`] is the team's
 //!   action space they choose from, [`central`] the central prompt.
 //! - [`optimal`]: the optimal planner's plan, the tables' ground-truth row.
 //! - [`external`]: a method written outside the crate (a Python class, say), asked once
@@ -24,9 +25,10 @@ pub mod dmrs;
 pub mod executor;
 pub mod external;
 pub mod feedback;
-pub mod joint;
 pub mod mcts;
 pub mod optimal;
 pub mod pefa;
+pub mod pefa_parallel;
 pub mod prompt;
+pub mod team_actions;
 pub mod templates;

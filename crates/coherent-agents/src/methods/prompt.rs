@@ -1,7 +1,7 @@
 //! What the methods' prompts share: filling a template of the prompt set
 //! ([`crate::methods::templates`]) with the situation, the team list, and robot labels.
 //! Each role renders its own templates ([`crate::methods::assigner`],
-//! [`crate::methods::executor`], [`crate::methods::joint`], [`crate::methods::dmrs`]).
+//! [`crate::methods::executor`], [`crate::methods::team_actions`], [`crate::methods::dmrs`]).
 //! Observations are written as relation facts (`coherent_core::describe`), in the layout
 //! the template asks for ([`Sight`]).
 

@@ -1,5 +1,5 @@
-//! The prompt set: the eight templates the methods render their prompts from, each the
-//! built-in one (`prompts/*.txt`, compiled in) or a file of the same name from a folder
+//! The prompt set: the twelve templates the methods render their prompts from (four of
+//! them for parallel episodes only), each the built-in one (`prompts/*.txt`, compiled in) or a file of the same name from a folder
 //! given at run time. A set is one value, passed down to the methods with the episode's
 //! settings; it is checked when it is made, so that a template naming a placeholder its
 //! method does not fill is refused before any model call.
@@ -12,9 +12,11 @@
 //! [`PAPER_LAYOUT`] ([`Template::paper_layout`]): the same facts in the order the
 //! templates had before.
 //!
-//! A transcript's header records the set ([`PromptRecord`]): a hash of every template's
-//! text and the text of each file that replaced a built-in template, so that two runs
-//! can be told apart and a replay renders the very prompts that were recorded.
+//! A transcript's header records the set ([`PromptRecord`]): a hash of the text of every
+//! template its execution's methods render (a sequential episode's leaves the parallel
+//! templates out, so that it is what it was before they existed) and the text of each
+//! file that replaced a built-in template, so that two runs can be told apart and a
+//! replay renders the very prompts that were recorded.
 
 use std::collections::BTreeMap;
 use std::fmt;
@@ -25,6 +27,7 @@ use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::digest;
+use crate::episode::execution::Execution;
 
 /// The most a template may hold: the built-in ones are a few KiB, and a prompt of a MiB
 /// is already past any model's context.
@@ -56,14 +59,22 @@ pub enum Template {
     ExecutorRobotArm,
     /// Every executor, each round: the subtask, its observation, its action list.
     ExecutorUser,
-    /// CMRS and LLM-MCTS: one central model choosing a line of the joint action space.
+    /// CMRS and LLM-MCTS: one central model choosing a line of the team action space.
     Central,
     /// DMRS: one robot's turn in the team's dialogue.
     DmrsSpeaker,
+    /// PEFA in joint steps: the task assigner's system prompt.
+    AssignerParallelSystem,
+    /// PEFA in joint steps: each round, subtasks for any of the idle robots.
+    AssignerParallelUser,
+    /// CMRS in joint steps: one central model choosing at most one line per robot.
+    CentralParallel,
+    /// DMRS in joint steps: one robot's turn, proposing its own action.
+    DmrsSpeakerParallel,
 }
 
 impl Template {
-    pub const ALL: [Template; 8] = [
+    pub const ALL: [Template; 12] = [
         Template::AssignerSystem,
         Template::AssignerUser,
         Template::ExecutorQuadrotor,
@@ -72,7 +83,27 @@ impl Template {
         Template::ExecutorUser,
         Template::Central,
         Template::DmrsSpeaker,
+        Template::AssignerParallelSystem,
+        Template::AssignerParallelUser,
+        Template::CentralParallel,
+        Template::DmrsSpeakerParallel,
     ];
+
+    /// Whether only parallel episodes render it.
+    pub fn parallel_only(self) -> bool {
+        matches!(
+            self,
+            Template::AssignerParallelSystem
+                | Template::AssignerParallelUser
+                | Template::CentralParallel
+                | Template::DmrsSpeakerParallel
+        )
+    }
+
+    /// Whether the methods of `execution` may render it.
+    pub fn used_in(self, execution: Execution) -> bool {
+        execution == Execution::Parallel || !self.parallel_only()
+    }
 
     /// Its file's name, in `prompts/` and in a prompt folder.
     pub fn file_name(self) -> &'static str {
@@ -85,6 +116,10 @@ impl Template {
             Template::ExecutorUser => "executor_user.txt",
             Template::Central => "central.txt",
             Template::DmrsSpeaker => "dmrs_speaker.txt",
+            Template::AssignerParallelSystem => "assigner_parallel_system.txt",
+            Template::AssignerParallelUser => "assigner_parallel_user.txt",
+            Template::CentralParallel => "central_parallel.txt",
+            Template::DmrsSpeakerParallel => "dmrs_speaker_parallel.txt",
         }
     }
 
@@ -104,6 +139,16 @@ impl Template {
             Template::ExecutorUser => include_str!("../../prompts/executor_user.txt"),
             Template::Central => include_str!("../../prompts/central.txt"),
             Template::DmrsSpeaker => include_str!("../../prompts/dmrs_speaker.txt"),
+            Template::AssignerParallelSystem => {
+                include_str!("../../prompts/assigner_parallel_system.txt")
+            }
+            Template::AssignerParallelUser => {
+                include_str!("../../prompts/assigner_parallel_user.txt")
+            }
+            Template::CentralParallel => include_str!("../../prompts/central_parallel.txt"),
+            Template::DmrsSpeakerParallel => {
+                include_str!("../../prompts/dmrs_speaker_parallel.txt")
+            }
         }
     }
 
@@ -128,6 +173,17 @@ impl Template {
             Template::ExecutorUser => include_str!("../../prompts/paper-layout/executor_user.txt"),
             Template::Central => include_str!("../../prompts/paper-layout/central.txt"),
             Template::DmrsSpeaker => include_str!("../../prompts/paper-layout/dmrs_speaker.txt"),
+            // Its system prompt has nothing that changes: one text in both layouts.
+            Template::AssignerParallelSystem => self.builtin(),
+            Template::AssignerParallelUser => {
+                include_str!("../../prompts/paper-layout/assigner_parallel_user.txt")
+            }
+            Template::CentralParallel => {
+                include_str!("../../prompts/paper-layout/central_parallel.txt")
+            }
+            Template::DmrsSpeakerParallel => {
+                include_str!("../../prompts/paper-layout/dmrs_speaker_parallel.txt")
+            }
         }
     }
 
@@ -137,7 +193,7 @@ impl Template {
     /// and what does.
     pub fn placeholders(self) -> &'static [&'static str] {
         match self {
-            Template::AssignerSystem => &["team"],
+            Template::AssignerSystem | Template::AssignerParallelSystem => &["team"],
             Template::AssignerUser => &[
                 "instruction",
                 "robots",
@@ -146,11 +202,21 @@ impl Template {
                 "state",
                 "history",
             ],
+            Template::AssignerParallelUser => &[
+                "instruction",
+                "robots",
+                "observation",
+                "scene",
+                "state",
+                "history",
+                "busy",
+                "idle",
+            ],
             Template::ExecutorQuadrotor
             | Template::ExecutorRobotDog
             | Template::ExecutorRobotArm => &["robot"],
             Template::ExecutorUser => &["subtask", "observation", "scene", "state", "actions"],
-            Template::Central => &[
+            Template::Central | Template::CentralParallel => &[
                 "team",
                 "instruction",
                 "observation",
@@ -159,7 +225,7 @@ impl Template {
                 "history",
                 "actions",
             ],
-            Template::DmrsSpeaker => &[
+            Template::DmrsSpeaker | Template::DmrsSpeakerParallel => &[
                 "robot",
                 "kind",
                 "team",
@@ -288,7 +354,8 @@ pub struct Prompts(Arc<Set>);
 struct Set {
     /// The templates that replace built-in ones, with their text.
     replaced: BTreeMap<Template, String>,
-    hash: String,
+    /// [`Prompts::hash`] of each execution: sequential, parallel.
+    hashes: [String; 2],
 }
 
 impl Default for Prompts {
@@ -300,7 +367,7 @@ impl Default for Prompts {
 impl fmt::Debug for Prompts {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Prompts")
-            .field("hash", &self.0.hash)
+            .field("hashes", &self.0.hashes)
             .field("replaced", &self.replaced_names())
             .finish()
     }
@@ -325,11 +392,18 @@ impl Prompts {
     }
 
     fn with(replaced: BTreeMap<Template, String>) -> Prompts {
-        let hash = digest::fnv128(Template::ALL.map(|t| {
-            let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
-            (t.file_name(), text)
-        }));
-        Prompts(Arc::new(Set { replaced, hash }))
+        let hashes = Execution::ALL.map(|execution| {
+            digest::fnv128(
+                Template::ALL
+                    .into_iter()
+                    .filter(|t| t.used_in(execution))
+                    .map(|t| {
+                        let text = replaced.get(&t).map_or(t.builtin(), String::as_str);
+                        (t.file_name(), text)
+                    }),
+            )
+        });
+        Prompts(Arc::new(Set { replaced, hashes }))
     }
 
     /// The built-in templates, with those of `files` (`(name, text)`, the name a
@@ -398,26 +472,30 @@ impl Prompts {
     }
 
     /// The set a transcript recorded: the built-in templates with the recorded
-    /// replacements, which must hash as recorded. A transcript recorded while the paper's
-    /// layout was built in hashes as the paper's layout with its replacements; any other
-    /// hash means that the built-in templates changed since, and the recorded prompts
-    /// cannot be rendered again.
-    pub fn from_record(record: &PromptRecord) -> Result<Prompts, PromptError> {
+    /// replacements, which must hash as recorded for `execution`. A transcript recorded
+    /// while the paper's layout was built in hashes as the paper's layout with its
+    /// replacements; any other hash means that the built-in templates changed since, and
+    /// the recorded prompts cannot be rendered again.
+    pub fn from_record(
+        record: &PromptRecord,
+        execution: Execution,
+    ) -> Result<Prompts, PromptError> {
         let replaced = record
             .replaced
             .iter()
             .map(|(name, text)| (name.clone(), text.clone()));
         let prompts = Prompts::from_texts(Path::new("(recorded)"), replaced.clone().collect())?;
-        if prompts.hash() == record.hash {
+        if prompts.hash(execution) == record.hash {
             return Ok(prompts);
         }
         let mut files: BTreeMap<String, String> = Template::ALL
             .iter()
+            .filter(|t| t.paper_layout() != t.builtin())
             .map(|t| (t.file_name().to_owned(), t.paper_layout().to_owned()))
             .collect();
         files.extend(replaced);
         let paper = Prompts::from_texts(Path::new("(recorded)"), files.into_iter().collect())?;
-        if paper.hash() == record.hash {
+        if paper.hash(execution) == record.hash {
             return Ok(paper);
         }
         Err(PromptError::Recorded(format!(
@@ -435,8 +513,8 @@ impl Prompts {
                     .collect::<Vec<_>>()
                     .join(", ")
             },
-            prompts.hash(),
-            paper.hash()
+            prompts.hash(execution),
+            paper.hash(execution)
         )))
     }
 
@@ -448,15 +526,24 @@ impl Prompts {
             .map_or(template.builtin(), String::as_str)
     }
 
-    /// 32 hex digits: FNV-1a (128 bits) of every template's file name and text, in
-    /// [`Template::ALL`] order.
-    pub fn hash(&self) -> &str {
-        &self.0.hash
+    /// 32 hex digits: FNV-1a (128 bits) of the file name and text of every template the
+    /// methods of `execution` render, in [`Template::ALL`] order.
+    pub fn hash(&self, execution: Execution) -> &str {
+        &self.0.hashes[execution as usize]
     }
 
     /// The file names of the templates that replace built-in ones.
     pub fn replaced_names(&self) -> Vec<&'static str> {
         self.0.replaced.keys().map(|t| t.file_name()).collect()
+    }
+
+    /// The templates that replace built-in ones, by file name, with their text.
+    pub fn replaced_texts(&self) -> BTreeMap<String, String> {
+        self.0
+            .replaced
+            .iter()
+            .map(|(t, text)| (t.file_name().to_owned(), text.clone()))
+            .collect()
     }
 
     /// The file names of the replacing templates that hold nothing but white space (a
@@ -470,16 +557,11 @@ impl Prompts {
             .collect()
     }
 
-    /// What a transcript's header records of the set.
-    pub fn record(&self) -> PromptRecord {
+    /// What the header of a transcript of `execution` records of the set.
+    pub fn record(&self, execution: Execution) -> PromptRecord {
         PromptRecord {
-            hash: self.0.hash.clone(),
-            replaced: self
-                .0
-                .replaced
-                .iter()
-                .map(|(t, text)| (t.file_name().to_owned(), text.clone()))
-                .collect(),
+            hash: self.hash(execution).to_owned(),
+            replaced: self.replaced_texts(),
         }
     }
 }
@@ -593,21 +675,23 @@ mod tests {
     #[test]
     fn the_paper_layout_is_a_set_of_its_own_that_records_and_replays() {
         let paper = Prompts::paper_layout();
-        assert_ne!(paper.hash(), Prompts::builtin().hash());
+        // Recorded before parallel episodes existed: a sequential episode's set.
+        let seq = Execution::Sequential;
+        assert_ne!(paper.hash(seq), Prompts::builtin().hash(seq));
         for t in Template::ALL {
             assert_eq!(paper.text(t), t.paper_layout());
         }
         assert_eq!(
-            Prompts::from_record(&paper.record()).expect("rebuilt"),
+            Prompts::from_record(&paper.record(seq), seq).expect("rebuilt"),
             paper
         );
         // A transcript recorded while the paper's layout was built in records no
         // replacement and that layout's hash, with or without files of its own.
         let then = PromptRecord {
-            hash: paper.hash().to_owned(),
+            hash: paper.hash(seq).to_owned(),
             replaced: BTreeMap::new(),
         };
-        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), paper);
+        assert_eq!(Prompts::from_record(&then, seq).expect("rebuilt"), paper);
         let edited = "Do {{instruction}} with {{observation}}.".to_owned();
         let mut files: Vec<(String, String)> = Template::ALL
             .iter()
@@ -616,10 +700,10 @@ mod tests {
         files[1].1.clone_from(&edited);
         let old_set = Prompts::from_texts(Path::new("d"), files).expect("a set");
         let then = PromptRecord {
-            hash: old_set.hash().to_owned(),
+            hash: old_set.hash(seq).to_owned(),
             replaced: BTreeMap::from([("assigner_user.txt".to_owned(), edited)]),
         };
-        assert_eq!(Prompts::from_record(&then).expect("rebuilt"), old_set);
+        assert_eq!(Prompts::from_record(&then, seq).expect("rebuilt"), old_set);
     }
 
     #[test]
@@ -650,8 +734,11 @@ mod tests {
             Template::AssignerSystem.builtin()
         );
         assert_eq!(set.replaced_names(), ["assigner_user.txt"]);
-        assert_ne!(set.hash(), Prompts::builtin().hash());
-        assert_eq!(set.hash().len(), 32);
+        assert_ne!(
+            set.hash(Execution::Sequential),
+            Prompts::builtin().hash(Execution::Sequential)
+        );
+        assert_eq!(set.hash(Execution::Sequential).len(), 32);
         // The same texts, the same hash; a file that repeats the built-in text replaces
         // nothing.
         let same = Prompts::from_texts(
@@ -665,7 +752,10 @@ mod tests {
             vec![("central.txt".into(), Template::Central.builtin().to_owned())],
         )
         .expect("a set");
-        assert_eq!(copy.hash(), Prompts::builtin().hash());
+        assert_eq!(
+            copy.hash(Execution::Sequential),
+            Prompts::builtin().hash(Execution::Sequential)
+        );
         assert!(copy.replaced_names().is_empty());
         let unknown =
             Prompts::from_texts(Path::new("d"), vec![("asigner.txt".into(), String::new())]);
@@ -679,14 +769,45 @@ mod tests {
             vec![("executor_user.txt".into(), "{{subtask}} {{actions}}".into())],
         )
         .expect("a set");
-        let record = set.record();
-        assert_eq!(Prompts::from_record(&record).expect("rebuilt"), set);
+        let record = set.record(Execution::Sequential);
+        assert_eq!(
+            Prompts::from_record(&record, Execution::Sequential).expect("rebuilt"),
+            set
+        );
         let changed = PromptRecord {
             hash: "0".repeat(32),
             ..record
         };
-        let e = Prompts::from_record(&changed).expect_err("refused");
+        let e = Prompts::from_record(&changed, Execution::Sequential).expect_err("refused");
         assert!(e.to_string().contains("executor_user.txt"), "{e}");
+    }
+
+    #[test]
+    fn a_parallel_template_changes_the_parallel_hash_alone() {
+        let set = Prompts::from_texts(
+            Path::new("d"),
+            vec![("central_parallel.txt".into(), "{{actions}}".into())],
+        )
+        .expect("a set");
+        let builtin = Prompts::builtin();
+        assert_eq!(
+            set.hash(Execution::Sequential),
+            builtin.hash(Execution::Sequential)
+        );
+        assert_ne!(
+            set.hash(Execution::Parallel),
+            builtin.hash(Execution::Parallel)
+        );
+        // The hash of the eight templates a sequential episode renders, as recorded before
+        // parallel templates existed: old transcripts replay.
+        assert_eq!(
+            builtin.hash(Execution::Sequential),
+            digest::fnv128(
+                Template::ALL[..8]
+                    .iter()
+                    .map(|t| (t.file_name(), t.builtin()))
+            )
+        );
     }
 
     #[test]
@@ -702,8 +823,10 @@ mod tests {
         let written = export(&dir, false, &Prompts::builtin()).expect("exported");
         assert_eq!(written.len(), Template::ALL.len());
         assert_eq!(
-            Prompts::read_dir(&dir).expect("reads back").hash(),
-            Prompts::builtin().hash()
+            Prompts::read_dir(&dir)
+                .expect("reads back")
+                .hash(Execution::Parallel),
+            Prompts::builtin().hash(Execution::Parallel)
         );
         assert!(
             export(&dir, false, &Prompts::builtin()).is_err(),

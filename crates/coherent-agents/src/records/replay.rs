@@ -14,12 +14,14 @@ use coherent_core::{Task, native};
 use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
 use crate::episode::budget::Budget;
-use crate::episode::policy::{Act, MethodFailure, Policy, StepView};
+use crate::episode::policy::{Act, Choice, MethodFailure, Policy, StepView};
 use crate::episode::rounds::Episode;
 use crate::episode::settings::{External, Method, MethodSpec, Settings};
 use crate::error::Error;
 use crate::methods::templates::Prompts;
-use crate::records::transcript::{Call, Round, RoundOutcome, Summary, Transcript};
+use crate::records::transcript::{
+    Call, Execution, RobotPart, Round, RoundOutcome, Summary, Transcript,
+};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
 /// `backend` and `budget`, then look for a [`Replay::difference`] from the recording.
@@ -80,11 +82,12 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
     // A transcript without a record was written before prompt sets, when the paper's
     // layout was built in.
     let prompts = match &t.header.prompts {
-        Some(record) => Prompts::from_record(record)?,
+        Some(record) => Prompts::from_record(record, t.header.execution)?,
         None => Prompts::paper_layout(),
     };
     let settings = Settings {
         method,
+        execution: t.header.execution,
         history: t.header.history,
         temperature: t.header.temperature,
         seed: t.header.seed,
@@ -110,6 +113,14 @@ pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
     let strip = |r: &Round| Round {
         wall_ms: 0.0,
         robot: None,
+        parts: r
+            .parts
+            .iter()
+            .map(|p| RobotPart {
+                report: None,
+                ..p.clone()
+            })
+            .collect(),
         calls: r
             .calls
             .iter()
@@ -135,12 +146,14 @@ pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
     {
         return Some(format!("round {} differs from the recording", a.step));
     }
-    let timeless = |s: &Summary| Summary {
+    // Simulated seconds count when the recording kept them (it did not before they were).
+    let timeless = |s: &Summary, sim: Option<f64>| Summary {
         wall_ms: 0.0,
+        sim_seconds: sim.and(s.sim_seconds),
         ..s.clone()
     };
     match &recorded.summary {
-        Some(s) if timeless(s) != timeless(&replayed.summary) => {
+        Some(s) if timeless(s, s.sim_seconds) != timeless(&replayed.summary, s.sim_seconds) => {
             Some("the summary differs from the recording".into())
         }
         _ => None,
@@ -148,7 +161,7 @@ pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
 }
 
 /// The decisions recorded in the rounds of a method written outside the crate, given
-/// back one per step with the calls the method made then.
+/// back one step at a time with the calls the method made then.
 struct RecordedDecisions {
     rounds: VecDeque<Round>,
 }
@@ -157,24 +170,35 @@ impl Policy for RecordedDecisions {
     fn act(&mut self, view: Arc<StepView>) -> BoxFuture<'_, Act> {
         let act = match self.rounds.pop_front() {
             None => Act {
-                choice: Err(MethodFailure(format!(
+                choices: Err(MethodFailure(format!(
                     "replay diverged: step {} is not in the recording",
                     view.step
                 ))),
                 calls: Vec::new(),
             },
             Some(round) => Act {
-                choice: match (round.external, round.outcome) {
-                    (Some(decision), _) => Ok(decision),
-                    (None, RoundOutcome::MethodError { message }) => Err(MethodFailure(message)),
-                    (None, _) => Err(MethodFailure(format!(
-                        "replay diverged: round {} of the recording holds no decision",
-                        round.step
-                    ))),
-                },
+                choices: recorded_choices(&round, view.execution),
                 calls: round.calls,
             },
         };
         Box::pin(async move { act })
     }
+}
+
+/// What the method gave in `round`: its decision, or in a parallel round each part's and
+/// the round's own (what decisions naming no robot reported); the method's error when it
+/// raised one.
+fn recorded_choices(round: &Round, execution: Execution) -> Result<Vec<Choice>, MethodFailure> {
+    if let RoundOutcome::MethodError { message } = &round.outcome {
+        return Err(MethodFailure(message.clone()));
+    }
+    let parts = round.parts.iter().filter_map(|p| p.external.clone());
+    let choices: Vec<Choice> = parts.chain(round.external.clone()).collect();
+    if choices.is_empty() && execution == Execution::Sequential {
+        return Err(MethodFailure(format!(
+            "replay diverged: round {} of the recording holds no decision",
+            round.step
+        )));
+    }
+    Ok(choices)
 }

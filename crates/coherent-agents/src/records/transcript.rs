@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use coherent_core::{NodeId, Task};
 
 use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
+pub use crate::episode::execution::Execution;
 use crate::error::Error;
 use crate::methods::templates::PromptRecord;
 use crate::records::lock;
@@ -33,6 +34,10 @@ pub struct Header {
     pub task: serde_json::Value,
     pub task_name: String,
     pub method: String,
+    /// Sequential (absent, as in transcripts written before parallel episodes) or
+    /// parallel: its rounds are joint steps with a [`RobotPart`] per robot.
+    #[serde(default, skip_serializing_if = "Execution::is_sequential")]
+    pub execution: Execution,
     pub history: usize,
     pub max_steps: u32,
     pub gt_steps: Option<u32>,
@@ -189,17 +194,84 @@ pub struct ExternalDecision {
     pub calls: u32,
 }
 
-/// One PEFA round, which is one step.
+/// One robot's part of a parallel round: what it was asked, what it decided, and what
+/// came of its action in the round's joint step.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobotPart {
+    pub robot: NodeId,
+    /// PEFA: the subtask the robot works on, given this round or kept from an earlier one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub proposal: Option<Proposal>,
+    /// Whether that subtask was given in an earlier round (the robot kept it).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub kept: bool,
+    /// The robot's action list at that moment.
+    #[serde(default)]
+    pub actions: Vec<String>,
+    /// Its decision: its executor's (PEFA), or the action a central, dialogue or Python
+    /// method chose for it (the action alone: the robot is [`RobotPart::robot`]).
+    pub decision: Option<Decision>,
+    /// What came of its action: executed, or why not (a refused joint step refuses every
+    /// action of it, each part saying what that means for its robot).
+    pub outcome: RoundOutcome,
+    /// What the method hears about this robot's part from the next round on.
+    pub feedback: String,
+    /// The decision of a method written outside the crate, as it gave it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub external: Option<ExternalDecision>,
+    /// What the robot said, when the action was sent to one outside this process.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub report: Option<RobotReport>,
+}
+
+impl RobotPart {
+    /// `robot`'s part before anything happened in it.
+    pub fn new(robot: NodeId) -> RobotPart {
+        RobotPart {
+            robot,
+            proposal: None,
+            kept: false,
+            actions: Vec::new(),
+            decision: None,
+            outcome: RoundOutcome::Declined,
+            feedback: String::new(),
+            external: None,
+            report: None,
+        }
+    }
+
+    /// The action it was to carry out: its decision's, when it decided on one.
+    pub fn action(&self) -> Option<&str> {
+        self.decision
+            .as_ref()
+            .filter(|d| d.can_do)
+            .and_then(|d| d.action.as_deref())
+    }
+}
+
+/// One round, which is one step: in a sequential episode one robot's (PEFA's proposal and
+/// decision, or a method's decision, and the outcome), in a parallel one a joint step,
+/// each robot's part in [`Round::parts`].
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Round {
     pub step: u32,
+    /// Every model call of the round, in the order asked (a parallel round's executors,
+    /// asked at once, in team order).
     pub calls: Vec<Call>,
+    /// A sequential round: the assigner's proposal (PEFA).
     pub proposal: Option<Proposal>,
-    /// The executor's action list at that moment.
+    /// A sequential round: the executor's action list at that moment.
     pub actions: Vec<String>,
+    /// A sequential round: the decision.
     pub decision: Option<Decision>,
+    /// A sequential round: what came of its one action. A parallel round: what came of
+    /// the step as a whole: `executed` (its joint step ran), `infeasible` (the rules
+    /// refused it, and why), `declined` (no robot acted), `no_proposal` (the assigner's
+    /// answer could not be used) or `no_decision` (the central or dialogue answer could
+    /// not be used), or how the episode ended (`backend_error`, `method_error`).
     pub outcome: RoundOutcome,
-    /// What the assigner is told about this round from the next round on.
+    /// What the method is told about this round from the next round on (a parallel
+    /// round: about the step, then each part's, in team order).
     pub feedback: String,
     /// Whether the goal holds after this round.
     pub done: bool,
@@ -212,6 +284,10 @@ pub struct Round {
     /// ROS 2): which robot, how, and its result's message.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub robot: Option<RobotReport>,
+    /// A parallel round: each robot's part of its joint step, in team order (empty in a
+    /// sequential round, and in transcripts written before parallel episodes).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub parts: Vec<RobotPart>,
 }
 
 impl Round {
@@ -246,6 +322,21 @@ impl Round {
         }
     }
 
+    /// Every robot's action the round carried out, in team order: [`Round::executed`]'s
+    /// one in a sequential round, each executed part's in a parallel one (a joint step's
+    /// actions do not interfere, so carried out one after another in this order they
+    /// give the step's state).
+    pub fn carried_out<'r>(&'r self, task: &Task) -> Vec<(NodeId, &'r str)> {
+        if self.parts.is_empty() {
+            return self.executed(task).into_iter().collect();
+        }
+        self.parts
+            .iter()
+            .filter(|p| p.outcome == RoundOutcome::Executed)
+            .filter_map(|p| p.action().map(|a| (p.robot, a)))
+            .collect()
+    }
+
     /// Round `step` before anything happened in it.
     pub fn new(step: u32) -> Round {
         Round {
@@ -260,6 +351,21 @@ impl Round {
             wall_ms: 0.0,
             external: None,
             robot: None,
+            parts: Vec::new(),
+        }
+    }
+
+    /// The actions carried out in this round: 0 or 1 in a sequential round, one per
+    /// executed part in a parallel one.
+    pub fn actions_executed(&self) -> u32 {
+        if self.parts.is_empty() {
+            u32::from(self.outcome == RoundOutcome::Executed)
+        } else {
+            let executed = self
+                .parts
+                .iter()
+                .filter(|p| p.outcome == RoundOutcome::Executed);
+            executed.count() as u32
         }
     }
 }
@@ -297,6 +403,15 @@ pub struct Summary {
     pub cached_tokens: u64,
     pub wall_ms: f64,
     pub error: Option<String>,
+    /// The simulated seconds the episode took, where its world simulates time (physics);
+    /// absent otherwise, and in transcripts written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sim_seconds: Option<f64>,
+}
+
+/// The actions carried out in `rounds` ([`Round::actions_executed`]).
+pub fn actions(rounds: &[Round]) -> u32 {
+    rounds.iter().map(Round::actions_executed).sum()
 }
 
 /// A line of a transcript.

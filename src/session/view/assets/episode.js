@@ -26,6 +26,7 @@ function header(ep, compact) {
         ['wall time', number(r.wall_ms / 1000, 2) + ' s', 'wall'],
       ]),
       facts([
+        ['execution', h.execution === 'parallel' ? 'parallel: joint steps, each robot at most one action a step' : null, 'execution'],
         ['physics', h.physics ? 'every action also in Rapier' : null, 'physics'],
         ['robots', h.ros2 ? 'over ROS 2' : null, 'ros2'],
         ['seed', h.seed === null ? null : String(h.seed), 'seed'],

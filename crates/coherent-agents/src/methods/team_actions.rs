@@ -1,19 +1,21 @@
-//! The team's joint action space, for the methods that choose one robot's action
-//! centrally or in dialogue (CMRS, DMRS, MCTS and LLM-MCTS): every `(robot, action)` the
-//! rules offer, one line each as the prompts list them, `<robot dog>(13): [grab] <mug>(7)`.
+//! The team's actions: every `(robot, action)` the rules offer any robot of the team, one
+//! line each as the prompts list them, `<robot dog>(13): [grab] <mug>(7)`. The methods
+//! that choose robots' actions centrally or in dialogue (CMRS, DMRS, MCTS and LLM-MCTS)
+//! choose from them: one line a step, or in a parallel episode one line per robot at
+//! most (a joint step, `coherent_core::joint`).
 //! The central prompt is [`crate::methods::central`]'s; reading an answer back to a line
 //! is [`crate::methods::answer`]'s.
 
 use coherent_core::{Action, Robot, State, Task, rules};
 
-/// One robot's action: an element of the joint action space.
+/// One robot's action: an element of the team action space.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct JointAction {
+pub struct TeamAction {
     pub robot: Robot,
     pub action: Action,
 }
 
-impl JointAction {
+impl TeamAction {
     /// `<robot label>: <action>`, as the prompt lists it.
     pub fn line(&self, task: &Task) -> String {
         format!(
@@ -26,14 +28,14 @@ impl JointAction {
 
 /// Every action of every robot in `s`: robots in team order, each robot's actions in
 /// [`rules::actions`] order.
-pub fn joint_actions(task: &Task, s: &State) -> Vec<JointAction> {
+pub fn offered(task: &Task, s: &State) -> Vec<TeamAction> {
     task.robots
         .iter()
         .zip(rules::team_actions(task, s, &task.robots))
         .flat_map(|(&robot, actions)| {
             actions
                 .into_iter()
-                .map(move |action| JointAction { robot, action })
+                .map(move |action| TeamAction { robot, action })
         })
         .collect()
 }
