@@ -416,7 +416,7 @@ fn an_error_does_not_count_and_runs_again_on_resume() {
     assert_eq!(failure.first_error, "RuntimeError: env1 is not for me");
     let md = report::markdown(&r);
     assert!(
-        md.contains("1 episode(s) failed with the method's own error"),
+        md.contains("1 episode(s) failed with an error (the method's own,"),
         "{md}"
     );
     assert!(!md.contains("run the same command again"), "{md}");

@@ -57,7 +57,7 @@ fn each_kind_of_error_exits_2_and_nothing_runs() {
     let prompts = bad_prompts(&dir);
     let door = one_sided_door(&dir);
     // Each kind, the command that meets it and what the message says.
-    let cases: [(&str, Vec<&str>, &str); 7] = [
+    let cases: [(&str, Vec<&str>, &str); 8] = [
         // An argument that cannot be used.
         (
             "invalid",
@@ -97,6 +97,12 @@ fn each_kind_of_error_exits_2_and_nothing_runs() {
             "file",
             vec!["run", "--replay", &garbage, "--out", &out],
             "garbage.jsonl: line 1: ",
+        ),
+        // A transcript that cannot be created: its folder would be a regular file.
+        (
+            "no transcript",
+            vec!["run", &demo, "--out", &garbage],
+            "garbage.jsonl/demo-apartment-task0-pefa-",
         ),
         // An endpoint that cannot be set up.
         (

@@ -3,7 +3,8 @@
 //! stands for a file of any size) with exit 2 and an error naming the file and the
 //! limit; prompt templates that are no regular file are refused, a blank one is warned
 //! of, `prompts export` never writes through a link; a price table that lists a model
-//! twice or prices it absurdly is refused.
+//! twice or prices it absurdly is refused; a benchmark whose transcript cannot be
+//! created skips that episode with its reason and goes on.
 
 use std::path::Path;
 
@@ -329,5 +330,87 @@ fn a_price_table_with_a_model_twice_or_an_absurd_price_is_refused() {
             says,
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A transcript that cannot be created (here a regular file where seed 1's folder goes,
+/// which stops root too, unlike a folder's permissions) keeps that episode from running,
+/// not the benchmark: its results line says why (status `interrupted`, so no final
+/// result), the progress and the report's failed episodes say it too, and the run exits
+/// 0. The same command, the way cleared, runs that episode alone.
+#[test]
+fn a_transcript_that_cannot_be_created_skips_its_episode_with_the_reason_and_resumes() {
+    let dir = scratch("no-transcript");
+    let out = dir.join("results.jsonl");
+    let in_the_way = dir.join("results.transcripts/seed1");
+    std::fs::create_dir_all(dir.join("results.transcripts")).expect("a folder");
+    std::fs::write(&in_the_way, "").expect("a file in the way");
+    let demo = demo();
+    let args = [
+        "bench",
+        "--tasks",
+        utf8(&demo),
+        "--methods",
+        "optimal",
+        "--seeds",
+        "2",
+        "--out",
+        utf8(&out),
+    ];
+    let first = coherent(&args);
+    assert_eq!(first.status.code(), Some(0), "{}", show(&first));
+    let lines: Vec<serde_json::Value> = std::fs::read_to_string(&out)
+        .expect("the results file")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a results line"))
+        .collect();
+    let seed = |n: u64| {
+        lines
+            .iter()
+            .find(|l| l["seed"] == n)
+            .unwrap_or_else(|| panic!("no line of seed {n}: {lines:?}"))
+    };
+    assert_eq!(seed(0)["status"], "success");
+    let skipped = seed(1);
+    assert_eq!(skipped["status"], "interrupted", "{skipped}");
+    let why = skipped["error"].as_str().expect("the reason");
+    let file = skipped["transcript"]
+        .as_str()
+        .expect("the transcript it would have been");
+    assert!(
+        why.starts_with(&format!("no transcript: {file}: ")) && file.contains("seed1/"),
+        "{why}"
+    );
+    let progress = String::from_utf8_lossy(&first.stderr);
+    assert!(
+        progress.contains("optimal demo-apartment task 0 seed 1: interrupted: no transcript: "),
+        "{}",
+        show(&first)
+    );
+    let report = String::from_utf8_lossy(&first.stdout);
+    assert!(
+        report.contains("### Episodes that failed with an error")
+            && report.contains(&format!("| optimal | 1 | no transcript: {file}: ")),
+        "{}",
+        show(&first)
+    );
+
+    std::fs::remove_file(&in_the_way).expect("the way cleared");
+    let again = coherent(&args);
+    assert_eq!(again.status.code(), Some(0), "{}", show(&again));
+    assert!(
+        String::from_utf8_lossy(&again.stderr)
+            .contains("1 already finished in the results file, 1 to run"),
+        "{}",
+        show(&again)
+    );
+    let text = std::fs::read_to_string(&out).expect("the results file");
+    let last: serde_json::Value =
+        serde_json::from_str(text.lines().last().expect("a line")).expect("a results line");
+    assert_eq!(
+        (last["seed"].as_u64(), last["status"].as_str()),
+        (Some(1), Some("success"))
+    );
+    assert!(Path::new(last["transcript"].as_str().expect("a transcript")).is_file());
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -550,3 +550,82 @@ fn bad_robot_flags_exit_2_before_anything_runs() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("no robot named drone_1 in the task; its robots: robot_arm_6, quadrotor_11, robot_dog_13"), "{err}");
 }
+
+/// `coherent run --execution parallel --robots ros2`: a joint step's goals go to the
+/// robots' servers at once and are awaited together. With every server taking 0.5 s an
+/// action, the demo's 13 joint steps of 22 actions last about 13 x 0.5 s, under the 11 s
+/// that its 22 actions in turn take at the least; and the servers' log shows every robot
+/// of a joint step accepting its goal before any of them is done.
+#[test]
+fn a_parallel_run_over_ros2_lasts_its_joint_steps_not_its_actions() {
+    const DELAY: f64 = 0.5;
+    let ns = Netns::new("parallel");
+    let (demo, namespace) = (demo(), "/lab/parallel");
+    let serve = [
+        "robots",
+        "serve",
+        &demo,
+        "--namespace",
+        namespace,
+        "--delay",
+        "0.5",
+    ];
+    let mut server = ns.spawn("serve", &serve);
+    let runs = ns.path("runs");
+    let args = [
+        "run",
+        &demo,
+        "--execution",
+        "parallel",
+        "--robots",
+        "ros2",
+        "--namespace",
+        namespace,
+        "--out",
+        &runs,
+    ];
+    let mut run = ns.spawn("run", &args);
+    assert_eq!(run.wait(LONG), 0, "{}\n{}", run.show(), server.show());
+    let t = transcript(&runs);
+    assert_eq!(t.summary["status"], "success", "{}", run.show());
+    let sizes: Vec<usize> = t
+        .rounds
+        .iter()
+        .map(|r| r["parts"].as_array().map_or(0, Vec::len))
+        .collect();
+    let actions: usize = sizes.iter().sum();
+    assert_eq!((sizes.len(), actions), (13, 22), "the makespan plan's");
+    let wall = t.summary["wall_ms"]
+        .as_f64()
+        .expect("the episode's wall time")
+        / 1e3;
+    eprintln!("13 joint steps of 22 actions at {DELAY} s each: {wall:.2} s");
+    assert!(
+        (13.0 * DELAY..22.0 * DELAY).contains(&wall),
+        "{wall:.2} s for 13 joint steps of 22 actions at {DELAY} s each"
+    );
+    // A goal's `step` is the count of the actions sent, its own included.
+    let served = server.stdout();
+    let lines: Vec<&str> = served.lines().collect();
+    let at = |step: usize, end: &str| {
+        let mark = format!(" step {step} [");
+        lines
+            .iter()
+            .position(|l| l.contains(&mark) && l.contains(end))
+            .unwrap_or_else(|| panic!("no goal {step} {end} in\n{served}"))
+    };
+    let mut first = 1;
+    for (k, &n) in sizes.iter().enumerate() {
+        let goals = first..first + n;
+        let accepted = goals.clone().map(|s| at(s, "-> accepted")).max();
+        let done = goals.map(|s| at(s, "-> succeeded")).min();
+        assert!(
+            accepted < done,
+            "joint step {}: a goal done before the others were sent\n{served}",
+            k + 1
+        );
+        first += n;
+    }
+    server.signal("TERM");
+    assert_eq!(server.wait(LONG), 0, "{}", server.show());
+}

@@ -323,7 +323,10 @@ class Report:
     """Episodes without a final result (backend error, the method's error or interrupted),
     left out."""
     errors: int
-    """Those of them that ended in an error raised by the method (status ``error``)."""
+    """Those of them that failed with an error their line names: raised by the method
+    (status ``error``), or why the episode could not go on (status ``interrupted`` with
+    an ``error``: a robot that stopped answering, a transcript that could not be
+    created)."""
     untyped_tasks: int
     """Tasks the planner finds no plan for: counted in Avg only."""
     settings: dict[str, Any] | None
@@ -332,9 +335,10 @@ class Report:
     method_settings: dict[str, dict[str, Any]]
     """The settings each method written in Python declared, by method."""
     failures: list[dict[str, Any]]
-    """The episodes that failed with the method's own error, by method: ``method``,
-    ``episodes``, ``first_error`` (the exception and where it was raised) and the
-    ``transcript`` that has the whole traceback."""
+    """The episodes that failed with an error (as counted in ``errors``), by method:
+    ``method``, ``episodes``, ``first_error`` (the method's exception and where it was
+    raised, or why the episode could not go on) and the ``transcript`` (a method's whole
+    traceback is there)."""
     lines: list[dict[str, Any]] = field(repr=False)
 
     def markdown(self) -> str:

@@ -53,6 +53,8 @@ def _cases(tmp_path: Path, demo: coherent.Task) -> list[tuple[str, Callable[[], 
         ),
         ("data file", lambda: coherent.replay(garbage, out=tmp_path), coherent.DataFileError, "garbage.jsonl: line 1"),
         ("data file", lambda: coherent.load_episode(garbage), coherent.DataFileError, "garbage.jsonl: line 1"),
+        # A transcript that cannot be created: its folder would be a regular file.
+        ("no transcript", lambda: coherent.run(demo, out=garbage), coherent.DataFileError, "garbage.jsonl/demo-apartment"),
         ("endpoint", lambda: coherent.LLM(base_url="not a url", model="m"), coherent.BackendError, "not a URL"),
         (
             "physics",

@@ -187,8 +187,8 @@ def test_an_exception_ends_that_episode_only(
     assert failure["first_error"].startswith("ValueError: boom at step 2 (test_methods.py, line ")
     assert failure["first_error"].endswith(", in act)") and failure["transcript"] == line["transcript"]
     markdown = report.markdown()
-    assert "1 episode(s) failed with the method's own error" in markdown
-    assert "Episodes that failed with the method's error" in markdown and "run the same command" not in markdown
+    assert "1 episode(s) failed with an error (the method's own," in markdown
+    assert "Episodes that failed with an error" in markdown and "run the same command" not in markdown
     # The same call runs the error episode again, and only it; the progress says why it failed.
     again = coherent.bench(tasks, ["optimal", Fails], out=tmp_path / "r.jsonl", progress=True)
     told = capsys.readouterr().err

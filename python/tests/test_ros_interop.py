@@ -253,6 +253,47 @@ def test_run_and_bench_over_ros2_carry_the_demo_out_through_the_robots_servers(
     assert "one episode at a time" in err, "concurrency 4 asked for, one used"
 
 
+RUN_PARALLEL = """
+import json, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+episode = coherent.run(task, execution="parallel", robots="ros2", namespace=sys.argv[2], out=sys.argv[3])
+print(json.dumps({"status": episode.status, "makespan": episode.makespan, "actions": episode.actions,
+                  "wall_ms": episode.wall_ms, "parts": [len(r["parts"]) for r in episode.transcript]}))
+"""
+
+
+def test_a_parallel_run_over_ros2_sends_a_joint_steps_goals_at_once(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    # Every server takes 0.5 s an action: the demo's 13 joint steps of 22 actions last
+    # about 13 x 0.5 s, under the 11 s of its actions in turn; the servers' log shows a
+    # joint step's robots all accepting their goals before any of them is done.
+    server = serve(netns, coherent_exe, "--namespace", "/py_parallel", "--delay", "0.5")
+    run = netns.popen(
+        [sys.executable, "-c", RUN_PARALLEL, str(DEMO), "/py_parallel", str(tmp_path)], stdout=subprocess.PIPE
+    )
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    result = json.loads(out.splitlines()[-1])
+    assert (result["status"], result["makespan"], result["actions"]) == ("success", 13, 22)
+    assert 13 * 0.5 <= result["wall_ms"] / 1e3 < 22 * 0.5, result
+    server.kill()
+    served, _ = server.communicate(timeout=LONG)
+    lines = served.splitlines()
+
+    def at(step: int, end: str) -> int:
+        return next(i for i, line in enumerate(lines) if f" step {step} [" in line and end in line)
+
+    first = 1
+    for k, n in enumerate(result["parts"]):
+        goals = range(first, first + n)
+        accepted = max(at(s, "-> accepted") for s in goals)
+        done = min(at(s, "-> succeeded") for s in goals)
+        assert accepted < done, f"joint step {k + 1}: a goal done before the others were sent\n{served}"
+        first += n
+
+
 SILENT = """
 import sys
 import coherent

@@ -48,6 +48,7 @@ pub(crate) fn of_error(error: &Error) -> u8 {
         | Error::Task(_)
         | Error::Prompt(_)
         | Error::File { .. }
+        | Error::NoTranscript { .. }
         | Error::Endpoint(_)
         | Error::SettingsDiffer { .. }
         | Error::Physics(_)

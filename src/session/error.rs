@@ -29,6 +29,10 @@ pub enum Error {
         line: Option<usize>,
         message: String,
     },
+    /// An episode's transcript that cannot be created (its folder cannot be made, or
+    /// allows no new file); nothing of the episode ran. A benchmark records it in the
+    /// episode's line and goes on.
+    NoTranscript { file: String, message: String },
     /// The model endpoint is misconfigured: no model, a base URL that is no URL.
     Endpoint(String),
     /// A results file whose lines were run with other settings than the run that would
@@ -64,7 +68,8 @@ impl fmt::Display for Error {
                 file,
                 line: None,
                 message,
-            } => write!(f, "{file}: {message}"),
+            }
+            | Error::NoTranscript { file, message } => write!(f, "{file}: {message}"),
             Error::SettingsDiffer { file, differences } => {
                 let name = |s| coherent_agents::bench::run_settings::field(s).to_owned();
                 f.write_str(&settings_differ(file, differences, name, "results file"))
@@ -96,6 +101,7 @@ impl From<coherent_agents::Error> for Error {
                 line,
                 message,
             },
+            A::NoTranscript { file, message } => Error::NoTranscript { file, message },
             A::Prompt(e) => Error::Prompt(e),
             A::Endpoint(e) => Error::Endpoint(e.to_string()),
             A::Invalid(why) | A::NoBudget(why) => Error::Invalid(why),

@@ -14,6 +14,9 @@ pub enum Error {
     /// A file that cannot be read or written: a transcript, a results file, a price
     /// table, a subset list, their folders.
     Io { file: String, message: String },
+    /// An episode's transcript that cannot be created (its folder cannot be made, or
+    /// allows no new file): nothing of the episode ran, so a benchmark can go on.
+    NoTranscript { file: String, message: String },
     /// A file of one of the crate's formats (a transcript, a results file, a price table,
     /// a subset list) that does not follow it; `line` when the fault is on one line.
     Format {
@@ -71,7 +74,9 @@ impl Error {
 impl fmt::Display for Error {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
-            Error::Io { file, message } => write!(f, "{file}: {message}"),
+            Error::Io { file, message } | Error::NoTranscript { file, message } => {
+                write!(f, "{file}: {message}")
+            }
             Error::Format {
                 file,
                 line: Some(line),

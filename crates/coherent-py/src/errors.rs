@@ -152,15 +152,8 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
         Error::Invalid(_) | Error::Backend(_) => error(py, Kind::Argument, message, None),
         Error::Task(e) => core_err(py, e),
         Error::Prompt(e) => prompt(py, &e),
-        Error::File { file, line, .. } => {
-            let built = exceptions(py).and_then(|exc| {
-                let value = exc.data_file.bind(py).call1((message.clone(),))?;
-                value.setattr("file", file)?;
-                value.setattr("line", line)?;
-                Ok(PyErr::from_value(value))
-            });
-            raised(message, built)
-        }
+        Error::File { file, line, .. } => data_file(py, message, file, line),
+        Error::NoTranscript { file, .. } => data_file(py, message, file, None),
         Error::Endpoint(_) => error(py, Kind::Backend, message, None),
         Error::SettingsDiffer { file, differences } => {
             let message = settings_differ(&file, &differences, |s| argument_of(s).into(), "out=");
@@ -172,6 +165,18 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
         Error::Interrupted => PyKeyboardInterrupt::new_err(message),
         Error::Internal(_) => error(py, Kind::Coherent, message, None),
     }
+}
+
+/// A `DataFileError` with the file and the line (None when the fault is not on one line)
+/// as attributes.
+fn data_file(py: Python<'_>, message: String, file: String, line: Option<usize>) -> PyErr {
+    let built = exceptions(py).and_then(|exc| {
+        let value = exc.data_file.bind(py).call1((message.clone(),))?;
+        value.setattr("file", file)?;
+        value.setattr("line", line)?;
+        Ok(PyErr::from_value(value))
+    });
+    raised(message, built)
 }
 
 /// The keyword argument of `coherent.bench` that sets `setting`.

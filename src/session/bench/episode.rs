@@ -201,12 +201,24 @@ pub async fn run_one(
             choice: Some(choice.clone()),
         },
     };
+    let max_steps = spec.budget.steps();
     let ran = on_its_own_thread(spec, cancel.clone()).await??;
     match ran {
         Built::Ran(ran) => Ok(EpisodeResult::Line(Box::new(line(
             key, method, seed, &info, &ran, settings,
         )))),
         Built::NoWorld(why) => Ok(EpisodeResult::TaskSkipped(format!("{name}: {why}"))),
+        Built::NoTranscript { file, message } => {
+            let not_run = NotRun {
+                seed,
+                max_steps,
+                why: format!("no transcript: {file}: {message}"),
+                transcript: file,
+            };
+            Ok(EpisodeResult::Line(Box::new(
+                not_run.line(key, method, task, &info, settings),
+            )))
+        }
     }
 }
 
@@ -215,6 +227,12 @@ enum Built {
     Ran(Box<Ran>),
     /// The task's physical world could not be built: the task cannot run in physics.
     NoWorld(String),
+    /// The episode's transcript could not be created (its folder cannot be made or
+    /// allows no new file): the episode did not run, the others may.
+    NoTranscript {
+        file: String,
+        message: String,
+    },
 }
 
 /// Prepares and runs the episode `spec` on a thread of its own, driven by the current
@@ -238,8 +256,13 @@ async fn on_its_own_thread(
                 }
                 Err(e) => return Err(e),
             };
-            let ran = prepared.run(&cancel, &mut |_| {}).await?;
-            Ok(Built::Ran(Box::new(ran)))
+            match prepared.run(&cancel, &mut |_| {}).await {
+                Ok(ran) => Ok(Built::Ran(Box::new(ran))),
+                Err(Error::NoTranscript { file, message }) => {
+                    Ok(Built::NoTranscript { file, message })
+                }
+                Err(e) => Err(e),
+            }
         })
     };
     std::thread::Builder::new()
@@ -291,11 +314,7 @@ fn line(
         optimal_steps: info.optimal.clone().ok(),
         max_steps: s.max_steps,
         makespan: s.success.then_some(s.steps),
-        optimal_makespan: info
-            .makespan
-            .as_ref()
-            .and_then(|m| m.as_ref().ok())
-            .map(|m| m.steps),
+        optimal_makespan: optimal_makespan(info),
         actions: Some(transcript::actions(&ran.transcript.rounds)),
         llm_calls: s.llm_calls,
         prompt_tokens: s.prompt_tokens,
@@ -314,6 +333,71 @@ fn line(
         // The run's settings are the driver's to record (`Ledger::record`).
         settings: None,
     }
+}
+
+/// An episode that did not run, and why, as its results line says it.
+struct NotRun {
+    seed: u64,
+    max_steps: u32,
+    why: String,
+    /// The transcript it would have written.
+    transcript: String,
+}
+
+impl NotRun {
+    /// Its results line: status `interrupted` with the reason in `error`, so that it is
+    /// no final result (a resume runs it again) and the report lists it as failed; no
+    /// step, no model call.
+    fn line(
+        self,
+        key: &EpisodeKey,
+        method: &MethodSpec,
+        task: &Task,
+        info: &TaskInfo,
+        settings: &EpisodeSettings,
+    ) -> ResultLine {
+        ResultLine {
+            method: method.name().to_owned(),
+            execution: key.execution,
+            scene: key.scene.clone(),
+            task_id: key.task_id,
+            task_type: info.task_type.clone(),
+            seed: key.seed,
+            episode_seed: self.seed,
+            success: false,
+            status: transcript::Status::Interrupted,
+            steps: 0,
+            gt_steps: task.meta.gt_steps,
+            optimal_steps: info.optimal.clone().ok(),
+            max_steps: self.max_steps,
+            makespan: None,
+            optimal_makespan: optimal_makespan(info),
+            actions: Some(0),
+            llm_calls: 0,
+            prompt_tokens: 0,
+            completion_tokens: 0,
+            cached_tokens: 0,
+            cost_usd: Some(0.0),
+            wall_ms: 0.0,
+            sim_seconds: None,
+            backend: match method.builtin() {
+                Some(_) => settings.backend.info(),
+                None => BackendInfo::none(),
+            },
+            uses_model: false,
+            error: Some(cut(&self.why, bench::ERROR_BYTES).into_owned()),
+            transcript: self.transcript,
+            settings: None,
+        }
+    }
+}
+
+/// The task's fewest joint steps, in a run with parallel episodes and a plan.
+fn optimal_makespan(info: &TaskInfo) -> Option<u32> {
+    info.makespan
+        .as_ref()
+        .and_then(|m| m.as_ref().ok())
+        .map(|m| m.steps)
 }
 
 /// The backend of a results line: the run's backend for a built-in method (even one

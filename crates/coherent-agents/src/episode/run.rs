@@ -122,7 +122,11 @@ pub async fn run(
         external: matches!(settings.method, MethodSpec::External(_)),
     };
     let io = |e: std::io::Error| Error::io(transcript, &e);
-    let mut writer = Writer::create(transcript, header.clone()).map_err(io)?;
+    let mut writer =
+        Writer::create(transcript, header.clone()).map_err(|e| Error::NoTranscript {
+            file: transcript.display().to_string(),
+            message: e.to_string(),
+        })?;
     let mut on_round = |r: &Round| {
         progress(r);
         writer.write(&Record::Round(Box::new(r.clone())))

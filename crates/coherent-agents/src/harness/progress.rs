@@ -118,13 +118,21 @@ impl Progress {
                     line.task_id,
                     line.seed
                 );
-                let error = (line.status == Status::Error).then(|| {
-                    format!(
+                let said = line.error.as_deref().unwrap_or("");
+                let error = match line.status {
+                    Status::Error => Some(format!(
                         "{episode}: error: {}; traceback in {}",
-                        shown(&headline(line.error.as_deref().unwrap_or(""))),
+                        shown(&headline(said)),
                         shown(&line.transcript)
-                    )
-                });
+                    )),
+                    // Why it could not go on (a robot, no transcript).
+                    _ if line.failed_with_error() => Some(format!(
+                        "{episode}: {}: {}",
+                        status_word(line.status),
+                        shown(&headline(said))
+                    )),
+                    _ => None,
+                };
                 Some(match (self.style, error) {
                     // An error must outlive the bar's next redraw.
                     (Style::Bar, Some(error)) => format!("\r\x1b[2K{error}\n{head}"),

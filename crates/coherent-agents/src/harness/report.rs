@@ -17,8 +17,8 @@ use serde::Serialize;
 use crate::harness::results::{EpisodeKey, ResultLine};
 use crate::harness::run_settings::{RunSettings, Setting, field, method_text};
 use crate::harness::speedup::{self, SpeedRow, row_name, row_order};
+use crate::records::transcript::Execution;
 use crate::records::transcript::headline;
-use crate::records::transcript::{Execution, Status};
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
 /// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the
@@ -121,7 +121,8 @@ pub struct Report {
     /// Episodes with no final line (only backend errors, the method's errors or
     /// interruptions).
     pub unfinished: usize,
-    /// Those of them whose last line is the method's error (status `error`).
+    /// Those of them whose last line failed with an error
+    /// ([`ResultLine::failed_with_error`]).
     pub errors: usize,
     /// Tasks the planner finds no plan for (task type null): in the average only.
     pub untyped_tasks: usize,
@@ -132,20 +133,21 @@ pub struct Report {
     pub settings: Option<RunSettings>,
     /// The settings methods written outside the crate declared, by method.
     pub method_settings: BTreeMap<String, BTreeMap<String, serde_json::Value>>,
-    /// The episodes that failed with the method's own error, by method.
+    /// The episodes that failed with an error, by method.
     pub failures: Vec<Failure>,
 }
 
-/// The episodes of one method that failed with its own error (status `error`, and no
-/// final line since).
+/// The episodes of one method that failed with an error
+/// ([`ResultLine::failed_with_error`], and no final line since).
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Failure {
     pub method: String,
     pub episodes: usize,
-    /// The first one's error: the exception and where it was raised
-    /// ([`crate::transcript::headline`]).
+    /// The first one's error: the method's exception and where it was raised
+    /// ([`crate::transcript::headline`]), or why the episode could not go on.
     pub first_error: String,
-    /// The transcript with the first one's whole error (the traceback).
+    /// The first one's transcript (a method's whole traceback; for an episode that had
+    /// no transcript, the file that could not be created).
     pub transcript: String,
 }
 
@@ -215,8 +217,8 @@ pub fn final_lines(lines: &[ResultLine]) -> (Vec<&ResultLine>, usize) {
     (last.into_values().collect(), unfinished)
 }
 
-/// The episodes with no final line whose last line is the method's error, in the order
-/// of the file.
+/// The episodes with no final line whose last line failed with an error
+/// ([`ResultLine::failed_with_error`]), in the order of the file.
 fn errors(lines: &[ResultLine]) -> Vec<&ResultLine> {
     let mut last: HashMap<EpisodeKey, usize> = HashMap::new();
     for (i, l) in lines.iter().enumerate() {
@@ -231,9 +233,7 @@ fn errors(lines: &[ResultLine]) -> Vec<&ResultLine> {
         .iter()
         .enumerate()
         .filter(|(i, l)| {
-            last.get(&l.key()) == Some(i)
-                && l.status == Status::Error
-                && !finished.contains(&l.key())
+            last.get(&l.key()) == Some(i) && l.failed_with_error() && !finished.contains(&l.key())
         })
         .map(|(_, l)| l)
         .collect()
@@ -491,7 +491,7 @@ fn header_lines(r: &Report) -> Vec<String> {
     }
     if r.errors > 0 {
         out.push(format!(
-            "{} episode(s) failed with the method's own error and are left out (see \"Episodes that failed with the method's error\").",
+            "{} episode(s) failed with an error (the method's own, a robot that stopped answering, a transcript that could not be created) and are left out (see \"Episodes that failed with an error\").",
             r.errors
         ));
     }
@@ -504,7 +504,7 @@ fn failures_markdown(r: &Report) -> String {
         return String::new();
     }
     let mut out = String::from(
-        "### Episodes that failed with the method's error\n\n| Method | Episodes | First error | Its transcript (the whole traceback) |\n|---|---|---|---|\n",
+        "### Episodes that failed with an error\n\n| Method | Episodes | First error | Its transcript (a method's whole traceback) |\n|---|---|---|---|\n",
     );
     for f in &r.failures {
         out.push_str(&format!(

@@ -89,6 +89,19 @@ impl ResultLine {
         matches!(self.status, Status::Success | Status::Failure)
     }
 
+    /// Whether the episode failed with an error its line names and has no final result:
+    /// the method's own (status `error`), or why it could not go on (status
+    /// `interrupted` with an `error`: a robot that stopped answering, a transcript that
+    /// could not be created). Not a backend's failure, not Ctrl-C. The report lists
+    /// these episodes.
+    pub fn failed_with_error(&self) -> bool {
+        match self.status {
+            Status::Error => true,
+            Status::Interrupted => self.error.is_some(),
+            Status::Success | Status::Failure | Status::BackendError => false,
+        }
+    }
+
     /// The line with its `cost_usd` from `prices` ([`PriceTable::episode_cost`] of its
     /// backend's model and its tokens).
     pub fn priced(mut self, prices: &PriceTable) -> ResultLine {
