@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 BARE ?= $(VENV)-bare
 WHEELS := target/wheels
 
-.PHONY: test lint rust-test bench-build wheel py-test bare-test venv browser demo bench
+.PHONY: test lint rust-test bench-build wheel py-test bare-test venv browser rsvg demo bench
 
 test: lint rust-test bench-build py-test bare-test
 
@@ -55,13 +55,25 @@ browser:
 		echo "browser: $(BROWSER) is missing and this is not root: the tests of coherent view will be skipped (apt-get install chromium-headless-shell)"; \
 	fi
 
+# librsvg's rsvg-convert, which turns docs/render's SVGs into their PNGs: the docs' test
+# (python/tests/test_docs.py) regenerates both and checks them byte for byte. Installed
+# with apt when missing and this runs as root; elsewhere that block fails and says so.
+rsvg:
+	@if command -v rsvg-convert >/dev/null; then \
+		echo "rsvg-convert: $$(command -v rsvg-convert)"; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends librsvg2-bin; \
+	else \
+		echo "rsvg-convert is missing and this is not root: the docs' test of docs/physics.md will fail (apt-get install librsvg2-bin)"; \
+	fi
+
 # The wheel (release), built once per make run, for both venvs below.
 wheel: venv
 	rm -rf $(WHEELS)
 	$(BIN)/maturin build --release --quiet --out $(WHEELS)
 
 # Installs the wheel into the venv, runs pytest.
-py-test: wheel browser
+py-test: wheel browser rsvg
 	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent_robots-*.whl
 	COHERENT_BROWSER=$(BROWSER) $(BIN)/pytest -q
 
