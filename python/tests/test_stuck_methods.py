@@ -121,7 +121,10 @@ def test_ctrl_c_stops_coherent_run_in_python_and_bench(stuck: Path, tmp_path: Pa
     started = tmp_path / "started"
     script = textwrap.dedent(
         f"""
-        import sys
+        import signal, sys
+        # Ctrl-C as in a terminal, even when this test runs from a background job, which
+        # starts its children with SIGINT ignored (and Python then keeps it ignored).
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         sys.path.insert(0, {str(stuck.parent)!r})
         import coherent, stuck
         task = coherent.load_tasks({str(DEMO)!r})[0]
