@@ -11,8 +11,11 @@ loopback. That needs root; without it the tests fail saying so.
 from __future__ import annotations
 
 import json
+import os
+import signal
 import subprocess
 import sys
+import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -125,11 +128,13 @@ def test_a_cyclone_dds_reader_decodes_the_robots_feedback_and_status_by_their_ro
     server.kill()
 
 
-def intrude(netns: Netns) -> subprocess.Popen[str]:
+def intrude(netns: Netns, *args: str) -> subprocess.Popen[str]:
     """`ros_intruder.py` for robot_arm_6 under /coherent, once it is ready."""
     intruder = netns.popen(
-        [sys.executable, str(INTRUDER), "/coherent", "robot_arm_6"], stdin=subprocess.PIPE, stdout=subprocess.PIPE
-    )  # fmt: skip
+        [sys.executable, str(INTRUDER), "/coherent", "robot_arm_6", *args],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+    )
     assert intruder.stdout is not None
     assert intruder.stdout.readline().strip() == "ready"
     return intruder
@@ -157,6 +162,78 @@ def test_feedback_from_a_third_participant_is_no_sign_of_life(netns: Netns, cohe
     assert did["goals"] >= 1 and did["sent"] >= 5, did
     assert run.returncode == 5, out
     assert "stopped: robot_arm_6 did not answer [grab] <mug>(7) within 2.0 s" in out
+
+
+def resident_kib(pid: int) -> int:
+    """The resident memory of process `pid` in KiB, 0 once it has ended."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except (FileNotFoundError, ProcessLookupError):
+        return 0
+    return next((int(line.split()[1]) for line in status.splitlines() if line.startswith("VmRSS:")), 0)
+
+
+def process_tree(pid: int) -> list[int]:
+    """`pid` and every process descended from it, as /proc lists them now."""
+    tree, todo = [], [pid]
+    while todo:
+        tree.append(todo.pop())
+        for children in Path(f"/proc/{tree[-1]}/task").glob("*/children"):
+            try:
+                todo += [int(child) for child in children.read_text().split()]
+            except (FileNotFoundError, ProcessLookupError):
+                pass
+    return tree
+
+
+def watch_memory(proc: subprocess.Popen[str], cap_kib: int, limit_s: float) -> tuple[int, int]:
+    """Samples the resident memory of `proc` and of its process tree every 0.1 s until it
+    ends, and returns the peaks (KiB). Kills its process group and fails the test once the
+    tree holds more than `cap_kib`, or once `limit_s` have passed: it stays gentle to the
+    machine whatever the program does."""
+    start, parent_peak, tree_peak = time.monotonic(), 0, 0
+    while proc.poll() is None:
+        parent = resident_kib(proc.pid)
+        tree = sum(resident_kib(pid) for pid in process_tree(proc.pid))
+        parent_peak, tree_peak = max(parent_peak, parent), max(tree_peak, tree)
+        elapsed = time.monotonic() - start
+        if tree > cap_kib or elapsed > limit_s:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+            pytest.fail(
+                f"after {elapsed:.1f} s the run still ran, its process tree holding {tree >> 10} MiB "
+                f"(the run itself {parent >> 10} MiB; killed at {cap_kib >> 10} MiB or {limit_s:.0f} s)"
+            )
+        time.sleep(0.1)
+    return parent_peak, tree_peak
+
+
+def test_a_feedback_flood_ends_the_ros2_link_process_not_the_run(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    # A participant publishes 10 MiB feedback samples for the live goal as fast as it can.
+    # The bridge's DDS reassembles each before anything can look at it, keeping many
+    # incomplete ones per writer: more than a GiB within seconds. robot_arm_6 never
+    # answers and may take a minute, so only the flood can end the run early: it must end
+    # the process that holds the DDS participant, and the run must stop as if the robot
+    # had stopped answering, its own memory small, its transcript kept.
+    serve(netns, coherent_exe, "--silent", "robot_arm_6")
+    intruder = intrude(netns, "--flood", str(10 << 20))
+    run = netns.popen(
+        [coherent_exe, "run", str(DEMO), "--robots", "ros2", "--robot-timeout", "60", "--out", str(tmp_path)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        start_new_session=True,  # its process group, to kill the whole tree if it runs away
+    )
+    parent_peak, tree_peak = watch_memory(run, cap_kib=1 << 20, limit_s=30)
+    out, _ = run.communicate()
+    did = what_it_did(intruder)
+    assert did["goals"] == 1 and did["sent"] >= 1, did
+    assert run.returncode == 5, out
+    assert "ROS 2 link process" in out, out
+    summary = transcript(tmp_path)[-1]
+    assert (summary["type"], summary["status"]) == ("summary", "interrupted"), summary
+    assert parent_peak < 300 << 10, f"the run itself held {parent_peak >> 10} MiB (tree {tree_peak >> 10} MiB)"
 
 
 STEP_BY_HAND = """
