@@ -65,7 +65,9 @@ def main() -> None:
     reliable = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(10))
     base = f"{namespace}/{robot}/execute/_action"
     goals = DataReader(participant, Topic(participant, f"rq{base}/send_goalRequest", SendGoalRequest), qos=reliable)
-    feedback = DataWriter(participant, Topic(participant, f"rt{base}/feedback", ExecuteFeedbackMessage), qos=reliable)
+    # A flood keeps one sample for resending, not ten: its own memory stays a few samples.
+    sending = Qos(Policy.Reliability.Reliable(duration(seconds=1)), Policy.History.KeepLast(1)) if flood else reliable
+    feedback = DataWriter(participant, Topic(participant, f"rt{base}/feedback", ExecuteFeedbackMessage), qos=sending)
     print("ready", flush=True)
     seen: list[UUID] = []
     sent = 0
