@@ -21,6 +21,10 @@ enum RobotsCommand {
     /// (coherent_msgs/action/Execute), acting by the rules or in Rapier (--physics), until
     /// Ctrl-C. One line when the servers are up, one per goal.
     Serve(ServeArgs),
+    /// The bridge's DDS side for a run over ROS 2, in a process of its own that `run`,
+    /// `bench` and the Python package start: JSON lines on stdin and stdout.
+    #[command(hide = true)]
+    Link,
 }
 
 #[derive(Args)]
@@ -60,6 +64,7 @@ struct ServeArgs {
 pub(crate) fn robots(args: RobotsArgs) -> Result<u8, Error> {
     match args.command {
         RobotsCommand::Serve(args) => serve(args),
+        RobotsCommand::Link => robots::link().map(|()| 0),
     }
 }
 

@@ -175,6 +175,25 @@ impl Proc {
         }
     }
 
+    /// The process's children, waiting up to `limit` for it to have one.
+    pub fn children(&self, limit: Duration) -> Vec<u32> {
+        let start = Instant::now();
+        loop {
+            let listed = Command::new("pgrep")
+                .args(["-P", &self.child.id().to_string()])
+                .output()
+                .expect("pgrep (procps) runs");
+            let pids: Vec<u32> = String::from_utf8_lossy(&listed.stdout)
+                .split_whitespace()
+                .map(|p| p.parse().expect("a pid"))
+                .collect();
+            if !pids.is_empty() || start.elapsed() > limit {
+                return pids;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
     pub fn signal(&self, signal: &str) {
         let sent = Command::new("kill")
             .args([&format!("-{signal}"), &self.child.id().to_string()])
