@@ -653,9 +653,8 @@ fn a_link_process_killed_mid_episode_stops_the_run_with_exit_5_naming_it() {
         .find(|l| l.contains("| goal not reached |"))
         .unwrap_or_else(|| panic!("a summary line\n{said}"));
     assert!(
-        summary.starts_with(
-            "stopped: robot_dog_13: the ROS 2 link process ended (killed by SIGKILL)"
-        ),
+        summary
+            .starts_with("stopped: robot_dog_13: the ROS 2 link process ended (killed by SIGKILL)"),
         "{summary}"
     );
     let t = transcript(&runs);
@@ -783,4 +782,32 @@ fn a_link_process_whose_memory_limit_is_reached_ends_and_the_bridge_says_so() {
         words.contains("memory allocation of") || words.contains("can't spawn"),
         "{error}"
     );
+}
+
+/// `coherent robots serve` reads DDS too: it limits its own memory, 1 GiB unless
+/// `--memory-limit` says otherwise, so that a flood ends it (its clients then see silent
+/// robots) instead of taking the machine's memory.
+#[test]
+fn the_robot_servers_limit_their_own_memory() {
+    let ns = Netns::new("serve-limit");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo()]);
+    server.wait_for("serving 3 robots", LONG);
+    let limits =
+        std::fs::read_to_string(format!("/proc/{}/limits", server.id())).expect("its limits");
+    let data = limits
+        .lines()
+        .find(|l| l.starts_with("Max data size"))
+        .expect("a data limit");
+    assert_eq!(
+        data.split_whitespace().nth(3),
+        Some("1073741824"),
+        "{limits}"
+    );
+    let mut tiny = ns.spawn(
+        "serve-tiny",
+        &["robots", "serve", &demo(), "--memory-limit", "1"],
+    );
+    // It cannot start its threads, or aborts on an allocation, whichever comes first.
+    assert!(!tiny.ended(LONG).success(), "{}", tiny.show());
+    assert!(!tiny.stdout().contains("serving"), "{}", tiny.show());
 }

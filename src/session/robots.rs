@@ -108,12 +108,8 @@ pub fn link() -> Result<(), Error> {
             .map(|r| r.handle().clone())
             .map_err(|e| e.to_string())
     };
-    coherent_ros::link_process::serve(
-        BufReader::new(std::io::stdin()),
-        std::io::stdout(),
-        runtime,
-    )
-    .map_err(|why| Error::Robots(coherent_ros::Error::Link(why)))
+    coherent_ros::link_process::serve(BufReader::new(std::io::stdin()), std::io::stdout(), runtime)
+        .map_err(|why| Error::Robots(coherent_ros::Error::Link(why)))
 }
 
 /// A `coherent-ros` error as the session's: a setting that cannot be used, a world
@@ -148,16 +144,22 @@ pub struct ServeRequest {
     pub refuse: Vec<String>,
     /// Fault: robots whose server is not started.
     pub absent: Vec<String>,
+    /// The data segment this process limits itself to, in bytes, since it reads DDS
+    /// (see [`coherent_ros::SERVE_MEMORY_LIMIT`]).
+    pub memory_limit: u64,
 }
 
 /// Serves every robot of the task `request` names as a ROS 2 action server until `stop`
-/// resolves; `log` gets one line when the servers are up and one per goal.
+/// resolves; `log` gets one line when the servers are up and one per goal. The whole
+/// process is limited to [`ServeRequest::memory_limit`] from then on.
 pub fn serve(
     request: ServeRequest,
     log: &(dyn Fn(&str) + Sync),
     stop: impl Future<Output = ()>,
 ) -> Result<(), Error> {
     let task = tasks::pick_task(&request.task_file, request.task_id)?;
+    coherent_ros::link_process::limit_memory(request.memory_limit)
+        .map_err(|why| Error::Invalid(format!("--memory-limit: {why}")))?;
     let options = ServeOptions {
         namespace: coherent_ros::wire::namespace(&request.namespace).map_err(ros_error)?,
         physics: request.physics,

@@ -25,4 +25,4 @@ pub use bridge::{BridgeOptions, Ros2Env};
 pub use error::Error;
 pub use faults::Faults;
 pub use link_process::{LINK_MEMORY_LIMIT, LinkCommand};
-pub use server::{ServeOptions, World, serve};
+pub use server::{SERVE_MEMORY_LIMIT, ServeOptions, World, serve};

@@ -254,9 +254,11 @@ pub fn serve(
     Ok(())
 }
 
-/// Sets the soft limit of the process's data segment to `bytes` (no higher than the hard
-/// limit), so that an allocation past it fails and the process aborts.
-fn limit_memory(bytes: u64) -> Result<(), String> {
+/// Sets the soft limit of this process's data segment to `bytes` (no higher than the
+/// hard limit), so that an allocation past it fails and the process aborts ("memory
+/// allocation of N bytes failed") rather than taking the machine's memory: the link
+/// process's, and `coherent robots serve`'s (which reads DDS too).
+pub fn limit_memory(bytes: u64) -> Result<(), String> {
     use rustix::process::{Resource, Rlimit, getrlimit, setrlimit};
     let now = getrlimit(Resource::Data);
     let current = now.maximum.map_or(bytes, |hard| hard.min(bytes));
@@ -468,7 +470,11 @@ impl LinkProcess {
     /// be used: `what` it did wrong, if anything, how it ended, and its last words. A
     /// child that did nothing wrong has closed its stdout to end: it is given time to.
     fn failed(&mut self, what: &str) -> String {
-        let status = self.end(if what.is_empty() { GRACE } else { Duration::ZERO });
+        let status = self.end(if what.is_empty() {
+            GRACE
+        } else {
+            Duration::ZERO
+        });
         // Its last words may still be on their way from the pipe.
         let deadline = Instant::now() + LAST_WORDS;
         while self.stderr_read.as_ref().is_some_and(|t| !t.is_finished())
@@ -508,9 +514,12 @@ impl LinkProcess {
         self.ended.get_or_insert(why).clone()
     }
 
-    /// Closes the child's stdin, waits up to `grace` for it to end, then kills it; its
-    /// exit status, unless it cannot be had.
+    /// Closes the child's stdin, waits up to `grace` for it to end, then kills it (at
+    /// once without a grace period); its exit status, unless it cannot be had.
     fn end(&mut self, grace: Duration) -> Option<ExitStatus> {
+        if grace.is_zero() {
+            let _ = self.child.kill();
+        }
         self.stdin = None;
         let deadline = Instant::now() + grace;
         loop {
@@ -597,4 +606,80 @@ fn drain(
             kept.drain(..over);
         }
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_line_longer_than_the_limit_is_an_error_read_no_further() {
+        let mut input = std::io::Cursor::new(b"12345\n123456\n1234567".to_vec());
+        assert_eq!(read_line(&mut input, 6), Ok(Some(b"12345".to_vec())));
+        assert_eq!(read_line(&mut input, 6), Ok(Some(b"123456".to_vec())));
+        assert_eq!(
+            read_line(&mut input, 6),
+            Err("a line longer than 6 bytes".to_owned())
+        );
+        assert_eq!(input.position(), 13 + 7, "no more than the limit and one");
+        assert_eq!(read_line(&mut input, 6), Ok(None));
+    }
+
+    #[test]
+    fn the_errors_of_a_connection_keep_their_kind_across_the_process() {
+        let errors = [
+            Error::Invalid("bad".into()),
+            Error::Missing {
+                robots: vec!["robot_arm_6".into()],
+                namespace: "/lab".into(),
+                waited: Duration::from_millis(2500),
+            },
+            Error::Several {
+                robot: "robot_arm_6".into(),
+                namespace: "/lab".into(),
+                servers: vec!["participant 01".into(), "participant 02".into()],
+            },
+            Error::Dds("cannot join".into()),
+        ];
+        for e in errors {
+            let line = serde_json::to_vec(&Answer::Refused(e.clone().into())).expect("JSON");
+            let back: Answer = serde_json::from_slice(&line).expect("an answer");
+            let Answer::Refused(refusal) = back else {
+                panic!("{back:?}");
+            };
+            assert_eq!(Error::from(refusal), e);
+        }
+    }
+
+    /// A child that writes a line longer than the protocol's is ended and named, and the
+    /// parent reads no more of it than the limit.
+    #[test]
+    fn a_child_that_writes_a_line_too_long_is_ended_and_named() {
+        let command = LinkCommand {
+            program: "sh".into(),
+            args: ["-c", "head -c 33554433 /dev/zero; exec sleep 60"]
+                .map(OsString::from)
+                .to_vec(),
+            memory_limit: LINK_MEMORY_LIMIT,
+        };
+        let error = LinkProcess::connect(&command, "/lab", &[], Duration::ZERO)
+            .expect_err("not a link process");
+        let Error::Link(why) = error else {
+            panic!("{error:?}");
+        };
+        assert!(
+            why.starts_with(
+                "the ROS 2 link process wrote a line longer than 33554432 bytes and was \
+                 ended (killed by SIGKILL)"
+            ),
+            "{why}"
+        );
+    }
+
+    #[test]
+    fn how_a_process_ended_is_said_with_the_signals_name() {
+        assert_eq!(ended_by(ExitStatus::from_raw(6)), "killed by SIGABRT");
+        assert_eq!(ended_by(ExitStatus::from_raw(9)), "killed by SIGKILL");
+        assert_eq!(ended_by(ExitStatus::from_raw(3 << 8)), "exit status 3");
+    }
 }
