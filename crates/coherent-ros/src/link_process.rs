@@ -79,6 +79,9 @@ struct Config {
     memory_limit: u64,
 }
 
+/// One exchange asked for: the goals, robot by robot number, and the silence allowed.
+type Asked = (Vec<(usize, Goal)>, Duration);
+
 /// The parent's later lines.
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -291,7 +294,7 @@ fn ignore_signals(runtime: &Handle) -> Result<(), String> {
 fn read_requests(
     mut input: impl BufRead + Send + 'static,
     cancel: Arc<AtomicBool>,
-) -> Receiver<Result<(Vec<(usize, Goal)>, Duration), String>> {
+) -> Receiver<Result<Asked, String>> {
     let (sender, requests) = mpsc::channel();
     std::thread::spawn(move || {
         loop {
