@@ -181,7 +181,8 @@ impl From<Refusal> for Error {
 }
 
 /// Reads one line of at most `max` bytes (its newline aside); `None` at the end of the
-/// input. A longer line is an error, read no further than `max` bytes and one.
+/// input, an unfinished last line included (its writer ended while writing it). A
+/// longer line is an error, read no further than `max` bytes and one.
 fn read_line(input: &mut impl BufRead, max: usize) -> Result<Option<Vec<u8>>, String> {
     let mut line = Vec::new();
     let limit = u64::try_from(max).unwrap_or(u64::MAX).saturating_add(1);
@@ -192,12 +193,12 @@ fn read_line(input: &mut impl BufRead, max: usize) -> Result<Option<Vec<u8>>, St
         .map_err(|e| format!("cannot read a line: {e}"))?;
     if line.last() == Some(&b'\n') {
         line.pop();
+        Ok(Some(line))
     } else if line.len() > max {
-        return Err(format!("a line longer than {max} bytes"));
-    } else if line.is_empty() {
-        return Ok(None);
+        Err(format!("a line longer than {max} bytes"))
+    } else {
+        Ok(None)
     }
-    Ok(Some(line))
 }
 
 /// Writes `value` as one JSON line and flushes it.
@@ -617,7 +618,7 @@ mod tests {
 
     #[test]
     fn a_line_longer_than_the_limit_is_an_error_read_no_further() {
-        let mut input = std::io::Cursor::new(b"12345\n123456\n1234567".to_vec());
+        let mut input = std::io::Cursor::new(b"12345\n123456\n12345678\n".to_vec());
         assert_eq!(read_line(&mut input, 6), Ok(Some(b"12345".to_vec())));
         assert_eq!(read_line(&mut input, 6), Ok(Some(b"123456".to_vec())));
         assert_eq!(
@@ -625,7 +626,9 @@ mod tests {
             Err("a line longer than 6 bytes".to_owned())
         );
         assert_eq!(input.position(), 13 + 7, "no more than the limit and one");
-        assert_eq!(read_line(&mut input, 6), Ok(None));
+        // A line cut short by the end of the input: its writer ended.
+        let mut input = std::io::Cursor::new(b"{\"exchanged\"".to_vec());
+        assert_eq!(read_line(&mut input, 64), Ok(None));
     }
 
     #[test]
