@@ -811,3 +811,29 @@ fn the_robot_servers_limit_their_own_memory() {
     assert!(!tiny.ended(LONG).success(), "{}", tiny.show());
     assert!(!tiny.stdout().contains("serving"), "{}", tiny.show());
 }
+
+/// A link process never outlives its run: the run killed (SIGKILL, so that it cannot
+/// clean up), the link process sees its stdin end, cancels the goal in flight and ends.
+#[test]
+fn a_link_process_cancels_its_goal_and_ends_when_its_run_is_killed() {
+    let ns = Netns::new("run-killed");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo(), "--delay", "30"]);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let mut run = ns.spawn("run", &["run", &demo, "--robots", "ros2", "--out", &runs]);
+    server.wait_for("robot_arm_6 step 1 [grab] <mug>(7) -> accepted", LONG);
+    let link = link_process(&run);
+    run.signal("KILL");
+    assert!(!run.ended(LONG).success());
+    server.wait_for("robot_arm_6 step 1 [grab] <mug>(7) -> cancelled", LONG);
+    let start = Instant::now();
+    while Path::new(&format!("/proc/{link}")).exists() {
+        // A zombie until its new parent reaps it: ended all the same.
+        let status = std::fs::read_to_string(format!("/proc/{link}/status")).unwrap_or_default();
+        if status.contains("State:\tZ") {
+            break;
+        }
+        assert!(start.elapsed() < LONG, "the link process outlived its run");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}

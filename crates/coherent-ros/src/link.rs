@@ -142,14 +142,6 @@ pub(crate) struct Link {
     runtime: Handle,
 }
 
-impl std::fmt::Debug for Link {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Link")
-            .field("robots", &self.robots.len())
-            .finish_non_exhaustive()
-    }
-}
-
 /// The QoS of the requests the bridge writes, as ROS 2 gives an action's services.
 fn request_qos() -> QosPolicies {
     QosPolicyBuilder::new()

@@ -251,6 +251,12 @@ pub fn serve(
     let requests = read_requests(input, Arc::clone(&cancel));
     for request in requests {
         let (goals, silence) = request?;
+        if let Some((n, _)) = goals.iter().find(|(n, _)| *n >= config.robots.len()) {
+            return Err(format!(
+                "from the bridge, a goal for robot number {n} of {}",
+                config.robots.len()
+            ));
+        }
         for exchange in link.exchange(goals, silence, Some(&cancel)) {
             write_line(&mut output, &Answer::Exchanged(exchange)).map_err(|e| e.to_string())?;
         }
