@@ -92,7 +92,20 @@ fn every_other_file_a_command_reads_stops_at_its_limit() {
     );
     let results_line = "/dev/zero: line 1: longer than 1 MiB, the most a line of a results \
                         file may hold";
-    bench(&["--out", ENDLESS], results_line);
+    // A results file that is no regular file is refused before anything is made beside
+    // it (the lock's folder): not even `/dev/zero.transcripts` for a device.
+    bench(
+        &["--out", ENDLESS],
+        "/dev/zero: not a regular file (a device, a pipe, a folder?): a results file must be one",
+    );
+    let pipe = dir.join("pipe.jsonl");
+    let made = std::process::Command::new("mkfifo").arg(&pipe).status();
+    assert!(made.expect("mkfifo runs").success());
+    bench(&["--out", utf8(&pipe)], "pipe.jsonl: not a regular file");
+    assert!(
+        !dir.join("pipe.transcripts").exists(),
+        "nothing is made for a run that cannot start"
+    );
     refused(&["bench", "--report", ENDLESS], results_line);
     bench(
         &[

@@ -629,3 +629,211 @@ fn a_parallel_run_over_ros2_lasts_its_joint_steps_not_its_actions() {
     server.signal("TERM");
     assert_eq!(server.wait(LONG), 0, "{}", server.show());
 }
+
+/// The bridge's DDS side runs in a link process of its own, with a memory limit, a child
+/// of the run; killed (as a flood of DDS samples would end it), the run stops the way a
+/// silent robot stops it: exit 5, the transcript kept as interrupted with the reason.
+#[test]
+fn a_link_process_killed_mid_episode_stops_the_run_with_exit_5_naming_it() {
+    let ns = Netns::new("link-killed");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo(), "--delay", "0.5"]);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let mut run = ns.spawn("run", &["run", &demo, "--robots", "ros2", "--out", &runs]);
+    server.wait_for("step 4 [movetowards] <fridge>(8) -> accepted", LONG);
+    let link = link_process(&run);
+    std::process::Command::new("kill")
+        .args(["-KILL", &link.to_string()])
+        .status()
+        .expect("kill runs");
+    assert_eq!(run.wait(LONG), 5, "{}", run.show());
+    let said = run.stdout();
+    let summary = said
+        .lines()
+        .find(|l| l.contains("| goal not reached |"))
+        .unwrap_or_else(|| panic!("a summary line\n{said}"));
+    assert!(
+        summary
+            .starts_with("stopped: robot_dog_13: the ROS 2 link process ended (killed by SIGKILL)"),
+        "{summary}"
+    );
+    let t = transcript(&runs);
+    assert_eq!(t.summary["status"], "interrupted");
+    assert_eq!(t.summary["steps"], 4);
+    let error = t.summary["error"].as_str().expect("the summary says why");
+    assert!(
+        error.contains("the ROS 2 link process ended (killed by SIGKILL)")
+            && error.contains("memory limit of 256 MiB"),
+        "{error}"
+    );
+    let (last, done) = t.rounds.split_last().expect("rounds");
+    assert_eq!(last["outcome"]["reason"], "robot");
+    assert!(done.iter().all(|r| r["outcome"]["kind"] == "executed"));
+}
+
+/// The link process of `run` (its one child), once it has the memory limit it sets on
+/// itself at start: a data segment of 256 MiB.
+fn link_process(run: &common::netns::Proc) -> u32 {
+    let children = run.children(LONG);
+    let [link] = children[..] else {
+        panic!("one link process, not {children:?}\n{}", run.show());
+    };
+    let cmdline = std::fs::read(format!("/proc/{link}/cmdline")).expect("its command line");
+    assert!(
+        String::from_utf8_lossy(&cmdline).ends_with("robots\0link\0"),
+        "{cmdline:?}"
+    );
+    let limits = std::fs::read_to_string(format!("/proc/{link}/limits")).expect("its limits");
+    let data = limits
+        .lines()
+        .find(|l| l.starts_with("Max data size"))
+        .expect("a data limit");
+    assert_eq!(
+        data.split_whitespace().nth(3),
+        Some("268435456"),
+        "{limits}"
+    );
+    link
+}
+
+/// A benchmark whose link process is killed keeps the episode's results line (status
+/// `interrupted`, the reason in `error`), and the next run of the same results file runs
+/// that episode again, to the goal.
+#[test]
+fn a_benchmark_whose_link_process_is_killed_keeps_its_line_and_resumes() {
+    let ns = Netns::new("bench-link-killed");
+    let demo = demo();
+    let results = ns.path("results.jsonl");
+    let args = [
+        "bench",
+        "--tasks",
+        &demo,
+        "--methods",
+        "pefa",
+        "--robots",
+        "ros2",
+        "--out",
+        &results,
+    ];
+    {
+        let mut server = ns.spawn("serve", &["robots", "serve", &demo, "--delay", "0.5"]);
+        let mut bench = ns.spawn("bench", &args);
+        server.wait_for("step 2 ", LONG);
+        let link = link_process(&bench);
+        std::process::Command::new("kill")
+            .args(["-KILL", &link.to_string()])
+            .status()
+            .expect("kill runs");
+        assert_eq!(bench.wait(LONG), 0, "{}", bench.show());
+    }
+    let lines = |text: &str| -> Vec<Value> {
+        text.lines()
+            .map(|l| serde_json::from_str(l).expect("JSON"))
+            .collect()
+    };
+    let text = std::fs::read_to_string(&results).expect("a results file");
+    let first = lines(&text);
+    assert_eq!(first.len(), 1, "{text}");
+    assert_eq!(first[0]["status"], "interrupted", "{text}");
+    let error = first[0]["error"].as_str().unwrap_or_default();
+    assert!(
+        error.contains("the ROS 2 link process ended (killed by SIGKILL)"),
+        "{text}"
+    );
+    // A fresh world for the episode run again.
+    let mut server = ns.spawn("serve-again", &["robots", "serve", &demo]);
+    server.wait_for("serving 3 robots", LONG);
+    let mut again = ns.spawn("bench-again", &args);
+    assert_eq!(again.wait(LONG), 0, "{}", again.show());
+    let text = std::fs::read_to_string(&results).expect("a results file");
+    let last = lines(&text).pop().expect("a line");
+    assert_eq!(last["status"], "success", "{text}");
+    assert_eq!(last["steps"], 22, "{text}");
+}
+
+/// The link process sets its memory limit on itself before it starts anything: with
+/// one far below what it needs, it ends before it connects, and the bridge's error names
+/// it, how it ended and its last words (no network needed: it never reaches DDS).
+#[test]
+fn a_link_process_whose_memory_limit_is_reached_ends_and_the_bridge_says_so() {
+    use coherent::session::engine::Cancel;
+    use coherent::session::episode::environment;
+    use coherent::session::robots::{Robots, start_links_with};
+    start_links_with(BIN.into(), Vec::new());
+    let task = std::sync::Arc::new(
+        coherent::session::tasks::pick_task(&common::demo(), None).expect("the demo task"),
+    );
+    let Robots::Ros2(mut options) = Robots::ros2("/tiny", 1.0, 1.0).expect("settings") else {
+        panic!("robots over ROS 2");
+    };
+    options.link.memory_limit = 1 << 20;
+    let error = match environment(&task, false, &Robots::Ros2(options), &Cancel::default()) {
+        Ok(_) => panic!("a link process within 1 MiB connected"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        error.starts_with("the ROS 2 link process ended (")
+            && error.contains("within a memory limit of 1 MiB")
+            && error.contains("; its last words: "),
+        "{error}"
+    );
+    let words = error.split("; its last words: ").nth(1).unwrap_or_default();
+    assert!(
+        words.contains("memory allocation of") || words.contains("can't spawn"),
+        "{error}"
+    );
+}
+
+/// `coherent robots serve` reads DDS too: it limits its own memory, 1 GiB unless
+/// `--memory-limit` says otherwise, so that a flood ends it (its clients then see silent
+/// robots) instead of taking the machine's memory.
+#[test]
+fn the_robot_servers_limit_their_own_memory() {
+    let ns = Netns::new("serve-limit");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo()]);
+    server.wait_for("serving 3 robots", LONG);
+    let limits =
+        std::fs::read_to_string(format!("/proc/{}/limits", server.id())).expect("its limits");
+    let data = limits
+        .lines()
+        .find(|l| l.starts_with("Max data size"))
+        .expect("a data limit");
+    assert_eq!(
+        data.split_whitespace().nth(3),
+        Some("1073741824"),
+        "{limits}"
+    );
+    let mut tiny = ns.spawn(
+        "serve-tiny",
+        &["robots", "serve", &demo(), "--memory-limit", "1"],
+    );
+    // It cannot start its threads, or aborts on an allocation, whichever comes first.
+    assert!(!tiny.ended(LONG).success(), "{}", tiny.show());
+    assert!(!tiny.stdout().contains("serving"), "{}", tiny.show());
+}
+
+/// A link process never outlives its run: the run killed (SIGKILL, so that it cannot
+/// clean up), the link process sees its stdin end, cancels the goal in flight and ends.
+#[test]
+fn a_link_process_cancels_its_goal_and_ends_when_its_run_is_killed() {
+    let ns = Netns::new("run-killed");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo(), "--delay", "30"]);
+    let runs = ns.path("runs");
+    let demo = demo();
+    let mut run = ns.spawn("run", &["run", &demo, "--robots", "ros2", "--out", &runs]);
+    server.wait_for("robot_arm_6 step 1 [grab] <mug>(7) -> accepted", LONG);
+    let link = link_process(&run);
+    run.signal("KILL");
+    assert!(!run.ended(LONG).success());
+    server.wait_for("robot_arm_6 step 1 [grab] <mug>(7) -> cancelled", LONG);
+    let start = Instant::now();
+    while Path::new(&format!("/proc/{link}")).exists() {
+        // A zombie until its new parent reaps it: ended all the same.
+        let status = std::fs::read_to_string(format!("/proc/{link}/status")).unwrap_or_default();
+        if status.contains("State:\tZ") {
+            break;
+        }
+        assert!(start.elapsed() < LONG, "the link process outlived its run");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}

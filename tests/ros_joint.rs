@@ -63,6 +63,8 @@ fn play(what: &Value) -> Value {
     let joint = what["joint"].as_bool().expect("joint");
     let timeout = what["timeout"].as_f64().expect("timeout");
     let namespace = what["namespace"].as_str().expect("namespace");
+    // This test program is not the `coherent` binary that link processes are.
+    coherent::session::robots::start_links_with(env!("CARGO_BIN_EXE_coherent").into(), Vec::new());
     let robots = Robots::ros2(namespace, timeout, 30.0).expect("robot settings");
     let cancel = Cancel::default();
     let mut env = environment(&task, false, &robots, &cancel).expect("the robots answer");

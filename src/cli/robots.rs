@@ -6,7 +6,7 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 
 use crate::session::Error;
-use crate::session::engine::DEFAULT_NAMESPACE;
+use crate::session::engine::{DEFAULT_NAMESPACE, SERVE_MEMORY_LIMIT};
 use crate::session::robots::{self, ServeRequest};
 
 #[derive(Args)]
@@ -21,6 +21,10 @@ enum RobotsCommand {
     /// (coherent_msgs/action/Execute), acting by the rules or in Rapier (--physics), until
     /// Ctrl-C. One line when the servers are up, one per goal.
     Serve(ServeArgs),
+    /// The bridge's DDS side for a run over ROS 2, in a process of its own that `run`,
+    /// `bench` and the Python package start: JSON lines on stdin and stdout.
+    #[command(hide = true)]
+    Link,
 }
 
 #[derive(Args)]
@@ -55,11 +59,18 @@ struct ServeArgs {
     /// Fault: a robot (ROS name) whose server is not started; repeatable.
     #[arg(long = "absent", value_name = "ROBOT")]
     absent: Vec<String>,
+    /// The most memory (data segment, MiB) the servers may take: past it they end
+    /// rather than take the machine's (a DDS participant flooding them with large
+    /// samples), and their clients see silent robots. Raise it for a large physical
+    /// world.
+    #[arg(long, value_name = "MIB", default_value_t = SERVE_MEMORY_LIMIT >> 20)]
+    memory_limit: u64,
 }
 
 pub(crate) fn robots(args: RobotsArgs) -> Result<u8, Error> {
     match args.command {
         RobotsCommand::Serve(args) => serve(args),
+        RobotsCommand::Link => robots::link().map(|()| 0),
     }
 }
 
@@ -75,6 +86,7 @@ fn serve(args: ServeArgs) -> Result<u8, Error> {
         silent: args.silent,
         refuse: args.refuse,
         absent: args.absent,
+        memory_limit: args.memory_limit.saturating_mul(1 << 20),
     };
     let log = |line: &str| println!("{line}");
     robots::serve(request, &log, shutdown())?;

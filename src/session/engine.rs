@@ -62,6 +62,8 @@ pub use coherent_agents::report::{Mixed, Report};
 // Stopping work from outside (Ctrl-C).
 pub use coherent_agents::Cancel;
 
-// Robots over ROS 2: the namespace their actions live under unless told otherwise, and
-// the names robots go by there (also the agents of `coherent.marl`).
+// Robots over ROS 2: the namespace their actions live under unless told otherwise, the
+// names robots go by there (also the agents of `coherent.marl`), and the memory the
+// reference servers limit themselves to unless told otherwise.
+pub use coherent_ros::SERVE_MEMORY_LIMIT;
 pub use coherent_ros::wire::{DEFAULT_NAMESPACE, robot_names};

@@ -194,13 +194,8 @@ pub fn environment(
             ));
         }
         Robots::Ros2(options) => Box::new(
-            coherent_ros::Ros2Env::connect(
-                Arc::clone(task),
-                options.clone(),
-                Some(cancel.flag()),
-                crate::session::runtime()?.handle().clone(),
-            )
-            .map_err(ros_error)?,
+            coherent_ros::Ros2Env::connect(Arc::clone(task), options.clone(), Some(cancel.flag()))
+                .map_err(ros_error)?,
         ),
     })
 }

@@ -138,12 +138,19 @@ impl Proc {
     /// The exit status, waiting up to `limit`; beyond it the process is killed and the
     /// test fails.
     pub fn wait(&mut self, limit: Duration) -> i32 {
+        let status = self.ended(limit);
+        status
+            .code()
+            .unwrap_or_else(|| panic!("killed by a signal\n{}", self.show()))
+    }
+
+    /// How the process ended, a signal included, waiting up to `limit`; beyond it the
+    /// process is killed and the test fails.
+    pub fn ended(&mut self, limit: Duration) -> std::process::ExitStatus {
         let start = Instant::now();
         loop {
             if let Some(status) = self.child.try_wait().expect("the process can be waited on") {
-                return status
-                    .code()
-                    .unwrap_or_else(|| panic!("killed by a signal\n{}", self.show()));
+                return status;
             }
             if start.elapsed() > limit {
                 let _ = self.child.kill();
@@ -170,6 +177,29 @@ impl Proc {
                     self.name,
                     self.show()
                 );
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+
+    pub fn id(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// The process's children, waiting up to `limit` for it to have one.
+    pub fn children(&self, limit: Duration) -> Vec<u32> {
+        let start = Instant::now();
+        loop {
+            let listed = Command::new("pgrep")
+                .args(["-P", &self.child.id().to_string()])
+                .output()
+                .expect("pgrep (procps) runs");
+            let pids: Vec<u32> = String::from_utf8_lossy(&listed.stdout)
+                .split_whitespace()
+                .map(|p| p.parse().expect("a pid"))
+                .collect();
+            if !pids.is_empty() || start.elapsed() > limit {
+                return pids;
             }
             std::thread::sleep(Duration::from_millis(20));
         }

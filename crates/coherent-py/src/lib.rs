@@ -213,6 +213,14 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
     m.add("METHODS", Method::ALL.map(Method::name).to_vec())?;
     m.add("DEFAULT_MAX_STATES", Limits::DEFAULT_MAX_STATES)?;
+    // Robots over ROS 2 start their link process as this Python with the console script's
+    // module, which runs the same command line as the binary; this process's executable
+    // is Python, not `coherent`.
+    let python: Option<PathBuf> = py.import("sys")?.getattr("executable")?.extract()?;
+    if let Some(python) = python.filter(|p| !p.as_os_str().is_empty()) {
+        let args = ["-m", "coherent._cli"].map(OsString::from).to_vec();
+        coherent::session::robots::start_links_with(python, args);
+    }
     let exc = errors::exceptions(py)?;
     m.add("CoherentError", exc.base.clone_ref(py))?;
     m.add("ArgumentError", exc.argument.clone_ref(py))?;

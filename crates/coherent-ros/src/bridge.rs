@@ -17,7 +17,8 @@ use coherent_core::{
 use ros2_client::action::GoalStatusEnum;
 
 use crate::error::Error;
-use crate::link::{Exchange, Link};
+use crate::link::Exchange;
+use crate::link_process::{LinkCommand, LinkProcess};
 use crate::relations;
 use crate::wire::{self, ExecuteResult, Goal};
 
@@ -31,16 +32,8 @@ pub struct BridgeOptions {
     pub robot_timeout: Duration,
     /// How long to wait for every robot's server before the first step.
     pub server_wait: Duration,
-}
-
-impl Default for BridgeOptions {
-    fn default() -> BridgeOptions {
-        BridgeOptions {
-            namespace: wire::DEFAULT_NAMESPACE.to_owned(),
-            robot_timeout: Duration::from_secs(10),
-            server_wait: Duration::from_secs(10),
-        }
-    }
+    /// How to start the process that holds the DDS side ([`crate::link_process`]).
+    pub link: LinkCommand,
 }
 
 /// An environment whose actions robots carry out, one ROS 2 action server per robot.
@@ -51,7 +44,8 @@ pub struct Ros2Env {
     options: BridgeOptions,
     /// The robots' ROS names, in the task's order.
     names: Vec<String>,
-    link: Link,
+    /// The DDS side, in a process of its own.
+    link: LinkProcess,
     /// The episode's cancel flag (Ctrl-C): a goal in flight is cancelled when it rises.
     cancel: Option<Arc<AtomicBool>>,
     /// Actions tried since the start or the last reset (the goals' `step`).
@@ -61,17 +55,21 @@ pub struct Ros2Env {
 }
 
 impl Ros2Env {
-    /// Connects to the servers of `task`'s robots, waiting up to
-    /// [`BridgeOptions::server_wait`] for all of them; `cancel` is the episode's flag,
-    /// `runtime` the one DDS work is spun on.
+    /// Starts the link process ([`BridgeOptions::link`]), which connects to the servers
+    /// of `task`'s robots, waiting up to [`BridgeOptions::server_wait`] for all of them;
+    /// `cancel` is the episode's flag.
     pub fn connect(
         task: Arc<Task>,
         options: BridgeOptions,
         cancel: Option<Arc<AtomicBool>>,
-        runtime: tokio::runtime::Handle,
     ) -> Result<Ros2Env, Error> {
         let names = wire::robot_names(&task);
-        let link = Link::connect(&options.namespace, &names, options.server_wait, runtime)?;
+        let link = LinkProcess::connect(
+            &options.link,
+            &options.namespace,
+            &names,
+            options.server_wait,
+        )?;
         Ok(Ros2Env {
             state: task.init.clone(),
             task,

@@ -24,6 +24,9 @@ pub enum Error {
     },
     /// DDS could not be set up.
     Dds(String),
+    /// The ROS 2 link process, which holds the bridge's DDS side, could not be started
+    /// or ended before it connected (the message names it and says how).
+    Link(String),
     /// The robots' physical world cannot be built for the task.
     Physics(coherent_sim::PhysicsError),
 }
@@ -68,6 +71,7 @@ impl std::fmt::Display for Error {
                 servers.join(", ")
             ),
             Error::Dds(why) => write!(f, "ROS 2: {why}"),
+            Error::Link(why) => f.write_str(why),
             Error::Physics(e) => write!(f, "physics: {e}"),
         }
     }

@@ -6,7 +6,8 @@
 //! per robot acting, all in flight at once (send each, follow its feedback, take its
 //! result; cancel it on Ctrl-C or when its robot falls silent) as a blocking call on the
 //! runtime the caller hands in (the session's, the one place a runtime is built), which
-//! works inside an async runtime as well as outside one.
+//! works inside an async runtime as well as outside one. It runs in the link process
+//! ([`crate::link_process`]), whose memory limit a flood of DDS samples reaches.
 //!
 //! A robot is one server. Two servers for one robot at the start is an error that names
 //! them; during an episode, only the server that accepted a goal is heard about it (its
@@ -46,7 +47,7 @@ const SETTLE: Duration = Duration::from_millis(500);
 /// How often a goal in flight looks at the cancel flag.
 const CANCEL_POLL: Duration = Duration::from_millis(20);
 /// How long a cancelled goal waits for the robot's acknowledgement, then its result.
-const CANCEL_WAIT: Duration = Duration::from_secs(2);
+pub(crate) const CANCEL_WAIT: Duration = Duration::from_secs(2);
 /// The samples each reader keeps: the replies to one goal and a little feedback. DDS
 /// would keep 64 of every topic by default, whatever their size.
 const READER_DEPTH: i32 = 4;
@@ -54,8 +55,10 @@ const READER_DEPTH: i32 = 4;
 type Writer<T> = DataWriter<T, CDRSerializerAdapter<T>>;
 type Reader<T> = SimpleDataReader<T, CDRDeserializerAdapter<T>>;
 
-/// How one goal ended, seen from the bridge.
-#[derive(Debug)]
+/// How one goal ended, seen from the bridge (and sent from the link process to it, see
+/// [`crate::link_process`]).
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub(crate) enum Exchange {
     /// The result came, with the goal's end status.
     Result {
@@ -137,14 +140,6 @@ pub(crate) struct Link {
     /// The participant, which lives as long as a handle to it does.
     _participant: DomainParticipant,
     runtime: Handle,
-}
-
-impl std::fmt::Debug for Link {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Link")
-            .field("robots", &self.robots.len())
-            .finish_non_exhaustive()
-    }
 }
 
 /// The QoS of the requests the bridge writes, as ROS 2 gives an action's services.

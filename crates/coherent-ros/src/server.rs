@@ -30,6 +30,13 @@ const FEEDBACK_EVERY: Duration = Duration::from_millis(100);
 /// How long a result waits for the bridge to ask for it before it is dropped.
 const RESULT_WAIT: Duration = Duration::from_secs(10);
 
+/// The data segment `coherent robots serve` limits itself to by default (see
+/// [`crate::link_process::limit_memory`]): it reads DDS like the link process, so a flood
+/// of large samples would take the machine's memory; it needs about 20 MiB with the
+/// rules or Rapier on the bundled scenes, and a physics server of a larger world may
+/// need more than the link process's limit, hence a wider one (and a flag).
+pub const SERVE_MEMORY_LIMIT: u64 = 1 << 30;
+
 /// What to serve and how.
 #[derive(Clone, Debug, Default)]
 pub struct ServeOptions {

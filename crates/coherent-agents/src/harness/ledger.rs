@@ -122,6 +122,7 @@ impl Ledger {
         max_bytes: u64,
         now: &BTreeMap<String, RunSettings>,
     ) -> Result<Ledger, Error> {
+        refuse_other_than_a_file(out)?;
         let lock = take_lock(out)?;
         let mut outcome = BenchOutcome::default();
         let mut done = HashSet::new();
@@ -251,6 +252,21 @@ impl Ledger {
     pub fn finish(mut self, interrupted: bool) -> BenchOutcome {
         self.outcome.interrupted = interrupted;
         self.outcome
+    }
+}
+
+/// Refuses a results file that exists and is no regular file (a device, a pipe, a
+/// folder), before anything is made beside it: the lock's folder would otherwise be made
+/// next to `/dev/zero`, say, for a run that cannot start.
+fn refuse_other_than_a_file(out: &Path) -> Result<(), Error> {
+    match std::fs::metadata(out) {
+        Ok(meta) if !meta.is_file() => Err(Error::Io {
+            file: out.display().to_string(),
+            message: "not a regular file (a device, a pipe, a folder?): a results file must \
+                      be one"
+                .into(),
+        }),
+        _ => Ok(()),
     }
 }
 
