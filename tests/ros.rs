@@ -803,13 +803,22 @@ fn the_robot_servers_limit_their_own_memory() {
         Some("1073741824"),
         "{limits}"
     );
-    let mut tiny = ns.spawn(
-        "serve-tiny",
-        &["robots", "serve", &demo(), "--memory-limit", "1"],
-    );
-    // It cannot start its threads, or aborts on an allocation, whichever comes first.
-    assert!(!tiny.ended(LONG).success(), "{}", tiny.show());
-    assert!(!tiny.stdout().contains("serving"), "{}", tiny.show());
+    // A limit too small to start under is refused before anything starts, not a crash.
+    for small in ["0", "1", "63"] {
+        let mut tiny = ns.spawn(
+            "serve-tiny",
+            &["robots", "serve", &demo(), "--memory-limit", small],
+        );
+        assert_eq!(tiny.ended(LONG).code(), Some(2), "{}", tiny.show());
+        assert!(!tiny.stdout().contains("serving"), "{}", tiny.show());
+        assert!(
+            tiny.show().contains(&format!(
+                "invalid value '{small}' for '--memory-limit <MIB>'"
+            )),
+            "{}",
+            tiny.show()
+        );
+    }
 }
 
 /// A link process never outlives its run: the run killed (SIGKILL, so that it cannot

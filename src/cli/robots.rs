@@ -62,8 +62,13 @@ struct ServeArgs {
     /// The most memory (data segment, MiB) the servers may take: past it they end
     /// rather than take the machine's (a DDS participant flooding them with large
     /// samples), and their clients see silent robots. Raise it for a large physical
-    /// world.
-    #[arg(long, value_name = "MIB", default_value_t = SERVE_MEMORY_LIMIT >> 20)]
+    /// world; from 64 (they need about 20) to 1048576 (1 TiB).
+    #[arg(
+        long,
+        value_name = "MIB",
+        default_value_t = SERVE_MEMORY_LIMIT >> 20,
+        value_parser = clap::value_parser!(u64).range(64..=1 << 20)
+    )]
     memory_limit: u64,
 }
 
