@@ -29,14 +29,16 @@ use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot}
 use crate::methods::team_actions;
 use crate::rng::Rng;
 
-/// The next step of a shortest plan from each state seen, per task, or why there is
-/// none. Planning once and following the plan costs one search per episode instead of
-/// one per round; a state off the plan is planned afresh.
-type Plans = HashMap<(usize, State), Result<Step, String>>;
+/// The first step `S` of a plan from each state seen, per task (by the task's address),
+/// or why there is none. Planning once and following the plan costs one search per
+/// episode instead of one per round; a state off the plan is planned afresh.
+type Known<S> = HashMap<(usize, State), Result<S, String>>;
 
-/// The first joint step of a plan of the fewest joint steps from each state seen, per
-/// task, or why there is none (planned once and followed, as [`Plans`]).
-type JointPlans = HashMap<(usize, State), Result<JointStep, String>>;
+/// The next step of a shortest plan from each state seen.
+type Plans = Known<Step>;
+
+/// The first joint step of a plan of the fewest joint steps from each state seen.
+type JointPlans = Known<JointStep>;
 
 #[derive(Debug, Default)]
 pub struct BuiltinBackend {
@@ -77,11 +79,72 @@ impl BuiltinBackend {
     }
 }
 
+/// What a search from a state gave, for [`Planner::first_of`]: a plan (empty when the
+/// goal already holds), none because none exists, or none because the search stopped at
+/// a limit after this many states.
+enum Searched<S> {
+    Plan(Vec<S>),
+    NoPlan,
+    Stopped(usize),
+}
+
 impl Planner {
+    /// The next step of a shortest plan from `state`, or why there is none.
     fn next_step(&self, task: &Arc<Task>, state: &State) -> Result<Step, String> {
+        let search = || {
+            let search = planner::search_from(task, state, &task.robots, &task.goal, &self.limits);
+            match search.plan {
+                Some(plan) => Searched::Plan(plan),
+                // Cancelled or cut short: not an answer to remember.
+                None if search.truncated => Searched::Stopped(search.states_expanded),
+                None => Searched::NoPlan,
+            }
+        };
+        self.first_of(&self.plans, task, state, search, |s, step| {
+            if let Some(robot) = task.robot(step.robot) {
+                rules::apply(task, s, *robot, step.action);
+            }
+        })
+    }
+
+    /// The first joint step of a plan of the fewest joint steps from `state` (the best
+    /// the search finds within the limits), or why there is none.
+    fn next_joint_step(&self, task: &Arc<Task>, state: &State) -> Result<JointStep, String> {
+        let search = || {
+            let (robots, goal, limits) = (&task.robots, &task.goal, &self.limits);
+            let sequential = planner::search_from(task, state, robots, goal, limits);
+            let plan = sequential.plan.as_deref();
+            let search = makespan::search_with(task, state, robots, goal, plan, limits);
+            match search.plan {
+                Some(plan) => Searched::Plan(plan),
+                None if search.stop.is_some() => Searched::Stopped(search.states_expanded),
+                None => Searched::NoPlan,
+            }
+        };
+        self.first_of(&self.joint_plans, task, state, search, |s, joint| {
+            for step in joint {
+                if let Some(robot) = task.robot(step.robot) {
+                    rules::apply(task, s, *robot, step.action);
+                }
+            }
+        })
+    }
+
+    /// The first step of a plan from `state`, as `plans` knows it from an earlier
+    /// search, else from `search` (run only when the goal is not plainly out of reach):
+    /// every step of the plan found is remembered from the state it starts in (`apply`
+    /// moves a state past one), and so is a goal no plan reaches; a search stopped at a
+    /// limit is not remembered.
+    fn first_of<S: Clone>(
+        &self,
+        plans: &Mutex<Known<S>>,
+        task: &Arc<Task>,
+        state: &State,
+        search: impl FnOnce() -> Searched<S>,
+        apply: impl Fn(&mut State, &S),
+    ) -> Result<S, String> {
         let key = (Arc::as_ptr(task) as usize, state.clone());
-        if let Some(known) = self
-            .plans
+        if let Some(known) = plans
             .lock()
             .unwrap_or_else(PoisonError::into_inner)
             .get(&key)
@@ -91,33 +154,31 @@ impl Planner {
         if let Some(why) = unreachable_goal(task, state) {
             return Err(why);
         }
-        let search = planner::search_from(task, state, &task.robots, &task.goal, &self.limits);
-        let mut plans = self.plans.lock().unwrap_or_else(PoisonError::into_inner);
+        let searched = search();
         self.keep(task);
-        let plan = match search.plan {
-            Some(plan) if !plan.is_empty() => plan,
-            Some(_) => return Err("the goal already holds".into()),
-            // Cancelled or cut short: not an answer to remember.
-            None if search.truncated => {
+        let mut plans = plans.lock().unwrap_or_else(PoisonError::into_inner);
+        let plan = match searched {
+            Searched::Plan(plan) => plan,
+            Searched::Stopped(states) => {
                 return Err(format!(
-                    "the search stopped after {} states without a plan",
-                    search.states_expanded
+                    "the search stopped after {states} states without a plan"
                 ));
             }
-            None => {
+            Searched::NoPlan => {
                 let why = "no plan reaches the goal from here".to_owned();
                 plans.insert(key, Err(why.clone()));
                 return Err(why);
             }
         };
+        let Some(first) = plan.first().cloned() else {
+            return Err("the goal already holds".into());
+        };
         let mut s = state.clone();
         for step in &plan {
-            plans.insert((key.0, s.clone()), Ok(*step));
-            if let Some(robot) = task.robot(step.robot) {
-                rules::apply(task, &mut s, *robot, step.action);
-            }
+            plans.insert((key.0, s.clone()), Ok(step.clone()));
+            apply(&mut s, step);
         }
-        Ok(plan[0])
+        Ok(first)
     }
 
     /// Keeps `task` alive, so that the addresses in the keys of the plans stay its.
@@ -126,63 +187,6 @@ impl Planner {
         if !tasks.iter().any(|t| Arc::ptr_eq(t, task)) {
             tasks.push(Arc::clone(task));
         }
-    }
-
-    /// The first joint step of a plan of the fewest joint steps from `state` (the best
-    /// the search finds within the limits), or why there is none.
-    fn next_joint_step(&self, task: &Arc<Task>, state: &State) -> Result<JointStep, String> {
-        let key = (Arc::as_ptr(task) as usize, state.clone());
-        let known = self
-            .joint_plans
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        if let Some(known) = known.get(&key) {
-            return known.clone();
-        }
-        drop(known);
-        if let Some(why) = unreachable_goal(task, state) {
-            return Err(why);
-        }
-        let (robots, goal, limits) = (&task.robots, &task.goal, &self.limits);
-        let sequential = planner::search_from(task, state, robots, goal, limits);
-        let search = makespan::search_with(
-            task,
-            state,
-            robots,
-            goal,
-            sequential.plan.as_deref(),
-            limits,
-        );
-        self.keep(task);
-        let mut plans = self
-            .joint_plans
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner);
-        let plan = match search.plan {
-            Some(plan) if !plan.is_empty() => plan,
-            Some(_) => return Err("the goal already holds".into()),
-            None if search.stop.is_some() => {
-                return Err(format!(
-                    "the search stopped after {} states without a plan",
-                    search.states_expanded
-                ));
-            }
-            None => {
-                let why = "no plan reaches the goal from here".to_owned();
-                plans.insert(key, Err(why.clone()));
-                return Err(why);
-            }
-        };
-        let mut s = state.clone();
-        for joint in &plan {
-            plans.insert((key.0, s.clone()), Ok(joint.clone()));
-            for step in joint {
-                if let Some(robot) = task.robot(step.robot) {
-                    rules::apply(task, &mut s, *robot, step.action);
-                }
-            }
-        }
-        Ok(plan[0].clone())
     }
 
     /// The answer to a parallel episode's question (`proposals`, `joint_step`,
