@@ -23,7 +23,7 @@ use crate::episode::cancel::Cancel;
 use crate::episode::rounds::{Episode, History, rounds};
 use crate::methods::answer::{field_text, json_object, normal, read_line};
 use crate::methods::prompt::{self, Sight, robot_label};
-use crate::methods::team_actions;
+use crate::methods::team_actions::{self, TeamAction};
 use crate::methods::templates::{self, Prompts, Template};
 use crate::methods::{central, decision, feedback};
 use crate::records::transcript::{Execution, Round};
@@ -70,11 +70,25 @@ pub async fn run(
     rounds(env, task, max_steps, cancel, on_round, play).await
 }
 
+/// The team actions of the robots heard so far in a round's dialogue, as listed to the
+/// next speaker.
+fn heard_lines(task: &Task, all: &[TeamAction], heard: &[NodeId]) -> Vec<String> {
+    all.iter()
+        .filter(|a| heard.contains(&task.id(a.robot.node)))
+        .map(|a| a.line(task))
+        .collect()
+}
+
+/// The `message` of a speaker's answer, as text, or nothing.
+fn message_in(text: &str) -> String {
+    json_object(text)
+        .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
+        .unwrap_or_default()
+}
+
 /// One speaker's turn, as the next speakers hear it.
 fn said(task: &Task, speaker: NodeId, text: &str, proposal: Option<&(NodeId, String)>) -> String {
-    let message = json_object(text)
-        .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
-        .unwrap_or_default();
+    let message = message_in(text);
     let proposal = proposal.map_or("nothing usable".to_owned(), |(robot, action)| {
         format!("{}: {action}", robot_label(task, *robot))
     });
@@ -119,11 +133,7 @@ async fn round(
             if !heard.contains(&speaker) {
                 heard.push(speaker);
             }
-            let lines: Vec<String> = all
-                .iter()
-                .filter(|a| heard.contains(&task.id(a.robot.node)))
-                .map(|a| a.line(task))
-                .collect();
+            let lines = heard_lines(task, &all, &heard);
             let query = Query {
                 role: Role::Executor,
                 robot: Some(speaker),
@@ -207,11 +217,7 @@ async fn parallel(
             if !heard.contains(&speaker) {
                 heard.push(speaker);
             }
-            let lines: Vec<String> = all
-                .iter()
-                .filter(|a| heard.contains(&task.id(a.robot.node)))
-                .map(|a| a.line(task))
-                .collect();
+            let lines = heard_lines(task, &all, &heard);
             let own = env.actions(speaker).unwrap_or_default();
             let query = Query {
                 role: Role::Executor,
@@ -271,17 +277,15 @@ async fn parallel(
     Some(round)
 }
 
+/// A speaker's word in a parallel dialogue: its own action (or none), and its message.
+type Word = (Option<String>, String);
+
 /// A speaker's own action in its answer (matched to the spelling of its list `own` when
 /// it is one of them, else as written for the feasibility check to judge; `none` for
 /// none, its own label in front allowed), and its message; an error when the answer
 /// names no action.
-/// A speaker's word in a parallel dialogue: its own action (or none), and its message.
-type Word = (Option<String>, String);
-
 fn own_action(task: &Task, speaker: NodeId, own: &[String], text: &str) -> Result<Word, String> {
-    let message = json_object(text)
-        .and_then(|m| m.get("message").and_then(Value::as_str).map(field_text))
-        .unwrap_or_default();
+    let message = message_in(text);
     let said = read_line(text);
     let label = robot_label(task, speaker);
     let said = said
