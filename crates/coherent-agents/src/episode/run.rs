@@ -2,6 +2,8 @@
 //! summary) and the method the settings name, within the step budget. The session's
 //! episode runner, under every front end and the benchmark alike, goes through here.
 
+use std::fs::OpenOptions;
+use std::io;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -32,7 +34,11 @@ const NAME_PART_BYTES: usize = 64;
 /// `<out>/<scene>-task<id>-<method>-<UTC time>.jsonl`, with a counter when that exists;
 /// `method` is the method's name. The scene and the method are written in safe
 /// characters only and shortened, with a hash when either had to change
-/// ([`file_name_part`]).
+/// ([`file_name_part`]). The file is made here, empty, so that the name is this
+/// episode's alone: two episodes starting in the same second (a benchmark's sequential
+/// and parallel runs of one task, two runs into one folder) would otherwise both find it
+/// free and write one file. Where it cannot be made (its folder cannot be), the name is
+/// given as it is, and making the transcript says why.
 pub fn transcript_path(out: &Path, task: &Task, method: &str) -> PathBuf {
     let secs = SystemTime::now()
         .duration_since(UNIX_EPOCH)
@@ -44,13 +50,18 @@ pub fn transcript_path(out: &Path, task: &Task, method: &str) -> PathBuf {
         file_name_part(method, NAME_PART_BYTES),
         utc_stamp(secs)
     );
+    let _ = std::fs::create_dir_all(out);
     let mut path = out.join(format!("{stem}.jsonl"));
     let mut n = 2;
-    while path.exists() {
-        path = out.join(format!("{stem}-{n}.jsonl"));
-        n += 1;
+    loop {
+        match OpenOptions::new().write(true).create_new(true).open(&path) {
+            Err(e) if e.kind() == io::ErrorKind::AlreadyExists => {
+                path = out.join(format!("{stem}-{n}.jsonl"));
+                n += 1;
+            }
+            _ => return path,
+        }
     }
-    path
 }
 
 /// `YYYYmmddTHHMMSSZ` for Unix seconds (the civil calendar from days, after H. Hinnant's
@@ -223,5 +234,35 @@ mod tests {
         assert_eq!(utc_stamp(0), "19700101T000000Z");
         assert_eq!(utc_stamp(951_782_400), "20000229T000000Z");
         assert_eq!(utc_stamp(1_795_323_508), "20261122T045828Z");
+    }
+
+    /// Episodes of one task and method that start at once (a benchmark's sequential and
+    /// parallel runs, say) each get a transcript of their own, never one between them.
+    #[test]
+    fn episodes_starting_at_once_get_a_transcript_each() {
+        let out = std::env::temp_dir().join(format!("coherent-names-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let task = crate::methods::prompt::demo_task();
+        let start = std::sync::Barrier::new(8);
+        let paths: Vec<PathBuf> = std::thread::scope(|s| {
+            let each: Vec<_> = (0..8)
+                .map(|_| {
+                    s.spawn(|| {
+                        start.wait();
+                        transcript_path(&out, &task, "pefa")
+                    })
+                })
+                .collect();
+            each.into_iter().map(|t| t.join().expect("named")).collect()
+        });
+        let mut distinct = paths.clone();
+        distinct.sort();
+        distinct.dedup();
+        assert_eq!(distinct.len(), 8, "{paths:?}");
+        assert!(
+            paths.iter().all(|p| p.is_file()),
+            "each name is taken: {paths:?}"
+        );
+        let _ = std::fs::remove_dir_all(&out);
     }
 }

@@ -115,7 +115,7 @@ pub(crate) fn every_placeholder(
     .expect("its own placeholders check")
 }
 
-/// The demo task (`examples/tasks/demo.json`), for the tests that render prompts.
+/// The demo task (`examples/tasks/demo.json`), for the unit tests.
 #[cfg(test)]
 pub(crate) fn demo_task() -> std::sync::Arc<Task> {
     let path =
