@@ -6,11 +6,14 @@
 use std::hint::black_box;
 use std::sync::Arc;
 
+use coherent_agents::episode::{self, Course};
 use coherent_agents::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, OutputMode, Query,
     Role, Usage,
 };
-use coherent_agents::pefa::{self, Cancel, PefaConfig};
+use coherent_agents::pefa::Pefa;
+use coherent_agents::{Cancel, HISTORY_WINDOW, Prompts};
+use coherent_core::Execution;
 use coherent_core::SymbolicEnv;
 use coherent_core::planner::{self, Limits};
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -74,7 +77,12 @@ fn pefa_round(c: &mut Criterion) {
         })
         .to_string(),
     };
-    let config = PefaConfig::new(1);
+    let mut pefa = Pefa::new(Prompts::builtin());
+    let course = Course {
+        execution: Execution::Sequential,
+        max_steps: 1,
+        history: HISTORY_WINDOW,
+    };
     let cancel = Cancel::default();
     let runtime = tokio::runtime::Builder::new_current_thread()
         .build()
@@ -83,11 +91,12 @@ fn pefa_round(c: &mut Criterion) {
         b.iter(|| {
             let mut env = SymbolicEnv::new(Arc::clone(&task));
             let episode = runtime
-                .block_on(pefa::run(
+                .block_on(episode::play(
                     &mut env,
                     &task,
+                    &mut pefa,
                     &backend,
-                    &config,
+                    course,
                     &cancel,
                     &mut |_| Ok(()),
                 ))

@@ -55,7 +55,7 @@ def test_a_clean_crate_passes_with_a_summary(tmp_path, capsys):
     assert code == 0
     assert out == [
         "check-layout: 2 files in 1 crates, 1 functions: "
-        "none over 900 or 150 lines, no import cycles, front ends through the session"
+        "none over 900 or 150 lines, no import cycles, layers kept, front ends through the session"
     ]
 
 
@@ -287,3 +287,43 @@ def test_a_front_end_that_names_a_crate_below_the_session_is_reported(tmp_path, 
         "src/cli/mod.rs:4: names coherent_core, a crate below the session layer",
         "src/cli/mod.rs:4: names coherent_sim, a crate below the session layer",
     ]
+
+
+LAYERED = {
+    "lib.rs": (
+        "//! A crate in layers.\n\n"
+        "// Layers, lowest first: each names only those above it.\n"
+        "pub mod low;\npub mod mid;\npub mod high;\n\npub use high::top;\n"
+    ),
+    "low/mod.rs": "pub mod base;\n",
+    "low/base.rs": "pub struct Base;\n",
+    "mid.rs": "use crate::low::base::Base;\npub fn mid(_: Base) {}\n",
+    "high/mod.rs": "pub fn top() {\n    crate::mid::mid(crate::low::base::Base);\n}\n",
+}
+
+
+def test_layers_that_name_only_lower_ones_pass(tmp_path, capsys):
+    code, out = run(crate(tmp_path, LAYERED), capsys)
+    assert code == 0, out
+
+
+def test_a_lower_layer_naming_a_higher_one_is_reported_with_its_line(tmp_path, capsys):
+    files = dict(LAYERED)
+    files["high/mod.rs"] = "pub fn top() {}\n"  # no cycle: only the rule can object
+    files["low/base.rs"] = "pub struct Base;\n\npub fn up() {\n    crate::high::top();\n}\n"
+    files["mid.rs"] = "use crate::high::top;\n" + LAYERED["mid.rs"] + "pub fn again() { top() }\n"
+    code, out = run(crate(tmp_path, files), capsys)
+    assert code == 1
+    assert out == [
+        "src/low/base.rs:4: layer low names high, a higher layer (crate::high::top)",
+        "src/mid.rs:1: layer mid names high, a higher layer (crate::high::top)",
+    ]
+
+
+def test_a_crate_without_the_layers_line_has_no_layer_rule(tmp_path, capsys):
+    files = dict(LAYERED)
+    files["lib.rs"] = LAYERED["lib.rs"].replace("// Layers, lowest first", "// Modules")
+    files["high/mod.rs"] = "pub fn top() {}\n"
+    files["low/base.rs"] = "pub struct Base;\n\npub fn up() {\n    crate::high::top();\n}\n"
+    code, out = run(crate(tmp_path, files), capsys)
+    assert code == 0, out

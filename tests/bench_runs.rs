@@ -10,8 +10,8 @@ use std::sync::Arc;
 use coherent::session::backend::{BackendName, BackendRequest};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
-    Act, BenchOutcome, BoxFuture, Cancel, Choice, DEFAULT_MAX_RESULTS_BYTES,
-    DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Event, Execution, External, MakePolicy, Method,
+    Act, BenchOutcome, BoxFuture, Builtin, Cancel, Choice, DEFAULT_MAX_RESULTS_BYTES,
+    DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Event, Execution, External, MakePolicy,
     MethodFailure, MethodSpec, NodeId, Policy, ResultLine, Status, StepView, Subset, Task,
     Transcript, read_results, transcripts_dir,
 };
@@ -59,7 +59,7 @@ fn builtin() -> BackendRequest {
     }
 }
 
-fn builtin_methods(methods: &[Method]) -> Vec<MethodSpec> {
+fn builtin_methods(methods: &[Builtin]) -> Vec<MethodSpec> {
     methods.iter().map(|&m| m.into()).collect()
 }
 
@@ -133,7 +133,7 @@ fn resume_skips_finished_episodes_reruns_unfinished_ones_and_repairs_a_cut_line(
     let tasks: Vec<Arc<Task>> = paper40_env0().into_iter().take(3).collect();
     // Task 0 finished (with a step count no real run gives, to see it is kept), task 1
     // stopped on a backend error, and a line for task 2 was cut off by a crash.
-    let config = config(&out, builtin_methods(&[Method::Pefa]), builtin(), 1, 2);
+    let config = config(&out, builtin_methods(&[Builtin::Pefa]), builtin(), 1, 2);
     let finished = hand_line(&tasks[0], 0, Status::Success, 77, &config);
     let failed = hand_line(&tasks[1], 0, Status::BackendError, 1, &config);
     let mut text = String::new();
@@ -178,7 +178,7 @@ fn resume_skips_finished_episodes_reruns_unfinished_ones_and_repairs_a_cut_line(
 fn a_cancelled_run_writes_nothing_twice_and_the_rerun_finishes_the_rest() {
     let out = common::scratch("bench-cancel").join("results.jsonl");
     let tasks = paper40_env0();
-    let methods = builtin_methods(&[Method::Pefa, Method::Mcts]);
+    let methods = builtin_methods(&[Builtin::Pefa, Builtin::Mcts]);
     let config = config(&out, methods, builtin(), 1, 1);
     let cancel = Cancel::default();
     let stop = cancel.clone();
@@ -217,7 +217,7 @@ fn the_same_seeds_give_the_same_lines_at_concurrency_1_and_4() {
         sim_errors: Some(ErrorRates::parse("all=0.2").expect("valid rates")),
         ..BackendRequest::default()
     };
-    let methods = builtin_methods(&[Method::Pefa, Method::PefaNoHistory, Method::Mcts]);
+    let methods = builtin_methods(&[Builtin::Pefa, Builtin::PefaNoHistory, Builtin::Mcts]);
     let mut runs = Vec::new();
     for concurrency in [1, 4] {
         let out = dir.join(format!("c{concurrency}.jsonl"));
@@ -264,7 +264,7 @@ fn the_same_seeds_give_the_same_lines_at_concurrency_1_and_4() {
 fn a_resumed_run_marks_the_transcripts_of_killed_episodes() {
     let out = common::scratch("bench-orphans").join("results.jsonl");
     let tasks = paper40_env0();
-    let config = config(&out, builtin_methods(&[Method::Optimal]), builtin(), 1, 2);
+    let config = config(&out, builtin_methods(&[Builtin::Optimal]), builtin(), 1, 2);
     let first = run(&tasks[..2], &config);
     assert!(first.orphaned.is_empty());
     // What a kill leaves: a transcript with a header and no summary, and no line for it.
@@ -332,7 +332,7 @@ fn a_policy_that_follows_the_plan_is_a_method_like_optimal() {
         .selection
         .tasks;
     let methods = vec![
-        Method::Optimal.into(),
+        Builtin::Optimal.into(),
         external("follow-plan", Arc::new(follow_plan)),
     ];
     let outcome = run(&tasks, &config(&out, methods, builtin(), 1, 4));
@@ -387,7 +387,7 @@ fn an_error_does_not_count_and_runs_again_on_resume() {
             follow_plan(task)
         },
     );
-    let methods = vec![Method::Pefa.into(), external("picky", make)];
+    let methods = vec![Builtin::Pefa.into(), external("picky", make)];
     let cfg = config(&out, methods, builtin(), 1, 2);
     let first = run(&tasks, &cfg);
     assert_eq!((first.written, first.unfinished), (4, 1));
@@ -440,7 +440,7 @@ fn a_benchmark_in_physics_writes_the_lines_the_rules_give() {
         .selection
         .tasks;
     tasks.extend(paper40_env0());
-    let methods = builtin_methods(&[Method::Optimal, Method::Pefa]);
+    let methods = builtin_methods(&[Builtin::Optimal, Builtin::Pefa]);
     let mut runs = Vec::new();
     for physics in [false, true] {
         let out = dir.join(format!("physics-{physics}.jsonl"));

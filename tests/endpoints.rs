@@ -14,8 +14,8 @@ use std::time::Duration;
 use coherent::session::backend::{BackendName, BackendRequest, EndpointSource};
 use coherent::session::bench::{self, BenchConfig, EpisodesRequest};
 use coherent::session::engine::{
-    ApiKey, Backoff, Cancel, DEFAULT_MAX_RESULTS_BYTES, Method, OpenAiConfig, ResultLine, Subset,
-    Task, read_results,
+    ApiKey, Backoff, Builtin, Cancel, DEFAULT_MAX_RESULTS_BYTES, OpenAiClient, OpenAiConfig,
+    ResultLine, Subset, Task, read_results,
 };
 use coherent_agents::transcript;
 use tokio::io::AsyncWriteExt;
@@ -131,10 +131,12 @@ async fn bench_over(urls: &[String], seeds: u32, out: &Path) -> Vec<ResultLine> 
     let episodes = EpisodesRequest {
         backend: BackendRequest {
             name: BackendName::OpenAi,
-            endpoint: EndpointSource::Given(config),
+            endpoint: EndpointSource::Client(Arc::new(
+                OpenAiClient::new(config).expect("a client"),
+            )),
             ..BackendRequest::default()
         },
-        ..EpisodesRequest::new(vec![Method::Pefa.into()])
+        ..EpisodesRequest::new(vec![Builtin::Pefa.into()])
     };
     let config = BenchConfig {
         episodes: episodes.prepare().expect("valid settings"),

@@ -301,6 +301,18 @@ def plan(task: Task, max_states: int = ..., parallel: bool = False, physics: boo
     moving at once (``makespan_physics_ok``, ``makespan_sim_seconds``...).
     Ctrl-C interrupts it and stops the search."""
 
+def budget(
+    task: Task,
+    execution: str = "sequential",
+    max_steps: int | None = None,
+    max_states: int = ...,
+) -> int:
+    """The step budget an episode of ``task`` gets in ``execution`` (``coherent run``,
+    ``coherent.run``, ``coherent.gym`` and ``coherent.marl`` alike): ``max_steps`` when
+    given, else twice the ground truth, else twice the optimum the planner finds; in joint
+    steps (``"parallel"``) twice the makespan. Raises ``ArgumentError`` when there is no
+    ground truth and no plan to size it by."""
+
 def validate(task: Task, max_states: int = ...) -> list[str]:
     """Semantic problems of ``task``, in words; empty when it is clean."""
 

@@ -13,7 +13,8 @@ An action is ``(robot id, action text)``; the actions a robot may use now are in
 ``edges`` with the original format's field names). The reward is 1 on the step that
 reaches the goal and 0 otherwise; an infeasible or unparsable action changes nothing
 and ``info["reason"]`` says why. The episode is truncated after ``max_steps`` steps
-(by default twice the task's ground truth, the paper's budget).
+(by default the budget every episode gets, ``coherent.budget``: twice the task's ground
+truth, the paper's, or twice the optimum when the task has none).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import operator
 import string
 from typing import Any
 
-from ._coherent import ArgumentError, Env, Task
+from ._coherent import ArgumentError, Env, Task, budget
 from ._extras import needs
 
 with needs("coherent.gym", "gym"):
@@ -70,8 +71,7 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
     def __init__(self, task: Task, *, physics: bool = False, max_steps: int | None = None) -> None:
         self.env = Env(task, physics=physics)
         self.robots = self.env.robots
-        gt = task.gt
-        self.max_steps = max_steps if max_steps is not None else (2 * gt if gt else None)
+        self.max_steps = budget(task, max_steps=max_steps)
         self.observation_space = spaces.Text(max_length=MAX_OBSERVATION, min_length=0, charset=CHARSET)
         self.action_space = spaces.Tuple(
             (RobotSpace(self.robots), spaces.Text(max_length=MAX_ACTION, min_length=0, charset=CHARSET))
@@ -108,5 +108,5 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
         # An int or a numpy integer; a float is refused (TypeError), not rounded.
         ok, reason, done = self.env.step(operator.index(robot), text)
         self.steps += 1
-        truncated = not done and self.max_steps is not None and self.steps >= self.max_steps
+        truncated = not done and self.steps >= self.max_steps
         return self._observation(), float(done and ok), done, truncated, self._info(ok, reason)

@@ -25,7 +25,8 @@ The reward is the team's, the same for every agent: 1 on the step that reaches t
 predicates that hold, a potential-based shaping (Ng, Harada and Russell, ICML 1999),
 which leaves the optimal policies as they are. Every agent terminates when the goal is
 reached, and is truncated after ``max_steps`` joint steps, by default twice the task's
-makespan (the fewest joint steps, ``coherent.plan(task, parallel=True)``).
+makespan (the fewest joint steps), the budget of every parallel episode
+(``coherent.budget(task, execution="parallel")``).
 """
 
 from __future__ import annotations
@@ -34,8 +35,7 @@ import json
 import operator
 from typing import Any
 
-from ._coherent import ArgumentError, Env, Task
-from ._coherent import plan as _plan
+from ._coherent import ArgumentError, Env, Task, budget
 from ._extras import needs
 
 with needs("coherent.marl", "marl"):
@@ -60,7 +60,7 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
     ) -> None:
         self.env = Env(task, physics=physics)
         self.shaping = bool(shaping)
-        self.max_steps = _budget(task) if max_steps is None else _count("max_steps", max_steps)
+        self.max_steps = budget(task, execution="parallel", max_steps=max_steps)
         names = task.robot_names
         self.possible_agents: list[str] = [names[robot] for robot in task.robots]
         self.agents: list[str] = []
@@ -173,15 +173,3 @@ def _count(name: str, value: Any) -> int:
     if isinstance(value, bool) or operator.index(value) < 0:
         raise ArgumentError(f"{name}={value!r}: expected an int from 0")
     return operator.index(value)
-
-
-def _budget(task: Task) -> int:
-    """Twice the task's makespan, its best joint plan's length (an upper bound where the
-    search stopped at a limit)."""
-    makespan = _plan(task, parallel=True)["makespan"]
-    if makespan is None:
-        raise ArgumentError(
-            f"task {task.scene}/{task.task_id}: the planner finds no plan, so there is no makespan "
-            "to size the budget by; pass max_steps"
-        )
-    return 2 * int(makespan)

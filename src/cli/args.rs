@@ -14,7 +14,7 @@ use crate::session::Error;
 use crate::session::backend::{EndpointSource, RecordedRun};
 use crate::session::bench::recorded_method;
 use crate::session::engine::{
-    ApiKey, Backoff, DEFAULT_NAMESPACE, ErrorRates, Execution, External, Method, MethodSpec,
+    ApiKey, Backoff, Builtin, DEFAULT_NAMESPACE, ErrorRates, Execution, External, MethodSpec,
     OpenAiConfig, OutputMode, ReadLimits, number,
 };
 use crate::session::prompts::{PriceSource, PromptSource};
@@ -235,7 +235,7 @@ pub(crate) fn method_name(value: &str) -> Result<String, String> {
 
 /// The methods a flag takes, for its messages.
 fn method_choices() -> String {
-    let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+    let names: Vec<&str> = Builtin::ALL.iter().map(|m| m.name()).collect();
     format!(
         "the methods are {}, or MODULE:CLASS for one written in Python",
         names.join(", ")
@@ -257,7 +257,7 @@ pub(crate) fn method_spec(
     step_timeout: Option<f64>,
     replay_from: Option<(&Path, ReadLimits)>,
 ) -> Result<MethodSpec, Error> {
-    if let Some(method) = Method::from_name(value) {
+    if let Some(method) = Builtin::from_name(value) {
         return Ok(method.into());
     }
     let limit = step_timeout

@@ -34,16 +34,31 @@ pub enum BackendName {
 }
 
 /// Where the model endpoint's settings come from.
-#[derive(Clone, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default)]
 pub enum EndpointSource {
     /// No endpoint.
     #[default]
     None,
-    /// These settings as they are (Python's `LLM`, complete when it was made).
-    Given(OpenAiConfig),
+    /// A client already made (Python's `LLM`): the episodes ask through it, so that they
+    /// and the calls a method makes through the same `LLM` share one client and its
+    /// limit on requests in flight.
+    Client(Arc<OpenAiClient>),
     /// These settings, what they leave unset taken from the environment ([`complete`]);
     /// no endpoint when neither configures one (the command line's flags).
     WithEnvironment(OpenAiConfig),
+}
+
+/// Two sources are the same when they configure the same: one client (the very one), or
+/// equal settings.
+impl PartialEq for EndpointSource {
+    fn eq(&self, other: &EndpointSource) -> bool {
+        match (self, other) {
+            (EndpointSource::None, EndpointSource::None) => true,
+            (EndpointSource::Client(a), EndpointSource::Client(b)) => Arc::ptr_eq(a, b),
+            (EndpointSource::WithEnvironment(a), EndpointSource::WithEnvironment(b)) => a == b,
+            _ => false,
+        }
+    }
 }
 
 /// Everything that decides the backend.
@@ -146,10 +161,10 @@ impl RecordedRun {
 impl BackendRequest {
     /// The backend these settings ask for.
     pub fn choose(self) -> Result<BackendChoice, Error> {
-        let endpoint = match self.endpoint {
-            EndpointSource::None => None,
-            EndpointSource::Given(config) => Some(config),
-            EndpointSource::WithEnvironment(config) => complete(config)?,
+        let (endpoint, client) = match self.endpoint {
+            EndpointSource::None => (None, None),
+            EndpointSource::Client(c) => (Some(c.config().clone()), Some(c)),
+            EndpointSource::WithEnvironment(config) => (complete(config)?, None),
         };
         let name = match self.name {
             BackendName::Auto => match (&self.sim_errors, &endpoint) {
@@ -173,6 +188,9 @@ impl BackendRequest {
                 self.sim_errors.unwrap_or_default(),
             )),
             (BackendName::OpenAi, None) => {
+                if let Some(client) = client {
+                    return Ok(BackendChoice::OpenAi(client));
+                }
                 let config = endpoint.ok_or(BackendProblem::NoEndpoint)?;
                 OpenAiClient::new(config)
                     .map(|c| BackendChoice::OpenAi(Arc::new(c)))
@@ -282,7 +300,8 @@ mod tests {
     }
 
     fn endpoint() -> EndpointSource {
-        EndpointSource::Given(OpenAiConfig::new("http://127.0.0.1:9/v1", "m"))
+        let config = OpenAiConfig::new("http://127.0.0.1:9/v1", "m");
+        EndpointSource::Client(Arc::new(OpenAiClient::new(config).expect("a client")))
     }
 
     fn problem(r: Result<BackendChoice, Error>) -> Option<BackendProblem> {

@@ -13,13 +13,14 @@ pub use coherent_core::makespan::Makespan;
 pub use coherent_core::planner::{Analysis, Limits, Stop};
 pub use coherent_core::task::predicate_holds;
 pub use coherent_core::text::{number, shown, shown_lines};
-pub use coherent_core::{Environment, Error as TaskError, NodeId, RawGraph, Task};
+pub use coherent_core::{Environment, Error as TaskError, Execution, NodeId, RawGraph, Task};
 pub use coherent_core::{feasibility, native, original};
 
 // What a run records: the transcript, its rounds and summary, the step budget.
-pub use coherent_agents::episode::{Budget, Execution, HISTORY_WINDOW};
+pub use coherent_agents::episode::{Budget, HISTORY_WINDOW};
 pub use coherent_agents::transcript::{
-    RobotPart, Round, RoundOutcome, Status, Summary, Transcript, actions as executed_actions,
+    Reason, RobotPart, Round, RoundOutcome, Status, Summary, Transcript,
+    actions as executed_actions,
 };
 
 // The limits on what is read back, in MiB as their flags give them: a transcript, a
@@ -31,9 +32,9 @@ pub use coherent_core::files::MIB;
 // Which method runs: a built-in one, or one written outside the crates (Python), with
 // what it is shown each step and what it answers.
 pub use coherent_agents::episode::{
-    Act, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, Policy, RobotView,
-    StepView,
+    Act, Choice, MakePolicy, MethodFailure, Policy, RobotView, StepView,
 };
+pub use coherent_agents::{Builtin, External, MethodSpec};
 
 // Reaching a model: the endpoint settings, the client that methods written in Python
 // call directly, what a call sends and gets back.
@@ -51,13 +52,13 @@ pub use coherent_agents::{ErrorRates, PriceTable, PromptError, Prompts};
 // Benchmarks: the results file, its lines and the driver's ledger, the subsets, the
 // progress lines, the paper's tables.
 pub use coherent_agents::bench::progress::clock;
-pub use coherent_agents::bench::run_settings::field as setting_field;
 pub use coherent_agents::bench::{
     BenchOutcome, Difference, EpisodeKey, EpisodeResult, Event, Group, Ledger, Progress,
     ResultLine, RunSettings, Setting, Style, Subset, read_results, select, transcripts_dir,
     worth_a_line,
 };
 pub use coherent_agents::report::{Mixed, Report};
+pub use coherent_agents::setting::field as setting_field;
 
 // Stopping work from outside (Ctrl-C).
 pub use coherent_agents::Cancel;

@@ -11,12 +11,15 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Execution, HISTORY_WINDOW, MethodSpec, Settings};
+use coherent_agents::episode::{Budget, HISTORY_WINDOW, Method};
 use coherent_agents::llm::Backend;
+use coherent_agents::run::new_transcript;
+use coherent_agents::run::replay::recorded_task;
 use coherent_agents::transcript::{self, Round, Status, Transcript};
 use coherent_agents::{BackendInfo, Cancel, Episode, ModelUse, PriceTable, Replay};
+use coherent_agents::{MethodSpec, Settings};
 use coherent_core::planner::Limits;
-use coherent_core::{Environment, SymbolicEnv, Task, native};
+use coherent_core::{Environment, Execution, SymbolicEnv, Task, native};
 
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::error::Error;
@@ -80,7 +83,6 @@ impl RunRequest {
     /// costs nothing; sizing the budget may plan (`cancel` stops it); over ROS 2 the
     /// robots' servers are awaited.
     pub fn prepare(self, cancel: &Cancel) -> Result<Prepared, Error> {
-        self.method.check_runs(self.execution)?;
         let prompts = self.prompts.read()?;
         let prices = self.prices.read()?;
         let task = self.task.task()?;
@@ -89,8 +91,6 @@ impl RunRequest {
             cancel: Some(cancel.flag()),
             ..Limits::max_states(self.max_states)
         };
-        let budget = Budget::searched(&task, self.execution, self.max_steps, &limits)?;
-        let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
         let settings = Settings {
             method: self.method,
             execution: self.execution,
@@ -101,6 +101,11 @@ impl RunRequest {
             robots: self.robots.record(),
             prompts,
         };
+        // Built before the budget is searched for: a method that cannot run the
+        // execution costs no search.
+        let method = settings.build(&task, cancel)?;
+        let budget = Budget::searched(&task, self.execution, self.max_steps, &limits)?;
+        let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
         let spec = EpisodeSpec {
             task,
             settings,
@@ -112,7 +117,7 @@ impl RunRequest {
             recording: None,
             choice: Some(choice),
         };
-        prepare(spec, cancel)
+        prepare_with(spec, method, cancel)
     }
 }
 
@@ -222,9 +227,10 @@ pub struct EpisodeSpec {
     pub choice: Option<BackendChoice>,
 }
 
-/// An episode ready to run: its spec and its environment.
+/// An episode ready to run: its spec, its method and its environment.
 pub struct Prepared {
     spec: EpisodeSpec,
+    method: Box<dyn Method>,
     env: Box<dyn Environment + Send + Sync>,
 }
 
@@ -248,12 +254,23 @@ impl std::fmt::Debug for Prepared {
     }
 }
 
-/// Builds the environment of the episode `spec` (over ROS 2, once the robots' servers
-/// are there; `cancel` cancels a goal in flight).
-pub fn prepare(mut spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Error> {
+/// Builds the method and the environment of the episode `spec` (over ROS 2, once the
+/// robots' servers are there; `cancel` cancels a goal in flight, and stops the optimal
+/// method's search).
+pub fn prepare(spec: EpisodeSpec, cancel: &Cancel) -> Result<Prepared, Error> {
+    let method = spec.settings.build(&spec.task, cancel)?;
+    prepare_with(spec, method, cancel)
+}
+
+/// [`prepare`] with its method already built.
+fn prepare_with(
+    mut spec: EpisodeSpec,
+    method: Box<dyn Method>,
+    cancel: &Cancel,
+) -> Result<Prepared, Error> {
     spec.settings.robots = spec.robots.record();
     let env = environment(&spec.task, spec.settings.physics, &spec.robots, cancel)?;
-    Ok(Prepared { spec, env })
+    Ok(Prepared { spec, method, env })
 }
 
 /// An episode read back from its transcript: the task it ran and what it recorded.
@@ -268,7 +285,7 @@ pub struct Recorded {
 /// The episode recorded in the transcript at `path`, of at most `max_bytes`.
 pub fn recorded(path: &Path, max_bytes: u64) -> Result<Recorded, Error> {
     let transcript = transcript::read_within(path, max_bytes)?;
-    let task = Arc::new(episode::recorded_task(&transcript, path)?);
+    let task = Arc::new(recorded_task(&transcript, path)?);
     Ok(Recorded {
         task,
         transcript,
@@ -414,14 +431,16 @@ impl Prepared {
         progress: &mut (dyn FnMut(&Round) + Send),
     ) -> Result<Ran, Error> {
         let spec = &self.spec;
-        let path = episode::transcript_path(&spec.out, &spec.task, spec.settings.method.name());
-        let (episode, header) = episode::run(
+        let transcript = new_transcript(&spec.out, &spec.task, spec.settings.method.name())?;
+        let path = transcript.path().to_owned();
+        let (episode, header) = coherent_agents::run(
             &spec.task,
             self.env.as_mut(),
             spec.backend.as_ref(),
+            self.method.as_mut(),
             &spec.settings,
             spec.budget,
-            &path,
+            transcript,
             cancel,
             progress,
         )

@@ -71,7 +71,7 @@ impl fmt::Display for Error {
             }
             | Error::NoTranscript { file, message } => write!(f, "{file}: {message}"),
             Error::SettingsDiffer { file, differences } => {
-                let name = |s| coherent_agents::bench::run_settings::field(s).to_owned();
+                let name = |s| coherent_agents::setting::field(s).to_owned();
                 f.write_str(&settings_differ(file, differences, name, "results file"))
             }
             Error::Physics(e) => write!(f, "physics: {}", e.message),

@@ -1,10 +1,10 @@
 //! The lines an episode is told in: `coherent run` prints them as the rounds end, and
 //! `coherent view` shows the same lines for a recorded episode.
 
-use coherent_agents::Execution;
+use coherent_agents::prompts::fill::action_line;
 use coherent_agents::transcript::{RobotPart, Round, RoundOutcome};
 use coherent_core::text::shown;
-use coherent_core::{NodeId, Task};
+use coherent_core::{Execution, NodeId, Task};
 
 /// The lines `coherent run` prints for round `r` of an episode of `task` in `execution`
 /// with the budget `max`: [`step`]'s one line for a sequential round, [`joint_step`]'s
@@ -18,13 +18,20 @@ pub fn round(task: &Task, r: &Round, max: u32, execution: Execution) -> Vec<Stri
 
 /// The line `coherent run` prints for round `r` of a sequential episode of `task` with
 /// the budget `max`: the step, the robot, the subtask (unless it is the action itself),
-/// the action and what came of it, every text from outside [`shown`].
+/// the action and what came of it, every text from outside [`shown`]. A method without a
+/// proposal (every one but PEFA) is shown choosing `<robot>: <action>`, as it chose.
 pub fn step(task: &Task, r: &Round, max: u32) -> String {
+    let decision = r.decision.as_ref();
+    let action = decision.and_then(|d| d.action.as_deref());
+    let chosen = match (&r.proposal, decision.and_then(|d| d.robot), action) {
+        (None, Some(robot), Some(action)) => Some(action_line(task, robot, action)),
+        _ => action.map(str::to_owned),
+    };
     let said = part_text(
         task,
         r.proposal.as_ref().map(|p| p.robot),
         r.proposal.as_ref().map(|p| p.subtask.as_str()),
-        r.decision.as_ref().and_then(|d| d.action.as_deref()),
+        chosen.as_deref(),
         &outcome_text(&r.outcome, r.done),
     );
     format!("{}  {said}", head(r, max))
@@ -87,7 +94,7 @@ fn outcome_text(outcome: &RoundOutcome, done: bool) -> String {
     match outcome {
         RoundOutcome::Executed if done => "ok, goal reached".to_owned(),
         RoundOutcome::Executed => "ok".to_owned(),
-        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", shown(reason)),
+        RoundOutcome::Infeasible { reason, .. } => format!("infeasible ({})", reason.name()),
         RoundOutcome::Declined => "declined".to_owned(),
         RoundOutcome::NoProposal { why } => format!("no usable proposal: {}", shown(why)),
         RoundOutcome::NoDecision { why } => format!("no usable decision: {}", shown(why)),

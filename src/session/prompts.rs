@@ -5,7 +5,8 @@
 
 use std::path::{Path, PathBuf};
 
-use coherent_agents::{Execution, PriceTable, Prompts, templates};
+use coherent_agents::{PriceTable, Prompts, templates};
+use coherent_core::Execution;
 
 use crate::session::error::Error;
 

@@ -61,7 +61,7 @@ pub fn replay_paths(task: &Arc<Task>, t: &Transcript) -> Result<Paths, Error> {
     let mut env = PhysicalEnv::new(Arc::clone(task))?;
     let mut warning = None;
     for round in &t.rounds {
-        let actions = round.carried_out(task);
+        let actions = round.carried_out();
         // A joint step's robots move at once; a sequential round's one action alone.
         let failed = if round.parts.is_empty() {
             match actions.first() {

@@ -4,9 +4,9 @@
 
 use std::fmt;
 
-use crate::backends::llm::LlmError;
-use crate::harness::run_settings::{Difference, field};
-use crate::methods::templates::PromptError;
+use crate::llm::LlmError;
+use crate::prompts::templates::PromptError;
+use crate::setting::{Difference, field};
 
 /// Why the crate could not do what it was asked.
 #[derive(Clone, Debug, PartialEq)]

@@ -1,83 +1,76 @@
 //! `coherent-agents`: the COHERENT planning loop over language models, and the methods
 //! the paper compares it with.
 //!
-//! The crate is in five folders, by layer:
+//! The crate is in layers, each a module of the crate root; a module imports only from
+//! the modules listed before it (`scripts/check-layout` holds the crate to this order):
 //!
-//! - [`methods`]: the planning methods. The paper's [`pefa`] loop
-//!   (Proposal-Execution-Feedback-Adjustment) with its two roles, [`TaskAssigner`]
-//!   (`methods/assigner.rs`) and [`RobotExecutor`] (`methods/executor.rs`); the baselines
-//!   [`cmrs`], [`dmrs`] and [`mcts`] over the [`team_actions`], the team's action space; the
-//!   [`optimal`] plan, the tables' ground-truth row; and [`external`], the loop of a
-//!   method written outside the crate (a Python class) that answers through a
-//!   [`Policy`]. Their prompts are rendered from a prompt set, [`Prompts`]
-//!   ([`templates`]): the built-in templates, or files given at run time.
-//! - [`episode`]: what every method shares. The round loop and its [`Episode`], asking
-//!   a backend, executing on the `coherent_core::Environment`, [`Cancel`], the step
-//!   [`Budget`], the [`Method`] names, a method written outside the crate
-//!   ([`External`], its [`Policy`] and the [`View`] it is shown) and their [`Settings`];
-//!   and [`episode::run()`], the front door that writes the transcript and runs the
-//!   method the settings name.
-//! - [`backends`]: who answers the methods' questions. The [`Backend`] trait ([`llm`])
-//!   and an OpenAI-compatible server ([`openai`], with [`retry`]), the optimal planner
-//!   ([`builtin`]; with seeded mistakes, the simulated backend) and a recorded transcript
-//!   ([`replay`]).
-//! - [`records`]: what an episode leaves behind. Its [`transcript`], and [`Replay`],
-//!   which sets up the replay of a recorded episode and compares it with the recording.
-//! - [`harness`] (also named [`bench`](mod@bench)): the benchmark's bookkeeping. The
-//!   results file and the [`Ledger`](bench::Ledger) that resumes it, the subsets, what an
-//!   episode costs ([`prices`]: a [`PriceTable`] and [`ModelUse`]), and [`report`], the
-//!   paper's tables. Running the episodes is the session's (the root package).
-//!
-//! [`Error`] is what a caller outside the crate gets when something cannot be done.
-//!
-//! No file reaches back to one that uses it. From the bottom: [`llm`] is the vocabulary
-//! of a model call; the transcript records calls in it; the backends answer them (the
-//! replay one from a transcript; the built-in one picks from the [`team_actions`]
-//! space); the episode loop asks backends and fills the records; the methods are built
-//! on the loop, and [`episode::run()`] on the methods; [`Replay`] prepares a run of it,
-//! and the harness keeps the books of many. [`rng`] is the crate's one random number
-//! generator.
+//! 1. [`rng`] and [`digest`]: the crate's one random number generator and hash.
+//! 2. [`llm`]: the vocabulary of a model call ([`Query`](llm::Query),
+//!    [`Answer`](llm::Answer), the [`Backend`] trait).
+//! 3. [`prompts`]: the prompt set ([`Prompts`]: the built-in templates, or files given at
+//!    run time), filling a template with what a role is shown, reading a model's answer,
+//!    and the team's action lines that the central and dialogue methods choose from.
+//! 4. [`setting`] and [`error`]: the settings a run can differ in, and [`Error`], what a
+//!    caller outside the crate gets when something cannot be done.
+//! 5. [`records`]: what an episode leaves behind, its [`transcript`].
+//! 6. [`backends`]: who answers the methods' questions: an OpenAI-compatible server
+//!    ([`openai`], with [`retry`]), the optimal planner ([`builtin`]; with seeded
+//!    mistakes, the simulated backend) and a recorded transcript ([`replay`]).
+//! 7. [`episode`]: the one loop every method runs under ([`episode::play`]) and the
+//!    [`Method`] trait it asks each round; asking a backend, carrying actions out on the
+//!    `coherent_core::Environment`, one at a time or as a joint step; the history window,
+//!    the step [`Budget`], [`Cancel`], and a method written outside the crate as the loop
+//!    sees it ([`Policy`], [`StepView`]).
+//! 8. [`methods`]: the planning methods, one file each: the paper's [`pefa`] loop with
+//!    its two roles, [`TaskAssigner`] and [`RobotExecutor`]; the baselines [`cmrs`],
+//!    [`dmrs`] and [`mcts`]; the [`optimal`] plan, the tables' ground-truth row;
+//!    [`random`], the floor; and [`external`], a method written outside the crate.
+//! 9. [`run`](mod@run): running one episode by its settings: the methods by name
+//!    ([`Builtin`], [`MethodSpec`], each built into a [`Method`] in one place), the
+//!    transcript written as it goes ([`run()`]), and [`Replay`], which sets up the replay
+//!    of a recorded episode and compares it with the recording.
+//! 10. [`harness`] (also named [`bench`](mod@bench)): the benchmark's bookkeeping: the
+//!     results file and the [`Ledger`](bench::Ledger) that resumes it, the subsets, what an
+//!     episode costs ([`prices`]: a [`PriceTable`] and [`ModelUse`]), and [`report`], the
+//!     paper's tables. Running the episodes is the session's (the root package).
 //!
 //! The modules are also reachable at the crate root by their short names
 //! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
 
-/// The version of coherent, as transcripts and results lines record it.
-pub const VERSION: &str = env!("CARGO_PKG_VERSION");
-
+// Layers, lowest first (scripts/check-layout holds each to naming only those above it).
 pub mod backends;
 pub mod digest;
 pub mod episode;
 pub mod error;
 pub mod harness;
+pub mod llm;
 pub mod methods;
+pub mod prompts;
 pub mod records;
 pub mod rng;
+pub mod run;
+pub mod setting;
 
-pub use backends::{builtin, llm, openai, replay, retry};
+pub use backends::{builtin, openai, replay, retry};
 pub use harness as bench;
 pub use harness::{prices, report};
-pub use methods::{
-    answer, central, cmrs, dmrs, external, feedback, mcts, optimal, pefa, pefa_parallel, prompt,
-    team_actions, templates,
-};
+pub use methods::{central, cmrs, dmrs, external, feedback, mcts, optimal, pefa, random};
+pub use prompts::{answer, team_actions, templates};
 pub use records::transcript;
 
 pub use backends::builtin::BuiltinBackend;
-pub use backends::llm::{
-    Answer, Backend, BackendInfo, BackendKind, LlmError, LlmErrorKind, OutputMode,
-};
 pub use backends::openai::{ApiKey, Chat, OpenAiClient, OpenAiConfig};
 pub use backends::replay::ReplayBackend;
 pub use backends::simulated::ErrorRates;
-pub use episode::{
-    Budget, Cancel, Episode, Execution, External, HISTORY_WINDOW, History, Method, MethodSpec,
-    Policy, Settings, StepView,
-};
+pub use episode::{Budget, Cancel, Episode, HISTORY_WINDOW, History, Method, Policy, StepView};
 pub use error::Error;
 pub use harness::prices::{ModelUse, PriceTable};
+pub use llm::{Answer, Backend, BackendInfo, BackendKind, LlmError, LlmErrorKind, OutputMode};
 pub use methods::assigner::TaskAssigner;
 pub use methods::executor::RobotExecutor;
-pub use methods::pefa::PefaConfig;
-pub use methods::templates::{PromptError, Prompts};
-pub use records::replay::{Replay, recorded_settings};
-pub use records::transcript::{RobotPart, RoundOutcome, Status, Summary, Transcript};
+pub use prompts::templates::{PromptError, Prompts};
+pub use records::VERSION;
+pub use records::transcript::{Reason, RobotPart, RoundOutcome, Status, Summary, Transcript};
+pub use run::replay::{Replay, recorded_settings};
+pub use run::run;
+pub use run::settings::{Builtin, External, MethodSpec, Settings};

@@ -5,11 +5,12 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+use coherent_agents::PriceTable;
 use coherent_agents::bench::{self, ResultLine, Subset};
 use coherent_agents::llm::{BackendInfo, BackendKind};
 use coherent_agents::report;
 use coherent_agents::transcript::Status;
-use coherent_agents::{Execution, PriceTable};
+use coherent_core::Execution;
 
 mod common;
 
@@ -221,7 +222,7 @@ fn report_numbers_match_a_hand_computation() {
     assert_eq!(r.table1.columns, ["mono", "dual", "trio", "Avg"]);
     assert_eq!(r.table1.tasks, [1, 1, 0, 2]);
     let methods: Vec<&str> = r.table1.rows.iter().map(|r| r.method.as_str()).collect();
-    assert_eq!(methods, ["pefa", "mcts"], "rows in Method::ALL order");
+    assert_eq!(methods, ["pefa", "mcts"], "rows in Builtin::ALL order");
 
     // pefa, Avg: SR per seed 0.5 and 1.0 -> mean 0.75, sd 0.353553, half-width
     // t(1) x sd / sqrt(2) = 12.706 x 0.25 = 3.1765. AS per seed (5+21)/2 = 13 and
@@ -337,7 +338,9 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
         started_ms: 0,
         external: false,
     };
-    let writer = coherent_agents::transcript::Writer::create(&live, header).expect("created");
+    std::fs::create_dir_all(&seed0).expect("a folder");
+    let file = std::fs::File::create(&live).expect("created");
+    let writer = coherent_agents::transcript::Writer::new(file, header).expect("written");
     let left = seed0.join("env0-task4-pefa-left.jsonl");
     std::fs::write(&left, "{\"type\": \"header\"}\n").expect("write");
     let marked = bench::mark_orphans(&out, &[]).expect("marked");

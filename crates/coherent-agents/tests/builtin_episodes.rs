@@ -5,10 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Execution, Method, Settings};
+use coherent_agents::episode::Budget;
 use coherent_agents::llm::Role;
 use coherent_agents::transcript::{self, RoundOutcome, Status};
+use coherent_agents::{Builtin, Settings};
 use coherent_agents::{BuiltinBackend, Cancel, Replay};
+use coherent_core::Execution;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
 
@@ -21,27 +23,21 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-async fn run_builtin(
-    task: &Arc<Task>,
-    out: &Path,
-) -> (episode::Budget, coherent_agents::Episode, PathBuf) {
+async fn run_builtin(task: &Arc<Task>, out: &Path) -> (Budget, coherent_agents::Episode, PathBuf) {
     let budget =
         Budget::searched(task, Execution::Sequential, None, &Limits::default()).expect("a budget");
-    let path = episode::transcript_path(out, task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
-    let e = episode::run(
+    let (e, path) = common::run(
         task,
         &mut env,
         &BuiltinBackend::new(Limits::default()),
-        &Settings::new(Method::Pefa),
+        &Settings::new(Builtin::Pefa),
         budget,
-        &path,
+        out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
-    .expect("the episode runs")
-    .0;
+    .expect("the episode runs");
     (budget, e, path)
 }
 
@@ -117,20 +113,17 @@ async fn a_transcript_replays_round_for_round_and_a_changed_one_is_caught() {
         async move {
             let task = &replay.task;
             let mut env = SymbolicEnv::new(Arc::clone(task));
-            let path = episode::transcript_path(&out, task, replay.settings.method.name());
-            let episode = episode::run(
+            let (episode, _) = common::run(
                 task,
                 &mut env,
                 replay.backend.as_ref(),
                 &replay.settings,
                 replay.budget,
-                &path,
+                &out,
                 &Cancel::default(),
-                &mut |_| {},
             )
             .await
-            .expect("the replay runs")
-            .0;
+            .expect("the replay runs");
             (replay, episode)
         }
     };

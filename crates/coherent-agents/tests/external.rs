@@ -9,12 +9,12 @@ use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
 use coherent_agents::episode::{
-    self, Act, Budget, Choice, External, MakePolicy, MethodFailure, MethodSpec, PastStep, Policy,
-    Settings, StepView,
+    Act, Budget, Choice, MakePolicy, MethodFailure, PastStep, Policy, StepView,
 };
 use coherent_agents::llm::BoxFuture;
-use coherent_agents::transcript::{self, RoundOutcome, Status};
+use coherent_agents::transcript::{self, Reason, RoundOutcome, Status};
 use coherent_agents::{BuiltinBackend, Cancel, Replay};
+use coherent_agents::{External, MethodSpec, Settings};
 use coherent_core::planner::Limits;
 use coherent_core::{NodeId, SymbolicEnv, Task};
 
@@ -91,24 +91,24 @@ async fn faults_are_steps_and_an_error_ends_the_episode() {
         Err("ValueError: no idea".into()),
     ];
     let method = scripted("scripted", script, &views);
-    let path = episode::transcript_path(&out, &task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, _) = episode::run(
+    let (e, path) = common::run(
         &task,
         &mut env,
         &BuiltinBackend::new(Limits::default()),
         &Settings::new(MethodSpec::External(method)),
         Budget::Given(10),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");
     let outcomes: Vec<&RoundOutcome> = e.rounds.iter().map(|r| &r.outcome).collect();
-    assert!(matches!(outcomes[0], RoundOutcome::Infeasible { reason, .. } if reason != "error"));
     assert!(
-        matches!(outcomes[1], RoundOutcome::Infeasible { reason, message } if reason == "unknown_robot" && message.contains("999 is not a robot"))
+        matches!(outcomes[0], RoundOutcome::Infeasible { reason, .. } if *reason != Reason::Error)
+    );
+    assert!(
+        matches!(outcomes[1], RoundOutcome::Infeasible { reason, message } if *reason == Reason::UnknownRobot && message.contains("999 is not a robot"))
     );
     assert_eq!(outcomes[2], &RoundOutcome::Declined);
     assert_eq!(outcomes[3], &RoundOutcome::Executed);
@@ -177,17 +177,15 @@ async fn faults_are_steps_and_an_error_ends_the_episode() {
     assert_eq!(recorded.summary.as_ref(), Some(&e.summary));
     let replay = Replay::prepare(&recorded, &path).expect("a replay");
     assert_eq!(replay.settings.method.name(), "scripted");
-    let again = out.join("again.jsonl");
     let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let (replayed, _) = episode::run(
+    let (replayed, _) = common::run(
         &replay.task,
         &mut env,
         replay.backend.as_ref(),
         &replay.settings,
         replay.budget,
-        &again,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the replay runs");
@@ -201,17 +199,15 @@ async fn a_replay_that_comes_out_differently_says_so() {
     let views = Arc::new(Mutex::new(Vec::new()));
     let script = vec![choice(Some(22), "[takeoff_from] <childroom floor>(3)")];
     let method = scripted("once", script, &views);
-    let path = episode::transcript_path(&out, &task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    episode::run(
+    let (_, path) = common::run(
         &task,
         &mut env,
         &BuiltinBackend::new(Limits::default()),
         &Settings::new(MethodSpec::External(method)),
         Budget::Given(1),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");
@@ -221,15 +217,14 @@ async fn a_replay_that_comes_out_differently_says_so() {
     decision.action = Some("[grab] <high kitchen table>(35)".into());
     let replay = Replay::prepare(&recorded, &path).expect("a replay");
     let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let (replayed, _) = episode::run(
+    let (replayed, _) = common::run(
         &replay.task,
         &mut env,
         replay.backend.as_ref(),
         &replay.settings,
         replay.budget,
-        &out.join("again.jsonl"),
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the replay runs");
@@ -265,17 +260,15 @@ async fn a_methods_texts_of_any_length_are_cut_so_that_its_transcript_reads_back
     };
     let traceback = format!("{}\nValueError: at the end", "  frame\n".repeat(1 << 18));
     let method = scripted("long", vec![Ok(long_note), Err(traceback.into())], &views);
-    let path = episode::transcript_path(&out, &task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, _) = episode::run(
+    let (e, path) = common::run(
         &task,
         &mut env,
         &BuiltinBackend::new(Limits::default()),
         &Settings::new(MethodSpec::External(method)),
         Budget::Given(10),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");
@@ -311,17 +304,15 @@ async fn a_step_over_the_time_limit_ends_the_episode_as_the_methods_error() {
     let method = External::new("silent", make)
         .expect("a valid name")
         .with_step_timeout(Some(std::time::Duration::from_millis(200)));
-    let path = episode::transcript_path(&out, &task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, _) = episode::run(
+    let (e, _) = common::run(
         &task,
         &mut env,
         &BuiltinBackend::new(Limits::default()),
         &Settings::new(MethodSpec::External(method)),
         Budget::Given(10),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");

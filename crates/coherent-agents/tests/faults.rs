@@ -8,11 +8,12 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::episode::Budget;
 use coherent_agents::llm::{Finish, LlmErrorKind, OutputMode};
 use coherent_agents::retry::Backoff;
 use coherent_agents::transcript::{self, RoundOutcome, Status};
 use coherent_agents::{ApiKey, Cancel, Episode, OpenAiClient, OpenAiConfig};
+use coherent_agents::{Builtin, Settings};
 use coherent_core::{SymbolicEnv, Task, load_tasks};
 use serde_json::json;
 use tokio::io::AsyncWriteExt;
@@ -131,21 +132,18 @@ async fn run(name: &str, server: &Server, steps: u32) -> Run {
     let _ = std::fs::remove_dir_all(&out);
     let task = demo();
     let client = OpenAiClient::new(config(&server.url)).expect("a client");
-    let path = episode::transcript_path(&out, &task, Method::Pefa.name());
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let episode = episode::run(
+    let (episode, path) = common::run(
         &task,
         &mut env,
         &client,
-        &Settings::new(Method::Pefa),
+        &Settings::new(Builtin::Pefa),
         Budget::Given(steps),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
-    .expect("the episode runs")
-    .0;
+    .expect("the episode runs");
     let transcript = transcript::read(&path).expect("the transcript reads back");
     assert!(
         transcript.rounds == episode.rounds,

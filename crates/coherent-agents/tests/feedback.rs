@@ -8,8 +8,9 @@ use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex};
 
-use coherent_agents::episode::{self, Budget, Method, Settings};
+use coherent_agents::episode::Budget;
 use coherent_agents::transcript::{Round, RoundOutcome};
+use coherent_agents::{Builtin, Settings};
 use coherent_agents::{Cancel, OpenAiClient, OpenAiConfig};
 use coherent_core::SymbolicEnv;
 use serde_json::{Value, json};
@@ -81,17 +82,15 @@ async fn two_rounds(id: i64, assigner: Vec<String>, executor: Vec<String>) -> (V
     let client = OpenAiClient::new(OpenAiConfig::new(&server.url, "scripted")).expect("a client");
     let out: PathBuf =
         std::env::temp_dir().join(format!("coherent-feedback-{id}-{}", std::process::id()));
-    let path = episode::transcript_path(&out, &task, "pefa");
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (episode, _) = episode::run(
+    let (episode, _) = common::run(
         &task,
         &mut env,
         &client,
-        &Settings::new(Method::Pefa),
+        &Settings::new(Builtin::Pefa),
         Budget::Given(2),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");

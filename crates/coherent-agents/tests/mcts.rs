@@ -6,20 +6,31 @@ use std::collections::HashMap;
 use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent_agents::answer::{match_line, read_line};
+use coherent_agents::episode::{self, Course};
+use coherent_agents::prompts::fill::action_line;
 use coherent_agents::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
     OutputMode, Query, Role, Usage,
 };
-use coherent_agents::mcts::{self, MctsConfig, mix_prior, puct, softmax_q};
+use coherent_agents::mcts::{self, Mcts, MctsConfig, mix_prior, puct, softmax_q};
 use coherent_agents::rng::Rng;
 use coherent_agents::team_actions::{self, TeamAction};
 use coherent_agents::transcript::{RoundOutcome, Status};
-use coherent_agents::{Cancel, Episode};
+use coherent_agents::{BuiltinBackend, Cancel, Episode, HISTORY_WINDOW};
 use coherent_core::planner::{self, Limits};
-use coherent_core::{State, SymbolicEnv, Task, rules};
+use coherent_core::{Execution, State, SymbolicEnv, Task, rules};
 use serde_json::json;
 
 mod common;
+
+/// A sequential episode of `max_steps` with the paper's history window.
+fn sequential(max_steps: u32) -> Course {
+    Course {
+        execution: Execution::Sequential,
+        max_steps,
+        history: HISTORY_WINDOW,
+    }
+}
 
 fn gt(task: &Task) -> u32 {
     task.meta
@@ -34,12 +45,22 @@ async fn episode(
     max_steps: u32,
 ) -> Episode {
     let mut env = SymbolicEnv::new(Arc::clone(task));
-    mcts::run(
+    let (mut method, no_model) = match backend {
+        Some(_) => (Mcts::llm(config.clone()), None),
+        None => (
+            Mcts::primitive(config.clone()),
+            Some(BuiltinBackend::default()),
+        ),
+    };
+    let backend = backend.or(no_model.as_ref().map(|b| b as &dyn Backend));
+    let course = sequential(max_steps);
+    let backend = backend.expect("a backend or none needed");
+    episode::play(
         &mut env,
         task,
+        &mut method,
         backend,
-        config,
-        max_steps,
+        course,
         &Cancel::default(),
         &mut |_| Ok(()),
     )
@@ -409,8 +430,9 @@ async fn primitive_mcts_solves_a_short_task() {
     for r in &e.rounds {
         let d = r.decision.as_ref().expect("a decision every round");
         let action = d.action.as_ref().expect("an action");
+        let robot = d.robot.expect("the robot that acts");
         assert!(
-            r.actions.contains(action),
+            r.actions.contains(&action_line(&task, robot, action)),
             "the choice is one of the team actions"
         );
         assert_eq!(
@@ -529,12 +551,13 @@ async fn a_cancelled_episode_stops_before_its_next_step() {
     let cancel = Cancel::default();
     let mut env = SymbolicEnv::new(Arc::clone(&task));
     let mut seen = 0;
-    let e = mcts::run(
+    let mut method = Mcts::primitive(MctsConfig::default());
+    let e = episode::play(
         &mut env,
         &task,
-        None,
-        &MctsConfig::default(),
-        20,
+        &mut method,
+        &BuiltinBackend::default(),
+        sequential(20),
         &cancel,
         &mut |_| {
             seen += 1;

@@ -4,9 +4,11 @@
 use std::path::PathBuf;
 use std::sync::Arc;
 
-use coherent_agents::episode::{self, Budget, Execution, Method, Settings};
+use coherent_agents::episode::Budget;
 use coherent_agents::transcript::{RoundOutcome, Status};
+use coherent_agents::{Builtin, Settings};
 use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
+use coherent_core::Execution;
 use coherent_core::planner::{self, Limits};
 use coherent_core::{SymbolicEnv, Task};
 
@@ -16,20 +18,20 @@ fn out(name: &str) -> PathBuf {
     std::env::temp_dir().join(format!("coherent-methods-{name}-{}", std::process::id()))
 }
 
-async fn run(task: &Arc<Task>, method: Method, backend: &BuiltinBackend) -> Episode {
+async fn run(task: &Arc<Task>, method: Builtin, backend: &BuiltinBackend) -> Episode {
     let budget =
         Budget::searched(task, Execution::Sequential, None, &Limits::default()).expect("a budget");
-    let path = episode::transcript_path(&out(method.name()), task, method.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
-    episode::run(
+    let settings = Settings::new(method);
+    let out = out(method.name());
+    common::run(
         task,
         &mut env,
         backend,
-        &Settings::new(method),
+        &settings,
         budget,
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs")
@@ -55,23 +57,23 @@ async fn without_mistakes_every_method_that_asks_a_model_solves_and_the_direct_o
             .expect("solvable")
             .len() as u32;
         let robots = task.robots.len() as u32;
-        for method in Method::ALL {
-            if method == Method::Mcts {
-                continue; // no model: its own tests
+        for method in Builtin::ALL {
+            if matches!(method, Builtin::Mcts | Builtin::Random) {
+                continue; // no model and no plan: their own tests
             }
             let e = run(&task, method, &BuiltinBackend::new(Limits::default())).await;
             let s = &e.summary;
             assert_eq!(s.status, Status::Success, "{name} {}", method.name());
             let per_step = match method {
-                Method::Pefa | Method::PefaNoHistory => 2,
-                Method::Cmrs => 1,
-                Method::Dmrs1d => robots,
-                Method::Dmrs2d => 2 * robots,
-                Method::LlmMcts => 5,
-                Method::Mcts | Method::Optimal => 0,
+                Builtin::Pefa | Builtin::PefaNoHistory => 2,
+                Builtin::Cmrs => 1,
+                Builtin::Dmrs1d => robots,
+                Builtin::Dmrs2d => 2 * robots,
+                Builtin::LlmMcts => 5,
+                Builtin::Mcts | Builtin::Optimal | Builtin::Random => 0,
             };
             assert_eq!(s.llm_calls, per_step * s.steps, "{name} {}", method.name());
-            if method != Method::LlmMcts {
+            if method != Builtin::LlmMcts {
                 // The others take the planner's step every round.
                 assert_eq!(s.steps, optimum, "{name} {}", method.name());
             }
@@ -84,7 +86,7 @@ async fn the_simulated_backend_makes_its_mistakes_reproducibly() {
     let task = common::task("env1", 3);
     let rates = ErrorRates::all(0.2);
     let mut seen = Vec::new();
-    for method in [Method::Pefa, Method::Cmrs, Method::Dmrs1d] {
+    for method in [Builtin::Pefa, Builtin::Cmrs, Builtin::Dmrs1d] {
         let once = run(
             &task,
             method,

@@ -9,10 +9,12 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use coherent_agents::episode::{self, Budget, Execution, Method, PlannedMakespan, Settings};
+use coherent_agents::episode::{Budget, PlannedMakespan};
 use coherent_agents::llm::{Backend, Role};
 use coherent_agents::transcript::{self, RoundOutcome, Status};
+use coherent_agents::{Builtin, Settings};
 use coherent_agents::{BuiltinBackend, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, Replay};
+use coherent_core::Execution;
 use coherent_core::makespan;
 use coherent_core::planner::Limits;
 use coherent_core::{SymbolicEnv, Task};
@@ -29,7 +31,7 @@ fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-fn parallel(method: Method) -> Settings {
+fn parallel(method: Builtin) -> Settings {
     Settings {
         execution: Execution::Parallel,
         ..Settings::new(method)
@@ -48,17 +50,15 @@ async fn run(
     let budget = budget.unwrap_or_else(|| {
         Budget::searched(task, settings.execution, None, &Limits::default()).expect("a budget")
     });
-    let path = episode::transcript_path(out, task, settings.method.name());
     let mut env = SymbolicEnv::new(Arc::clone(task));
-    let (e, _) = episode::run(
+    let (e, path) = common::run(
         task,
         &mut env,
         backend,
         settings,
         budget,
-        &path,
+        out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");
@@ -70,16 +70,14 @@ async fn replays(path: &Path, out: &Path) {
     let recorded = transcript::read(path).expect("the transcript reads back");
     let replay = Replay::prepare(&recorded, path).expect("a replay");
     let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let again = episode::transcript_path(out, &replay.task, "replay");
-    let (e, _) = episode::run(
+    let (e, _) = common::run(
         &replay.task,
         &mut env,
         replay.backend.as_ref(),
         &replay.settings,
         replay.budget,
-        &again,
+        out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the replay runs");
@@ -101,7 +99,12 @@ async fn builtin_methods_solve_every_released_task_in_the_makespan_of_the_search
         let task = Arc::new(task);
         // One backend for the task's episodes: it plans once and follows the plan.
         let backend = BuiltinBackend::new(Limits::default());
-        for method in [Method::Pefa, Method::Cmrs, Method::Dmrs1d, Method::Optimal] {
+        for method in [
+            Builtin::Pefa,
+            Builtin::Cmrs,
+            Builtin::Dmrs1d,
+            Builtin::Optimal,
+        ] {
             let (e, path) = run(&task, &backend, &parallel(method), Some(budget), &out).await;
             let s = &e.summary;
             assert_eq!(s.status, Status::Success, "{name} {}", method.name());
@@ -128,7 +131,7 @@ async fn builtin_methods_solve_every_released_task_in_the_makespan_of_the_search
                 );
                 assert!(r.parts.iter().all(|p| p.outcome == RoundOutcome::Executed));
             }
-            if method == Method::Pefa {
+            if method == Builtin::Pefa {
                 // The assigner once a round (every robot is idle again: the built-in
                 // executor completes its one-action subtask), then one executor per part.
                 let parts: usize = e.rounds.iter().map(|r| r.parts.len()).sum();
@@ -147,7 +150,12 @@ async fn parallel_episodes_with_mistakes_replay_round_for_round() {
     let rates = ErrorRates::all(0.15);
     for (scene, id) in [("env0", 2), ("env1", 16), ("env2", 13), ("env3", 19)] {
         let task = common::task(scene, id);
-        for method in [Method::Pefa, Method::Cmrs, Method::Dmrs2d, Method::Optimal] {
+        for method in [
+            Builtin::Pefa,
+            Builtin::Cmrs,
+            Builtin::Dmrs2d,
+            Builtin::Optimal,
+        ] {
             for seed in 0..3 {
                 let backend = BuiltinBackend::simulated(Limits::default(), rates, seed);
                 let settings = Settings {
@@ -162,25 +170,14 @@ async fn parallel_episodes_with_mistakes_replay_round_for_round() {
     }
 }
 
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn the_tree_searches_are_sequential_only() {
+#[test]
+fn the_tree_searches_are_sequential_only() {
     let task = common::task("env0", 2);
-    for method in [Method::Mcts, Method::LlmMcts] {
-        let out = scratch(method.name());
-        let path = out.join("t.jsonl");
-        let mut env = SymbolicEnv::new(Arc::clone(&task));
-        let e = episode::run(
-            &task,
-            &mut env,
-            &BuiltinBackend::new(Limits::default()),
-            &parallel(method),
-            Budget::Given(4),
-            &path,
-            &Cancel::default(),
-            &mut |_| {},
-        )
-        .await
-        .expect_err("refused");
+    for method in [Builtin::Mcts, Builtin::LlmMcts] {
+        let e = parallel(method)
+            .build(&task, &Cancel::default())
+            .err()
+            .expect("refused");
         assert!(e.to_string().contains("sequential only"), "{e}");
     }
 }
@@ -285,17 +282,15 @@ async fn a_parallel_round_asks_its_executors_at_once_and_robots_keep_their_subta
     // env1 task 16: four robots.
     let task = common::task("env1", 16);
     let out = scratch("at-once");
-    let path = out.join("t.jsonl");
     let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, _) = episode::run(
+    let (e, _) = common::run(
         &task,
         &mut env,
         &client,
-        &parallel(Method::Pefa),
+        &parallel(Builtin::Pefa),
         Budget::Given(3),
-        &path,
+        &out,
         &Cancel::default(),
-        &mut |_| {},
     )
     .await
     .expect("the episode runs");

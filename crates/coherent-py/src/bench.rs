@@ -196,7 +196,7 @@ pub(crate) fn run_backend(
     let (name, endpoint) = match backend {
         Some(b) if b.is_instance_of::<PyLlm>() => (
             BackendName::OpenAi,
-            EndpointSource::Given(b.cast::<PyLlm>()?.get().config.clone()),
+            EndpointSource::Client(Arc::clone(&b.cast::<PyLlm>()?.get().client)),
         ),
         None => (BackendName::Builtin, EndpointSource::None),
         Some(b) => match b.cast::<PyString>().map(convert::utf8) {

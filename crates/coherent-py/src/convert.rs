@@ -277,6 +277,7 @@ where
 /// An execution's name: `"sequential"` or `"parallel"`, for the argument `name`.
 pub(crate) fn execution(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Execution> {
     let given = text(obj, name)?;
-    Execution::from_name(given)
-        .ok_or_else(|| errors::argument(name, obj, "expected \"sequential\" or \"parallel\""))
+    given
+        .parse()
+        .map_err(|_| errors::argument(name, obj, "expected \"sequential\" or \"parallel\""))
 }

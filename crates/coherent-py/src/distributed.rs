@@ -36,8 +36,9 @@ type Key = (String, String, i64, u32, String);
 type Handed = (String, Option<String>);
 
 fn key_of(py: Python<'_>, (method, scene, task_id, seed, execution): Key) -> PyResult<EpisodeKey> {
-    let execution = Execution::from_name(&execution)
-        .ok_or_else(|| errors::invalid(py, format!("an episode's key: execution {execution:?}")))?;
+    let execution: Execution = execution
+        .parse()
+        .map_err(|e| errors::invalid(py, format!("an episode's key: execution {e}")))?;
     Ok(EpisodeKey {
         method,
         scene,

@@ -28,7 +28,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent::session::engine::{
-    External, Limits, Mention, Method, Subset, load_tasks as read_all, parse_action as parse,
+    Budget, Builtin, Execution, External, Limits, Mention, Subset, load_tasks as read_all,
+    parse_action as parse,
 };
 use coherent::session::{Error, check, tasks};
 use pyo3::prelude::*;
@@ -134,6 +135,35 @@ fn plan<'py>(
     json_to_py(py, &json)
 }
 
+/// The step budget of an episode of `task` in `execution`, as every episode gets it
+/// (`coherent run`, `coherent.run`, the Gymnasium and PettingZoo environments):
+/// `max_steps` when given, else 2 x GT, else 2 x the optimum the planner finds; in joint
+/// steps 2 x the makespan.
+#[pyfunction]
+#[pyo3(signature = (task, execution = Execution::Sequential, max_steps = None, max_states = Limits::DEFAULT_MAX_STATES))]
+fn budget(
+    py: Python<'_>,
+    task: &Bound<'_, PyTask>,
+    #[pyo3(from_py_with = args::execution)] execution: Execution,
+    #[pyo3(from_py_with = args::max_steps)] max_steps: Option<u32>,
+    #[pyo3(from_py_with = args::max_states)] max_states: usize,
+) -> PyResult<u32> {
+    let task = Arc::clone(&task.get().task);
+    let cancel = Arc::new(AtomicBool::new(false));
+    let limits = Limits {
+        cancel: Some(Arc::clone(&cancel)),
+        ..Limits::max_states(max_states)
+    };
+    let stop = Arc::clone(&cancel);
+    let budget = interruptible(
+        py,
+        move || stop.store(true, Ordering::Relaxed),
+        move || Budget::searched(&task, execution, max_steps, &limits),
+    )?;
+    let budget = budget.map_err(|e| errors::session_err(py, Error::from(e)))?;
+    Ok(budget.steps())
+}
+
 /// Problems of `task` (empty when it is clean), as `coherent validate` lists them: the
 /// rules' findings and the geometry's.
 #[pyfunction(name = "validate")]
@@ -211,7 +241,7 @@ fn cli_main(
 fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();
     m.add("__version__", env!("CARGO_PKG_VERSION"))?;
-    m.add("METHODS", Method::ALL.map(Method::name).to_vec())?;
+    m.add("METHODS", Builtin::ALL.map(Builtin::name).to_vec())?;
     m.add("DEFAULT_MAX_STATES", Limits::DEFAULT_MAX_STATES)?;
     // Robots over ROS 2 start their link process as this Python with the console script's
     // module, which runs the same command line as the binary; this process's executable
@@ -247,6 +277,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
+    m.add_function(wrap_pyfunction!(budget, m)?)?;
     m.add_function(wrap_pyfunction!(validate_task, m)?)?;
     m.add_function(wrap_pyfunction!(parse_action, m)?)?;
     m.add_function(wrap_pyfunction!(cli_main, m)?)?;

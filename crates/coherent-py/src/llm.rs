@@ -54,10 +54,10 @@ async fn ask(
 /// logs.
 #[pyclass(name = "LLM", module = "coherent._coherent", frozen)]
 pub(crate) struct PyLlm {
-    pub config: OpenAiConfig,
-    /// The client of `chat` and `achat` (its connections, its limit on requests in
-    /// flight and its answer format last taken are kept between calls).
-    client: Arc<OpenAiClient>,
+    /// The one client of this endpoint: `chat` and `achat`, and the episodes of `run`
+    /// and `bench` given this `LLM` (its connections, its limit on requests in flight
+    /// and its answer format last taken are shared by all of them).
+    pub(crate) client: Arc<OpenAiClient>,
 }
 
 #[pymethods]
@@ -123,10 +123,8 @@ impl PyLlm {
                 )
             })?;
         // The client checks the rest (the model name, the URL); fail here, not mid-run.
-        let client =
-            OpenAiClient::new(config.clone()).map_err(|e| errors::backend(py, e.to_string()))?;
+        let client = OpenAiClient::new(config).map_err(|e| errors::backend(py, e.to_string()))?;
         Ok(PyLlm {
-            config,
             client: Arc::new(client),
         })
     }
@@ -213,41 +211,41 @@ impl PyLlm {
     /// The base URL; several comma-separated when several serve the model.
     #[getter]
     fn base_url(&self) -> String {
-        self.config.base_urls.join(",")
+        self.client.config().base_urls.join(",")
     }
 
     /// Every base URL.
     #[getter]
     fn base_urls(&self) -> Vec<String> {
-        self.config.base_urls.clone()
+        self.client.config().base_urls.clone()
     }
 
     #[getter]
     fn model(&self) -> &str {
-        &self.config.model
+        &self.client.config().model
     }
 
     /// Whether a key is set (the key itself cannot be read back).
     #[getter]
     fn has_api_key(&self) -> bool {
-        self.config.api_key.is_some()
+        self.client.config().api_key.is_some()
     }
 
     #[getter]
     fn temperature(&self) -> f32 {
-        self.config.temperature
+        self.client.config().temperature
     }
 
     #[getter]
     fn seed(&self) -> Option<u64> {
-        self.config.seed
+        self.client.config().seed
     }
 
     /// The keyword arguments that build this LLM again elsewhere (a Ray worker), all but
     /// the key, which never leaves this process: there it comes from `OPENAI_API_KEY`;
     /// `has_api_key` says whether this one has a key.
     fn _settings<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
-        let c = &self.config;
+        let c = self.client.config();
         let d = PyDict::new(py);
         d.set_item("base_url", &c.base_urls)?;
         d.set_item("model", &c.model)?;
@@ -266,7 +264,7 @@ impl PyLlm {
 
     /// The base URLs as shown anywhere: without user or password, query values redacted.
     fn __repr__(&self, py: Python<'_>) -> String {
-        let base_url = match self.config.base_urls.as_slice() {
+        let base_url = match self.client.config().base_urls.as_slice() {
             [one] => py_repr(py, &redacted(one)),
             several => format!(
                 "[{}]",
@@ -280,13 +278,13 @@ impl PyLlm {
         format!(
             "LLM(base_url={}, model={}, api_key={}, temperature={:?})",
             base_url,
-            py_repr(py, &self.config.model),
+            py_repr(py, &self.client.config().model),
             if self.has_api_key() {
                 "'[hidden]'"
             } else {
                 "None"
             },
-            self.config.temperature
+            self.client.config().temperature
         )
     }
 }

@@ -18,7 +18,7 @@ use coherent::session::Error;
 use coherent::session::backend::RecordedRun;
 use coherent::session::bench::recorded_method;
 use coherent::session::engine::{
-    Act, BoxFuture, Call, Choice, External, MakePolicy, Method, MethodFailure, MethodSpec, NodeId,
+    Act, BoxFuture, Builtin, Call, Choice, External, MakePolicy, MethodFailure, MethodSpec, NodeId,
     Policy, ReadLimits, RobotView, StepView, Task,
 };
 use pyo3::exceptions::{PyTypeError, PyValueError};
@@ -584,9 +584,9 @@ impl Done {
 }
 
 /// The built-in method named `name`; an `ArgumentError` listing them otherwise.
-pub(crate) fn method_of(py: Python<'_>, name: &str) -> PyResult<Method> {
-    Method::from_name(name).ok_or_else(|| {
-        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+pub(crate) fn method_of(py: Python<'_>, name: &str) -> PyResult<Builtin> {
+    Builtin::from_name(name).ok_or_else(|| {
+        let names: Vec<&str> = Builtin::ALL.iter().map(|m| m.name()).collect();
         errors::invalid(
             py,
             format!("unknown method {name:?}; the methods: {}", names.join(", ")),
@@ -628,7 +628,7 @@ impl MethodArg {
     pub(crate) fn recorded(&self, py: Python<'_>, results: &Path) -> PyResult<MethodSpec> {
         let name = match self {
             MethodArg::Name(name) if !name.contains(':') => {
-                if let Some(method) = Method::from_name(name) {
+                if let Some(method) = Builtin::from_name(name) {
                     return Ok(method.into());
                 }
                 name.clone()

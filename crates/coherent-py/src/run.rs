@@ -361,7 +361,7 @@ pub(crate) fn run(
     let request = RunRequest {
         backend: BackendRequest {
             endpoint: llm.map_or(EndpointSource::None, |l| {
-                EndpointSource::Given(l.get().config.clone())
+                EndpointSource::Client(Arc::clone(&l.get().client))
             }),
             sim_errors: error_rates(sim_errors)?,
             ..BackendRequest::default()

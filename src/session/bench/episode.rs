@@ -8,10 +8,12 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use coherent_agents::Settings;
 use coherent_agents::bench::{self, EpisodeKey, EpisodeResult, ResultLine, same_key_twice};
-use coherent_agents::episode::{Budget, Execution, NoPlan, PlannedMakespan, Settings};
+use coherent_agents::episode::{Budget, NoPlan, PlannedMakespan};
 use coherent_agents::llm::Backend;
 use coherent_agents::{BackendInfo, BackendKind, Cancel, MethodSpec, Replay, transcript};
+use coherent_core::Execution;
 use coherent_core::Task;
 use coherent_core::makespan;
 use coherent_core::planner::{self, Limits};

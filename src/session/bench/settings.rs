@@ -7,7 +7,8 @@ use std::collections::BTreeMap;
 use coherent_agents::bench::RunSettings;
 use coherent_agents::episode::HISTORY_WINDOW;
 use coherent_agents::transcript::RobotsRecord;
-use coherent_agents::{Execution, MethodSpec, PriceTable, Prompts};
+use coherent_agents::{MethodSpec, PriceTable, Prompts};
+use coherent_core::Execution;
 use coherent_core::planner::Limits;
 
 use crate::session::backend::{BackendChoice, BackendRequest};

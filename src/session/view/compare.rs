@@ -2,7 +2,7 @@
 //! which their decisions differ.
 
 use coherent_agents::transcript::{RobotPart, Round, Transcript};
-use coherent_core::{NodeId, Task};
+use coherent_core::NodeId;
 use serde::Serialize;
 
 use super::episode::EpisodeView;
@@ -18,15 +18,12 @@ pub struct Episodes {
     pub first_difference: Option<u32>,
 }
 
-/// The step of the first round where `a` and `b` (episodes of `task_a` and `task_b`)
-/// decide differently: another robot, or another action ([`Round::chosen`]; in a joint
-/// step, any robot's); when one ends earlier and they agree until then, the first round only the other has.
-pub fn first_difference(
-    (task_a, a): (&Task, &Transcript),
-    (task_b, b): (&Task, &Transcript),
-) -> Option<u32> {
+/// The step of the first round where episodes `a` and `b` decide differently: another
+/// robot, or another action ([`Round::chosen`]; in a joint step, any robot's); when one
+/// ends earlier and they agree until then, the first round only the other has.
+pub fn first_difference(a: &Transcript, b: &Transcript) -> Option<u32> {
     for (ra, rb) in a.rounds.iter().zip(&b.rounds) {
-        if decided(task_a, ra) != decided(task_b, rb) {
+        if decided(ra) != decided(rb) {
             return Some(ra.step);
         }
     }
@@ -41,9 +38,9 @@ pub fn first_difference(
 
 /// What a round decided: the robot and action it chose, or each robot's part of a joint
 /// step and the action decided for it.
-fn decided<'r>(task: &Task, r: &'r Round) -> Vec<(Option<NodeId>, Option<&'r str>)> {
+fn decided<'r>(r: &'r Round) -> Vec<(Option<NodeId>, Option<&'r str>)> {
     if r.parts.is_empty() {
-        return vec![r.chosen(task)];
+        return vec![r.chosen()];
     }
     let action = |p: &'r RobotPart| p.decision.as_ref().and_then(|d| d.action.as_deref());
     r.parts.iter().map(|p| (Some(p.robot), action(p))).collect()

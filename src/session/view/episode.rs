@@ -9,13 +9,14 @@
 
 use std::sync::Arc;
 
+use coherent_agents::BackendKind;
 use coherent_agents::llm::{Answer, BackendInfo, Finish, Role};
 use coherent_agents::transcript::{
     Call, Decision, ExternalDecision, Proposal, RobotPart, Round, RoundOutcome as Outcome, Status,
     Transcript,
 };
-use coherent_agents::{BackendKind, Execution};
 use coherent_agents::{ModelUse, PriceTable};
+use coherent_core::Execution;
 use coherent_core::text::{shown, shown_lines};
 use coherent_core::{NodeId, RobotReport, Task};
 use serde::Serialize;
@@ -272,7 +273,7 @@ fn step(task: &Task, r: &Round, max_steps: u32, execution: Execution) -> Step {
 
 /// The round's robot and what it did.
 fn entry(task: &Task, r: &Round) -> Entry {
-    let (robot, _) = r.chosen(task);
+    let (robot, _) = r.chosen();
     let (outcome, reason) = outcome(&r.outcome, r.done);
     Entry {
         robot: robot.map(|id| id.0),
@@ -329,8 +330,8 @@ fn outcome(o: &Outcome, done: bool) -> (String, Option<String>) {
         Outcome::Executed if done => ("executed; the goal holds".to_owned(), None),
         Outcome::Executed => ("executed".to_owned(), None),
         Outcome::Infeasible { reason, message } => (
-            format!("refused ({}): {}", shown(reason), shown_lines(message)),
-            Some(shown(reason).into_owned()),
+            format!("refused ({}): {}", reason.name(), shown_lines(message)),
+            Some(reason.name().to_owned()),
         ),
         Outcome::Declined => (
             "declined: the executor cannot do the subtask now".to_owned(),

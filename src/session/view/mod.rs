@@ -102,8 +102,7 @@ pub fn episode_html(e: &Shown<'_>) -> Result<String, String> {
 /// The page of two episodes side by side, stepping together, the first round where
 /// their decisions differ marked.
 pub fn compare_html(a: &Shown<'_>, b: &Shown<'_>) -> Result<String, String> {
-    let first_difference =
-        compare::first_difference((a.task, a.transcript), (b.task, b.transcript));
+    let first_difference = compare::first_difference(a.transcript, b.transcript);
     let mut va = episode::view(a.task, a.transcript, a.cost_usd, "a-");
     let mut vb = episode::view(b.task, b.transcript, b.cost_usd, "b-");
     let title = format!(

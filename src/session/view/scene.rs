@@ -100,7 +100,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
         Err(e) => {
             let mut moments = vec![moment(task, rules.state(), 0, None, None)];
             for round in &t.rounds {
-                for (robot, action) in round.carried_out(task) {
+                for (robot, action) in round.carried_out() {
                     let _ = rules.step(robot, action);
                 }
                 moments.push(moment(task, rules.state(), 0, None, None));
@@ -127,7 +127,7 @@ pub fn follow(task: &Arc<Task>, t: &Transcript, ids: &str) -> Scene {
     let first = pictures.of(&stage, rules.state(), ids);
     let mut moments = vec![moment(task, rules.state(), first, Some(&drawn), None)];
     for round in &t.rounds {
-        let actions = round.carried_out(task);
+        let actions = round.carried_out();
         for &(robot, action) in &actions {
             let _ = rules.step(robot, action);
         }

@@ -21,12 +21,12 @@ use coherent_core::task::predicate_holds;
 use coherent_core::{Idx, State, Task, rules};
 use serde_json::json;
 
-use crate::backends::llm::{
+use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot};
+use crate::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
     OutputMode, Query, Usage,
 };
-use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot};
-use crate::methods::team_actions;
+use crate::prompts::team_actions;
 use crate::rng::Rng;
 
 /// The first step `S` of a plan from each state seen, per task (by the task's address),

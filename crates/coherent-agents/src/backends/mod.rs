@@ -1,4 +1,4 @@
-//! Who answers the methods' questions, behind one trait ([`llm::Backend`]):
+//! Who answers the methods' questions, behind one trait ([`crate::llm::Backend`]):
 //!
 //! - [`openai`]: any OpenAI-compatible chat completions server, with [`retry`]'s backoff;
 //!   several servers of one model share its requests (`endpoints.rs`); [`address`] is
@@ -10,7 +10,6 @@
 pub mod address;
 pub mod builtin;
 mod endpoints;
-pub mod llm;
 pub mod openai;
 pub mod replay;
 pub mod retry;

@@ -17,11 +17,11 @@ use coherent_core::text::cut;
 
 use crate::backends::address::{Address, redacted};
 use crate::backends::endpoints::{Endpoints, Lease};
-use crate::backends::llm::{
+use crate::backends::retry::{Backoff, parse_retry_after};
+use crate::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
     MAX_ANSWER_BYTES, Message, OutputMode, Query, Response, Usage,
 };
-use crate::backends::retry::{Backoff, parse_retry_after};
 use crate::rng::Rng;
 
 /// An API key. It is sent in the `Authorization` header and nowhere else: it has no

@@ -6,7 +6,7 @@
 use std::collections::VecDeque;
 use std::sync::{Mutex, PoisonError};
 
-use crate::backends::llm::{
+use crate::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, LlmError, LlmErrorKind, Query, Response,
 };
 use crate::records::transcript::{Call, Transcript};

@@ -4,8 +4,8 @@
 
 use futures_util::future::join_all;
 
-use crate::backends::llm::{Backend, Finish, LlmError, Query};
 use crate::episode::cancel::Cancel;
+use crate::llm::{Backend, Finish, LlmError, Query};
 use crate::records::transcript::{Call, RoundOutcome};
 
 /// Why a role's answer gave nothing to act on.

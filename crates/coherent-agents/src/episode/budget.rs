@@ -6,10 +6,9 @@
 //! Every episode, run alone or in a benchmark, is sized here.
 
 use coherent_core::planner::{self, Limits};
-use coherent_core::{Task, makespan};
+use coherent_core::{Execution, Task, makespan};
 
 use crate::error::Error;
-use crate::records::transcript::Execution;
 
 /// What the makespan search found for a task: the joint steps of its best plan, and
 /// whether no plan has fewer.

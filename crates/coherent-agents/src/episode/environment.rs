@@ -3,13 +3,13 @@
 
 use coherent_core::{Environment, NodeId, Task};
 
-use crate::methods::prompt::Sight;
-use crate::records::transcript::{Round, RoundOutcome};
+use crate::prompts::fill::Sight;
+use crate::records::transcript::{Reason, Round, RoundOutcome};
 
 /// Checks and runs `action` for `robot`: executed, or why not; what a robot outside this
 /// process said about it goes into `round`.
 pub(crate) fn execute(
-    env: &mut (dyn Environment + Send),
+    env: &mut dyn Environment,
     round: &mut Round,
     robot: NodeId,
     action: &str,
@@ -20,20 +20,20 @@ pub(crate) fn execute(
             match o.infeasible {
                 None => RoundOutcome::Executed,
                 Some(why) => RoundOutcome::Infeasible {
-                    reason: why.reason.name().to_owned(),
+                    reason: why.reason.into(),
                     message: why.message,
                 },
             }
         }
         Err(e) => RoundOutcome::Infeasible {
-            reason: "error".into(),
+            reason: Reason::Error,
             message: e.to_string(),
         },
     }
 }
 
 /// What the whole team sees: every robot's observation.
-pub(crate) fn team_sight<'a>(env: &'a (dyn Environment + Send), task: &'a Task) -> Sight<'a> {
+pub(crate) fn team_sight<'a>(env: &'a dyn Environment, task: &'a Task) -> Sight<'a> {
     Sight {
         task,
         state: env.state(),

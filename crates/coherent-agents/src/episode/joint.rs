@@ -1,21 +1,29 @@
-//! What every method does with a parallel round's joint step: the actions its robots'
-//! parts decided on, carried out at once through [`Environment::step_joint`], each part's
-//! outcome recorded, and what the step as a whole came to.
+//! A parallel round's joint step, as the loop carries it out: the actions its robots'
+//! parts decided on, at once through [`Environment::step_joint`], each part's outcome
+//! recorded, and what the step as a whole came to; and what a method hears of it.
 
-use coherent_core::{Environment, NodeId};
+use coherent_core::{Environment, NodeId, Task};
 
-use crate::records::transcript::{RobotPart, Round, RoundOutcome};
+use crate::records::transcript::{Reason, RobotPart, RoundOutcome};
 
-/// Carries out the joint step of `parts`: every part whose decision names an action acts,
-/// at once; one whose decision names none is `declined`, and one without a decision keeps
-/// the outcome the method gave it (why there is none). Each acting part gets its outcome
-/// (executed, or the rules' reason, a refused step refusing all of them) and what its
-/// robot said. Returns what the step came to: `executed` when it ran, `infeasible` with
-/// the refusal when the rules refused it, `declined` when no part had an action.
+/// Carries out the joint step of `parts`, put in team order first: every part whose
+/// decision names an action acts, at once; one whose decision names none is `declined`,
+/// and one without a decision keeps the outcome the method gave it (why there is none).
+/// Each acting part gets its outcome (executed, or the rules' reason, a refused step
+/// refusing all of them) and what its robot said. Returns what the step came to:
+/// `executed` when it ran, `infeasible` with the refusal when the rules refused it,
+/// `declined` when no part had an action. A part of a robot that is not in the team
+/// refuses the step as the rules refuse any step with an action that cannot be
+/// (`unknown_robot`, every other part `step_refused`), the parts left in the order given.
 pub(crate) fn carry_out(
-    env: &mut (dyn Environment + Send),
+    env: &mut dyn Environment,
+    task: &Task,
     parts: &mut [RobotPart],
 ) -> RoundOutcome {
+    if let Some(refused) = unknown_robots(task, parts) {
+        return refused;
+    }
+    parts.sort_by_key(|p| task.robots.iter().position(|r| task.id(r.node) == p.robot));
     let acting: Vec<usize> = (0..parts.len())
         .filter(|&i| parts[i].action().is_some())
         .collect();
@@ -44,7 +52,7 @@ pub(crate) fn carry_out(
                 parts[i].outcome = match part.infeasible {
                     None => RoundOutcome::Executed,
                     Some(why) => RoundOutcome::Infeasible {
-                        reason: why.reason.name().to_owned(),
+                        reason: why.reason.into(),
                         message: why.message,
                     },
                 };
@@ -52,25 +60,56 @@ pub(crate) fn carry_out(
             match outcome.refused {
                 None => RoundOutcome::Executed,
                 Some(refusal) => RoundOutcome::Infeasible {
-                    reason: "step_refused".into(),
+                    reason: coherent_core::Reason::StepRefused.into(),
                     message: refusal.to_string(),
                 },
             }
         }
-        // A robot the team does not have (the methods check theirs first).
+        // The environment could not take the step at all.
         Err(e) => {
             for &i in &acting {
                 parts[i].outcome = RoundOutcome::Infeasible {
-                    reason: "error".into(),
+                    reason: Reason::Error,
                     message: e.to_string(),
                 };
             }
             RoundOutcome::Infeasible {
-                reason: "error".into(),
+                reason: Reason::Error,
                 message: e.to_string(),
             }
         }
     }
+}
+
+/// The refusal of a joint step whose parts name robots that are not in the team, with
+/// each part's outcome set, or `None` when every robot is the team's.
+fn unknown_robots(task: &Task, parts: &mut [RobotPart]) -> Option<RoundOutcome> {
+    let unknown: Vec<NodeId> = parts
+        .iter()
+        .map(|p| p.robot)
+        .filter(|r| task.robot_by_id(*r).is_err())
+        .collect();
+    if unknown.is_empty() {
+        return None;
+    }
+    for p in parts.iter_mut() {
+        p.outcome = match task.robot_by_id(p.robot) {
+            Err(e) => RoundOutcome::Infeasible {
+                reason: Reason::UnknownRobot,
+                message: e.to_string(),
+            },
+            Ok(_) => RoundOutcome::Infeasible {
+                reason: coherent_core::Reason::StepRefused.into(),
+                message: "not carried out: the joint step names a robot that is not in the team"
+                    .into(),
+            },
+        };
+    }
+    let ids: Vec<String> = unknown.iter().map(ToString::to_string).collect();
+    Some(RoundOutcome::Infeasible {
+        reason: Reason::UnknownRobot,
+        message: format!("robot {} is not in the team", ids.join(", ")),
+    })
 }
 
 /// The sentence of each part and, first, the one about the step as a whole (if any),
@@ -81,19 +120,4 @@ pub(crate) fn paragraph(step: Option<String>, parts: &[RobotPart]) -> String {
         .filter(|s| !s.is_empty())
         .collect::<Vec<_>>()
         .join(" ")
-}
-
-/// Closes a parallel round: its parts, the step's outcome, what is heard of it, and
-/// whether the goal holds.
-pub(crate) fn close(
-    env: &(dyn Environment + Send),
-    round: &mut Round,
-    parts: Vec<RobotPart>,
-    outcome: RoundOutcome,
-    feedback: String,
-) {
-    round.parts = parts;
-    round.outcome = outcome;
-    round.feedback = feedback;
-    round.done = env.goal_satisfied();
 }

@@ -7,10 +7,10 @@
 use std::sync::Arc;
 
 use coherent_core::rules::Observation;
-use coherent_core::{Environment, NodeId, RobotKind, State, Task, describe};
+use coherent_core::{Environment, Execution, NodeId, RobotKind, State, Task, describe};
 
-use crate::backends::llm::BoxFuture;
-use crate::records::transcript::{Call, Execution};
+use crate::llm::BoxFuture;
+use crate::records::transcript::Call;
 
 /// One robot as a method sees it at a step.
 #[derive(Clone, Debug)]

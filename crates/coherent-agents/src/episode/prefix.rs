@@ -7,7 +7,7 @@
 
 use std::collections::HashMap;
 
-use crate::backends::llm::{Message, Role};
+use crate::llm::{Message, Role};
 use crate::records::transcript::Call;
 
 /// The last prompt of each role and robot in an episode.

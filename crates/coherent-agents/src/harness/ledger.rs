@@ -10,14 +10,17 @@ use std::sync::Arc;
 
 use coherent_core::Task;
 
-use crate::episode::settings::{Execution, MethodSpec};
+use coherent_core::Execution;
+
 use crate::error::Error;
 use crate::harness::results::{
     EpisodeKey, ResultLine, mark_orphans, read_results_within, repair, transcripts_dir,
 };
-use crate::harness::run_settings::{Difference, RunSettings, Setting, method_text};
+use crate::harness::run_settings::{RunSettings, method_text};
 use crate::records::lock;
 use crate::records::transcript::Status;
+use crate::run::settings::MethodSpec;
+use crate::setting::{Difference, Setting};
 
 /// What came of one episode, as an executor hands it to the driver.
 #[derive(Debug)]

@@ -16,6 +16,7 @@ pub mod run_settings;
 pub mod speedup;
 pub mod subset;
 
+pub use crate::setting::{Difference, Setting};
 pub use ledger::{BenchOutcome, EpisodeResult, Ledger, episode_keys};
 pub use prices::{ModelUse, PriceTable};
 pub use progress::{Event, Progress, Style, worth_a_line};
@@ -25,5 +26,5 @@ pub use results::{
     EpisodeKey, ReadLimits, ResultLine, ResultsFile, mark_orphans, read_results,
     read_results_within, repair, transcripts_dir,
 };
-pub use run_settings::{Difference, RunSettings, Setting};
+pub use run_settings::RunSettings;
 pub use subset::{PAPER40, Selection, Subset, same_key_twice, select};

@@ -10,8 +10,8 @@ use std::path::Path;
 use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
-use crate::backends::llm::{BackendInfo, Usage};
 use crate::error::Error;
+use crate::llm::{BackendInfo, Usage};
 use crate::records::transcript::{Header, Round, Summary};
 
 /// The price of one model, USD per million tokens.

@@ -11,14 +11,15 @@
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 
+use coherent_core::Execution;
 use coherent_core::text::shown;
 use serde::Serialize;
 
 use crate::harness::results::{EpisodeKey, ResultLine};
-use crate::harness::run_settings::{RunSettings, Setting, field, method_text};
+use crate::harness::run_settings::{RunSettings, method_text};
 use crate::harness::speedup::{self, SpeedRow, row_name, row_order};
-use crate::records::transcript::Execution;
 use crate::records::transcript::headline;
+use crate::setting::{Setting, field};
 
 /// Two-sided 95% quantiles of Student's t, t(0.975, df) for df = 1..30 (the standard
 /// table, e.g. NIST/SEMATECH e-Handbook of Statistical Methods, section 1.3.6.7.2); the

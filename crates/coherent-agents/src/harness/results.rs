@@ -7,15 +7,16 @@ use std::fs::OpenOptions;
 use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
+use coherent_core::Execution;
 use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
-use crate::backends::llm::{BackendInfo, Usage};
 use crate::error::Error;
 use crate::harness::prices::PriceTable;
 use crate::harness::run_settings::RunSettings;
+use crate::llm::{BackendInfo, Usage};
 use crate::records::lock;
-use crate::records::transcript::{Execution, Status};
+use crate::records::transcript::Status;
 
 /// One finished episode: a line of the results file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

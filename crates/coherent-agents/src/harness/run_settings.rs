@@ -7,14 +7,13 @@
 //! as one.
 
 use std::collections::BTreeMap;
-use std::fmt;
 
-use coherent_core::text::shown;
+use coherent_core::Execution;
 use serde::{Deserialize, Serialize};
 
-use crate::backends::llm::BackendKind;
-use crate::episode::execution::Execution;
-use crate::methods::templates::Prompts;
+use crate::llm::BackendKind;
+use crate::prompts::templates::Prompts;
+use crate::setting::{Difference, Setting, field};
 
 /// The settings one results line was run with.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -59,56 +58,6 @@ pub struct RunSettings {
     /// `settings`); none for a built-in method, whose settings are the ones above.
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub method: BTreeMap<String, serde_json::Value>,
-}
-
-/// One setting of [`RunSettings`], for a front end to name as its flag or argument.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Setting {
-    Backend,
-    Model,
-    SimErrors,
-    Temperature,
-    ModelSeed,
-    Seeds,
-    Prompts,
-    History,
-    MaxSteps,
-    MaxStates,
-    Physics,
-    Robots,
-    /// The executions of the run.
-    Execution,
-    /// The version of coherent.
-    Version,
-    /// A method's own settings.
-    Method,
-    /// Lines that record no settings (written before results lines kept them).
-    Unrecorded,
-}
-
-/// A setting that differs between the lines of a results file and a run.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Difference {
-    pub setting: Setting,
-    /// The method, for [`Setting::Method`].
-    pub method: Option<String>,
-    /// Its value in the file, as shown.
-    pub file: String,
-    /// Its value now, as shown.
-    pub now: String,
-}
-
-/// Both values shown escaped: the file's come from whatever wrote it (a model's name, a
-/// method's own settings).
-impl fmt::Display for Difference {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(
-            f,
-            "{} in the file, {} now",
-            shown(&self.file),
-            shown(&self.now)
-        )
-    }
 }
 
 impl RunSettings {
@@ -187,28 +136,6 @@ impl RunSettings {
             .map(|(setting, value)| format!("{} {value}", field(setting)))
             .collect::<Vec<_>>()
             .join(", ")
-    }
-}
-
-/// The name of `setting` in a results line's `settings` object.
-pub fn field(setting: Setting) -> &'static str {
-    match setting {
-        Setting::Backend => "backend",
-        Setting::Model => "model",
-        Setting::SimErrors => "sim_errors",
-        Setting::Temperature => "temperature",
-        Setting::ModelSeed => "model_seed",
-        Setting::Seeds => "seeds",
-        Setting::Prompts => "prompts",
-        Setting::History => "history",
-        Setting::MaxSteps => "max_steps",
-        Setting::MaxStates => "max_states",
-        Setting::Physics => "physics",
-        Setting::Robots => "robots",
-        Setting::Execution => "executions",
-        Setting::Version => "coherent",
-        Setting::Method => "method",
-        Setting::Unrecorded => "settings",
     }
 }
 

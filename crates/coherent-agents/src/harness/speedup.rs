@@ -13,9 +13,10 @@ use std::collections::HashMap;
 
 use serde::Serialize;
 
-use crate::episode::settings::Method;
 use crate::harness::results::ResultLine;
-use crate::records::transcript::Execution;
+use coherent_core::Execution;
+
+use crate::run::settings::Builtin;
 
 /// A row's name in the tables: the method, with ` (parallel)` for its parallel
 /// episodes (a sequential row keeps the method's name alone, as before parallel
@@ -30,10 +31,10 @@ pub fn row_name(method: &str, execution: Execution) -> String {
 /// How rows are ordered: the paper's methods in their order, then the others by name;
 /// each method's sequential row before its parallel one.
 pub fn row_order(method: &str, execution: Execution) -> (usize, String, Execution) {
-    let at = Method::ALL
+    let at = Builtin::ALL
         .iter()
         .position(|m| m.name() == method)
-        .unwrap_or(Method::ALL.len());
+        .unwrap_or(Builtin::ALL.len());
     (at, method.to_owned(), execution)
 }
 

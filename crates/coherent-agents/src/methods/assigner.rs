@@ -5,7 +5,7 @@
 //! Adjustment ([`crate::methods::pefa`]).
 //!
 //! Its prompt is the prompt set's `assigner_system.txt` and `assigner_user.txt`
-//! ([`crate::methods::templates`]), the built-in ones laid out from what never changes
+//! ([`crate::prompts::templates`]), the built-in ones laid out from what never changes
 //! (the rules, the team, the instruction, the scene) to what changes each round (where
 //! the robots are, the states and relations, the history); its answer is one JSON object `{"reasoning", "robot", "subtask"}`, the robot constrained
 //! to the team's labels, read into a [`Proposal`] wherever it sits in the text (or,
@@ -16,11 +16,11 @@ use std::sync::Arc;
 use coherent_core::{Environment, NodeId, Relation, Task, rules};
 use serde_json::{Value, json};
 
-use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::episode::environment::team_sight;
-use crate::methods::answer::{field_text, json_object, string_field};
-use crate::methods::prompt::{fill, robot_label, team};
-use crate::methods::templates::{Prompts, Template};
+use crate::llm::{Message, Query, Role, Situation};
+use crate::prompts::answer::{field_text, json_object, string_field};
+use crate::prompts::fill::{fill, robot_label, team};
+use crate::prompts::templates::{Prompts, Template};
 use crate::records::transcript::Proposal;
 
 /// What the assigner is told each round.
@@ -459,7 +459,7 @@ fn team_list(task: &Task) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::{check_placeholders, demo_task, every_placeholder};
+    use crate::prompts::fill::{check_placeholders, demo_task, every_placeholder};
     use coherent_core::SymbolicEnv;
 
     #[test]

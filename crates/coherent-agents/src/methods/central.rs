@@ -1,15 +1,15 @@
 //! The central prompt (the prompt set's `central.txt`), which CMRS answers once per step
 //! and LLM-MCTS samples for its prior: the team, the rules, the instruction, the team's
 //! observation, the last executed actions and every team action line
-//! ([`crate::methods::team_actions`]); and the line an answer chooses.
+//! ([`crate::prompts::team_actions`]); and the line an answer chooses.
 
 use coherent_core::{NodeId, Task};
 use serde_json::{Value, json};
 
-use crate::backends::llm::Message;
-use crate::methods::answer::{field_text, json_object, normal, read_line};
-use crate::methods::prompt::{self, Sight};
-use crate::methods::templates::{self, Prompts, Template};
+use crate::llm::Message;
+use crate::prompts::answer::{field_text, json_object, normal, read_line};
+use crate::prompts::fill::{self, Sight};
+use crate::prompts::templates::{self, Prompts, Template};
 
 /// The central prompt: the team, the rules, the instruction, what `sight` shows the
 /// team, the last executed actions and every team action line (CMRS, LLM-MCTS
@@ -26,7 +26,7 @@ pub(crate) fn messages(
 /// `text` (a system part, the user mark, a user part) filled.
 fn render(text: &str, sight: &Sight<'_>, lines: &[String], history: &[String]) -> Vec<Message> {
     let task = sight.task;
-    let team = prompt::team(task);
+    let team = fill::team(task);
     let history = if history.is_empty() {
         "(none yet)".to_owned()
     } else {
@@ -45,10 +45,10 @@ fn render(text: &str, sight: &Sight<'_>, lines: &[String], history: &[String]) -
     let mut messages = Vec::new();
     if !system.trim().is_empty() {
         messages.push(Message::system(
-            prompt::fill(system, &values).trim().to_owned(),
+            fill::fill(system, &values).trim().to_owned(),
         ));
     }
-    messages.push(Message::user(prompt::fill(user, &values).trim().to_owned()));
+    messages.push(Message::user(fill::fill(user, &values).trim().to_owned()));
     messages
 }
 
@@ -117,7 +117,7 @@ pub(crate) fn choose_several(task: &Task, lines: &[String], text: &str) -> Resul
         match choose(task, lines, &line) {
             Ok((robot, _)) if chosen.iter().any(|(r, _)| *r == robot) => unused.push(format!(
                 "{} was given two actions: the first counts",
-                prompt::robot_label(task, robot)
+                fill::robot_label(task, robot)
             )),
             Ok(pick) => chosen.push(pick),
             Err(why) => unused.push(why),
@@ -132,7 +132,7 @@ pub(crate) fn choose_several(task: &Task, lines: &[String], text: &str) -> Resul
 /// The robot and action an answer chooses: one of `lines` (matched ignoring case and
 /// spacing), or else `<robot label>: <action>` for a robot of the team, the action then
 /// taken as written for the feasibility check to judge. No nearest-match guessing: that
-/// is LLM-MCTS's own mechanism ([`crate::methods::answer::match_line`]), not these methods'.
+/// is LLM-MCTS's own mechanism ([`crate::prompts::answer::match_line`]), not these methods'.
 pub(crate) fn choose(
     task: &Task,
     lines: &[String],
@@ -181,8 +181,8 @@ mod tests {
 
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
-        let task = crate::methods::prompt::demo_task();
-        let prompts = crate::methods::prompt::every_placeholder(Template::Central);
+        let task = crate::prompts::fill::demo_task();
+        let prompts = crate::prompts::fill::every_placeholder(Template::Central);
         let sight = Sight {
             task: &task,
             state: &task.init,

@@ -11,63 +11,77 @@
 //! last proposal, carried out together as the step's joint step.
 
 use std::io;
-use std::sync::Arc;
-use std::time::Instant;
 
-use coherent_core::{Environment, NodeId, Task};
+use coherent_core::{Environment, Execution, NodeId, Task};
 use serde_json::{Value, json};
 
-use crate::backends::llm::{Backend, Message, Query, Role, Situation};
 use crate::episode::ask::{Side, Unusable, ask};
-use crate::episode::cancel::Cancel;
-use crate::episode::rounds::{Episode, History, rounds};
-use crate::methods::answer::{field_text, json_object, normal, read_line};
-use crate::methods::prompt::{self, Sight, robot_label};
-use crate::methods::team_actions::{self, TeamAction};
-use crate::methods::templates::{self, Prompts, Template};
-use crate::methods::{central, decision, feedback};
-use crate::records::transcript::{Execution, Round};
+use crate::episode::method::{Closing, Decided, Method, Turn};
+use crate::llm::{BoxFuture, Message, Query, Role, Situation};
+use crate::methods::{central, decision};
+use crate::prompts::answer::{field_text, json_object, normal, read_line};
+use crate::prompts::fill::{self, Sight, robot_label};
+use crate::prompts::team_actions::{self, TeamAction};
+use crate::prompts::templates::{self, Prompts, Template};
+use crate::records::transcript::Round;
 use crate::rng::{Rng, seed_of};
 
 /// Most tokens of one turn (a sentence and a line).
 const MAX_TOKENS: u32 = 200;
 
-/// Settings of a DMRS episode.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct DmrsConfig {
+/// DMRS for one episode.
+#[derive(Debug)]
+pub struct Dmrs {
     /// Dialogue rounds per step: 1 (DMRS-1D) or 2 (DMRS-2D).
-    pub dialogue_rounds: u32,
-    /// Executed actions shown (the paper: 5).
-    pub history: usize,
+    dialogue_rounds: u32,
     /// Seeds the speaking order of every step.
-    pub seed: u64,
+    seed: u64,
     /// The speakers' template (`dmrs_speaker.txt`; `dmrs_speaker_parallel.txt` in joint
     /// steps) comes from here.
-    pub prompts: Prompts,
-    /// One robot's action a step, or joint steps.
-    pub execution: Execution,
+    prompts: Prompts,
 }
 
-/// Runs DMRS on `env` until the goal holds, `max_steps` are spent, the backend fails for
-/// good, or `cancel` fires.
-pub async fn run(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    backend: &dyn Backend,
-    config: &DmrsConfig,
-    max_steps: u32,
-    cancel: &Cancel,
-    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-) -> io::Result<Episode> {
-    let mut history = History::new(config.history);
-    let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, config, cancel, &history.entries(), step).await;
-        if let Some(line) = r.as_ref().and_then(|r| decision::executed_line(task, r)) {
-            history.push(line);
+impl Dmrs {
+    /// DMRS with `dialogue_rounds` rounds of dialogue a step (1 or 2), its speaking
+    /// orders drawn from `seed`.
+    pub fn new(dialogue_rounds: u32, seed: u64, prompts: Prompts) -> Dmrs {
+        Dmrs {
+            dialogue_rounds,
+            seed,
+            prompts,
         }
-        Ok(r)
-    };
-    rounds(env, task, max_steps, cancel, on_round, play).await
+    }
+
+    /// This step's speaking order: the team shuffled, seeded by the episode's seed and
+    /// the step.
+    fn order(&self, task: &Task, step: u32) -> Vec<NodeId> {
+        let mut order: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
+        Rng::new(seed_of(self.seed, u64::from(step))).shuffle(&mut order);
+        order
+    }
+}
+
+impl Method for Dmrs {
+    fn decide<'a>(
+        &'a mut self,
+        turn: Turn<'a>,
+        round: &'a mut Round,
+    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+        Box::pin(async move {
+            Ok(match turn.execution {
+                Execution::Sequential => self.dialogue(turn, round).await,
+                Execution::Parallel => self.joint_dialogue(turn, round).await,
+            })
+        })
+    }
+
+    fn conclude(&mut self, closing: Closing<'_>, round: &mut Round) {
+        decision::team_feedback(closing.task, round, None);
+    }
+
+    fn recall(&self, task: &Task, round: &Round) -> Option<String> {
+        decision::executed_line(task, round)
+    }
 }
 
 /// The team actions of the robots heard so far in a round's dialogue, as listed to the
@@ -99,182 +113,135 @@ fn said(task: &Task, speaker: NodeId, text: &str, proposal: Option<&(NodeId, Str
     )
 }
 
-async fn round(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    backend: &dyn Backend,
-    config: &DmrsConfig,
-    cancel: &Cancel,
-    history: &[String],
-    step: u32,
-) -> Option<Round> {
-    let start = Instant::now();
-    let round = Round::new(step);
-    let mut order: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
-    let mut rng = Rng::new(seed_of(config.seed, u64::from(step)));
-    for i in (1..order.len()).rev() {
-        order.swap(i, rng.below(i + 1));
-    }
-    if config.execution == Execution::Parallel {
-        let turns = Turns {
-            order,
-            round,
-            start,
-        };
-        return parallel(env, task, backend, config, cancel, history, turns).await;
-    }
-    let mut round = round;
-    let all = team_actions::offered(task, env.state());
-    let mut dialogue: Vec<String> = Vec::new();
-    let mut heard: Vec<NodeId> = Vec::new();
-    let mut proposal: Option<(NodeId, String)> = None;
-    for _ in 0..config.dialogue_rounds.max(1) {
-        for &speaker in &order {
-            if !heard.contains(&speaker) {
-                heard.push(speaker);
-            }
-            let lines = heard_lines(task, &all, &heard);
-            let query = Query {
-                role: Role::Executor,
-                robot: Some(speaker),
-                messages: speaker_messages(
-                    config.prompts.text(Template::DmrsSpeaker),
-                    env,
-                    task,
-                    speaker,
-                    history,
-                    &dialogue,
-                    &lines,
-                ),
-                schema_name: "team_action",
-                schema: speaker_schema(&lines),
-                max_tokens: MAX_TOKENS,
-                situation: Situation::now(task, env, None),
-            };
-            let reply = ask(backend, query, cancel, &mut round.calls).await?;
-            let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());
-            match reply.and_then(|r| r.read(|text| central::choose(task, &lines, text))) {
-                Ok(p) => proposal = Some(p),
-                Err(Unusable::Failed(e)) => {
-                    return Some(close(env, round, Unusable::Failed(e), start));
+impl Dmrs {
+    /// A sequential round: the speakers in order, each proposing a team action; the
+    /// last speaker's is the round's decision. `None` when cancelled.
+    async fn dialogue(&self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
+        let Turn { task, env, .. } = turn;
+        let order = self.order(task, round.step);
+        let all = team_actions::offered(task, env.state());
+        let mut dialogue: Vec<String> = Vec::new();
+        let mut heard: Vec<NodeId> = Vec::new();
+        let mut proposal: Option<(NodeId, String)> = None;
+        for _ in 0..self.dialogue_rounds.max(1) {
+            for &speaker in &order {
+                if !heard.contains(&speaker) {
+                    heard.push(speaker);
                 }
-                Err(Unusable::Bad(_)) => proposal = None,
+                let lines = heard_lines(task, &all, &heard);
+                let query = Query {
+                    role: Role::Executor,
+                    robot: Some(speaker),
+                    messages: speaker_messages(
+                        self.prompts.text(Template::DmrsSpeaker),
+                        env,
+                        task,
+                        speaker,
+                        turn.history,
+                        &dialogue,
+                        &lines,
+                    ),
+                    schema_name: "team_action",
+                    schema: speaker_schema(&lines),
+                    max_tokens: MAX_TOKENS,
+                    situation: Situation::now(task, env, None),
+                };
+                let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
+                let text = reply.as_ref().map_or(String::new(), |r| r.text.clone());
+                match reply.and_then(|r| r.read(|text| central::choose(task, &lines, text))) {
+                    Ok(p) => proposal = Some(p),
+                    Err(Unusable::Failed(e)) => {
+                        return Some(Decided::Ends(Unusable::Failed(e).outcome(Side::Executor)));
+                    }
+                    Err(Unusable::Bad(_)) => proposal = None,
+                }
+                dialogue.push(said(task, speaker, &text, proposal.as_ref()));
             }
-            dialogue.push(said(task, speaker, &text, proposal.as_ref()));
         }
+        round.actions = all.iter().map(|a| a.line(task)).collect();
+        let Some((robot, action)) = proposal else {
+            let why = "the last speaker proposed nothing usable".to_owned();
+            return Some(Decided::Ends(Unusable::Bad(why).outcome(Side::Executor)));
+        };
+        decision::choose(round, robot, &action, dialogue.join("\n"));
+        Some(Decided::CarryOut)
     }
-    round.actions = all.iter().map(|a| a.line(task)).collect();
-    let Some((robot, action)) = proposal else {
-        let why = "the last speaker proposed nothing usable".to_owned();
-        return Some(close(env, round, Unusable::Bad(why), start));
-    };
-    decision::act(env, task, &mut round, robot, &action, dialogue.join("\n"));
-    round.done = env.goal_satisfied();
-    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    Some(round)
-}
 
-/// A round that ends without an action.
-fn close(env: &(dyn Environment + Send), mut round: Round, why: Unusable, start: Instant) -> Round {
-    round.outcome = why.outcome(Side::Executor);
-    round.feedback = feedback::team("", &round.outcome);
-    round.done = env.goal_satisfied();
-    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    round
-}
-
-/// A parallel round's speaking order, its record so far and when it started.
-struct Turns {
-    order: Vec<NodeId>,
-    round: Round,
-    start: Instant,
-}
-
-/// A round of a parallel episode: each speaker proposes its own action, hearing what the
-/// others said; each robot's last proposal is carried out, all together.
-async fn parallel(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    backend: &dyn Backend,
-    config: &DmrsConfig,
-    cancel: &Cancel,
-    history: &[String],
-    turns: Turns,
-) -> Option<Round> {
-    let Turns {
-        order,
-        mut round,
-        start,
-    } = turns;
-    let all = team_actions::offered(task, env.state());
-    let mut dialogue: Vec<String> = Vec::new();
-    let mut heard: Vec<NodeId> = Vec::new();
-    // Each speaker's last word: its own action (or none) and its message; `None` while
-    // its last answer gave nothing usable.
-    let mut last: Vec<(NodeId, Option<Word>)> = Vec::new();
-    for _ in 0..config.dialogue_rounds.max(1) {
-        for &speaker in &order {
-            if !heard.contains(&speaker) {
-                heard.push(speaker);
-            }
-            let lines = heard_lines(task, &all, &heard);
-            let own = env.actions(speaker).unwrap_or_default();
-            let query = Query {
-                role: Role::Executor,
-                robot: Some(speaker),
-                messages: speaker_messages(
-                    config.prompts.text(Template::DmrsSpeakerParallel),
-                    env,
-                    task,
-                    speaker,
-                    history,
-                    &dialogue,
-                    &lines,
-                ),
-                schema_name: "own_action",
-                schema: own_schema(&own),
-                max_tokens: MAX_TOKENS,
-                situation: Situation::now(task, env, None),
-            };
-            let reply = ask(backend, query, cancel, &mut round.calls).await?;
-            let word =
-                match reply.and_then(|r| r.read(|text| own_action(task, speaker, &own, text))) {
+    /// A parallel round: each speaker proposes its own action, hearing what the others
+    /// said; each robot's last proposal is carried out, all together. `None` when
+    /// cancelled.
+    async fn joint_dialogue(&self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
+        let Turn { task, env, .. } = turn;
+        let order = self.order(task, round.step);
+        let all = team_actions::offered(task, env.state());
+        let mut dialogue: Vec<String> = Vec::new();
+        let mut heard: Vec<NodeId> = Vec::new();
+        // Each speaker's last word: its own action (or none) and its message; `None` while
+        // its last answer gave nothing usable.
+        let mut last: Vec<(NodeId, Option<Word>)> = Vec::new();
+        for _ in 0..self.dialogue_rounds.max(1) {
+            for &speaker in &order {
+                if !heard.contains(&speaker) {
+                    heard.push(speaker);
+                }
+                let lines = heard_lines(task, &all, &heard);
+                let own = env.actions(speaker).unwrap_or_default();
+                let query = Query {
+                    role: Role::Executor,
+                    robot: Some(speaker),
+                    messages: speaker_messages(
+                        self.prompts.text(Template::DmrsSpeakerParallel),
+                        env,
+                        task,
+                        speaker,
+                        turn.history,
+                        &dialogue,
+                        &lines,
+                    ),
+                    schema_name: "own_action",
+                    schema: own_schema(&own),
+                    max_tokens: MAX_TOKENS,
+                    situation: Situation::now(task, env, None),
+                };
+                let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
+                let word = match reply
+                    .and_then(|r| r.read(|text| own_action(task, speaker, &own, text)))
+                {
                     Ok(word) => Some(word),
                     Err(Unusable::Failed(e)) => {
-                        return Some(close(env, round, Unusable::Failed(e), start));
+                        return Some(Decided::Ends(Unusable::Failed(e).outcome(Side::Executor)));
                     }
                     Err(Unusable::Bad(_)) => None,
                 };
-            let proposed = match &word {
-                Some((Some(action), _)) => format!("It will do {action}."),
-                Some((None, _)) => "It will do nothing this step.".to_owned(),
-                None => "It proposed nothing usable.".to_owned(),
-            };
-            let message = word.as_ref().map_or("", |(_, m)| m.as_str());
-            dialogue.push(format!(
-                "{} said: {} {proposed}",
-                robot_label(task, speaker),
-                message.trim()
-            ));
-            last.retain(|(r, _)| *r != speaker);
-            last.push((speaker, word));
+                let proposed = match &word {
+                    Some((Some(action), _)) => format!("It will do {action}."),
+                    Some((None, _)) => "It will do nothing this step.".to_owned(),
+                    None => "It proposed nothing usable.".to_owned(),
+                };
+                let message = word.as_ref().map_or("", |(_, m)| m.as_str());
+                dialogue.push(format!(
+                    "{} said: {} {proposed}",
+                    robot_label(task, speaker),
+                    message.trim()
+                ));
+                last.retain(|(r, _)| *r != speaker);
+                last.push((speaker, word));
+            }
         }
+        round.actions = all.iter().map(|a| a.line(task)).collect();
+        if last.iter().all(|(_, word)| word.is_none()) {
+            let why = "no speaker proposed anything usable".to_owned();
+            return Some(Decided::Ends(Unusable::Bad(why).outcome(Side::Executor)));
+        }
+        round.parts = last
+            .into_iter()
+            .filter_map(|(robot, word)| {
+                let (action, message) = word?;
+                Some(decision::part(env, robot, action.as_deref()?, message))
+            })
+            .collect();
+        Some(Decided::CarryOut)
     }
-    round.actions = all.iter().map(|a| a.line(task)).collect();
-    if last.iter().all(|(_, word)| word.is_none()) {
-        let why = "no speaker proposed anything usable".to_owned();
-        return Some(close(env, round, Unusable::Bad(why), start));
-    }
-    let parts = last
-        .into_iter()
-        .filter_map(|(robot, word)| {
-            let (action, message) = word?;
-            Some(decision::part(env, robot, action.as_deref()?, message))
-        })
-        .collect();
-    decision::act_jointly(env, task, &mut round, parts, None);
-    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    Some(round)
 }
 
 /// A speaker's word in a parallel dialogue: its own action (or none), and its message.
@@ -323,7 +290,7 @@ fn own_schema(own: &[String]) -> Value {
 
 fn speaker_messages(
     template: &str,
-    env: &(dyn Environment + Send),
+    env: &dyn Environment,
     task: &Task,
     speaker: NodeId,
     history: &[String],
@@ -348,7 +315,7 @@ fn speaker_messages(
     let mut values = vec![
         ("robot", robot_label(task, speaker)),
         ("kind", kind),
-        ("team", prompt::team(task)),
+        ("team", fill::team(task)),
         ("instruction", task.meta.instruction.clone()),
         ("history", or_none(history)),
         ("dialogue", or_none(dialogue)),
@@ -358,8 +325,8 @@ fn speaker_messages(
     let values: Vec<(&str, &str)> = values.iter().map(|(k, v)| (*k, v.as_str())).collect();
     let (system, user) = templates::split(template);
     vec![
-        Message::system(prompt::fill(system, &values).trim().to_owned()),
-        Message::user(prompt::fill(user, &values).trim().to_owned()),
+        Message::system(fill::fill(system, &values).trim().to_owned()),
+        Message::user(fill::fill(user, &values).trim().to_owned()),
     ]
 }
 
@@ -378,7 +345,7 @@ fn speaker_schema(lines: &[String]) -> Value {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::demo_task;
+    use crate::prompts::fill::demo_task;
 
     #[test]
     fn every_placeholder_of_the_template_is_filled() {
@@ -404,8 +371,8 @@ mod tests {
     #[test]
     fn every_placeholder_a_template_may_use_is_filled() {
         let task = demo_task();
-        let env = coherent_core::SymbolicEnv::new(Arc::clone(&task));
-        let prompts = crate::methods::prompt::every_placeholder(Template::DmrsSpeaker);
+        let env = coherent_core::SymbolicEnv::new(std::sync::Arc::clone(&task));
+        let prompts = crate::prompts::fill::every_placeholder(Template::DmrsSpeaker);
         let speaker = task.id(task.robots[0].node);
         let lines = ["a: b".to_owned()];
         let template = prompts.text(Template::DmrsSpeaker);

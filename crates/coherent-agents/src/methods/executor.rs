@@ -6,7 +6,7 @@
 //!
 //! Its prompt is one system prompt per robot type (`executor_quadrotor.txt`,
 //! `executor_robot_dog.txt`, `executor_robot_arm.txt`) and `executor_user.txt`, from the
-//! prompt set ([`crate::methods::templates`]); its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
+//! prompt set ([`crate::prompts::templates`]); its answer is one JSON object `{"action", "subtask_complete", "note"}`, the action
 //! constrained to its list or `none`, read into a [`Decision`] (or, without an object,
 //! from the first action of the list the text names). What the assigner hears of the
 //! round is [`crate::methods::feedback::pefa`]'s.
@@ -16,11 +16,11 @@ use std::sync::Arc;
 use coherent_core::{Environment, NodeId, RobotKind, Task};
 use serde_json::{Value, json};
 
-use crate::backends::llm::{Message, Query, Role, Situation};
 use crate::error::Error;
-use crate::methods::answer::{bool_field, field_text, json_object, normal, string_field};
-use crate::methods::prompt::{Sight, fill};
-use crate::methods::templates::{Prompts, Template};
+use crate::llm::{Message, Query, Role, Situation};
+use crate::prompts::answer::{bool_field, field_text, json_object, normal, string_field};
+use crate::prompts::fill::{Sight, fill};
+use crate::prompts::templates::{Prompts, Template};
 use crate::records::transcript::Decision;
 
 /// What one executor is told.
@@ -153,7 +153,11 @@ impl RobotExecutor {
 
     /// The decision in an answer, given the list it chose from, or why there is none.
     pub(crate) fn parse(&self, actions: &[String], text: &str) -> Result<Decision, String> {
-        parse_decision(actions, text)
+        let decision = parse_decision(actions, text)?;
+        Ok(Decision {
+            robot: Some(self.robot),
+            ..decision
+        })
     }
 }
 
@@ -168,6 +172,7 @@ fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String> {
         let can_do = bool_field(&map, "can_do").unwrap_or(true) && action.is_some();
         let note = string_field(&map, "note").unwrap_or_default();
         return Ok(Decision {
+            robot: None,
             can_do,
             action: if can_do {
                 action.map(|a| match_action(actions, &a))
@@ -190,6 +195,7 @@ fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String> {
         .min();
     match found {
         Some((_, _, action)) => Ok(Decision {
+            robot: None,
             can_do: true,
             action: Some(action.clone()),
             subtask_complete: false,
@@ -200,6 +206,7 @@ fn parse_decision(actions: &[String], text: &str) -> Result<Decision, String> {
             .any(|w| lower.contains(w)) =>
         {
             Ok(Decision {
+                robot: None,
                 can_do: false,
                 action: None,
                 subtask_complete: false,
@@ -223,7 +230,7 @@ fn match_action(actions: &[String], answer: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::methods::prompt::{check_placeholders, demo_task, every_placeholder};
+    use crate::prompts::fill::{check_placeholders, demo_task, every_placeholder};
     use coherent_core::SymbolicEnv;
 
     #[test]

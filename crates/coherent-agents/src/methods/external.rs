@@ -1,6 +1,6 @@
 //! A method written outside the crate ([`crate::episode::policy`]): each step its
 //! [`Policy`] gets a [`StepView`] and answers one robot and one action, or none; the action
-//! is checked and run through the same [`Environment`] as every method's, the round is
+//! is checked and run through the same environment as every method's, the round is
 //! recorded with the method's decision, note and model calls, and the episode goes on
 //! under the same budget.
 //!
@@ -15,114 +15,140 @@
 
 use std::io;
 use std::sync::Arc;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use coherent_core::text::{cut, cut_front, number};
-use coherent_core::{Environment, NodeId, Task};
+use coherent_core::{Execution, NodeId, Task};
 
-use crate::episode::cancel::Cancel;
-use crate::episode::joint;
+use crate::episode::method::{Closing, Decided, Method, Turn};
 use crate::episode::policy::{Act, Choice, MethodFailure, PastStep, Policy, StepView};
-use crate::episode::rounds::{Episode, History, rounds};
-use crate::methods::prompt::robot_label;
-use crate::methods::{decision, feedback};
-use crate::records::transcript::{Execution, RobotPart, Round, RoundOutcome};
+use crate::llm::BoxFuture;
+use crate::methods::decision;
+use crate::records::transcript::{RobotPart, Round, RoundOutcome};
 
-/// Runs the policy `made` for the episode on `env` until the goal holds, `max_steps` are
-/// spent, the policy fails or a step takes longer than `step_timeout`, or `cancel`
-/// fires; in a parallel episode each step's choices (one per robot that acts) are
-/// carried out as one joint step. A policy that could not be made fails the first step.
-pub async fn run(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    made: Result<Box<dyn Policy>, MethodFailure>,
-    (execution, max_steps): (Execution, u32),
+/// A method written outside the crate, for one episode: its policy (or why it could not
+/// be made: the first step fails with that), and how long one step may take.
+pub struct ExternalMethod {
+    policy: Result<Box<dyn Policy>, MethodFailure>,
     step_timeout: Option<Duration>,
-    cancel: &Cancel,
-    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-) -> io::Result<Episode> {
-    let mut policy = made;
-    let mut history = History::whole();
-    let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let start = Instant::now();
-        let act = match &mut policy {
-            Ok(policy) => {
-                let past = history.entries();
-                let view = StepView::now(env, task, (step, max_steps), execution, &past);
-                let act = policy.act(Arc::new(view));
-                // Without a limit, a step may take as long as it takes (a sleep of
-                // Duration::MAX would overflow the clock).
-                let limit = async {
-                    match step_timeout {
-                        Some(limit) => tokio::time::sleep(limit).await,
-                        None => std::future::pending().await,
-                    }
-                };
-                tokio::select! {
-                    biased;
-                    () = cancel.cancelled() => return Ok(None),
-                    act = act => act,
-                    () = limit => Act {
-                        choices: Err(out_of_time(step_timeout.unwrap_or_default())),
-                        calls: Vec::new(),
-                    },
-                }
+}
+
+impl ExternalMethod {
+    /// The method asking `policy` each step, each step within `step_timeout` (`None`: no
+    /// limit).
+    pub fn new(
+        policy: Result<Box<dyn Policy>, MethodFailure>,
+        step_timeout: Option<Duration>,
+    ) -> ExternalMethod {
+        ExternalMethod {
+            policy,
+            step_timeout,
+        }
+    }
+
+    /// The policy's answer for the step `turn` is about, within the step limit; `None`
+    /// when cancelled.
+    async fn ask(&mut self, turn: &Turn<'_>) -> Option<Act> {
+        let policy = match &mut self.policy {
+            Ok(policy) => policy,
+            Err(why) => {
+                return Some(Act {
+                    choices: Err(why.clone()),
+                    calls: Vec::new(),
+                });
             }
-            Err(why) => Act {
-                choices: Err(why.clone()),
-                calls: Vec::new(),
-            },
         };
-        let mut round = Round::new(step);
-        round.calls = act.calls;
-        match (bounded(act.choices), execution) {
-            (Ok(choices), Execution::Parallel) => jointly(env, task, &mut round, choices),
-            (Ok(mut choices), Execution::Sequential) if choices.len() <= 1 => {
-                let choice = choices.pop().unwrap_or_default();
-                round.external = Some(choice.clone());
-                let action = choice.action.unwrap_or_default();
-                match choice.robot {
-                    Some(robot) => take(env, task, &mut round, robot, &action, choice.note),
-                    None => decision::no_action(&mut round, choice.note),
-                }
+        let past: Vec<PastStep> = turn.rounds.iter().flat_map(past_steps).collect();
+        let at = (turn.step, turn.max_steps);
+        let view = StepView::now(turn.env, turn.task, at, turn.execution, &past);
+        let act = policy.act(Arc::new(view));
+        let step_timeout = self.step_timeout;
+        // Without a limit, a step may take as long as it takes (a sleep of
+        // Duration::MAX would overflow the clock).
+        let limit = async {
+            match step_timeout {
+                Some(limit) => tokio::time::sleep(limit).await,
+                None => std::future::pending().await,
             }
-            (Ok(choices), Execution::Sequential) => failed(
-                &mut round,
-                format!(
-                    "act gave {} decisions: a sequential episode takes one a step (run it \
-                     with execution parallel for one per robot)",
-                    choices.len()
-                ),
-            ),
-            (Err(MethodFailure(message)), _) => failed(&mut round, message),
+        };
+        tokio::select! {
+            biased;
+            () = turn.cancel.cancelled() => None,
+            act = act => Some(act),
+            () = limit => Some(Act {
+                choices: Err(out_of_time(step_timeout.unwrap_or_default())),
+                calls: Vec::new(),
+            }),
         }
-        for past in past_steps(&round) {
-            history.push(past);
-        }
-        round.done = env.goal_satisfied();
-        round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(Some(round))
-    };
-    rounds(env, task, max_steps, cancel, on_round, play).await
+    }
 }
 
-/// A round in which the method failed: the episode ends with its words.
-fn failed(round: &mut Round, message: String) {
-    round.outcome = RoundOutcome::MethodError { message };
-    round.feedback = feedback::team("", &round.outcome);
+impl std::fmt::Debug for ExternalMethod {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ExternalMethod")
+            .field("made", &self.policy.is_ok())
+            .field("step_timeout", &self.step_timeout)
+            .finish_non_exhaustive()
+    }
 }
 
-/// A parallel round: each choice that names a robot is that robot's part, carried out
-/// together; choices that name none are no action, what they report kept in the
-/// round's own [`Round::external`]. A robot that is not in the team refuses the step
-/// (`unknown_robot`, every other part `step_refused`), as the rules refuse any step
-/// with an action that cannot be.
-fn jointly(
-    env: &mut (dyn Environment + Send),
-    task: &Task,
-    round: &mut Round,
-    choices: Vec<Choice>,
-) {
+impl Method for ExternalMethod {
+    fn decide<'a>(
+        &'a mut self,
+        turn: Turn<'a>,
+        round: &'a mut Round,
+    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+        Box::pin(async move {
+            let Some(act) = self.ask(&turn).await else {
+                return Ok(None);
+            };
+            round.calls = act.calls;
+            Ok(Some(match (bounded(act.choices), turn.execution) {
+                (Ok(choices), Execution::Parallel) => jointly(turn, round, choices),
+                (Ok(mut choices), Execution::Sequential) if choices.len() <= 1 => {
+                    let choice = choices.pop().unwrap_or_default();
+                    round.external = Some(choice.clone());
+                    match choice.robot {
+                        Some(robot) => {
+                            if turn.task.robot_by_id(robot).is_ok() {
+                                round.actions = turn.env.actions(robot).unwrap_or_default();
+                            }
+                            let action = choice.action.unwrap_or_default();
+                            decision::choose(round, robot, &action, choice.note);
+                        }
+                        None => decision::nothing(round, choice.note),
+                    }
+                    Decided::CarryOut
+                }
+                (Ok(choices), Execution::Sequential) => Decided::Ends(RoundOutcome::MethodError {
+                    message: format!(
+                        "act gave {} decisions: a sequential episode takes one a step (run it \
+                         with execution parallel for one per robot)",
+                        choices.len()
+                    ),
+                }),
+                (Err(MethodFailure(message)), _) => {
+                    Decided::Ends(RoundOutcome::MethodError { message })
+                }
+            }))
+        })
+    }
+
+    fn conclude(&mut self, closing: Closing<'_>, round: &mut Round) {
+        decision::team_feedback(closing.task, round, None);
+    }
+
+    /// Nothing: the method is shown every earlier step, and picks its own window.
+    fn recall(&self, _: &Task, _: &Round) -> Option<String> {
+        None
+    }
+}
+
+/// A parallel round: each choice that names a robot is that robot's part, for the loop to
+/// carry out together (a robot that is not in the team refuses the step); choices that
+/// name none are no action, what they report kept in the round's own
+/// [`Round::external`].
+fn jointly(turn: Turn<'_>, round: &mut Round, choices: Vec<Choice>) -> Decided {
     let (acting, idle): (Vec<Choice>, Vec<Choice>) =
         choices.into_iter().partition(|c| c.robot.is_some());
     if !idle.is_empty() {
@@ -140,57 +166,18 @@ fn jointly(
             calls: idle.iter().map(|c| c.calls).sum(),
         });
     }
-    let mut parts: Vec<RobotPart> = acting
+    round.parts = acting
         .into_iter()
         .filter_map(|c| {
             let robot = c.robot?;
             let action = c.action.clone().unwrap_or_default();
             Some(RobotPart {
                 external: Some(c.clone()),
-                ..decision::part(env, robot, &action, c.note)
+                ..decision::part(turn.env, robot, &action, c.note)
             })
         })
         .collect();
-    let unknown: Vec<NodeId> = parts
-        .iter()
-        .map(|p| p.robot)
-        .filter(|r| task.robot_by_id(*r).is_err())
-        .collect();
-    if unknown.is_empty() {
-        return decision::act_jointly(env, task, round, parts, None);
-    }
-    for p in &mut parts {
-        p.outcome = match task.robot_by_id(p.robot) {
-            Err(e) => RoundOutcome::Infeasible {
-                reason: "unknown_robot".into(),
-                message: e.to_string(),
-            },
-            Ok(_) => RoundOutcome::Infeasible {
-                reason: "step_refused".into(),
-                message: "not carried out: the joint step names a robot that is not in the team"
-                    .into(),
-            },
-        };
-        let line = format!(
-            "{}: {}",
-            robot_label(task, p.robot),
-            p.action().unwrap_or_default()
-        );
-        p.feedback = feedback::team(&line, &p.outcome);
-    }
-    let outcome = RoundOutcome::Infeasible {
-        reason: "unknown_robot".into(),
-        message: format!(
-            "robot {} is not in the team",
-            unknown
-                .iter()
-                .map(ToString::to_string)
-                .collect::<Vec<_>>()
-                .join(", ")
-        ),
-    };
-    let paragraph = joint::paragraph(None, &parts);
-    joint::close(env, round, parts, outcome, paragraph);
+    Decided::CarryOut
 }
 
 /// The failure of a step that took longer than `limit`.
@@ -219,31 +206,6 @@ fn bounded(choices: Result<Vec<Choice>, MethodFailure>) -> Result<Vec<Choice>, M
             })
             .collect()),
         Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
-    }
-}
-
-/// Runs `robot`'s `action` as the round's decision; a robot that is not in the team is a
-/// refused step (`unknown_robot`) with the team in its message.
-fn take(
-    env: &mut (dyn Environment + Send),
-    task: &Task,
-    round: &mut Round,
-    robot: NodeId,
-    action: &str,
-    note: String,
-) {
-    match task.robot_by_id(robot) {
-        Ok(_) => {
-            round.actions = env.actions(robot).unwrap_or_default();
-            decision::act(env, task, round, robot, action, note);
-        }
-        Err(e) => {
-            let outcome = RoundOutcome::Infeasible {
-                reason: "unknown_robot".into(),
-                message: e.to_string(),
-            };
-            decision::decided(task, round, robot, action, outcome, note);
-        }
     }
 }
 

@@ -9,7 +9,7 @@
 use coherent_core::reach::{self, Reach};
 use coherent_core::{NodeId, State, Task};
 
-use crate::methods::prompt::robot_label;
+use crate::prompts::fill::robot_label;
 use crate::records::transcript::{Decision, Proposal, RobotPart, Round, RoundOutcome};
 
 /// The most things of a subtask whose obstacles the feedback lists.

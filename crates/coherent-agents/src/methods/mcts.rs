@@ -56,7 +56,7 @@
 //! language model at the root of each real step's tree: it is sampled
 //! [`MctsConfig::samples`] (5) times with a CMRS-like prompt (the instruction, every
 //! robot's observation as facts, the union of the action lists as `<robot>: <action>`
-//! lines, the last executed actions: [`HISTORY_WINDOW`]), each answer is matched to the nearest valid
+//! lines, the last executed actions: the history window), each answer is matched to the nearest valid
 //! team action ([`match_line`]; an answer matching none is dropped), and
 //! `P = 0.5 x (the empirical distribution of matched samples) + 0.5 x uniform`
 //! ([`mix_prior`]). Below the root the prior is uniform. Asking the model only at the
@@ -68,19 +68,18 @@
 use std::io;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
 
-use coherent_core::{Environment, State, Task, rules};
+use coherent_core::{State, Task, rules};
 
-use crate::backends::llm::{Backend, Finish, Query, Role, Situation};
 use crate::episode::ask::place_call;
-use crate::episode::cancel::Cancel;
-use crate::episode::environment::{execute, team_sight};
-use crate::episode::rounds::{Episode, HISTORY_WINDOW, History, rounds};
-use crate::methods::answer::{match_line, read_line};
-use crate::methods::team_actions::{self, TeamAction};
-use crate::methods::templates::Prompts;
+use crate::episode::environment::team_sight;
+use crate::episode::method::{Closing, Decided, Method, Turn};
+use crate::llm::{BoxFuture, Finish, Query, Role, Situation};
 use crate::methods::{central, decision, feedback};
+use crate::prompts::answer::{match_line, read_line};
+use crate::prompts::fill::robot_label;
+use crate::prompts::team_actions::{self, TeamAction};
+use crate::prompts::templates::Prompts;
 use crate::records::transcript::{Decision, Round, RoundOutcome};
 use crate::rng::{Rng, seed_of};
 
@@ -104,8 +103,6 @@ pub struct MctsConfig {
     pub samples: u32,
     /// LLM-MCTS: the model's share of the root prior (the rest is uniform).
     pub llm_weight: f64,
-    /// LLM-MCTS: executed actions the prompt recalls.
-    pub history: usize,
     /// LLM-MCTS: the answer is one short line.
     pub max_tokens: u32,
     /// LLM-MCTS: the prompt's template (`central.txt`) comes from here.
@@ -124,7 +121,6 @@ impl Default for MctsConfig {
             seed: 0,
             samples: 5,
             llm_weight: 0.5,
-            history: HISTORY_WINDOW,
             max_tokens: 120,
             prompts: Prompts::builtin(),
         }
@@ -397,54 +393,38 @@ fn root_stats(mut tree: Vec<Node>, config: &MctsConfig, simulations: u32) -> Roo
     stats
 }
 
-/// Runs MCTS on `env` until the goal holds, `max_steps` steps are spent, the backend
-/// fails for good, or `cancel` fires: primitive MCTS when `backend` is `None`, LLM-MCTS
-/// otherwise. `on_round` sees each round as it ends; its error stops the episode.
-pub async fn run(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    backend: Option<&dyn Backend>,
-    config: &MctsConfig,
-    max_steps: u32,
-    cancel: &Cancel,
-    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-) -> io::Result<Episode> {
-    let mut history = History::new(config.history);
-    let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let r = round(env, task, backend, config, cancel, &history.entries(), step).await?;
-        if let Some(line) = r.as_ref().and_then(|r| decision::executed_line(task, r)) {
-            history.push(line);
-        }
-        Ok(r)
-    };
-    rounds(env, task, max_steps, cancel, on_round, play).await
+/// MCTS for one episode: primitive MCTS, or LLM-MCTS with the model's prior at the root
+/// of each step's tree.
+#[derive(Debug)]
+pub struct Mcts {
+    config: MctsConfig,
+    /// Whether the episode's backend gives the prior (LLM-MCTS).
+    llm: bool,
 }
 
-/// One real step; `None` when cancelled during it (nothing of it is kept).
-async fn round(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    backend: Option<&dyn Backend>,
-    config: &MctsConfig,
-    cancel: &Cancel,
-    history: &[String],
-    step: u32,
-) -> io::Result<Option<Round>> {
-    let start = Instant::now();
-    let state = env.state().clone();
-    let actions = team_actions::offered(task, &state);
-    let lines: Vec<String> = actions.iter().map(|a| a.line(task)).collect();
-    let mut round = Round::new(step);
-    round.actions = lines.clone();
-    if actions.is_empty() {
-        round.feedback = feedback::mcts(None, &round.outcome);
-        return Ok(Some(close(env, round, start)));
+impl Mcts {
+    /// Primitive MCTS: the uniform prior everywhere; no model.
+    pub fn primitive(config: MctsConfig) -> Mcts {
+        Mcts { config, llm: false }
     }
 
-    // The prior, from the model's samples.
-    let mut prior = None;
-    if let Some(backend) = backend {
-        let messages = central::messages(&config.prompts, &team_sight(env, task), &lines, history);
+    /// LLM-MCTS: the model's samples shape the root's prior.
+    pub fn llm(config: MctsConfig) -> Mcts {
+        Mcts { config, llm: true }
+    }
+
+    /// The root's prior from the model's samples, or the outcome that ends the round
+    /// (the model could not be reached); `None` when cancelled.
+    async fn prior(
+        &self,
+        turn: &Turn<'_>,
+        round: &mut Round,
+        lines: &[String],
+    ) -> Option<Result<Vec<f64>, RoundOutcome>> {
+        let Turn { task, env, .. } = *turn;
+        let config = &self.config;
+        let messages =
+            central::messages(&config.prompts, &team_sight(env, task), lines, turn.history);
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {
@@ -452,76 +432,110 @@ async fn round(
                 robot: None,
                 messages: messages.clone(),
                 schema_name: "team_action",
-                schema: central::schema(&lines),
+                schema: central::schema(lines),
                 max_tokens: config.max_tokens,
                 situation: Situation::now(task, env, None),
             };
-            let Some(call) = place_call(backend, query, cancel).await else {
-                return Ok(None);
-            };
+            let call = place_call(turn.backend, query, turn.cancel).await?;
             // A refusal, a filtered or an empty answer names nothing.
             if let Some(answer) = &call.answer
                 && matches!(answer.finish, Finish::Stop | Finish::Length)
                 && !answer.text.trim().is_empty()
-                && let Some(i) = match_line(&lines, &read_line(&answer.text))
+                && let Some(i) = match_line(lines, &read_line(&answer.text))
             {
                 counts[i] += 1;
             }
             let ended = call.error.as_ref().filter(|e| e.ends_episode()).cloned();
             round.calls.push(call);
             if let Some(e) = ended {
-                round.outcome = RoundOutcome::BackendError {
+                return Some(Err(RoundOutcome::BackendError {
                     message: e.to_string(),
-                };
-                round.feedback = feedback::team("", &round.outcome);
-                return Ok(Some(close(env, round, start)));
+                }));
             }
         }
-        prior = Some(mix_prior(&counts, config.llm_weight));
+        Some(Ok(mix_prior(&counts, config.llm_weight)))
     }
-
-    // The search is CPU work: keep it off the async workers.
-    let seed = seed_of(config.seed, u64::from(step));
-    let (t, s, c, flag) = (Arc::clone(task), state, config.clone(), cancel.flag());
-    let stats = tokio::task::spawn_blocking(move || {
-        search(
-            &t,
-            &s,
-            prior.as_deref(),
-            &c,
-            &mut Rng::new(seed),
-            Some(&flag),
-        )
-    })
-    .await
-    .map_err(io::Error::other)?;
-    if cancel.is_cancelled() {
-        return Ok(None);
-    }
-    let Some(i) = stats.choice else {
-        round.feedback = feedback::mcts(None, &round.outcome);
-        return Ok(Some(close(env, round, start)));
-    };
-    let chosen = stats.actions[i];
-    let line = chosen.line(task);
-    let robot = task.node(chosen.robot.node).label();
-    let action = chosen.action.render(task);
-    round.decision = Some(Decision {
-        can_do: true,
-        action: Some(line),
-        subtask_complete: false,
-        note: format!(
-            "{} of {} simulations, Q {:.3}, prior {:.3}",
-            stats.visits[i], stats.simulations, stats.q[i], stats.prior[i]
-        ),
-    });
-    round.outcome = execute(env, &mut round, task.id(chosen.robot.node), &action);
-    round.feedback = feedback::mcts(Some((&robot, &action)), &round.outcome);
-    Ok(Some(close(env, round, start)))
 }
 
-fn close(env: &(dyn Environment + Send), mut round: Round, start: Instant) -> Round {
-    round.done = env.goal_satisfied();
-    round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-    round
+impl Method for Mcts {
+    fn decide<'a>(
+        &'a mut self,
+        turn: Turn<'a>,
+        round: &'a mut Round,
+    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+        Box::pin(async move {
+            let task = turn.task;
+            let state = turn.env.state().clone();
+            let actions = team_actions::offered(task, &state);
+            let lines: Vec<String> = actions.iter().map(|a| a.line(task)).collect();
+            round.actions = lines.clone();
+            if actions.is_empty() {
+                return Ok(Some(Decided::Ends(RoundOutcome::Declined)));
+            }
+            let prior = if self.llm {
+                match self.prior(&turn, round, &lines).await {
+                    None => return Ok(None),
+                    Some(Err(ended)) => return Ok(Some(Decided::Ends(ended))),
+                    Some(Ok(prior)) => Some(prior),
+                }
+            } else {
+                None
+            };
+
+            // The search is CPU work: keep it off the async workers.
+            let seed = seed_of(self.config.seed, u64::from(round.step));
+            let (t, c, flag) = (Arc::clone(task), self.config.clone(), turn.cancel.flag());
+            let stats = tokio::task::spawn_blocking(move || {
+                search(
+                    &t,
+                    &state,
+                    prior.as_deref(),
+                    &c,
+                    &mut Rng::new(seed),
+                    Some(&flag),
+                )
+            })
+            .await
+            .map_err(io::Error::other)?;
+            if turn.cancel.is_cancelled() {
+                return Ok(None);
+            }
+            let Some(i) = stats.choice else {
+                return Ok(Some(Decided::Ends(RoundOutcome::Declined)));
+            };
+            let chosen = stats.actions[i];
+            round.decision = Some(Decision {
+                robot: Some(task.id(chosen.robot.node)),
+                can_do: true,
+                action: Some(chosen.action.render(task)),
+                subtask_complete: false,
+                note: format!(
+                    "{} of {} simulations, Q {:.3}, prior {:.3}",
+                    stats.visits[i], stats.simulations, stats.q[i], stats.prior[i]
+                ),
+            });
+            Ok(Some(Decided::CarryOut))
+        })
+    }
+
+    /// What its chosen action did ([`feedback::mcts`]), or that no robot could act, or
+    /// that the model could not be reached.
+    fn conclude(&mut self, closing: Closing<'_>, round: &mut Round) {
+        let task = closing.task;
+        let chosen = round
+            .decision
+            .as_ref()
+            .and_then(|d| Some((d.robot?, d.action.as_deref()?)));
+        round.feedback = match (&round.outcome, chosen) {
+            (RoundOutcome::BackendError { .. }, _) => feedback::team("", &round.outcome),
+            (_, None) => feedback::mcts(None, &round.outcome),
+            (outcome, Some((robot, action))) => {
+                feedback::mcts(Some((&robot_label(task, robot), action)), outcome)
+            }
+        };
+    }
+
+    fn recall(&self, task: &Task, round: &Round) -> Option<String> {
+        decision::executed_line(task, round)
+    }
 }

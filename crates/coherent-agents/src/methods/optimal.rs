@@ -1,122 +1,128 @@
 //! The ground-truth row of the paper's tables: the optimal planner's shortest plan,
-//! executed step by step through the same `Environment` and loop as every method; in a
-//! parallel episode the makespan search's plan (`coherent_core::makespan`), joint step by
-//! joint step. No model; a task without a plan spends its budget on rounds that say why.
+//! carried out step by step under the same loop as every method; in a parallel episode
+//! the makespan search's plan (`coherent_core::makespan`), joint step by joint step. No
+//! model; a task without a plan spends its budget on rounds that say why.
 
 use std::io;
 use std::sync::Arc;
-use std::time::Instant;
 
 use coherent_core::makespan::{self, JointStep};
-use coherent_core::planner::{self, Limits};
-use coherent_core::{Environment, Task};
+use coherent_core::planner::{self, Limits, Step};
+use coherent_core::{Execution, State, Task};
 
-use crate::episode::cancel::Cancel;
-use crate::episode::rounds::{Episode, rounds};
+use crate::episode::method::{Closing, Decided, Method, Turn};
+use crate::llm::BoxFuture;
 use crate::methods::decision;
-use crate::records::transcript::{Execution, Round, RoundOutcome};
+use crate::records::transcript::{Round, RoundOutcome};
 
-/// Runs the shortest plan from the environment's state (found once, by `limits`), or in
-/// a parallel episode the plan of the fewest joint steps.
-pub async fn run(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
-    limits: &Limits,
-    execution: Execution,
-    max_steps: u32,
-    cancel: &Cancel,
-    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-) -> io::Result<Episode> {
-    if execution == Execution::Parallel {
-        return parallel(env, task, limits, max_steps, cancel, on_round).await;
-    }
-    let (t, s, l) = (Arc::clone(task), env.state().clone(), limits.clone());
-    let search =
-        tokio::task::spawn_blocking(move || planner::search_from(&t, &s, &t.robots, &t.goal, &l))
-            .await
-            .map_err(io::Error::other)?;
-    let plan = search.plan.ok_or(if search.truncated {
-        "the search stopped before it found a plan"
-    } else {
-        "no plan reaches the goal"
-    });
-    let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let start = Instant::now();
-        let mut round = Round::new(step);
-        match plan.as_ref().map(|p| p.get(step as usize - 1)) {
-            Ok(Some(s)) => {
-                let robot = task.id(s.robot);
-                let action = s.action.render(task);
-                decision::act(env, task, &mut round, robot, &action, String::new());
-            }
-            Ok(None) => {
-                round.outcome = RoundOutcome::NoDecision {
-                    why: "the plan is over".into(),
-                }
-            }
-            Err(why) => {
-                round.outcome = RoundOutcome::NoDecision {
-                    why: (*why).to_owned(),
-                }
-            }
-        }
-        round.done = env.goal_satisfied();
-        round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(Some(round))
-    };
-    rounds(env, task, max_steps, cancel, on_round, play).await
+/// The plan an episode follows: a step per round, or a joint step per round.
+#[derive(Debug)]
+enum Plan {
+    Steps(Vec<Step>),
+    JointSteps(Vec<JointStep>),
 }
 
-/// Runs the plan of the fewest joint steps from the environment's state (the best one
-/// found within `limits`: the sequential optimum scheduled, when the search stops early).
-async fn parallel(
-    env: &mut (dyn Environment + Send),
-    task: &Arc<Task>,
+/// The optimal plan for one episode, found at its first round (within `limits`).
+#[derive(Debug)]
+pub struct Optimal {
+    limits: Limits,
+    /// The plan once found, or why there is none.
+    plan: Option<Result<Plan, &'static str>>,
+}
+
+impl Optimal {
+    /// The method; `limits` bound its one search (its cancel flag stops it).
+    pub fn new(limits: Limits) -> Optimal {
+        Optimal { limits, plan: None }
+    }
+}
+
+/// The shortest plan from `state`, or in a parallel episode the plan of the fewest joint
+/// steps (the best found within `limits`: the sequential optimum scheduled, when the
+/// search stops early), or why there is none.
+fn search(
+    task: &Task,
+    state: &State,
     limits: &Limits,
-    max_steps: u32,
-    cancel: &Cancel,
-    on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-) -> io::Result<Episode> {
-    let (t, s, l) = (Arc::clone(task), env.state().clone(), limits.clone());
-    let search = tokio::task::spawn_blocking(move || {
-        let sequential = planner::search_from(&t, &s, &t.robots, &t.goal, &l);
-        makespan::search_with(&t, &s, &t.robots, &t.goal, sequential.plan.as_deref(), &l)
-    })
-    .await
-    .map_err(io::Error::other)?;
-    let plan: Result<Vec<JointStep>, &str> = search.plan.ok_or(if search.stop.is_some() {
-        "the search stopped before it found a plan"
-    } else {
-        "no plan reaches the goal"
-    });
-    let play = async |env: &mut (dyn Environment + Send), step: u32| {
-        let start = Instant::now();
-        let mut round = Round::new(step);
-        match plan.as_ref().map(|p| p.get(step as usize - 1)) {
-            Ok(Some(joint)) => {
-                let parts = joint
-                    .iter()
-                    .map(|s| {
-                        let action = s.action.render(task);
-                        decision::part(env, task.id(s.robot), &action, String::new())
-                    })
-                    .collect();
-                decision::act_jointly(env, task, &mut round, parts, None);
-            }
-            Ok(None) => {
-                round.outcome = RoundOutcome::NoDecision {
-                    why: "the plan is over".into(),
-                }
-            }
-            Err(why) => {
-                round.outcome = RoundOutcome::NoDecision {
-                    why: (*why).to_owned(),
-                }
-            }
+    execution: Execution,
+) -> Result<Plan, &'static str> {
+    let sequential = planner::search_from(task, state, &task.robots, &task.goal, limits);
+    let stopped = "the search stopped before it found a plan";
+    let none = "no plan reaches the goal";
+    match execution {
+        Execution::Sequential => sequential
+            .plan
+            .map(Plan::Steps)
+            .ok_or(if sequential.truncated { stopped } else { none }),
+        Execution::Parallel => {
+            let plan = sequential.plan.as_deref();
+            let joint = makespan::search_with(task, state, &task.robots, &task.goal, plan, limits);
+            joint
+                .plan
+                .map(Plan::JointSteps)
+                .ok_or(if joint.stop.is_some() { stopped } else { none })
         }
-        round.done = env.goal_satisfied();
-        round.wall_ms = start.elapsed().as_secs_f64() * 1e3;
-        Ok(Some(round))
-    };
-    rounds(env, task, max_steps, cancel, on_round, play).await
+    }
+}
+
+impl Method for Optimal {
+    fn decide<'a>(
+        &'a mut self,
+        turn: Turn<'a>,
+        round: &'a mut Round,
+    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+        Box::pin(async move {
+            let task = turn.task;
+            let plan = match &mut self.plan {
+                Some(plan) => plan,
+                unsearched @ None => {
+                    let (t, s) = (Arc::clone(task), turn.env.state().clone());
+                    let (l, execution) = (self.limits.clone(), turn.execution);
+                    let found = tokio::task::spawn_blocking(move || search(&t, &s, &l, execution))
+                        .await
+                        .map_err(io::Error::other)?;
+                    unsearched.insert(found)
+                }
+            };
+            let at = round.step as usize - 1;
+            let why = match plan {
+                Ok(Plan::Steps(steps)) => match steps.get(at) {
+                    Some(s) => {
+                        let action = s.action.render(task);
+                        decision::choose(round, task.id(s.robot), &action, String::new());
+                        return Ok(Some(Decided::CarryOut));
+                    }
+                    None => "the plan is over",
+                },
+                Ok(Plan::JointSteps(steps)) => match steps.get(at) {
+                    Some(joint) => {
+                        round.parts = joint
+                            .iter()
+                            .map(|s| {
+                                let action = s.action.render(task);
+                                decision::part(turn.env, task.id(s.robot), &action, String::new())
+                            })
+                            .collect();
+                        return Ok(Some(Decided::CarryOut));
+                    }
+                    None => "the plan is over",
+                },
+                Err(why) => *why,
+            };
+            let why = why.to_owned();
+            Ok(Some(Decided::Ends(RoundOutcome::NoDecision { why })))
+        })
+    }
+
+    /// What ran, as the team methods hear it; a round past the plan, or of a task without
+    /// one, says nothing more than its outcome.
+    fn conclude(&mut self, closing: Closing<'_>, round: &mut Round) {
+        if round.decision.is_some() || !round.parts.is_empty() {
+            decision::team_feedback(closing.task, round, None);
+        }
+    }
+
+    fn recall(&self, _: &Task, _: &Round) -> Option<String> {
+        None
+    }
 }

@@ -1,7 +1,9 @@
 //! What an episode leaves behind: its [`transcript`] (one JSON line per round, written as
-//! it runs), and the [`replay`] of a recorded episode from it; [`lock`] keeps a file
-//! being written from a second writer.
+//! it runs, read back by every version since the first); [`lock`] keeps a file being
+//! written from a second writer.
+
+/// The version of coherent, as transcripts and results lines record it.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 pub mod lock;
-pub mod replay;
 pub mod transcript;

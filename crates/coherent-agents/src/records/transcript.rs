@@ -2,7 +2,7 @@
 //! raw answers, parsed decisions, the action list, the outcome, tokens, latencies),
 //! then a summary; each line is flushed as it is written, so a crash loses nothing that
 //! ran. A transcript holds everything needed to replay its episode
-//! ([`crate::records::replay`]).
+//! ([`crate::run::replay`]).
 
 use std::fs::File;
 use std::io::{self, Write};
@@ -12,16 +12,17 @@ use coherent_core::RobotReport;
 use coherent_core::files::{Limit, Lines, MIB};
 use serde::{Deserialize, Serialize};
 
-use coherent_core::{NodeId, Task};
+use coherent_core::{Execution, NodeId, Task, native};
 
-use crate::backends::llm::{Answer, BackendInfo, LlmError, Message, Role};
-pub use crate::episode::execution::Execution;
 use crate::error::Error;
-use crate::methods::templates::PromptRecord;
+use crate::llm::{Answer, BackendInfo, LlmError, Message, Role};
+use crate::prompts::fill::robot_label;
+use crate::prompts::templates::PromptRecord;
 use crate::records::lock;
 
 pub const FORMAT: &str = "coherent-transcript";
-pub const VERSION: u32 = 1;
+/// The version written; every version from 1 up to it is read.
+pub const VERSION: u32 = 2;
 
 /// The first line: what ran, on what, with which settings.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -107,11 +108,14 @@ pub struct Proposal {
     pub reasoning: String,
 }
 
-/// An executor's decision, as read from its answer
-/// ([`crate::methods::executor::RobotExecutor::parse`]); the central and dialogue
-/// methods record their chosen line as one too.
+/// A decision: an executor's, as read from its answer
+/// ([`crate::methods::executor::RobotExecutor::parse`]), or the robot and action a
+/// central, dialogue, tree-search, optimal, random or Python method chose.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Decision {
+    /// The robot that is to act; `None` when the method chose no action.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub robot: Option<NodeId>,
     pub can_do: bool,
     /// The action to run, as answered (matched to the list's spelling when it is one of
     /// them); `None` when the executor declines.
@@ -128,7 +132,7 @@ pub enum RoundOutcome {
     /// The action ran.
     Executed,
     /// The action was checked and refused (core's feasibility reason; physics when on).
-    Infeasible { reason: String, message: String },
+    Infeasible { reason: Reason, message: String },
     /// The executor said it cannot do the subtask now.
     Declined,
     /// The assigner's answer could not be used.
@@ -140,6 +144,63 @@ pub enum RoundOutcome {
     /// A method written outside the crate raised an error instead of deciding; the
     /// episode ends here.
     MethodError { message: String },
+}
+
+/// Why an action, or a joint step, did not run: the engine's reason (the rules', the
+/// physical world's or a robot's, `coherent_core::Reason`; `step_refused` for a joint
+/// step refused as a whole), or one of the loop's own. Written as its name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(into = "String", try_from = "String")]
+pub enum Reason {
+    Engine(coherent_core::Reason),
+    /// The environment could not take the action at all: an error, not a refusal (over
+    /// ROS 2, a robot without a server).
+    Error,
+    /// The decision names a robot that is not in the team.
+    UnknownRobot,
+}
+
+impl Reason {
+    /// A stable snake_case name, as transcripts, results and step lines write it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reason::Engine(r) => r.name(),
+            Reason::Error => "error",
+            Reason::UnknownRobot => "unknown_robot",
+        }
+    }
+}
+
+impl From<coherent_core::Reason> for Reason {
+    fn from(r: coherent_core::Reason) -> Reason {
+        Reason::Engine(r)
+    }
+}
+
+impl From<Reason> for String {
+    fn from(r: Reason) -> String {
+        r.name().to_owned()
+    }
+}
+
+impl TryFrom<String> for Reason {
+    type Error = String;
+
+    fn try_from(name: String) -> Result<Reason, String> {
+        match name.as_str() {
+            "error" => Ok(Reason::Error),
+            "unknown_robot" => Ok(Reason::UnknownRobot),
+            other => coherent_core::Reason::from_name(other)
+                .map(Reason::Engine)
+                .ok_or_else(|| format!("unknown reason {:?}", coherent_core::text::shown(other))),
+        }
+    }
+}
+
+impl std::fmt::Display for Reason {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// The headline of an error's text: for a Python traceback, the exception's first line
@@ -292,31 +353,20 @@ pub struct Round {
 
 impl Round {
     /// The robot the round chose and the action it chose for it, whatever came of it:
-    /// the proposal's robot and the decision's action (PEFA), or the robot a decision
-    /// `<robot label>: <action>` names (the central and dialogue methods, and methods
-    /// written outside the crate, record their choice so), else a method's own robot.
-    pub fn chosen<'r>(&'r self, task: &Task) -> (Option<NodeId>, Option<&'r str>) {
-        let action = self.decision.as_ref().and_then(|d| d.action.as_deref());
-        if let Some(p) = &self.proposal {
-            return (Some(p.robot), action);
-        }
-        if let Some(line) = action {
-            for r in &task.robots {
-                let label = task.node(r.node).label();
-                if let Some(rest) = line
-                    .strip_prefix(label.as_str())
-                    .and_then(|rest| rest.strip_prefix(": "))
-                {
-                    return (Some(task.id(r.node)), Some(rest));
-                }
-            }
-        }
-        (self.external.as_ref().and_then(|e| e.robot), action)
+    /// its decision's (PEFA's executor's robot is the proposal's), else the robot a
+    /// proposal named or a method written outside the crate gave.
+    pub fn chosen(&self) -> (Option<NodeId>, Option<&str>) {
+        let decision = self.decision.as_ref();
+        let robot = decision
+            .and_then(|d| d.robot)
+            .or(self.proposal.as_ref().map(|p| p.robot))
+            .or(self.external.as_ref().and_then(|e| e.robot));
+        (robot, decision.and_then(|d| d.action.as_deref()))
     }
 
     /// The robot and the action the round carried out, if it carried one out.
-    pub fn executed<'r>(&'r self, task: &Task) -> Option<(NodeId, &'r str)> {
-        match (&self.outcome, self.chosen(task)) {
+    pub fn executed(&self) -> Option<(NodeId, &str)> {
+        match (&self.outcome, self.chosen()) {
             (RoundOutcome::Executed, (Some(robot), Some(action))) => Some((robot, action)),
             _ => None,
         }
@@ -326,9 +376,9 @@ impl Round {
     /// one in a sequential round, each executed part's in a parallel one (a joint step's
     /// actions do not interfere, so carried out one after another in this order they
     /// give the step's state).
-    pub fn carried_out<'r>(&'r self, task: &Task) -> Vec<(NodeId, &'r str)> {
+    pub fn carried_out(&self) -> Vec<(NodeId, &str)> {
         if self.parts.is_empty() {
-            return self.executed(task).into_iter().collect();
+            return self.executed().into_iter().collect();
         }
         self.parts
             .iter()
@@ -431,12 +481,9 @@ pub struct Writer {
 }
 
 impl Writer {
-    /// Creates the file (and its folder), locks it and writes the header.
-    pub fn create(path: &Path, header: Header) -> io::Result<Writer> {
-        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)?;
-        }
-        let file = File::create(path)?;
+    /// Writes into `file`, made for it (its name is the episode's alone: see
+    /// `crate::run::new_transcript`): locks it and writes the header.
+    pub fn new(file: File, header: Header) -> io::Result<Writer> {
         // A file just made is nobody else's: the lock is only for the others to see.
         lock::try_exclusive(&file)?;
         let mut w = Writer { file };
@@ -496,9 +543,9 @@ pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
         let record: Record = serde_json::from_str(line).map_err(|e| at(e.to_string()))?;
         match record {
             Record::Header(h) if i == 0 => {
-                if h.format != FORMAT || h.version != VERSION {
+                if h.format != FORMAT || !(1..=VERSION).contains(&h.version) {
                     return Err(at(format!(
-                        "format {:?} version {} (this is {FORMAT} version {VERSION})",
+                        "format {:?} version {} (this reads {FORMAT} versions 1 to {VERSION})",
                         h.format, h.version
                     )));
                 }
@@ -514,11 +561,49 @@ pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
         line: None,
         message: "no header line".into(),
     })?;
+    if header.version == 1 {
+        let task = native::read(&path.display().to_string(), &header.task)?;
+        for round in &mut rounds {
+            upgrade_v1(&task, round);
+        }
+    }
     Ok(Transcript {
         header,
         rounds,
         summary,
     })
+}
+
+/// A round of a version 1 transcript as version 2 records it: each decision names its
+/// robot. Version 1 named it only through the round's proposal (PEFA), its part (a joint
+/// step) or, for the other methods, in front of the action as `<robot label>: `, which is
+/// taken off here (the method written outside the crate's own robot first, for a robot
+/// that is not in the team).
+pub fn upgrade_v1(task: &Task, round: &mut Round) {
+    for part in &mut round.parts {
+        if let Some(d) = &mut part.decision {
+            d.robot = Some(part.robot);
+        }
+    }
+    let Some(d) = &mut round.decision else {
+        return;
+    };
+    if let Some(p) = &round.proposal {
+        d.robot = Some(p.robot);
+        return;
+    }
+    let Some(line) = &d.action else {
+        return;
+    };
+    let own = round.external.as_ref().and_then(|e| e.robot);
+    let team = task.robots.iter().map(|r| task.id(r.node));
+    for robot in own.into_iter().chain(team) {
+        if let Some(action) = line.strip_prefix(&format!("{}: ", robot_label(task, robot))) {
+            d.action = Some(action.to_owned());
+            d.robot = Some(robot);
+            return;
+        }
+    }
 }
 
 #[cfg(test)]

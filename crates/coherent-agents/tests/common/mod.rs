@@ -6,10 +6,14 @@
 
 pub mod http;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_core::{Task, read_tasks};
+use coherent_agents::episode::Budget;
+use coherent_agents::llm::Backend;
+use coherent_agents::run::new_transcript;
+use coherent_agents::{Cancel, Episode, Error, Settings};
+use coherent_core::{Environment, Task, read_tasks};
 
 pub fn data_dir() -> PathBuf {
     PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
@@ -47,4 +51,33 @@ pub fn task(scene: &str, id: i64) -> Arc<Task> {
         .find(|t| t.meta.task_id == id)
         .expect("the task is in the file");
     Arc::new(task)
+}
+
+/// Runs the method `settings` name on `env` as the session does (built by its name, under
+/// the one loop), into a transcript made in `out`: the episode and the transcript's path.
+pub async fn run(
+    task: &Arc<Task>,
+    env: &mut (dyn Environment + Send + Sync),
+    backend: &dyn Backend,
+    settings: &Settings,
+    budget: Budget,
+    out: &Path,
+    cancel: &Cancel,
+) -> Result<(Episode, PathBuf), Error> {
+    let file = new_transcript(out, task, settings.method.name())?;
+    let path = file.path().to_owned();
+    let mut method = settings.build(task, cancel)?;
+    let mut progress = |_: &coherent_agents::transcript::Round| {};
+    let run = coherent_agents::run(
+        task,
+        env,
+        backend,
+        method.as_mut(),
+        settings,
+        budget,
+        file,
+        cancel,
+        &mut progress,
+    );
+    Ok((run.await?.0, path))
 }

@@ -1,19 +1,26 @@
-//! The round loop every method shares: one round per step until the goal holds, the
-//! budget is spent, the backend fails for good or the episode is cancelled; then the
-//! summary. And what a method remembers of its earlier rounds, the history window: PEFA's
-//! task assigner reads the feedback of the last rounds, the baselines' prompts recall the
-//! last executed actions, and a method written outside the crate is shown every earlier
-//! step; each keeps them in a [`History`].
+//! The one loop every method runs under ([`play`]): one round per step until the goal
+//! holds, the budget is spent, the backend fails for good, the method fails or the
+//! episode is cancelled; then the summary. Each round the method decides
+//! ([`Method::decide`]), the loop carries out what it decided (one robot's action, or in a
+//! parallel episode a joint step of several), the method concludes the round
+//! ([`Method::conclude`]), and the history window keeps what the method recalls of it
+//! ([`Method::recall`], [`History`]). A new execution, or anything that happens to every
+//! method alike, is a change to this loop, not to the methods.
 
 use std::collections::VecDeque;
 use std::io;
+use std::sync::Arc;
 use std::time::Instant;
 
-use coherent_core::{Environment, Task};
+use coherent_core::{Environment, Execution, Task};
 
 use crate::episode::cancel::Cancel;
+use crate::episode::environment::execute;
+use crate::episode::joint;
+use crate::episode::method::{Closing, Decided, Method, Turn};
 use crate::episode::prefix::LastPrompts;
-use crate::records::transcript::{Round, RoundOutcome, Status, Summary};
+use crate::llm::Backend;
+use crate::records::transcript::{Reason, Round, RoundOutcome, Status, Summary};
 
 /// An episode as it ran.
 #[derive(Clone, Debug, PartialEq)]
@@ -22,23 +29,35 @@ pub struct Episode {
     pub summary: Summary,
 }
 
-/// The loop every method shares: `play` one round per step until the goal holds, the
-/// budget is spent, a round ends in a backend failure or the method's error, or `cancel`
-/// fires (`play` gives `None` when cancelled during a round); then the summary. Each
-/// call of a round gets its shared prefix with the previous call of its role and robot
-/// ([`crate::episode::prefix`]). `on_round` sees each round as it ends (the transcript
-/// writer, progress lines); its error stops the episode, so that no round goes
-/// unrecorded.
-pub(crate) async fn rounds(
-    env: &mut (dyn Environment + Send),
-    task: &Task,
-    max_steps: u32,
+/// How an episode's rounds go: how its robots step, its step budget, and how many entries
+/// of the method's history its prompts recall.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Course {
+    pub execution: Execution,
+    pub max_steps: u32,
+    /// The history window ([`HISTORY_WINDOW`]; 0 is the paper's "w/o history").
+    pub history: usize,
+}
+
+/// Runs `method` on `env` round by round until the goal holds, the budget is spent, a
+/// round ends in a backend failure or the method's error, or `cancel` fires (a method
+/// cancelled during a round gives `None`, and nothing of the round is kept); then the
+/// summary. Each call of a round gets its shared prefix with the previous call of its
+/// role and robot ([`crate::episode::prefix`]). `on_round` sees each round as it ends
+/// (the transcript writer, progress lines); its error stops the episode, so that no
+/// round goes unrecorded.
+pub async fn play(
+    env: &mut (dyn Environment + Send + Sync),
+    task: &Arc<Task>,
+    method: &mut dyn Method,
+    backend: &dyn Backend,
+    course: Course,
     cancel: &Cancel,
     on_round: &mut (dyn FnMut(&Round) -> io::Result<()> + Send),
-    mut play: impl AsyncFnMut(&mut (dyn Environment + Send), u32) -> io::Result<Option<Round>>,
 ) -> io::Result<Episode> {
     let start = Instant::now();
     let mut rounds: Vec<Round> = Vec::new();
+    let mut history = History::new(course.history);
     let mut prompts = LastPrompts::default();
     let mut status = if env.goal_satisfied() {
         Status::Success
@@ -46,17 +65,46 @@ pub(crate) async fn rounds(
         Status::Failure
     };
     let mut error = None;
-    while status == Status::Failure && rounds.len() < max_steps as usize {
+    while status == Status::Failure && rounds.len() < course.max_steps as usize {
         if cancel.is_cancelled() {
             status = Status::Interrupted;
             break;
         }
-        let Some(mut round) = play(env, rounds.len() as u32 + 1).await? else {
+        let began = Instant::now();
+        let mut round = Round::new(rounds.len() as u32 + 1);
+        let recalled = history.entries();
+        let turn = Turn {
+            task,
+            env: &*env,
+            backend,
+            cancel,
+            step: round.step,
+            max_steps: course.max_steps,
+            execution: course.execution,
+            history: &recalled,
+            rounds: &rounds,
+        };
+        let Some(decided) = method.decide(turn, &mut round).await? else {
             status = Status::Interrupted;
             break;
         };
+        round.outcome = match decided {
+            Decided::CarryOut => carry_out(env, task, course.execution, &mut round),
+            Decided::Ends(outcome) => outcome,
+        };
+        let closing = Closing {
+            task,
+            state: env.state(),
+            execution: course.execution,
+        };
+        method.conclude(closing, &mut round);
+        round.done = env.goal_satisfied();
+        round.wall_ms = began.elapsed().as_secs_f64() * 1e3;
         prompts.mark(&mut round.calls);
         on_round(&round)?;
+        if let Some(line) = method.recall(task, &round) {
+            history.push(line);
+        }
         match &round.outcome {
             RoundOutcome::BackendError { message } => {
                 status = Status::BackendError;
@@ -105,7 +153,7 @@ pub(crate) async fn rounds(
         success: status == Status::Success,
         steps: rounds.len() as u32,
         gt_steps: task.meta.gt_steps,
-        max_steps,
+        max_steps: course.max_steps,
         llm_calls: rounds.iter().map(|r| r.calls.len() as u32).sum::<u32>() + reported_calls,
         prompt_tokens,
         completion_tokens,
@@ -115,6 +163,36 @@ pub(crate) async fn rounds(
         sim_seconds: env.sim_seconds(),
     };
     Ok(Episode { rounds, summary })
+}
+
+/// Carries out what a round decided: a sequential round's decision (its robot's action,
+/// when it can do and names one; a robot that is not in the team is refused as such), or
+/// a parallel round's parts as one joint step ([`joint::carry_out`]). Returns the round's
+/// outcome.
+fn carry_out(
+    env: &mut (dyn Environment + Send + Sync),
+    task: &Task,
+    execution: Execution,
+    round: &mut Round,
+) -> RoundOutcome {
+    if execution == Execution::Parallel {
+        return joint::carry_out(env, task, &mut round.parts);
+    }
+    let act = round
+        .decision
+        .as_ref()
+        .filter(|d| d.can_do)
+        .and_then(|d| Some((d.robot?, d.action.clone()?)));
+    match act {
+        None => RoundOutcome::Declined,
+        Some((robot, action)) => match task.robot_by_id(robot) {
+            Ok(_) => execute(env, round, robot, &action),
+            Err(e) => RoundOutcome::Infeasible {
+                reason: Reason::UnknownRobot,
+                message: e.to_string(),
+            },
+        },
+    }
 }
 
 /// Rounds of history the methods' prompts recall unless told otherwise: the paper's 5,

@@ -4,9 +4,11 @@
 //! choose from them: one line a step, or in a parallel episode one line per robot at
 //! most (a joint step, `coherent_core::joint`).
 //! The central prompt is [`crate::methods::central`]'s; reading an answer back to a line
-//! is [`crate::methods::answer`]'s.
+//! is [`crate::prompts::answer`]'s.
 
 use coherent_core::{Action, Robot, State, Task, rules};
+
+use crate::prompts::fill::action_line;
 
 /// One robot's action: an element of the team action space.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -18,11 +20,7 @@ pub struct TeamAction {
 impl TeamAction {
     /// `<robot label>: <action>`, as the prompt lists it.
     pub fn line(&self, task: &Task) -> String {
-        format!(
-            "{}: {}",
-            task.node(self.robot.node).label(),
-            self.action.render(task)
-        )
+        action_line(task, task.id(self.robot.node), &self.action.render(task))
     }
 }
 

@@ -1,7 +1,7 @@
 //! What the methods' prompts share: filling a template of the prompt set
-//! ([`crate::methods::templates`]) with the situation, the team list, and robot labels.
+//! ([`crate::prompts::templates`]) with the situation, the team list, and robot labels.
 //! Each role renders its own templates ([`crate::methods::assigner`],
-//! [`crate::methods::executor`], [`crate::methods::team_actions`], [`crate::methods::dmrs`]).
+//! [`crate::methods::executor`], [`crate::prompts::team_actions`], [`crate::methods::dmrs`]).
 //! Observations are written as relation facts (`coherent_core::describe`), in the layout
 //! the template asks for ([`Sight`]).
 
@@ -85,6 +85,12 @@ pub fn robot_label(task: &Task, robot: NodeId) -> String {
         .map_or_else(|| format!("robot {robot}"), |i| task.node(i).label())
 }
 
+/// `<robot label>: <action>`: one robot's action as the central and dialogue prompts list
+/// it, as their methods hear what ran and as their history recalls it.
+pub fn action_line(task: &Task, robot: NodeId, action: &str) -> String {
+    format!("{}: {action}", robot_label(task, robot))
+}
+
 /// Asserts that `template` has a placeholder for each of `keys` and that filling them
 /// leaves none unfilled.
 #[cfg(test)]
@@ -101,14 +107,14 @@ pub(crate) fn check_placeholders(template: &str, keys: &[&str]) {
 /// line: rendering it must leave none unfilled.
 #[cfg(test)]
 pub(crate) fn every_placeholder(
-    template: crate::methods::templates::Template,
-) -> crate::methods::templates::Prompts {
+    template: crate::prompts::templates::Template,
+) -> crate::prompts::templates::Prompts {
     let text: Vec<String> = template
         .placeholders()
         .iter()
         .map(|p| format!("{p}: {{{{{p}}}}}"))
         .collect();
-    crate::methods::templates::Prompts::from_texts(
+    crate::prompts::templates::Prompts::from_texts(
         std::path::Path::new("test"),
         vec![(template.file_name().to_owned(), text.join("\n"))],
     )

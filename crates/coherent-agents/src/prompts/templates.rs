@@ -27,7 +27,7 @@ use coherent_core::files::{self, Limit, MIB};
 use serde::{Deserialize, Serialize};
 
 use crate::digest;
-use crate::episode::execution::Execution;
+use coherent_core::Execution;
 
 /// The most a template may hold: the built-in ones are a few KiB, and a prompt of a MiB
 /// is already past any model's context.

@@ -9,19 +9,17 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
-use coherent_core::{Task, native};
+use coherent_core::{Execution, Task, native};
 
-use crate::backends::llm::BoxFuture;
 use crate::backends::replay::ReplayBackend;
 use crate::episode::budget::Budget;
+use crate::episode::play::Episode;
 use crate::episode::policy::{Act, Choice, MethodFailure, Policy, StepView};
-use crate::episode::rounds::Episode;
-use crate::episode::settings::{External, Method, MethodSpec, Settings};
 use crate::error::Error;
-use crate::methods::templates::Prompts;
-use crate::records::transcript::{
-    Call, Execution, RobotPart, Round, RoundOutcome, Summary, Transcript,
-};
+use crate::llm::BoxFuture;
+use crate::prompts::templates::Prompts;
+use crate::records::transcript::{Call, RobotPart, Round, RoundOutcome, Summary, Transcript};
+use crate::run::settings::{Builtin, External, MethodSpec, Settings};
 
 /// What replaying a recorded episode needs: run `settings.method` on `task` with
 /// `backend` and `budget`, then look for a [`Replay::difference`] from the recording.
@@ -75,7 +73,7 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
         };
         MethodSpec::External(External::new(name, Arc::new(make))?)
     } else {
-        Method::from_name(name)
+        Builtin::from_name(name)
             .ok_or_else(|| Error::Invalid(format!("unknown method {name:?} in the transcript")))?
             .into()
     };

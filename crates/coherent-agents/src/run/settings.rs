@@ -1,23 +1,34 @@
-//! How an episode is run: the method (built in, or written outside the crate) and its
-//! settings as a transcript records them. The step budget is apart ([`crate::episode::budget`]).
+//! How an episode is run: the method (built in, or written outside the crate), each
+//! built by its name into the [`Method`] an episode runs ([`MethodSpec::build`], the one
+//! place that knows every method), and the settings a transcript records. The step
+//! budget is apart ([`crate::episode::budget`]).
 
 use std::collections::BTreeMap;
 use std::fmt;
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent_core::Task;
+use coherent_core::planner::Limits;
+use coherent_core::{Execution, Task};
 
-pub use crate::episode::execution::Execution;
+use crate::episode::cancel::Cancel;
+use crate::episode::method::Method;
+use crate::episode::play::HISTORY_WINDOW;
 use crate::episode::policy::{MakePolicy, MethodFailure, Policy};
-use crate::episode::rounds::HISTORY_WINDOW;
 use crate::error::Error;
-use crate::methods::templates::Prompts;
+use crate::methods::cmrs::Cmrs;
+use crate::methods::dmrs::Dmrs;
+use crate::methods::external::ExternalMethod;
+use crate::methods::mcts::{Mcts, MctsConfig};
+use crate::methods::optimal::Optimal;
+use crate::methods::pefa::Pefa;
+use crate::methods::random::Random;
+use crate::prompts::templates::Prompts;
 use crate::records::transcript::RobotsRecord;
 
-/// A planning method.
+/// A planning method built into the crate, by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Method {
+pub enum Builtin {
     /// COHERENT's loop with the assigner's history window.
     Pefa,
     /// The paper's "w/o history" ablation: the window is 0.
@@ -34,47 +45,51 @@ pub enum Method {
     LlmMcts,
     /// The optimal planner's plan: the ground-truth row; no model.
     Optimal,
+    /// A random feasible action each round, seeded: the floor; no model.
+    Random,
 }
 
-impl Method {
-    pub const ALL: [Method; 8] = [
-        Method::Pefa,
-        Method::PefaNoHistory,
-        Method::Cmrs,
-        Method::Dmrs1d,
-        Method::Dmrs2d,
-        Method::Mcts,
-        Method::LlmMcts,
-        Method::Optimal,
+impl Builtin {
+    pub const ALL: [Builtin; 9] = [
+        Builtin::Pefa,
+        Builtin::PefaNoHistory,
+        Builtin::Cmrs,
+        Builtin::Dmrs1d,
+        Builtin::Dmrs2d,
+        Builtin::Mcts,
+        Builtin::LlmMcts,
+        Builtin::Optimal,
+        Builtin::Random,
     ];
 
     pub fn name(self) -> &'static str {
         match self {
-            Method::Pefa => "pefa",
-            Method::PefaNoHistory => "pefa-no-history",
-            Method::Cmrs => "cmrs",
-            Method::Dmrs1d => "dmrs-1d",
-            Method::Dmrs2d => "dmrs-2d",
-            Method::Mcts => "mcts",
-            Method::LlmMcts => "llm-mcts",
-            Method::Optimal => "optimal",
+            Builtin::Pefa => "pefa",
+            Builtin::PefaNoHistory => "pefa-no-history",
+            Builtin::Cmrs => "cmrs",
+            Builtin::Dmrs1d => "dmrs-1d",
+            Builtin::Dmrs2d => "dmrs-2d",
+            Builtin::Mcts => "mcts",
+            Builtin::LlmMcts => "llm-mcts",
+            Builtin::Optimal => "optimal",
+            Builtin::Random => "random",
         }
     }
 
     /// Whether the method asks the episode's backend at all.
     pub fn asks_backend(self) -> bool {
-        !matches!(self, Method::Mcts | Method::Optimal)
+        !matches!(self, Builtin::Mcts | Builtin::Optimal | Builtin::Random)
     }
 
     /// Whether the method can run `execution`: the tree searches, MCTS and LLM-MCTS,
     /// are sequential only (their tree's edges are one robot's action; a tree over
     /// joint steps is a method of its own, which the paper does not have).
     pub fn runs(self, execution: Execution) -> bool {
-        execution == Execution::Sequential || !matches!(self, Method::Mcts | Method::LlmMcts)
+        execution == Execution::Sequential || !matches!(self, Builtin::Mcts | Builtin::LlmMcts)
     }
 
-    pub fn from_name(name: &str) -> Option<Method> {
-        Method::ALL.into_iter().find(|m| m.name() == name)
+    pub fn from_name(name: &str) -> Option<Builtin> {
+        Builtin::ALL.into_iter().find(|m| m.name() == name)
     }
 }
 
@@ -102,7 +117,7 @@ impl External {
                 "method name {name:?}: use letters, digits, '-', '_' and '.' (not first)"
             )));
         }
-        if Method::from_name(name).is_some() {
+        if Builtin::from_name(name).is_some() {
             return Err(Error::Invalid(format!(
                 "method name {name:?} is a built-in method's: give yours another name"
             )));
@@ -173,7 +188,7 @@ impl PartialEq for External {
 /// The method of an episode: one of the built-in ones, or one written outside the crate.
 #[derive(Clone, Debug, PartialEq)]
 pub enum MethodSpec {
-    Builtin(Method),
+    Builtin(Builtin),
     External(External),
 }
 
@@ -224,16 +239,53 @@ impl MethodSpec {
     }
 
     /// The built-in method, when it is one.
-    pub fn builtin(&self) -> Option<Method> {
+    pub fn builtin(&self) -> Option<Builtin> {
         match self {
             MethodSpec::Builtin(m) => Some(*m),
             MethodSpec::External(_) => None,
         }
     }
+
+    /// The method of one episode of `task` run with `settings` (its execution, prompt set
+    /// and seed), or the error that says it cannot run that execution. Every method is
+    /// built here and nowhere else. `cancel` stops the optimal method's search.
+    pub fn build(
+        &self,
+        task: &Arc<Task>,
+        settings: &Settings,
+        cancel: &Cancel,
+    ) -> Result<Box<dyn Method>, Error> {
+        self.check_runs(settings.execution)?;
+        let prompts = settings.prompts.clone();
+        let seed = settings.seed.unwrap_or(0);
+        let mcts = || MctsConfig {
+            seed,
+            prompts: prompts.clone(),
+            ..MctsConfig::default()
+        };
+        Ok(match self {
+            MethodSpec::Builtin(Builtin::Pefa | Builtin::PefaNoHistory) => {
+                Box::new(Pefa::new(prompts))
+            }
+            MethodSpec::Builtin(Builtin::Cmrs) => Box::new(Cmrs::new(prompts)),
+            MethodSpec::Builtin(Builtin::Dmrs1d) => Box::new(Dmrs::new(1, seed, prompts)),
+            MethodSpec::Builtin(Builtin::Dmrs2d) => Box::new(Dmrs::new(2, seed, prompts)),
+            MethodSpec::Builtin(Builtin::Mcts) => Box::new(Mcts::primitive(mcts())),
+            MethodSpec::Builtin(Builtin::LlmMcts) => Box::new(Mcts::llm(mcts())),
+            MethodSpec::Builtin(Builtin::Optimal) => Box::new(Optimal::new(Limits {
+                cancel: Some(cancel.flag()),
+                ..Limits::default()
+            })),
+            MethodSpec::Builtin(Builtin::Random) => Box::new(Random::new(seed)),
+            MethodSpec::External(e) => {
+                Box::new(ExternalMethod::new(e.make(task), e.step_timeout()))
+            }
+        })
+    }
 }
 
-impl From<Method> for MethodSpec {
-    fn from(m: Method) -> MethodSpec {
+impl From<Builtin> for MethodSpec {
+    fn from(m: Builtin) -> MethodSpec {
         MethodSpec::Builtin(m)
     }
 }
@@ -261,6 +313,21 @@ pub struct Settings {
 }
 
 impl Settings {
+    /// The rounds of history the episode's prompts recall: [`Settings::history`], but none
+    /// for `pefa-no-history` (the paper's "w/o history").
+    pub fn history_window(&self) -> usize {
+        match self.method {
+            MethodSpec::Builtin(Builtin::PefaNoHistory) => 0,
+            _ => self.history,
+        }
+    }
+
+    /// The method these settings name, built for one episode of `task`
+    /// ([`MethodSpec::build`]).
+    pub fn build(&self, task: &Arc<Task>, cancel: &Cancel) -> Result<Box<dyn Method>, Error> {
+        self.method.build(task, self, cancel)
+    }
+
     pub fn new(method: impl Into<MethodSpec>) -> Settings {
         Settings {
             method: method.into(),
