@@ -7,12 +7,12 @@ use std::sync::{Arc, Mutex, PoisonError};
 
 use coherent_agents::answer::{match_line, read_line};
 use coherent_agents::episode::{self, Course};
-use coherent_agents::prompts::fill::action_line;
 use coherent_agents::llm::{
     Answer, Backend, BackendInfo, BackendKind, BoxFuture, Finish, LlmError, LlmErrorKind,
     OutputMode, Query, Role, Usage,
 };
 use coherent_agents::mcts::{self, Mcts, MctsConfig, mix_prior, puct, softmax_q};
+use coherent_agents::prompts::fill::action_line;
 use coherent_agents::rng::Rng;
 use coherent_agents::team_actions::{self, TeamAction};
 use coherent_agents::transcript::{RoundOutcome, Status};

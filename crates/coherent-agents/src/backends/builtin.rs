@@ -12,7 +12,8 @@
 //! ([`crate::backends::simulated`]).
 
 use std::collections::HashMap;
-use std::sync::{Arc, Mutex, PoisonError};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 use std::time::Instant;
 
 use coherent_core::makespan::{self, JointStep};
@@ -45,7 +46,68 @@ pub struct BuiltinBackend {
     inner: Arc<Planner>,
     /// The simulated backend's error model and its seeded draws; `None` for the
     /// built-in backend, which makes no mistakes.
-    errors: Option<(ErrorRates, Arc<Mutex<Rng>>)>,
+    errors: Option<(ErrorRates, Arc<Draws>)>,
+}
+
+/// The simulated backend's random draws, taken by its calls in the order they were
+/// asked: each call takes a ticket when it is first polled (a parallel round's executors
+/// are polled in team order) and draws only when every call before it has drawn. The
+/// searches run on blocking threads that finish in any order; without the tickets, a
+/// parallel round's mistakes fell to whichever robot's thread locked the generator first,
+/// and the same seed could give another episode.
+#[derive(Debug)]
+struct Draws {
+    tickets: AtomicU64,
+    /// The ticket whose turn it is, and the generator.
+    turn: Mutex<(u64, Rng)>,
+    next: Condvar,
+}
+
+impl Draws {
+    fn new(seed: u64) -> Draws {
+        Draws {
+            tickets: AtomicU64::new(0),
+            turn: Mutex::new((0, Rng::new(seed))),
+            next: Condvar::new(),
+        }
+    }
+
+    /// The next ticket, in the order calls ask.
+    fn ticket(&self) -> u64 {
+        self.tickets.fetch_add(1, Ordering::SeqCst)
+    }
+
+    /// Waits for `ticket`'s turn: the generator, until the turn is dropped.
+    fn wait(&self, ticket: u64) -> Drawing<'_> {
+        let turn = self.turn.lock().unwrap_or_else(PoisonError::into_inner);
+        let guard = self
+            .next
+            .wait_while(turn, |(serving, _)| *serving != ticket)
+            .unwrap_or_else(PoisonError::into_inner);
+        Drawing {
+            guard,
+            next: &self.next,
+        }
+    }
+}
+
+/// One call's turn at the generator; dropped (even by a panic), it passes the turn on.
+struct Drawing<'a> {
+    guard: MutexGuard<'a, (u64, Rng)>,
+    next: &'a Condvar,
+}
+
+impl Drawing<'_> {
+    fn rng(&mut self) -> &mut Rng {
+        &mut self.guard.1
+    }
+}
+
+impl Drop for Drawing<'_> {
+    fn drop(&mut self) {
+        self.guard.0 += 1;
+        self.next.notify_all();
+    }
 }
 
 #[derive(Debug, Default)]
@@ -73,7 +135,7 @@ impl BuiltinBackend {
     /// from `seed` (one backend per episode keeps an episode reproducible).
     pub fn simulated(limits: Limits, rates: ErrorRates, seed: u64) -> BuiltinBackend {
         BuiltinBackend {
-            errors: Some((rates, Arc::new(Mutex::new(Rng::new(seed))))),
+            errors: Some((rates, Arc::new(Draws::new(seed)))),
             ..BuiltinBackend::new(limits)
         }
     }
@@ -400,19 +462,22 @@ impl Backend for BuiltinBackend {
         let errors = self.errors.clone();
         Box::pin(async move {
             let start = Instant::now();
+            // Taken before the first await: in the order the calls were asked.
+            let ticket = errors.as_ref().map(|(_, draws)| draws.ticket());
             // A search can take a second or two: keep it off the async workers.
-            let mut answer = tokio::task::spawn_blocking(move || match errors {
-                None => planner.answer(&query, None),
-                Some((rates, rng)) => {
-                    let mut rng = rng.lock().unwrap_or_else(PoisonError::into_inner);
-                    match rates.draw(&mut rng) {
+            let mut answer = tokio::task::spawn_blocking(move || match (errors, ticket) {
+                (Some((rates, draws)), Some(ticket)) => {
+                    let mut drawing = draws.wait(ticket);
+                    let rng = drawing.rng();
+                    match rates.draw(rng) {
                         Some(Mistake::Malformed) => {
                             answer("{\"robot\": <the one that".to_owned(), Finish::Stop)
                         }
-                        Some(m) => planner.answer(&query, Some((m, &mut rng))),
+                        Some(m) => planner.answer(&query, Some((m, rng))),
                         None => planner.answer(&query, None),
                     }
                 }
+                _ => planner.answer(&query, None),
             })
             .await
             .map_err(|e| {
@@ -421,5 +486,44 @@ impl Backend for BuiltinBackend {
             answer.latency_ms = start.elapsed().as_secs_f64() * 1e3;
             Ok(answer)
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Calls that reach the generator in the reverse of the order they asked (the later
+    /// ones' threads ready first) still draw in the order they asked.
+    #[test]
+    fn draws_go_in_the_order_the_calls_asked_whatever_order_their_threads_come() {
+        let draws = Arc::new(Draws::new(7));
+        let tickets: Vec<u64> = (0..6).map(|_| draws.ticket()).collect();
+        let mut expected = Rng::new(7);
+        let expected: Vec<u64> = tickets.iter().map(|_| expected.next_u64()).collect();
+        let drawn = Arc::new(Mutex::new(Vec::new()));
+        let threads: Vec<_> = tickets
+            .into_iter()
+            .rev()
+            .map(|ticket| {
+                let (draws, drawn) = (Arc::clone(&draws), Arc::clone(&drawn));
+                std::thread::spawn(move || {
+                    let mut drawing = draws.wait(ticket);
+                    let n = drawing.rng().next_u64();
+                    drawn.lock().expect("no panic").push((ticket, n));
+                })
+            })
+            .collect();
+        for t in threads {
+            t.join().expect("a thread");
+        }
+        let drawn = drawn.lock().expect("no panic").clone();
+        let order: Vec<u64> = drawn.iter().map(|(t, _)| *t).collect();
+        assert_eq!(order, [0, 1, 2, 3, 4, 5]);
+        let numbers: Vec<u64> = drawn.iter().map(|(_, n)| *n).collect();
+        assert_eq!(
+            numbers, expected,
+            "the one stream, as a single caller draws it"
+        );
     }
 }

@@ -69,6 +69,10 @@ pub enum Decided {
     Ends(RoundOutcome),
 }
 
+/// What [`Method::decide`] gives back when its questions are answered: what the method
+/// decided, or `None` when cancelled during the round.
+pub type Deciding<'a> = BoxFuture<'a, io::Result<Option<Decided>>>;
+
 /// A planning method. Each round the loop asks it to [`Method::decide`], carries out what
 /// it decided, then lets it [`Method::conclude`] the round: the feedback its next rounds
 /// hear. Its memory of earlier rounds is the loop's history window, fed by
@@ -78,11 +82,7 @@ pub trait Method: Send {
     /// Asks the round's questions and records them in `round` (the calls, a proposal, the
     /// action list it chose from, its decision or, in a parallel round, each robot's
     /// part). `None` when cancelled during the round: nothing of it is kept.
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>>;
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a>;
 
     /// Once the round's actions were carried out (the outcomes are in `round`): the
     /// feedback the method hears of the round from the next one on, in

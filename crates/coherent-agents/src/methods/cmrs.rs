@@ -4,14 +4,12 @@
 //! runs. In a parallel episode it answers a list of lines, at most one per robot, carried
 //! out together as the step's joint step. One model call per step.
 
-use std::io;
-
 use coherent_core::Execution;
 
 use crate::episode::ask::{Side, ask};
 use crate::episode::environment::team_sight;
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::{BoxFuture, Query, Role, Situation};
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
+use crate::llm::{Query, Role, Situation};
 use crate::methods::{central, decision};
 use crate::prompts::team_actions;
 use crate::prompts::templates::Prompts;
@@ -40,11 +38,7 @@ impl Cmrs {
 }
 
 impl Method for Cmrs {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let Turn { task, env, .. } = turn;
             self.unused = None;

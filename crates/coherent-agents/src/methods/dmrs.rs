@@ -10,14 +10,12 @@
 //! others said they will do; the dialogue ends in one action per robot, each robot's
 //! last proposal, carried out together as the step's joint step.
 
-use std::io;
-
 use coherent_core::{Environment, Execution, NodeId, Task};
 use serde_json::{Value, json};
 
 use crate::episode::ask::{Side, Unusable, ask};
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::{BoxFuture, Message, Query, Role, Situation};
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
+use crate::llm::{Message, Query, Role, Situation};
 use crate::methods::{central, decision};
 use crate::prompts::answer::{field_text, json_object, normal, read_line};
 use crate::prompts::fill::{self, Sight, robot_label};
@@ -62,11 +60,7 @@ impl Dmrs {
 }
 
 impl Method for Dmrs {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             Ok(match turn.execution {
                 Execution::Sequential => self.dialogue(turn, round).await,

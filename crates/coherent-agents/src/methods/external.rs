@@ -13,16 +13,14 @@
 //! In a parallel episode the policy answers a decision per robot that acts, carried out
 //! together as one joint step (two for one robot refuse the step, as the rules do).
 
-use std::io;
 use std::sync::Arc;
 use std::time::Duration;
 
 use coherent_core::text::{cut, cut_front, number};
 use coherent_core::{Execution, NodeId, Task};
 
-use crate::episode::method::{Closing, Decided, Method, Turn};
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::episode::policy::{Act, Choice, MethodFailure, PastStep, Policy, StepView};
-use crate::llm::BoxFuture;
 use crate::methods::decision;
 use crate::records::transcript::{RobotPart, Round, RoundOutcome};
 
@@ -93,11 +91,7 @@ impl std::fmt::Debug for ExternalMethod {
 }
 
 impl Method for ExternalMethod {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let Some(act) = self.ask(&turn).await else {
                 return Ok(None);

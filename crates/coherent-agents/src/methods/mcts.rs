@@ -73,8 +73,8 @@ use coherent_core::{State, Task, rules};
 
 use crate::episode::ask::place_call;
 use crate::episode::environment::team_sight;
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::{BoxFuture, Finish, Query, Role, Situation};
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
+use crate::llm::{Finish, Query, Role, Situation};
 use crate::methods::{central, decision, feedback};
 use crate::prompts::answer::{match_line, read_line};
 use crate::prompts::fill::robot_label;
@@ -458,11 +458,7 @@ impl Mcts {
 }
 
 impl Method for Mcts {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let task = turn.task;
             let state = turn.env.state().clone();

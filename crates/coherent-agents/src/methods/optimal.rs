@@ -10,8 +10,7 @@ use coherent_core::makespan::{self, JointStep};
 use coherent_core::planner::{self, Limits, Step};
 use coherent_core::{Execution, State, Task};
 
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::BoxFuture;
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::methods::decision;
 use crate::records::transcript::{Round, RoundOutcome};
 
@@ -66,11 +65,7 @@ fn search(
 }
 
 impl Method for Optimal {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let task = turn.task;
             let plan = match &mut self.plan {

@@ -19,14 +19,12 @@
 //! when it is asked.
 
 use std::collections::BTreeMap;
-use std::io;
 
 use coherent_core::{Execution, NodeId, State, Task};
 
 use crate::episode::ask::{Side, Unusable, ask, ask_all};
 use crate::episode::joint;
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::BoxFuture;
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::methods::assigner::TaskAssigner;
 use crate::methods::executor::RobotExecutor;
 use crate::methods::feedback;
@@ -69,23 +67,15 @@ impl Pefa {
     }
 
     /// A sequential round: one proposal, one executor.
-    async fn propose_and_execute(
-        &self,
-        turn: Turn<'_>,
-        round: &mut Round,
-    ) -> io::Result<Option<Decided>> {
-        let Turn {
-            task, env, backend, ..
-        } = turn;
+    async fn propose_and_execute(&self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
+        let Turn { task, env, .. } = turn;
         // Proposal.
         let assigner = TaskAssigner::new(task, &self.prompts, ASSIGNER_MAX_TOKENS);
         let query = assigner.query(env, turn.history);
-        let Some(reply) = ask(backend, query, turn.cancel, &mut round.calls).await else {
-            return Ok(None);
-        };
+        let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
         let proposal = match reply.and_then(|r| r.read(|text| assigner.parse(text))) {
             Ok(p) => p,
-            Err(e) => return Ok(Some(Decided::Ends(e.outcome(Side::Assigner)))),
+            Err(e) => return Some(Decided::Ends(e.outcome(Side::Assigner))),
         };
         round.proposal = Some(proposal.clone());
 
@@ -95,33 +85,25 @@ impl Pefa {
                 Ok(executor) => executor,
                 Err(e) => {
                     let why = e.to_string();
-                    return Ok(Some(Decided::Ends(RoundOutcome::NoProposal { why })));
+                    return Some(Decided::Ends(RoundOutcome::NoProposal { why }));
                 }
             };
         round.actions = executor.actions(env);
         let query = executor.query(env, &proposal.subtask, &round.actions);
-        let Some(reply) = ask(backend, query, turn.cancel, &mut round.calls).await else {
-            return Ok(None);
-        };
+        let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
         match reply.and_then(|r| r.read(|text| executor.parse(&round.actions, text))) {
             Ok(decision) => {
                 round.decision = Some(decision);
-                Ok(Some(Decided::CarryOut))
+                Some(Decided::CarryOut)
             }
-            Err(e) => Ok(Some(Decided::Ends(e.outcome(Side::Executor)))),
+            Err(e) => Some(Decided::Ends(e.outcome(Side::Executor))),
         }
     }
 
     /// A parallel round: the assigner when a robot is idle, then every robot with a
     /// subtask, its executor asked beside the others'.
-    async fn assign_and_execute(
-        &mut self,
-        turn: Turn<'_>,
-        round: &mut Round,
-    ) -> io::Result<Option<Decided>> {
-        let Turn {
-            task, env, backend, ..
-        } = turn;
+    async fn assign_and_execute(&mut self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
+        let Turn { task, env, .. } = turn;
         let team: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
         let idle: Vec<NodeId> = team
             .iter()
@@ -140,9 +122,7 @@ impl Pefa {
                 .map(|(r, (p, since))| (*r, p.subtask.clone(), *since))
                 .collect();
             let query = assigner.query_parallel(env, turn.history, &kept, &idle);
-            let Some(reply) = ask(backend, query, turn.cancel, &mut round.calls).await else {
-                return Ok(None);
-            };
+            let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
             match reply.and_then(|r| r.read(|text| assigner.parse_parallel(text, &idle))) {
                 Ok(answer) => {
                     if !answer.unused.is_empty() {
@@ -157,7 +137,7 @@ impl Pefa {
                 }
                 Err(Unusable::Failed(e)) => {
                     let outcome = Unusable::Failed(e).outcome(Side::Assigner);
-                    return Ok(Some(Decided::Ends(outcome)));
+                    return Some(Decided::Ends(outcome));
                 }
                 Err(bad) => {
                     let outcome = bad.outcome(Side::Assigner);
@@ -185,9 +165,7 @@ impl Pefa {
             }
             round.parts.push(part);
         }
-        let Some(replies) = ask_all(backend, queries, turn.cancel).await else {
-            return Ok(None);
-        };
+        let replies = ask_all(turn.backend, queries, turn.cancel).await?;
         let mut failed = None;
         for ((i, executor), (calls, reply)) in executors.into_iter().zip(replies) {
             round.calls.extend(calls);
@@ -202,7 +180,7 @@ impl Pefa {
             }
         }
         let Some(outcome) = failed else {
-            return Ok(Some(Decided::CarryOut));
+            return Some(Decided::CarryOut);
         };
         // The model is gone: no step is carried out, and the episode ends here.
         for part in round.parts.iter_mut().filter(|p| p.decision.is_some()) {
@@ -211,7 +189,7 @@ impl Pefa {
                 message: "not carried out: the model could not be reached".into(),
             };
         }
-        Ok(Some(Decided::Ends(outcome)))
+        Some(Decided::Ends(outcome))
     }
 
     /// A parallel round's feedback: each robot's own, and who keeps a subtask (unless the
@@ -258,16 +236,12 @@ impl Pefa {
 }
 
 impl Method for Pefa {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
-            match turn.execution {
+            Ok(match turn.execution {
                 Execution::Sequential => self.propose_and_execute(turn, round).await,
                 Execution::Parallel => self.assign_and_execute(turn, round).await,
-            }
+            })
         })
     }
 

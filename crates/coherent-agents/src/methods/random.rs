@@ -6,13 +6,10 @@
 //! does not interfere with those drawn before it (`coherent_core::joint::check`), so that
 //! the joint step is valid.
 
-use std::io;
-
 use coherent_core::joint::{self, Part};
 use coherent_core::{Execution, Task, rules};
 
-use crate::episode::method::{Closing, Decided, Method, Turn};
-use crate::llm::BoxFuture;
+use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::methods::decision;
 use crate::prompts::team_actions;
 use crate::records::transcript::{Round, RoundOutcome};
@@ -39,11 +36,7 @@ fn shuffled(n: usize, rng: &mut Rng) -> Vec<usize> {
 }
 
 impl Method for Random {
-    fn decide<'a>(
-        &'a mut self,
-        turn: Turn<'a>,
-        round: &'a mut Round,
-    ) -> BoxFuture<'a, io::Result<Option<Decided>>> {
+    fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let Turn { task, env, .. } = turn;
             let state = env.state();
