@@ -89,6 +89,10 @@ fn run_parallel_prints_each_robots_part_reports_the_makespan_and_replays() {
     assert_eq!(summary["sim_seconds"], Value::Null);
     let transcript = summary["transcript"].as_str().expect("a path");
     let records = lines(Path::new(transcript));
+    assert!(
+        records.iter().all(|r| r.get("sim_seconds").is_none()),
+        "no simulated time without physics"
+    );
     assert_eq!(records[0]["execution"], json!("parallel"));
     let first = &records[1];
     assert_eq!(first["parts"].as_array().map(Vec::len), Some(3));
@@ -305,6 +309,18 @@ fn a_parallel_episode_in_physics_reports_its_simulated_seconds() {
     assert!(seconds > 10.0, "{seconds}");
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains(&format!("simulated {seconds:.2} s")), "{err}");
+    // Each joint step's own, which add up to the episode's but for the world settling
+    // before the first step.
+    let transcript = summary["transcript"].as_str().expect("a path");
+    let steps: Vec<f64> = lines(Path::new(transcript))
+        .iter()
+        .filter(|r| r["type"] == "round")
+        .map(|r| r["sim_seconds"].as_f64().expect("a round's simulated seconds"))
+        .collect();
+    assert_eq!(steps.len(), 13);
+    assert!(steps.iter().all(|s| *s > 0.0), "{steps:?}");
+    let settling = seconds - steps.iter().sum::<f64>();
+    assert!((0.0..1.0).contains(&settling), "{steps:?} {seconds}");
 }
 
 #[test]

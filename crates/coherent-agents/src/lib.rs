@@ -6,7 +6,7 @@
 //!
 //! 1. [`rng`] and [`digest`]: the crate's one random number generator and hash.
 //! 2. [`llm`]: the vocabulary of a model call ([`Query`](llm::Query),
-//!    [`Answer`](llm::Answer), the [`Backend`] trait).
+//!    [`Answer`], the [`Backend`] trait).
 //! 3. [`prompts`]: the prompt set ([`Prompts`]: the built-in templates, or files given at
 //!    run time), filling a template with what a role is shown, reading a model's answer,
 //!    and the team's action lines that the central and dialogue methods choose from.
@@ -16,7 +16,7 @@
 //! 6. [`backends`]: who answers the methods' questions: an OpenAI-compatible server
 //!    ([`openai`], with [`retry`]), the optimal planner ([`builtin`]; with seeded
 //!    mistakes, the simulated backend) and a recorded transcript ([`replay`]).
-//! 7. [`episode`]: the one loop every method runs under ([`episode::play`]) and the
+//! 7. [`episode`]: the one loop every method runs under ([`episode::play()`]) and the
 //!    [`Method`] trait it asks each round; asking a backend, carrying actions out on the
 //!    `coherent_core::Environment`, one at a time or as a joint step; the history window,
 //!    the step [`Budget`], [`Cancel`], and a method written outside the crate as the loop
@@ -37,19 +37,32 @@
 //! The modules are also reachable at the crate root by their short names
 //! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
 
-// Layers, lowest first (scripts/check-layout holds each to naming only those above it).
-pub mod backends;
-pub mod digest;
-pub mod episode;
-pub mod error;
-pub mod harness;
-pub mod llm;
-pub mod methods;
-pub mod prompts;
-pub mod records;
+// Layers, lowest first: each module names only those above it (scripts/check-layout holds
+// the crate to it). The comment above each also keeps rustfmt from sorting them.
+// Seeded random numbers.
 pub mod rng;
-pub mod run;
+// Hashes of what runs are compared by.
+pub mod digest;
+// The vocabulary of a model call.
+pub mod llm;
+// The prompt set, filling it, reading answers.
+pub mod prompts;
+// The settings a benchmark run can differ in.
 pub mod setting;
+// What goes wrong, by kind.
+pub mod error;
+// What an episode leaves behind.
+pub mod records;
+// Who answers.
+pub mod backends;
+// The one loop and the shape of a method.
+pub mod episode;
+// The methods.
+pub mod methods;
+// One episode by its settings; replays.
+pub mod run;
+// The benchmark's bookkeeping.
+pub mod harness;
 
 pub use backends::{builtin, openai, replay, retry};
 pub use harness as bench;

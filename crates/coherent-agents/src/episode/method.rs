@@ -1,5 +1,5 @@
 //! The shape every planning method has: what it asks in a round and what it makes of the
-//! answers ([`Method`]). The loop ([`crate::episode::play`]) owns everything else: the
+//! answers ([`Method`]). The loop ([`crate::episode::play()`]) owns everything else: the
 //! rounds and the budget, the history window, carrying the decided actions out (one
 //! robot's action, or a joint step of several), whether the goal holds, the transcript's
 //! rounds and the time they took.

@@ -88,10 +88,12 @@ pub async fn play(
             status = Status::Interrupted;
             break;
         };
+        let sim_before = env.sim_seconds();
         round.outcome = match decided {
             Decided::CarryOut => carry_out(env, task, course.execution, &mut round),
             Decided::Ends(outcome) => outcome,
         };
+        round.sim_seconds = env.sim_seconds().zip(sim_before).map(|(t, t0)| t - t0);
         let closing = Closing {
             task,
             state: env.state(),

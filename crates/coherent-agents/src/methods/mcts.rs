@@ -5,7 +5,8 @@
 //! the team action space: every `(robot, action)` pair that [`rules::actions`] offers
 //! any robot (one robot acts per step). The world model inside the search is the
 //! symbolic rules on cloned [`State`]s, with the ground-truth reward, as in the paper.
-//! The chosen action is then run through the [`Environment`], like any other method's.
+//! The loop then carries the chosen action out through the environment, like any other
+//! method's.
 //!
 //! # The search (the authors' settings are [`MctsConfig::default`])
 //!

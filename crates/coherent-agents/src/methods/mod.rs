@@ -1,5 +1,5 @@
 //! The planning methods, one file each, every one a [`crate::episode::Method`] that the
-//! one loop ([`crate::episode::play`]) asks each round:
+//! one loop ([`crate::episode::play()`]) asks each round:
 //!
 //! - [`pefa`]: COHERENT's Proposal-Execution-Feedback-Adjustment loop, sequential and in
 //!   joint steps, with its two roles, the [`assigner::TaskAssigner`] and the
@@ -11,7 +11,7 @@
 //! - [`external`]: a method written outside the crate (a Python class, say), asked once
 //!   per step through [`crate::episode::policy::Policy`].
 //!
-//! What they share: [`decision`], the record of the action a method chose and what such
+//! What they share: `decision`, the record of the action a method chose and what such
 //! a method hears of a round; [`feedback`], what the next rounds hear of a round.
 
 pub mod assigner;

@@ -2,7 +2,7 @@
 //!
 //! - [`templates`]: the prompt set ([`templates::Prompts`]): the built-in templates, the
 //!   paper's layout, or files given at run time, and what a transcript records of it.
-//! - [`fill`]: filling a template with what a role is shown ([`fill::Sight`]), the team
+//! - [`fill`]: filling a template with what a role is shown (`Sight`), the team
 //!   list and robot labels.
 //! - [`answer`]: reading a model's answer (JSON, fenced, or free text) and the line it
 //!   names or comes nearest to.

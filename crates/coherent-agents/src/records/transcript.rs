@@ -100,7 +100,7 @@ pub enum RobotsRecord {
 }
 
 /// The task assigner's proposal, as read from its answer
-/// ([`crate::methods::assigner::TaskAssigner::parse`]).
+/// (`TaskAssigner::parse`, `crate::methods::assigner`).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Proposal {
     pub robot: NodeId,
@@ -109,7 +109,7 @@ pub struct Proposal {
 }
 
 /// A decision: an executor's, as read from its answer
-/// ([`crate::methods::executor::RobotExecutor::parse`]), or the robot and action a
+/// (`RobotExecutor::parse`, `crate::methods::executor`), or the robot and action a
 /// central, dialogue, tree-search, optimal, random or Python method chose.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Decision {
@@ -349,6 +349,10 @@ pub struct Round {
     /// sequential round, and in transcripts written before parallel episodes).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub parts: Vec<RobotPart>,
+    /// The simulated seconds the round's actions took, where the world simulates time
+    /// (physics); absent otherwise, and in transcripts written before it was kept.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sim_seconds: Option<f64>,
 }
 
 impl Round {
@@ -402,6 +406,7 @@ impl Round {
             external: None,
             robot: None,
             parts: Vec::new(),
+            sim_seconds: None,
         }
     }
 

@@ -107,10 +107,13 @@ pub fn recorded_task(t: &Transcript, file: &Path) -> Result<Task, Error> {
 pub fn difference(recorded: &Transcript, replayed: &Episode) -> Option<String> {
     // What robots outside the process said is theirs, not the replay's to reproduce; a
     // call's shared prefix follows from the prompts compared (and transcripts written
-    // before it was kept have none).
+    // before it was kept have none); simulated seconds count when the recording kept
+    // them.
+    let kept_sim = recorded.rounds.iter().any(|r| r.sim_seconds.is_some());
     let strip = |r: &Round| Round {
         wall_ms: 0.0,
         robot: None,
+        sim_seconds: r.sim_seconds.filter(|_| kept_sim),
         parts: r
             .parts
             .iter()
