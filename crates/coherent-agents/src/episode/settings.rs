@@ -188,7 +188,7 @@ impl MethodSpec {
 
     /// Whether the episode's backend answers the method's questions (a method written
     /// outside the crate asks its own models, if any). Whether an episode used a model
-    /// is another question, answered by its calls ([`crate::records::cost::ModelUse`]).
+    /// is another question, answered by its calls ([`crate::ModelUse`]).
     pub fn asks_backend(&self) -> bool {
         match self {
             MethodSpec::Builtin(m) => m.asks_backend(),
@@ -239,7 +239,7 @@ impl From<Method> for MethodSpec {
 }
 
 /// How an episode is run, as recorded in its transcript's header. The step budget is
-/// apart ([`Budget`]).
+/// apart ([`Budget`](crate::episode::Budget)).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     pub method: MethodSpec,

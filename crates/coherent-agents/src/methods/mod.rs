@@ -12,7 +12,7 @@
 //!   per step through [`crate::episode::policy::Policy`].
 //!
 //! What they share: [`templates`], the prompt set their prompts are rendered from, and
-//! [`prompt`], filling it; [`answer`], reading a model's answer; [`decision`], the
+//! [`prompt`], filling it; [`answer`], reading a model's answer; `decision`, the
 //! record of the action a method chose; [`feedback`], what the next rounds hear of a
 //! round.
 

@@ -3,7 +3,7 @@
 //! Each role renders its own templates ([`crate::methods::assigner`],
 //! [`crate::methods::executor`], [`crate::methods::team_actions`], [`crate::methods::dmrs`]).
 //! Observations are written as relation facts (`coherent_core::describe`), in the layout
-//! the template asks for ([`Sight`]).
+//! the template asks for (`Sight`).
 
 use coherent_core::{NodeId, Observation, State, Task, describe};
 
