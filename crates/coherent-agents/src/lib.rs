@@ -14,9 +14,9 @@
 //! - [`episode`]: what every method shares. The round loop and its [`Episode`], asking
 //!   a backend, executing on the `coherent_core::Environment`, [`Cancel`], the step
 //!   [`Budget`], the [`Method`] names, a method written outside the crate
-//!   ([`External`], its [`Policy`] and the [`View`] it is shown) and their [`Settings`];
-//!   and [`episode::run()`], the front door that writes the transcript and runs the
-//!   method the settings name.
+//!   ([`External`], its [`Policy`] and the [`StepView`] it is shown) and their
+//!   [`Settings`]; and [`episode::run()`], the front door that writes the transcript and
+//!   runs the method the settings name.
 //! - [`backends`]: who answers the methods' questions. The [`Backend`] trait ([`llm`])
 //!   and an OpenAI-compatible server ([`openai`], with [`retry`]), the optimal planner
 //!   ([`builtin`]; with seeded mistakes, the simulated backend) and a recorded transcript

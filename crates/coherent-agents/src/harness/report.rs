@@ -1,4 +1,4 @@
-//! The paper's tables from a results file ([`crate::harness::bench`]): Table I (success rate and
+//! The paper's tables from a results file ([`crate::harness::results`]): Table I (success rate and
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
 //! scene), each with the ground-truth row, and each method's LLM calls, tokens and cost
 //! (per task and per success, from the lines' `cost_usd`). A method's parallel episodes

@@ -99,7 +99,7 @@ pub enum RobotsRecord {
 }
 
 /// The task assigner's proposal, as read from its answer
-/// ([`crate::methods::assigner::TaskAssigner::parse`]).
+/// (`TaskAssigner::parse`).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Proposal {
     pub robot: NodeId,
@@ -108,7 +108,7 @@ pub struct Proposal {
 }
 
 /// An executor's decision, as read from its answer
-/// ([`crate::methods::executor::RobotExecutor::parse`]); the central and dialogue
+/// (`RobotExecutor::parse`); the central and dialogue
 /// methods record their chosen line as one too.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Decision {
