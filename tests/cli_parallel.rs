@@ -315,7 +315,11 @@ fn a_parallel_episode_in_physics_reports_its_simulated_seconds() {
     let steps: Vec<f64> = lines(Path::new(transcript))
         .iter()
         .filter(|r| r["type"] == "round")
-        .map(|r| r["sim_seconds"].as_f64().expect("a round's simulated seconds"))
+        .map(|r| {
+            r["sim_seconds"]
+                .as_f64()
+                .expect("a round's simulated seconds")
+        })
         .collect();
     assert_eq!(steps.len(), 13);
     assert!(steps.iter().all(|s| *s > 0.0), "{steps:?}");

@@ -185,7 +185,7 @@ pub(crate) enum RobotsKind {
 #[derive(Args)]
 pub(crate) struct RobotFlags {
     /// Who carries the actions out: `local` (this process), or `ros2` (one ROS 2 action
-    /// server per robot at /<namespace>/<robot>/execute).
+    /// server per robot at `/<namespace>/<robot>/execute`).
     #[arg(long, value_enum, default_value = "local")]
     robots: RobotsKind,
     /// With --robots ros2: the namespace of the robots' actions.

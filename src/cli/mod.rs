@@ -128,7 +128,7 @@ where
     run_with(args, None)
 }
 
-/// [`run`], with `load` to load the methods written in Python that `--method` and
+/// [`run()`], with `load` to load the methods written in Python that `--method` and
 /// `--methods` name as `MODULE:CLASS` (without it, such a name is an error that says
 /// what is needed).
 pub fn run_with<I, T>(args: I, load: Option<&LoadMethod<'_>>) -> u8

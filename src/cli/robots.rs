@@ -17,9 +17,10 @@ pub(crate) struct RobotsArgs {
 
 #[derive(Subcommand)]
 enum RobotsCommand {
-    /// Serve every robot of a task as a ROS 2 action server, /<namespace>/<robot>/execute
-    /// (coherent_msgs/action/Execute), acting by the rules or in Rapier (--physics), until
-    /// Ctrl-C. One line when the servers are up, one per goal.
+    /// Serve every robot of a task as a ROS 2 action server,
+    /// `/<namespace>/<robot>/execute` (coherent_msgs/action/Execute), acting by the rules
+    /// or in Rapier (--physics), until Ctrl-C. One line when the servers are up, one per
+    /// goal.
     Serve(ServeArgs),
     /// The bridge's DDS side for a run over ROS 2, in a process of its own that `run`,
     /// `bench` and the Python package start: JSON lines on stdin and stdout.

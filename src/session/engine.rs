@@ -52,6 +52,9 @@ pub use coherent_agents::{ErrorRates, PriceTable, PromptError, Prompts};
 // Benchmarks: the results file, its lines and the driver's ledger, the subsets, the
 // progress lines, the paper's tables.
 pub use coherent_agents::bench::progress::clock;
+// What the ledger, the results file's readers and an `External`'s constructor return,
+// which the Python bindings convert into their exceptions by kind.
+pub use coherent_agents::Error as AgentsError;
 pub use coherent_agents::bench::{
     BenchOutcome, Difference, EpisodeKey, EpisodeResult, Event, Group, Ledger, Progress,
     ResultLine, RunSettings, Setting, Style, Subset, read_results, select, transcripts_dir,

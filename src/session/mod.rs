@@ -8,7 +8,7 @@
 //!   [`episode::ReplayRequest`]), prepared in one call, and the one episode runner under
 //!   `run`, `replay` and `bench`, in a symbolic or physical environment or with robots
 //!   over ROS 2;
-//! - [`bench`]: methods x tasks x seeds into a resumable results file, locally or
+//! - [`bench`](mod@bench): methods x tasks x seeds into a resumable results file, locally or
 //!   through a worker of a distributed executor;
 //! - [`backend`]: which backend answers, the model endpoint completed from the
 //!   environment;

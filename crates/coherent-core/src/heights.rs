@@ -1,5 +1,5 @@
 //! What the `geometric` rule set takes from a task's [`Layout`]: the height labels,
-//! derived instead of hand-set ([`derive_heights`]), and the checks that tie a layout to
+//! derived instead of hand-set (`derive_heights`), and the checks that tie a layout to
 //! its graph (every room, door, robot and object has an entry; every fixed arm reaches
 //! what starts on its surface; every `LANDABLE` top is large enough).
 
@@ -46,6 +46,8 @@ impl Layout {
 /// its JSON path. The same derivation also checks the rest of what the rules take from
 /// geometry: every fixed arm reaches the top of everything that starts on its surface,
 /// and every `LANDABLE` top is large enough for the quadrotor.
+///
+/// [`RobotSpecs::dog_max_height`]: crate::geometry::RobotSpecs::dog_max_height
 pub(crate) fn derive_heights(task: &mut Task, layout: &Layout, site: &Site<'_>) -> Result<()> {
     let nodes_site = site.key("graph").key("nodes");
     for n in task.indices() {

@@ -1,7 +1,7 @@
 //! Reading JSON input with errors that name the file, the place and the value: whole
 //! documents ([`parse`]: UTF-8 text, JSON syntax, no key twice in one object), the typed
-//! fields of a parsed document ([`from_value`]), and short descriptions of values for
-//! messages ([`describe`]).
+//! fields of a parsed document (`from_value`), and short descriptions of values for
+//! messages (`describe`).
 //!
 //! JSON leaves repeated keys to the reader and serde_json keeps the last one, so that
 //! `{"task_id": 0, "task_id": 7}` would silently be task 7. [`value`] deserializes a

@@ -18,7 +18,7 @@ pub fn may_reach(task: &Task, kinds: &[RobotKind], goal: &[GoalPredicate]) -> bo
 
 struct Facts {
     n: usize,
-    /// at[x][p]: bit 0 = x may be ON p, bit 1 = x may be INSIDE p.
+    /// `at[x][p]`: bit 0 = x may be ON p, bit 1 = x may be INSIDE p.
     at: Vec<u8>,
     in_room: Vec<bool>,
     low: Vec<bool>,
@@ -28,7 +28,7 @@ struct Facts {
     basket_low_at: Vec<bool>,
     open: Vec<bool>,
     dog_close: Vec<bool>,
-    /// dog_holds[x]: the robot dog may hold x.
+    /// `dog_holds[x]`: the robot dog may hold x.
     dog_holds: Vec<bool>,
     /// arm_holds[a * n + x]: arm `a` may hold x.
     arm_holds: Vec<bool>,

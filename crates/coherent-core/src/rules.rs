@@ -342,7 +342,7 @@ pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
 }
 
 /// The action lists of several robots in state `s`, in the order of `robots`: what one
-/// planning round asks of the rules. The state's [`Contents`] is built once for all, and
+/// planning round asks of the rules. The state's `Contents` is built once for all, and
 /// the lists share one block.
 pub fn team_actions(task: &Task, s: &State, robots: &[Robot]) -> TeamActions {
     let contents = Contents::new(task, s);

@@ -1,6 +1,6 @@
 //! A task: the scene graph at the start, the robots, the goal and what is known of the
 //! ground truth. Both file formats (the paper's and ours) build a [`Task`] through
-//! [`Task::build`], so structural checks live in one place.
+//! `Task::build`, so structural checks live in one place.
 
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};

@@ -21,6 +21,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::convert::{self, interruptible, to_py};
+use crate::errors::PyCoherentResult;
 use crate::llm::PyLlm;
 use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_source, prompt_source};
@@ -29,7 +30,7 @@ use crate::{args, errors};
 use coherent::session::prompts::PriceSource;
 
 /// `"all"`, `"paper40"`, a file of `scene task_id` lines, or a list of `(scene, task_id)`.
-fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
+fn subset_of(subset: &Bound<'_, PyAny>) -> PyCoherentResult<Subset> {
     let py = subset.py();
     // A str that is not text (a lone surrogate) may still be a file's name.
     if let Ok(s) = subset.cast::<PyString>()
@@ -39,10 +40,10 @@ fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
     }
     match convert::path(subset, "subset") {
         Ok(path) => {
-            return session_bench::subset_file(&path).map_err(|e| errors::session_err(py, e));
+            return Ok(session_bench::subset_file(&path)?);
         }
         // A `TypeError`: no path, so maybe pairs; else a path that names no file.
-        Err(e) if !e.is_instance_of::<PyTypeError>(py) => return Err(e),
+        Err(e) if !e.is_instance_of::<PyTypeError>(py) => return Err(e.into()),
         Err(_) => {}
     }
     let wrong = || {
@@ -57,19 +58,19 @@ fn subset_of(subset: &Bound<'_, PyAny>) -> PyResult<Subset> {
     let mut listed = Vec::with_capacity(pairs.len());
     for (i, pair) in pairs.iter().enumerate() {
         let Ok((scene, task_id)) = pair.extract::<(Bound<'_, PyAny>, Bound<'_, PyAny>)>() else {
-            return Err(wrong());
+            return Err(wrong().into());
         };
         if !scene.is_instance_of::<PyString>() {
-            return Err(wrong());
+            return Err(wrong().into());
         }
         let scene = convert::text(&scene, &format!("subset[{i}][0]"))?.to_owned();
         let task_id = match task_id.extract::<i64>() {
             Ok(id) => id,
             Err(e) if e.is_instance_of::<PyOverflowError>(py) => {
                 let why = "beyond the 64 bits of task ids";
-                return Err(errors::argument(&format!("subset[{i}][1]"), &task_id, why));
+                return Err(errors::argument(&format!("subset[{i}][1]"), &task_id, why).into());
             }
-            Err(_) => return Err(wrong()),
+            Err(_) => return Err(wrong().into()),
         };
         listed.push((scene, task_id));
     }
@@ -89,6 +90,7 @@ pub(crate) fn select(
 ) -> PyResult<Selected> {
     let subset = subset_of(subset)?;
     let owned = tasks.iter().map(|t| (*t.get().task).clone()).collect();
+    // The argument the fault is in, which the selection does not know.
     let selection =
         select_tasks(owned, &subset).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
     Ok((
@@ -159,10 +161,11 @@ pub(crate) fn run_methods(
             Some(results) => m.recorded(py, results),
             None => m.spec(py, python, tasks),
         })
-        .collect::<PyResult<Vec<_>>>()?;
+        .collect::<PyCoherentResult<Vec<_>>>()?;
     if methods.is_empty() {
         return Err(errors::invalid(py, "methods: name at least one method"));
     }
+    // The argument, and the attribute that names a method written in Python.
     session_bench::distinct_names(&methods)
         .map_err(|e| errors::invalid(py, format!("methods: {e} (its `name`)")))?;
     if seeds == 0 {
@@ -225,7 +228,9 @@ pub(crate) fn run_backend(
 }
 
 /// The exception of an error in preparing a run's episodes: the backend's problems
-/// worded with `coherent.bench`'s keyword arguments, the others by their kind.
+/// worded with `coherent.bench`'s keyword arguments, the others by their kind. Its call
+/// sites convert with it, not with `?`: the wording is `coherent.bench`'s, which the
+/// conversion of the session's errors (the neutral words) cannot know.
 pub(crate) fn settings_err(py: Python<'_>, e: Error) -> PyErr {
     let Error::Backend(problem) = &e else {
         return errors::session_err(py, e);
@@ -283,7 +288,7 @@ pub(crate) fn run_bench<'py>(
     robot_timeout: f64,
     server_wait: f64,
     #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
-) -> PyResult<Bound<'py, PyDict>> {
+) -> PyCoherentResult<Bound<'py, PyDict>> {
     let style = progress_style(py, progress)?;
     let prompts_given = prompts.is_some();
     let request = EpisodesRequest {
@@ -339,7 +344,7 @@ pub(crate) fn run_bench<'py>(
         },
     );
     python.close(py)?;
-    let outcome = result?.map_err(|e| errors::session_err(py, e))?;
+    let outcome = result??;
     let d = outcome_dict(py, &outcome)?;
     d.set_item("out", &config_out)?;
     Ok(d)
@@ -353,12 +358,10 @@ pub(crate) fn read_results<'py>(
     py: Python<'py>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
     prices: Option<&Bound<'py, PyAny>>,
-) -> PyResult<Bound<'py, PyList>> {
+) -> PyCoherentResult<Bound<'py, PyList>> {
     let prices = price_source(prices)?;
-    let file = py
-        .detach(|| read_results_file(&path))
-        .map_err(|e| errors::session_err(py, e.into()))?;
-    let lines = priced(py, file.lines, prices)?;
+    let file = py.detach(|| read_results_file(&path))?;
+    let lines = priced(file.lines, prices)?;
     let list = PyList::empty(py);
     for line in &lines {
         list.append(to_py(py, line)?)?;
@@ -367,15 +370,11 @@ pub(crate) fn read_results<'py>(
 }
 
 /// `lines` priced anew from their tokens at `prices`, or as they are without.
-fn priced(
-    py: Python<'_>,
-    lines: Vec<ResultLine>,
-    prices: PriceSource,
-) -> PyResult<Vec<ResultLine>> {
+fn priced(lines: Vec<ResultLine>, prices: PriceSource) -> PyCoherentResult<Vec<ResultLine>> {
     if prices == PriceSource::Builtin {
         return Ok(lines);
     }
-    session_bench::priced(lines, prices).map_err(|e| errors::session_err(py, e))
+    Ok(session_bench::priced(lines, prices)?)
 }
 
 /// Results lines (dicts with the results file's fields) as the harness's type; errors
@@ -386,6 +385,7 @@ pub(crate) fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine
         .enumerate()
         .map(|(i, item)| {
             let value = convert::json_at(&item, &format!("lines[{i}]"))?;
+            // The line's index, which the parser does not know.
             serde_json::from_value(value)
                 .map_err(|e| errors::invalid(lines.py(), format!("results line {i}: {e}")))
         })
@@ -398,11 +398,10 @@ pub(crate) fn result_lines(lines: &Bound<'_, PyList>) -> PyResult<Vec<ResultLine
 pub(crate) fn price_lines<'py>(
     lines: &Bound<'py, PyList>,
     prices: &Bound<'py, PyAny>,
-) -> PyResult<Bound<'py, PyList>> {
+) -> PyCoherentResult<Bound<'py, PyList>> {
     let py = lines.py();
     let source = price_source(Some(prices))?;
-    let priced = session_bench::priced(result_lines(lines)?, source)
-        .map_err(|e| errors::session_err(py, e))?;
+    let priced = session_bench::priced(result_lines(lines)?, source)?;
     let list = PyList::empty(py);
     for line in &priced {
         list.append(to_py(py, line)?)?;
@@ -415,6 +414,7 @@ pub(crate) fn price_lines<'py>(
 fn report_of(lines: &Bound<'_, PyList>) -> PyResult<Report> {
     let py = lines.py();
     let lines = result_lines(lines)?;
+    // Which rows to pick, in pandas: Python's words, not the session's.
     session_bench::report(&lines).map_err(|mixed| {
         let example = match mixed.differing.first() {
             Some(&setting) if setting != Setting::Unrecorded => {

@@ -23,6 +23,7 @@ use crate::bench::{
     outcome_dict, progress_style, replaying, run_backend, run_methods, settings_err, to_stderr,
 };
 use crate::convert::{json_at, text, to_py};
+use crate::errors::PyCoherentResult;
 use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_source, prompt_source};
 use crate::task::PyTask;
@@ -100,7 +101,7 @@ impl PyLedger {
         progress: Option<&str>,
         prompts: Option<&Bound<'_, PyAny>>,
         prices: Option<&Bound<'_, PyAny>>,
-    ) -> PyResult<PyLedger> {
+    ) -> PyCoherentResult<PyLedger> {
         let prompts_given = prompts.is_some();
         let request = EpisodesRequest {
             prompts: prompt_source(prompts)?,
@@ -126,10 +127,10 @@ impl PyLedger {
             .prepare()
             .map_err(|e| settings_err(py, e))?;
         let tasks: Vec<_> = tasks.iter().map(|t| Arc::clone(&t.get().task)).collect();
+        // The argument the fault is in, and an argument's error whatever the kind.
         RunTasks::new(&tasks).map_err(|e| errors::invalid(py, format!("tasks: {e}")))?;
         let out = out.unwrap_or_else(|| default_out(&settings, seeds));
-        let mut ledger = Ledger::open(&out, DEFAULT_MAX_RESULTS_BYTES, &settings.record(seeds))
-            .map_err(|e| errors::session_err(py, e.into()))?;
+        let mut ledger = Ledger::open(&out, DEFAULT_MAX_RESULTS_BYTES, &settings.record(seeds))?;
         let pending = ledger.plan(&tasks, &settings.methods, &settings.executions, seeds);
         let mut progress = progress_style(py, progress)?.map(Progress::new);
         if let Some(p) = progress.as_mut() {
@@ -177,9 +178,10 @@ impl PyLedger {
 
     /// Records what a worker handed back for one episode; returns whether a line was
     /// written (not when this run already wrote that episode's line).
-    fn record(&mut self, py: Python<'_>, handed: Handed) -> PyResult<bool> {
+    fn record(&mut self, handed: Handed) -> PyCoherentResult<bool> {
         let result = match handed {
             (kind, Some(json)) if kind == "line" => {
+                // What the text is, which the parser does not know.
                 let line: ResultLine = serde_json::from_str(&json)
                     .map_err(|e| PyValueError::new_err(format!("a results line: {e}")))?;
                 EpisodeResult::Line(Box::new(line))
@@ -187,15 +189,11 @@ impl PyLedger {
             (kind, Some(why)) if kind == "skipped" => EpisodeResult::TaskSkipped(why),
             (kind, None) if kind == "not_started" => EpisodeResult::NotStarted,
             (kind, _) => {
-                return Err(PyValueError::new_err(format!(
-                    "an episode's result of kind {kind:?}"
-                )));
+                let kind = format!("an episode's result of kind {kind:?}");
+                return Err(PyValueError::new_err(kind).into());
             }
         };
-        let written = self
-            .ledger()?
-            .record(result)
-            .map_err(|e| errors::session_err(py, e.into()))?;
+        let written = self.ledger()?.record(result)?;
         if let (Some(line), Some(p)) = (&written, self.progress.as_mut()) {
             show(p.line(&Event::Finished(line)));
         }
@@ -212,15 +210,13 @@ impl PyLedger {
         py: Python<'py>,
         interrupted: bool,
         orphans: bool,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyCoherentResult<Bound<'py, PyDict>> {
         let mut ledger = self
             .ledger
             .take()
             .ok_or_else(|| PyValueError::new_err("the run is finished"))?;
         if orphans {
-            ledger
-                .mark_orphans()
-                .map_err(|e| errors::session_err(py, e.into()))?;
+            ledger.mark_orphans()?;
         }
         if self.progress.as_ref().map(Progress::style) == Some(Style::Bar) {
             // The bar's last redraw ends its line.
@@ -280,13 +276,13 @@ impl PyWorker {
         prompts: &Bound<'_, PyDict>,
         prices: &Bound<'_, PyDict>,
         #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
-    ) -> PyResult<PyWorker> {
+    ) -> PyCoherentResult<PyWorker> {
         let mut read = Vec::new();
         for (i, text) in tasks.iter().enumerate() {
+            // Which task the text is, which the parser does not know.
             let value: serde_json::Value = serde_json::from_str(text)
                 .map_err(|e| PyValueError::new_err(format!("task {i}: {e}")))?;
-            let task =
-                native::read(&format!("task {i}"), &value).map_err(|e| errors::core_err(py, e))?;
+            let task = native::read(&format!("task {i}"), &value)?;
             read.push(Arc::new(task));
         }
         let objects = read
@@ -320,7 +316,7 @@ impl PyWorker {
         }
         .prepare()
         .map_err(|e| settings_err(py, e))?;
-        let worker = Worker::new(&read, settings, &out).map_err(|e| errors::session_err(py, e))?;
+        let worker = Worker::new(&read, settings, &out)?;
         Ok(PyWorker {
             worker,
             _python: python,
@@ -329,13 +325,12 @@ impl PyWorker {
 
     /// Runs the episode `(method, scene, task_id, seed, execution)` with the GIL released
     /// (other threads may run theirs meanwhile); returns what the driver records.
-    fn run(&self, py: Python<'_>, key: Key) -> PyResult<Handed> {
+    fn run(&self, py: Python<'_>, key: Key) -> PyCoherentResult<Handed> {
         let key = key_of(py, key)?;
-        let result = py
-            .detach(|| self.worker.run(&key, &Cancel::default()))
-            .map_err(|e| errors::session_err(py, e))?;
+        let result = py.detach(|| self.worker.run(&key, &Cancel::default()))?;
         Ok(match result {
             EpisodeResult::Line(line) => {
+                // What failed to be written, which the serializer does not know.
                 let json = serde_json::to_string(&line)
                     .map_err(|e| PyValueError::new_err(format!("a results line: {e}")))?;
                 ("line".to_owned(), Some(json))

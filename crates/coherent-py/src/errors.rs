@@ -1,12 +1,13 @@
 //! The exception tree: `CoherentError` and a few subclasses, each raised for one kind of
 //! failure, with the attributes a caller needs to act on it. The session's errors
 //! ([`session_err`]) and the ways an episode ends ([`ending_err`]) map to them by kind,
-//! one class each.
+//! one class each; [`PyCoherentErr`] carries the engine's errors to Python, so that the
+//! bindings convert them with `?`.
 
 use std::fmt::Display;
 
 use coherent::session::Error;
-use coherent::session::engine::{PromptError, Setting, TaskError};
+use coherent::session::engine::{AgentsError, LlmError, PromptError, Setting, TaskError};
 use coherent::session::episode::Ending;
 use coherent::session::error::settings_differ;
 use pyo3::exceptions::{PyException, PyKeyboardInterrupt, PyRuntimeError, PyValueError};
@@ -143,6 +144,68 @@ pub(crate) fn exceptions(py: Python<'_>) -> PyResult<&'static Exceptions> {
             base,
         })
     })
+}
+
+/// An error on its way to Python: one that Python raised or the bindings built, or one
+/// of the engine's, which becomes its exception by kind when it reaches Python. Neither
+/// the session's errors nor `PyErr` are this crate's, so `From` between them cannot be
+/// written (the orphan rule); this type stands between: functions that meet the
+/// engine's errors return it and use `?` on both, and PyO3 (or `?` in a function that
+/// returns `PyResult`) turns it into the exception.
+pub(crate) enum PyCoherentErr {
+    /// Raised by Python, or an exception built here.
+    Python(PyErr),
+    /// The session's error, raised by its kind ([`session_err`]).
+    Session(Error),
+    /// A model call's or the model client's, raised as a `BackendError` with no episode
+    /// (the words the session gives an endpoint's error).
+    Model(LlmError),
+}
+
+/// The bindings' results where the engine's errors meet Python's.
+pub(crate) type PyCoherentResult<T> = Result<T, PyCoherentErr>;
+
+impl From<PyErr> for PyCoherentErr {
+    fn from(e: PyErr) -> PyCoherentErr {
+        PyCoherentErr::Python(e)
+    }
+}
+
+impl From<Error> for PyCoherentErr {
+    fn from(e: Error) -> PyCoherentErr {
+        PyCoherentErr::Session(e)
+    }
+}
+
+/// A task file, a task, an action or a robot id: the session's `Error::Task`.
+impl From<TaskError> for PyCoherentErr {
+    fn from(e: TaskError) -> PyCoherentErr {
+        PyCoherentErr::Session(e.into())
+    }
+}
+
+/// A results file, a transcript, a method's name: as the session words them.
+impl From<AgentsError> for PyCoherentErr {
+    fn from(e: AgentsError) -> PyCoherentErr {
+        PyCoherentErr::Session(e.into())
+    }
+}
+
+impl From<LlmError> for PyCoherentErr {
+    fn from(e: LlmError) -> PyCoherentErr {
+        PyCoherentErr::Model(e)
+    }
+}
+
+impl From<PyCoherentErr> for PyErr {
+    fn from(e: PyCoherentErr) -> PyErr {
+        match e {
+            PyCoherentErr::Python(e) => e,
+            // Converted on the way back to Python, where the GIL is held: `attach` is cheap.
+            PyCoherentErr::Session(e) => Python::attach(|py| session_err(py, e)),
+            PyCoherentErr::Model(e) => Python::attach(|py| backend(py, e.to_string())),
+        }
+    }
 }
 
 /// The exception of the session's error `e`, by its kind.

@@ -36,7 +36,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use convert::{interruptible, json_to_py};
-use errors::core_err;
+use errors::{PyCoherentResult, core_err};
 use method::Methods;
 use task::PyTask;
 
@@ -48,8 +48,8 @@ use task::PyTask;
 fn load_tasks(
     py: Python<'_>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
-) -> PyResult<Vec<PyTask>> {
-    let tasks = py.detach(|| read_all(&path)).map_err(|e| core_err(py, e))?;
+) -> PyCoherentResult<Vec<PyTask>> {
+    let tasks = py.detach(|| read_all(&path))?;
     Ok(tasks.into_iter().map(PyTask::new).collect())
 }
 
@@ -60,10 +60,8 @@ fn load_tasks(
 fn read_tasks(
     py: Python<'_>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
-) -> PyResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
-    let results = py
-        .detach(|| tasks::read_tasks(&path))
-        .map_err(|e| core_err(py, e))?;
+) -> PyCoherentResult<(Vec<PyTask>, Vec<Py<PyAny>>)> {
+    let results = py.detach(|| tasks::read_tasks(&path))?;
     let mut tasks = Vec::new();
     let mut errors = Vec::new();
     for r in results {
@@ -82,22 +80,15 @@ fn read_tasks(
 fn benchmark_tasks(
     py: Python<'_>,
     #[pyo3(from_py_with = args::subset)] subset: Option<&str>,
-) -> PyResult<Vec<PyTask>> {
+) -> PyCoherentResult<Vec<PyTask>> {
     let subset = match subset {
         None => Subset::All,
         Some("40") => Subset::named("native40").expect("a subset name"),
         Some(other) => {
-            return Err(errors::choice(
-                py,
-                "subset",
-                other,
-                "expected None or \"40\"",
-            ));
+            return Err(errors::choice(py, "subset", other, "expected None or \"40\"").into());
         }
     };
-    let tasks = py
-        .detach(|| tasks::benchmark(&subset))
-        .map_err(|e| errors::session_err(py, e))?;
+    let tasks = py.detach(|| tasks::benchmark(&subset))?;
     Ok(tasks.into_iter().map(PyTask::shared).collect())
 }
 
@@ -192,8 +183,8 @@ fn validate_task(
 fn parse_action<'py>(
     py: Python<'py>,
     #[pyo3(from_py_with = convert::action_text)] text: String,
-) -> PyResult<Bound<'py, PyDict>> {
-    let parsed = parse(&text).map_err(|e| core_err(py, e))?;
+) -> PyCoherentResult<Bound<'py, PyDict>> {
+    let parsed = parse(&text)?;
     let mention = |m: &Mention| -> PyResult<Bound<'py, PyDict>> {
         let d = PyDict::new(py);
         d.set_item("name", &m.name)?;
@@ -217,11 +208,12 @@ fn cli_main(
 ) -> PyResult<u8> {
     let methods = Mutex::new(Methods::new(py, None)?);
     let load = |spec: &str| -> Result<External, Error> {
-        Python::attach(|py| {
+        Python::attach(|py| -> PyResult<External> {
             let found = method::helpers(py)?.call_method1("load", (spec,))?;
             let mut methods = methods.lock().unwrap_or_else(PoisonError::into_inner);
-            methods.add(&found, &[])
+            Ok(methods.add(&found, &[])?)
         })
+        // The other way round: the command line's error, naming the spec it was given.
         .map_err(|e| Error::Invalid(format!("{spec}: {e}")))
     };
     let code = py.detach(|| {

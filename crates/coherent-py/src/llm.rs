@@ -19,12 +19,12 @@ use pyo3::types::{PyCFunction, PyDict, PyList, PyString};
 
 use crate::args;
 use crate::convert::{json_at, py_repr, to_py};
-use crate::errors;
+use crate::errors::{self, PyCoherentResult};
 use crate::method::{Recorder, helpers};
 
 /// The session's runtime, which the model calls of Python code run on.
-fn runtime(py: Python<'_>) -> PyResult<&'static tokio::runtime::Runtime> {
-    session::runtime().map_err(|e| errors::session_err(py, e))
+fn runtime() -> PyCoherentResult<&'static tokio::runtime::Runtime> {
+    Ok(session::runtime()?)
 }
 
 /// Asks `client`, and files the call with `recorder` (the step being decided), if any.
@@ -88,7 +88,7 @@ impl PyLlm {
         #[pyo3(from_py_with = args::max_retries)] max_retries: u32,
         #[pyo3(from_py_with = args::concurrency)] concurrency: usize,
         #[pyo3(from_py_with = args::max_response_bytes)] max_response_bytes: usize,
-    ) -> PyResult<PyLlm> {
+    ) -> PyCoherentResult<PyLlm> {
         let format: OutputMode = serde_json::from_value(format.into()).map_err(|_| {
             errors::choice(
                 py,
@@ -114,16 +114,11 @@ impl PyLlm {
             output: format,
             max_response_bytes,
         };
-        let config = backend::complete(given)
-            .map_err(|e| errors::session_err(py, e))?
-            .ok_or_else(|| {
-                errors::backend(
-                    py,
-                    "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and COHERENT_MODEL)",
-                )
-            })?;
+        let none = "no endpoint: pass base_url= and model= (or set OPENAI_BASE_URL and \
+                    COHERENT_MODEL)";
+        let config = backend::complete(given)?.ok_or_else(|| errors::backend(py, none))?;
         // The client checks the rest (the model name, the URL); fail here, not mid-run.
-        let client = OpenAiClient::new(config).map_err(|e| errors::backend(py, e.to_string()))?;
+        let client = OpenAiClient::new(config)?;
         Ok(PyLlm {
             client: Arc::new(client),
         })
@@ -145,30 +140,27 @@ impl PyLlm {
         max_tokens: u32,
         role: &str,
         robot: Option<i64>,
-    ) -> PyResult<PyReply> {
+    ) -> PyCoherentResult<PyReply> {
         let (chat, call) = self.request(messages, schema, max_tokens, role, robot)?;
         let recorder = Recorder::current(py)?;
         let (tx, mut rx) = mpsc::channel();
         let client = Arc::clone(&self.client);
-        let task = runtime(py)?.spawn(async move {
+        let task = runtime()?.spawn(async move {
             let _ = tx.send(ask(client, chat, call, recorder).await);
         });
         loop {
             let receiver = &mut rx;
             match py.detach(move || receiver.recv_timeout(Duration::from_millis(50))) {
-                Ok(result) => {
-                    return result
-                        .map(|answer| PyReply { answer })
-                        .map_err(|e| errors::backend(py, e.to_string()));
-                }
+                Ok(result) => return Ok(PyReply { answer: result? }),
                 Err(RecvTimeoutError::Timeout) => {
                     if let Err(interrupt) = py.check_signals() {
                         task.abort();
-                        return Err(interrupt);
+                        return Err(interrupt.into());
                     }
                 }
                 Err(RecvTimeoutError::Disconnected) => {
-                    return Err(PyRuntimeError::new_err("the model call stopped unanswered"));
+                    let why = "the model call stopped unanswered";
+                    return Err(PyRuntimeError::new_err(why).into());
                 }
             }
         }
@@ -302,7 +294,7 @@ fn start<'py>(
     let future = event_loop.call_method0("create_future")?;
     let settle = helpers(py)?.getattr("_settle")?.unbind();
     let (event_loop, pending) = (event_loop.clone().unbind(), future.clone().unbind());
-    runtime(py)?.spawn(async move {
+    runtime()?.spawn(async move {
         let result = ask(client, chat, call, recorder).await;
         Python::attach(|py| {
             let (ok, value) = match result {

@@ -14,7 +14,6 @@ use std::time::{Duration, Instant};
 
 use std::path::Path;
 
-use coherent::session::Error;
 use coherent::session::backend::RecordedRun;
 use coherent::session::bench::recorded_method;
 use coherent::session::engine::{
@@ -28,7 +27,7 @@ use pyo3::types::{PyDict, PyList, PyTuple};
 use tokio::sync::oneshot;
 
 use crate::convert::{json_at, py_repr, to_py};
-use crate::errors;
+use crate::errors::{self, PyCoherentResult};
 use crate::stepper::{Stepper, Threads};
 use crate::task::PyTask;
 
@@ -368,14 +367,15 @@ impl Methods {
         &mut self,
         method: &Bound<'_, PyAny>,
         tasks: &[Py<PyTask>],
-    ) -> PyResult<External> {
+    ) -> PyCoherentResult<External> {
         let py = method.py();
         if !method.is_callable() {
             return Err(PyTypeError::new_err(format!(
                 "method {}: expected a method's name, or a class (any callable) whose \
                  objects have act(view)",
                 method.repr()?
-            )));
+            ))
+            .into());
         }
         let name: String = helpers(py)?
             .call_method1("method_name", (method,))?
@@ -403,8 +403,7 @@ impl Methods {
                 stepper: Stepper::start(&maker.threads).map_err(MethodFailure)?,
             }) as Box<dyn Policy>)
         });
-        let external = External::new(&name, make)
-            .map_err(|e| errors::session_err(py, Error::from(e)))?
+        let external = External::new(&name, make)?
             .with_step_timeout(self.step_timeout)
             .with_settings(settings);
         self.methods.push(shared);
@@ -608,13 +607,13 @@ impl MethodArg {
         py: Python<'_>,
         methods: &mut Methods,
         tasks: &[Py<PyTask>],
-    ) -> PyResult<MethodSpec> {
+    ) -> PyCoherentResult<MethodSpec> {
         match self {
             MethodArg::Name(name) if name.contains(':') => {
                 let found = helpers(py)?.call_method1("load", (name,))?;
                 methods.add(&found, tasks).map(MethodSpec::External)
             }
-            MethodArg::Name(name) => method_of(py, name).map(MethodSpec::from),
+            MethodArg::Name(name) => Ok(method_of(py, name)?.into()),
             MethodArg::Python(object) => methods
                 .add(object.bind(py), tasks)
                 .map(MethodSpec::External),
@@ -625,7 +624,7 @@ impl MethodArg {
     /// or the recorded one of the name a method written in Python goes by, whose
     /// decisions replay without its code (a `MODULE:CLASS` that cannot be loaded any
     /// more is an error listing the recorded names).
-    pub(crate) fn recorded(&self, py: Python<'_>, results: &Path) -> PyResult<MethodSpec> {
+    pub(crate) fn recorded(&self, py: Python<'_>, results: &Path) -> PyCoherentResult<MethodSpec> {
         let name = match self {
             MethodArg::Name(name) if !name.contains(':') => {
                 if let Some(method) = Builtin::from_name(name) {
@@ -638,9 +637,9 @@ impl MethodArg {
                     .call_method1("method_name", (found,))?
                     .extract()?,
                 Err(e) => {
-                    let names = RecordedRun::read(results, ReadLimits::default())
-                        .map(|r| r.methods().join(", "))
-                        .map_err(|e| errors::session_err(py, e))?;
+                    let names = RecordedRun::read(results, ReadLimits::default())?
+                        .methods()
+                        .join(", ");
                     return Err(errors::invalid(
                         py,
                         format!(
@@ -648,14 +647,14 @@ impl MethodArg {
                              needs no code: name the method as {} records it ({names})",
                             results.display()
                         ),
-                    ));
+                    )
+                    .into());
                 }
             },
             MethodArg::Python(object) => helpers(py)?
                 .call_method1("method_name", (object,))?
                 .extract()?,
         };
-        recorded_method(results, &name, ReadLimits::default())
-            .map_err(|e| errors::session_err(py, e))
+        Ok(recorded_method(results, &name, ReadLimits::default())?)
     }
 }

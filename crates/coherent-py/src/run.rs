@@ -21,7 +21,7 @@ use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::args;
 use crate::convert::{finite, interruptible, py_repr, text, to_py};
-use crate::errors::{self, short_repr};
+use crate::errors::{self, PyCoherentResult, short_repr};
 use crate::llm::PyLlm;
 use crate::method::{MethodArg, Methods};
 use crate::prompts::{price_source, prompt_source};
@@ -40,13 +40,9 @@ pub(crate) struct PyEpisode {
 impl PyEpisode {
     /// Reads the transcript at `path`; it must hold a finished episode. Its cost is at
     /// the built-in prices, by the same rule as the episode's when it ran.
-    fn read(py: Python<'_>, path: &Path) -> PyResult<PyEpisode> {
-        let recorded = episode::recorded(path, DEFAULT_MAX_TRANSCRIPT_BYTES)
-            .map_err(|e| errors::session_err(py, e))?;
-        let summary = recorded
-            .finished()
-            .map_err(|e| errors::session_err(py, e))?
-            .clone();
+    fn read(py: Python<'_>, path: &Path) -> PyCoherentResult<PyEpisode> {
+        let recorded = episode::recorded(path, DEFAULT_MAX_TRANSCRIPT_BYTES)?;
+        let summary = recorded.finished()?.clone();
         let cost_usd = recorded.cost(&PriceTable::builtin());
         Ok(PyEpisode {
             transcript: recorded.transcript,
@@ -79,6 +75,7 @@ impl PyEpisode {
             transcript: &self.transcript,
             cost_usd: self.cost_usd,
         };
+        // The view's errors are text, of no kind to convert by.
         let html = py
             .detach(|| view::episode_html(&shown))
             .map_err(|e| errors::error(py, errors::Kind::Coherent, e, None))?;
@@ -274,6 +271,7 @@ pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Er
             "sim_errors: expected a str such as \"all=0.1\" or a dict of rates by kind",
         ));
     };
+    // The argument's name, which the parser does not know.
     ErrorRates::parse(&written)
         .map(Some)
         .map_err(|e| errors::invalid(spec.py(), format!("sim_errors: {e}")))
@@ -285,7 +283,7 @@ pub(crate) fn error_rates(spec: Option<&Bound<'_, PyAny>>) -> PyResult<Option<Er
 fn episode_off_the_gil(
     py: Python<'_>,
     prepare: impl FnOnce(&Cancel) -> Result<Prepared, Error> + Send + 'static,
-) -> PyResult<Ran> {
+) -> PyCoherentResult<Ran> {
     let cancel = Cancel::default();
     let stop = cancel.clone();
     let ran = interruptible(
@@ -296,7 +294,7 @@ fn episode_off_the_gil(
             session::block_on(prepared.run(&cancel, &mut |_| {}))?
         },
     )?;
-    ran.map_err(|e| errors::session_err(py, e))
+    Ok(ran?)
 }
 
 /// The episode that `ran`, or the exception its ending raises (`BackendError`,
@@ -412,6 +410,6 @@ pub(crate) fn replay(
 pub(crate) fn load_episode(
     py: Python<'_>,
     #[pyo3(from_py_with = args::path)] path: PathBuf,
-) -> PyResult<PyEpisode> {
+) -> PyCoherentResult<PyEpisode> {
     PyEpisode::read(py, &path)
 }

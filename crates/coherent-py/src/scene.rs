@@ -11,7 +11,7 @@ use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 
 use crate::convert::{interruptible, to_py};
-use crate::errors;
+use crate::errors::PyCoherentResult;
 use crate::run::PyEpisode;
 use crate::task::PyTask;
 
@@ -23,9 +23,9 @@ use crate::task::PyTask;
 pub(crate) fn scene_layout<'py>(
     py: Python<'py>,
     task: &Bound<'py, PyTask>,
-) -> PyResult<Bound<'py, PyAny>> {
-    let layout = render::scene_layout(&task.get().task).map_err(|e| errors::session_err(py, e))?;
-    to_py(py, &layout)
+) -> PyCoherentResult<Bound<'py, PyAny>> {
+    let layout = render::scene_layout(&task.get().task)?;
+    Ok(to_py(py, &layout)?)
 }
 
 /// A task (its optimal plan) or an episode (its executed actions), as given to Python.
@@ -52,7 +52,7 @@ fn source_of(source: &Bound<'_, PyAny>) -> PyResult<Source> {
 }
 
 /// The paths, off the GIL; Ctrl-C stops the plan search.
-fn paths_of(py: Python<'_>, source: Source) -> PyResult<(Arc<Task>, Vec<RobotPath>)> {
+fn paths_of(py: Python<'_>, source: Source) -> PyCoherentResult<(Arc<Task>, Vec<RobotPath>)> {
     let cancel = Arc::new(AtomicBool::new(false));
     let flag = Arc::clone(&cancel);
     let result = interruptible(
@@ -71,7 +71,7 @@ fn paths_of(py: Python<'_>, source: Source) -> PyResult<(Arc<Task>, Vec<RobotPat
             }
         },
     )?;
-    let (task, Paths { paths, warning }) = result.map_err(|e| errors::session_err(py, e))?;
+    let (task, Paths { paths, warning }) = result?;
     if let Some(why) = warning {
         eprintln!("warning: {why}");
     }
@@ -88,7 +88,7 @@ type Track = Vec<(f32, f32, f32)>;
 pub(crate) fn robot_paths(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
-) -> PyResult<BTreeMap<i64, Track>> {
+) -> PyCoherentResult<BTreeMap<i64, Track>> {
     let (_, paths) = paths_of(py, source_of(source)?)?;
     Ok(paths
         .into_iter()
@@ -109,7 +109,7 @@ pub(crate) fn render_svg(
     py: Python<'_>,
     source: &Bound<'_, PyAny>,
     paths: bool,
-) -> PyResult<String> {
+) -> PyCoherentResult<String> {
     let source = source_of(source)?;
     let (task, drawn) = if paths {
         let (task, p) = paths_of(py, source)?;
@@ -119,5 +119,5 @@ pub(crate) fn render_svg(
             Source::Plan(task) | Source::Episode(task, _) => (task, None),
         }
     };
-    render::svg(&task, drawn.as_deref()).map_err(|e| errors::session_err(py, e))
+    Ok(render::svg(&task, drawn.as_deref())?)
 }

@@ -16,7 +16,7 @@ use pyo3::types::{PyDict, PyTuple};
 
 use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
 
-use crate::errors::{self, core_err, short_repr};
+use crate::errors::{self, PyCoherentResult, core_err, short_repr};
 
 /// A task: the scene graph at the start, the robots, the goal and the ground truth.
 #[pyclass(name = "Task", module = "coherent._coherent", frozen)]
@@ -127,9 +127,9 @@ impl PyTask {
         &self,
         py: Python<'_>,
         #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
-    ) -> PyResult<usize> {
+    ) -> PyCoherentResult<usize> {
         let id = node_id(py, &self.task, robot)?;
-        let r = self.task.robot_by_id(id).map_err(|e| core_err(py, e))?;
+        let r = self.task.robot_by_id(id)?;
         Ok(most_actions(&self.task, r.kind))
     }
 
@@ -263,7 +263,7 @@ impl PyEnv {
         namespace: Option<&str>,
         robot_timeout: f64,
         server_wait: f64,
-    ) -> PyResult<PyEnv> {
+    ) -> PyCoherentResult<PyEnv> {
         let t = Arc::clone(&task.get().task);
         let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
         let namespace = match &robots {
@@ -271,7 +271,7 @@ impl PyEnv {
             Robots::Local => None,
         };
         let built = py.detach(|| environment(&t, physics, &robots, &Cancel::default()));
-        let env = built.map_err(|e| errors::session_err(py, e))?;
+        let env = built?;
         Ok(PyEnv {
             env,
             task: task.unbind(),
@@ -310,9 +310,9 @@ impl PyEnv {
         &self,
         py: Python<'py>,
         #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
-    ) -> PyResult<Bound<'py, PyDict>> {
+    ) -> PyCoherentResult<Bound<'py, PyDict>> {
         let robot = node_id(py, self.env.task(), robot)?;
-        let obs = self.env.observe(robot).map_err(|e| core_err(py, e))?;
+        let obs = self.env.observe(robot)?;
         let task = self.env.task();
         let graph = task.raw_subgraph(self.env.state(), &obs.nodes, &obs.edges);
         let dict = PyDict::new(py);
@@ -326,9 +326,9 @@ impl PyEnv {
         &self,
         py: Python<'_>,
         #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
-    ) -> PyResult<Vec<String>> {
+    ) -> PyCoherentResult<Vec<String>> {
         let robot = node_id(py, self.env.task(), robot)?;
-        self.env.actions(robot).map_err(|e| core_err(py, e))
+        Ok(self.env.actions(robot)?)
     }
 
     /// Why `robot` cannot do `action` now, by the rules, without doing it; None when it
@@ -339,10 +339,10 @@ impl PyEnv {
         py: Python<'_>,
         #[pyo3(from_py_with = robot_arg)] robot: RobotArg,
         #[pyo3(from_py_with = action_text)] action: String,
-    ) -> PyResult<Option<String>> {
+    ) -> PyCoherentResult<Option<String>> {
         let task = self.env.task();
         let robot = node_id(py, task, robot)?;
-        let r = task.robot_by_id(robot).map_err(|e| core_err(py, e))?;
+        let r = task.robot_by_id(robot)?;
         Ok(feasibility::check(task, self.env.state(), r, &action)
             .err()
             .map(|why| why.message))
@@ -364,7 +364,7 @@ impl PyEnv {
         py: Python<'py>,
         robot: &Bound<'py, PyAny>,
         action: Option<&Bound<'py, PyAny>>,
-    ) -> PyResult<Bound<'py, PyTuple>> {
+    ) -> PyCoherentResult<Bound<'py, PyTuple>> {
         let Some(action) = action else {
             return self.step_joint(py, robot);
         };
@@ -375,11 +375,10 @@ impl PyEnv {
             py.detach(|| env.step(robot, &action))
         } else {
             self.env.step(robot, &action)
-        }
-        .map_err(|e| core_err(py, e))?;
+        }?;
         let executed = outcome.executed();
         let reason = outcome.infeasible.map(|i| i.message);
-        (executed, reason, outcome.done).into_pyobject(py)
+        Ok((executed, reason, outcome.done).into_pyobject(py)?)
     }
 
     /// Whether each goal predicate holds now, in the order of `Task.goal`.
@@ -431,7 +430,7 @@ impl PyEnv {
         &mut self,
         py: Python<'py>,
         actions: &Bound<'py, PyAny>,
-    ) -> PyResult<Bound<'py, PyTuple>> {
+    ) -> PyCoherentResult<Bound<'py, PyTuple>> {
         let pairs: Vec<(Bound<'py, PyAny>, Bound<'py, PyAny>)> = match actions.cast::<PyDict>() {
             Ok(dict) => dict.iter().collect(),
             Err(_) => actions.extract().map_err(|_| {
@@ -454,15 +453,14 @@ impl PyEnv {
             py.detach(|| env.step_joint(&step))
         } else {
             self.env.step_joint(&step)
-        }
-        .map_err(|e| core_err(py, e))?;
+        }?;
         let oks: Vec<bool> = outcome.parts.iter().map(|p| p.executed()).collect();
         let reasons: Vec<Option<String>> = outcome
             .parts
             .into_iter()
             .map(|p| p.infeasible.map(|i| i.message))
             .collect();
-        (oks, reasons, outcome.done).into_pyobject(py)
+        Ok((oks, reasons, outcome.done).into_pyobject(py)?)
     }
 }
 
@@ -474,15 +472,18 @@ pub(crate) fn robots_arg(
     namespace: Option<&str>,
     robot_timeout: f64,
     server_wait: f64,
-) -> PyResult<Robots> {
+) -> PyCoherentResult<Robots> {
     match (robots, namespace) {
         ("local", None) => Ok(Robots::Local),
-        ("local", Some(_)) => Err(errors::invalid(py, "a namespace is for robots=\"ros2\"")),
-        ("ros2", ns) => Robots::ros2(ns.unwrap_or(DEFAULT_NAMESPACE), robot_timeout, server_wait)
-            .map_err(|e| errors::session_err(py, e)),
-        (other, _) => Err(errors::invalid(
-            py,
-            format!("robots={other:?}: \"local\" or \"ros2\""),
-        )),
+        ("local", Some(_)) => Err(errors::invalid(py, "a namespace is for robots=\"ros2\"").into()),
+        ("ros2", ns) => Ok(Robots::ros2(
+            ns.unwrap_or(DEFAULT_NAMESPACE),
+            robot_timeout,
+            server_wait,
+        )?),
+        (other, _) => {
+            let why = format!("robots={other:?}: \"local\" or \"ros2\"");
+            Err(errors::invalid(py, why).into())
+        }
     }
 }

@@ -1,4 +1,4 @@
-//! The ROS 2 link process: the bridge's DDS side ([`Link`]) in a child process of its
+//! The ROS 2 link process: the bridge's DDS side (`Link`) in a child process of its
 //! own, with a memory limit it sets on itself, so that whatever a DDS participant sends
 //! it can end that process but never the run.
 //!
@@ -9,7 +9,7 @@
 //! ([`LINK_MEMORY_LIMIT`]); a flood makes an allocation fail there, the child aborts,
 //! and the parent stops the bridge the way a silent robot stops it, naming the process.
 //!
-//! The parent ([`LinkProcess`], inside [`crate::Ros2Env`]) starts the child with a
+//! The parent (`LinkProcess`, inside [`crate::Ros2Env`]) starts the child with a
 //! [`LinkCommand`] (this program, with its hidden subcommand), writes its configuration
 //! and then its requests as JSON lines to the child's stdin, and reads one JSON line per
 //! answer from its stdout; every line either side reads is bounded ([`MAX_LINE_BYTES`]),

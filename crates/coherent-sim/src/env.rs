@@ -231,6 +231,7 @@ impl PhysicalEnv {
 
 /// Every difference between the physical relations and the symbolic state `s`.
 pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
+    let tol = w.tolerances();
     let mut out = Vec::new();
     let label = |n: Idx| task.node(n).label();
     for x in task.indices() {
@@ -281,7 +282,7 @@ pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
         {
             let deg = angle.abs().to_degrees();
             let open = states.is_open();
-            if (open && deg < 60.0) || (!open && deg > 2.0) {
+            if (open && deg < tol.open_min_degrees) || (!open && deg > tol.closed_max_degrees) {
                 out.push(format!(
                     "{}: symbolic {}, physical hinge at {deg:.1} degrees",
                     label(x),
@@ -337,7 +338,7 @@ pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
                 let reach = w.dog_reach();
                 for x in s.targets(r.node, Relation::Close) {
                     match w.dog_distance(x) {
-                        Some(d) if d <= reach + 0.01 => {}
+                        Some(d) if d <= reach + tol.close_margin => {}
                         Some(d) => out.push(format!(
                             "{me}: symbolic CLOSE {}, physically {d:.2} m from its shoulder (reach {reach:.2} m)",
                             label(x)

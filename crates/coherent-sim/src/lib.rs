@@ -15,4 +15,4 @@ pub use env::{
     execute_plan,
 };
 pub use layout::{Layout, LayoutError, RobotSpecs};
-pub use world::{FailureKind, PhysicsError, Placement, World};
+pub use world::{FailureKind, PhysicsError, Placement, Tolerances, World};

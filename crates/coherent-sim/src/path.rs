@@ -1,4 +1,4 @@
-//! Paths for the legged robot: A* on a 10 cm occupancy grid of one storey's floor plan,
+//! Paths for the legged robot: A* on an occupancy grid of one storey's floor plan,
 //! built from the colliders at the robot's height above that storey's floor (closed
 //! door panels included), inflated by the robot's half width, then shortened by line of
 //! sight. Storeys are joined by flights of stairs ([`crate::layout::Flight`]); the world
@@ -10,8 +10,7 @@ use std::collections::BinaryHeap;
 use rapier3d::prelude::*;
 
 use crate::layout::{self, Flight, Layout};
-
-const CELL: f32 = 0.1;
+use crate::world::Tolerances;
 
 pub(crate) struct Grid {
     x0: f32,
@@ -19,18 +18,24 @@ pub(crate) struct Grid {
     nx: usize,
     nz: usize,
     blocked: Vec<bool>,
+    /// Side of a cell (`Tolerances::path_cell`).
+    cell: f32,
+    /// How far into blocked cells a route may go to leave the margin it starts in
+    /// (`Tolerances::path_escape_cost`).
+    escape_cost: u32,
 }
 
 impl Grid {
     /// The grid of the storey whose floor is at `level`, from the layout's rooms and
     /// doors, its `flights`, and the `colliders` (those of the legged robot's body `dog`
-    /// left out).
+    /// left out), with the cell size and margins of `tol`.
     pub fn new(
         layout: &Layout,
         flights: &[Flight],
         colliders: &ColliderSet,
         dog: RigidBodyHandle,
         level: f32,
+        tol: &Tolerances,
     ) -> Grid {
         let (mut x0, mut z0, mut x1, mut z1) = (f32::MAX, f32::MAX, f32::MIN, f32::MIN);
         for r in &layout.rooms {
@@ -39,17 +44,20 @@ impl Grid {
             x1 = x1.max(r.max[0]);
             z1 = z1.max(r.max[1]);
         }
-        let nx = ((x1 - x0) / CELL).ceil() as usize + 1;
-        let nz = ((z1 - z0) / CELL).ceil() as usize + 1;
+        let cell = tol.path_cell;
+        let nx = ((x1 - x0) / cell).ceil() as usize + 1;
+        let nz = ((z1 - z0) / cell).ceil() as usize + 1;
         let mut g = Grid {
             x0,
             z0,
             nx,
             nz,
             blocked: vec![true; nx * nz],
+            cell,
+            escape_cost: tol.path_escape_cost,
         };
         let h = layout.specs.dog_half;
-        let inflate = h[0].max(h[2]) + 0.03;
+        let inflate = h[0].max(h[2]) + tol.path_margin;
         // Free inside the storey's rooms, minus a margin along the outer footprint.
         for r in layout.rooms.iter().filter(|r| r.level == level) {
             g.mark(
@@ -62,7 +70,8 @@ impl Grid {
         }
         // Door openings are passable (their panels, when closed, block below), and so is
         // the opening where a flight arrives on this storey: a box across the opening
-        // (its middle, its width, whether it runs along x), 15 cm deep into each side.
+        // (its middle, its width, whether it runs along x), `path_opening_depth` beyond
+        // the margin into each side.
         let doors = layout
             .doors
             .iter()
@@ -73,7 +82,7 @@ impl Grid {
             .filter(|f| f.upper == level)
             .map(|f| (f.head, f.width, !f.along_x()));
         for (c, width, along_x) in doors.chain(heads) {
-            let (half, deep) = (width / 2.0 - inflate, inflate + 0.15);
+            let (half, deep) = (width / 2.0 - inflate, inflate + tol.path_opening_depth);
             let (ax, az) = if along_x { (half, deep) } else { (deep, half) };
             g.mark(c[0] - ax, c[1] - az, c[0] + ax, c[1] + az, false);
         }
@@ -83,7 +92,7 @@ impl Grid {
             }
             let a = c.compute_aabb();
             // Only what stands at the robot's height; floors are below it.
-            if a.maxs.y < level + 0.03 || a.mins.y > level + 0.75 {
+            if a.maxs.y < level + tol.path_min_height || a.mins.y > level + tol.path_max_height {
                 continue;
             }
             g.mark(
@@ -108,17 +117,20 @@ impl Grid {
     }
 
     fn cell_of(&self, x: f32, z: f32) -> (usize, usize) {
-        let i = ((x - self.x0) / CELL)
+        let i = ((x - self.x0) / self.cell)
             .round()
             .clamp(0.0, (self.nx - 1) as f32) as usize;
-        let k = ((z - self.z0) / CELL)
+        let k = ((z - self.z0) / self.cell)
             .round()
             .clamp(0.0, (self.nz - 1) as f32) as usize;
         (i, k)
     }
 
     fn centre(&self, i: usize, k: usize) -> (f32, f32) {
-        (self.x0 + i as f32 * CELL, self.z0 + k as f32 * CELL)
+        (
+            self.x0 + i as f32 * self.cell,
+            self.z0 + k as f32 * self.cell,
+        )
     }
 
     pub fn free(&self, p: Vector) -> bool {
@@ -127,7 +139,8 @@ impl Grid {
     }
 
     fn line_free(&self, a: Vector, b: Vector) -> bool {
-        let n = ((b - a).length() / (CELL * 0.5)).ceil() as usize;
+        // Sampled every half cell: no cell is stepped over.
+        let n = ((b - a).length() / (self.cell * 0.5)).ceil() as usize;
         (0..=n).all(|s| {
             let p = a + (b - a) * (s as f32 / n.max(1) as f32);
             self.free(p)
@@ -174,7 +187,7 @@ impl Grid {
                 let (ni, nk) = (ni as usize, nk as usize);
                 let j = idx(ni, nk);
                 // Blocked cells only while escaping the margin the robot starts in.
-                if self.blocked[j] && (!self.blocked[cur] || cost[cur] > 60) {
+                if self.blocked[j] && (!self.blocked[cur] || cost[cur] > self.escape_cost) {
                     continue;
                 }
                 let nc = cost[cur].saturating_add(c);

@@ -340,7 +340,7 @@ pub fn report(lines: &[ResultLine]) -> Result<Report, Mixed> {
     report::build(lines)
 }
 
-/// The paper's tables ([`report`]) as text.
+/// The paper's tables ([`report()`]) as text.
 pub fn tables(lines: &[ResultLine], format: TableFormat) -> Result<String, Mixed> {
     report(lines).map(|r| text(&r, format))
 }

@@ -17,8 +17,47 @@ const CELL: f32 = 3.0;
 const GAP: f32 = 0.06;
 /// Height of the generated layout's walls.
 const WALL_HEIGHT: f32 = 2.6;
-/// Where things that are in no room are set aside, `[x, z]`.
+/// Where things that are in no room are set aside, `[x, z]`: in rows of `ASIDE_ROW`,
+/// `ASIDE_SPACING` apart.
 pub const ASIDE: [f32; 2] = [-30.0, -30.0];
+const ASIDE_ROW: f32 = 10.0;
+const ASIDE_SPACING: f32 = 0.5;
+/// A generated door's opening: its width and height.
+const DOOR_WIDTH: f32 = 1.1;
+const DOOR_HEIGHT: f32 = 2.3;
+/// Things are placed this far above what holds them and drop into place when the world
+/// settles (not in it, where the solver would push them out).
+const DROP: f32 = 0.002;
+/// A quadrotor starting on furniture stands this far in from the +x end (beyond its half
+/// width) and this far towards the front.
+const QUAD_PAD_IN: f32 = 0.02;
+const QUAD_PAD_FORWARD: f32 = 0.1;
+/// A fixed arm stands left of its surface's middle (0.2 m on a 1.8 m table, in
+/// proportion) and this far in from the back.
+const ARM_LEFT: f32 = 0.2;
+const ARM_LEFT_OF: f32 = 1.8;
+const ARM_BACK_IN: f32 = 0.15;
+/// A lidded container is at least this much taller inside than the tallest thing in it,
+/// grown in steps of this much.
+const LID_CLEARANCE: f32 = 0.02;
+/// At most this many steps of growth for a holder to fit its things: furniture grows
+/// along x up to `FURNITURE_MAX_LENGTH` (a walkway stays free in its cell), then along
+/// z, `FURNITURE_GROWTH` a step; smaller things grow `THING_GROWTH` a step, about square.
+const GROWTH_STEPS: usize = 80;
+const FURNITURE_MAX_LENGTH: f32 = 2.2;
+const FURNITURE_GROWTH: f32 = 0.1;
+const THING_GROWTH: f32 = 0.04;
+/// A basket's height as a holder (its floor is 2 cm thick, as the robot model builds it).
+const BASKET_HEIGHT: f32 = 0.08;
+/// A row of packed things may run over its region by this much (rounding).
+const PACK_EPS: f32 = 1e-4;
+/// Packing keeps this far inside a container's walls, and this far inside a surface's
+/// edges; a fixed arm's strip at the back is this deep; things on a surface without an
+/// arm start in a band this far behind its middle.
+const INSIDE_MARGIN: f32 = 0.01;
+const EDGE_MARGIN: f32 = 0.05;
+const ARM_STRIP: f32 = 0.32;
+const CENTRE_BAND: f32 = 0.15;
 
 /// A deterministic layout from the graph: rooms on a grid joined where doors say,
 /// one floor item per cell, things packed on their surface or in their container.
@@ -211,8 +250,8 @@ fn door_geoms(
                 ca[1] + dz as f32 * side / 2.0,
             ],
             along_x: dz != 0,
-            width: 1.1,
-            height: 2.3,
+            width: DOOR_WIDTH,
+            height: DOOR_HEIGHT,
         });
     }
     Ok(door_geom)
@@ -283,9 +322,9 @@ fn quadrotor_on_furniture(
             continue;
         };
         rg.pos = [
-            sg.pos[0] + sg.size[0] / 2.0 - specs.quad_half - 0.02,
+            sg.pos[0] + sg.size[0] / 2.0 - specs.quad_half - QUAD_PAD_IN,
             sg.pos[1] + sg.size[1],
-            sg.pos[2] - 0.1,
+            sg.pos[2] - QUAD_PAD_FORWARD,
         ];
     }
 }
@@ -353,9 +392,9 @@ fn held_things(
                 items.push(ItemGeom {
                     id: task.id(n).0,
                     pos: [
-                        ASIDE[0] - (k % 10.0) * 0.5,
-                        0.002,
-                        ASIDE[1] - (k / 10.0).floor() * 0.5,
+                        ASIDE[0] - (k % ASIDE_ROW) * ASIDE_SPACING,
+                        DROP,
+                        ASIDE[1] - (k / ASIDE_ROW).floor() * ASIDE_SPACING,
                     ],
                     size,
                     container,
@@ -406,7 +445,7 @@ fn held_things(
             };
             items.push(ItemGeom {
                 id: task.id(n).0,
-                pos: [hg.pos[0] + at[0], y + 0.002, hg.pos[2] + at[1]],
+                pos: [hg.pos[0] + at[0], y + DROP, hg.pos[2] + at[1]],
                 size,
                 container,
                 lid,
@@ -426,8 +465,8 @@ fn held_things(
 /// the right end free for the quadrotor to land.
 pub fn arm_spot(surface: &ItemGeom) -> (f32, f32) {
     (
-        surface.pos[0] - 0.2 * surface.size[0] / 1.8,
-        surface.pos[2] + surface.size[2] / 2.0 - 0.15,
+        surface.pos[0] - ARM_LEFT * surface.size[0] / ARM_LEFT_OF,
+        surface.pos[2] + surface.size[2] / 2.0 - ARM_BACK_IN,
     )
 }
 
@@ -558,14 +597,14 @@ fn fit_pass(
         if container && lid != Lid::None {
             let tallest = inner.iter().map(|c| c[1]).fold(0.0f32, f32::max);
             let lids = if lid == Lid::Front { 2.0 } else { 1.0 };
-            while s[1] - lids * wall_of(s[1]) < tallest + 0.02 {
-                s[1] += 0.02;
+            while s[1] - lids * wall_of(s[1]) < tallest + LID_CLEARANCE {
+                s[1] += LID_CLEARANCE;
             }
         }
         let flags = holder_flags(task, specs, loc, x);
         let floor_standing =
             loc[x.get()].is_some_and(|(h, _)| task.node(h).kind == NodeKind::Floor);
-        for _ in 0..80 {
+        for _ in 0..GROWTH_STEPS {
             let g = ItemGeom {
                 id: 0,
                 pos: [0.0; 3],
@@ -583,15 +622,15 @@ fn fit_pass(
             // Furniture grows along x up to what leaves a walkway in its 3 m cell;
             // smaller things stay about square.
             if floor_standing {
-                if s[0] < 2.2 {
-                    s[0] += 0.1;
+                if s[0] < FURNITURE_MAX_LENGTH {
+                    s[0] += FURNITURE_GROWTH;
                 } else {
-                    s[2] += 0.1;
+                    s[2] += FURNITURE_GROWTH;
                 }
             } else if s[0] <= s[2] {
-                s[0] += 0.04;
+                s[0] += THING_GROWTH;
             } else {
-                s[2] += 0.04;
+                s[2] += THING_GROWTH;
             }
         }
         size[x.get()] = s;
@@ -614,8 +653,7 @@ fn basket_geom(
     Some(ItemGeom {
         id: task.id(basket).0,
         pos: rg.pos,
-        // Its floor is 2 cm thick, as the robot model builds it.
-        size: [b, 0.08, b],
+        size: [b, BASKET_HEIGHT, b],
         container: true,
         lid: Lid::None,
         dynamic: true,
@@ -628,12 +666,12 @@ fn pack(region: [f32; 4], sizes: &[[f32; 3]]) -> Option<Vec<[f32; 2]>> {
     let (mut x, mut z, mut row) = (region[0], region[1], 0.0f32);
     let mut out = Vec::with_capacity(sizes.len());
     for s in sizes {
-        if x + s[0] > region[2] + 1e-4 {
+        if x + s[0] > region[2] + PACK_EPS {
             x = region[0];
             z += row + GAP;
             row = 0.0;
         }
-        if x + s[0] > region[2] + 1e-4 || z + s[2] > region[3] + 1e-4 {
+        if x + s[0] > region[2] + PACK_EPS || z + s[2] > region[3] + PACK_EPS {
             return None;
         }
         out.push([x + s[0] / 2.0, z + s[2] / 2.0]);
@@ -648,17 +686,17 @@ fn pack(region: [f32; 4], sizes: &[[f32; 3]]) -> Option<Vec<[f32; 2]>> {
 fn pack_region(h: &ItemGeom, inside: bool, arm_here: bool, pad: Option<f32>) -> [f32; 4] {
     let (hx, hz) = (h.size[0] / 2.0, h.size[2] / 2.0);
     if inside {
-        let m = wall_of(h.size[1]) + 0.01;
+        let m = wall_of(h.size[1]) + INSIDE_MARGIN;
         return [-hx + m, -hz + m, hx - m, hz - m];
     }
-    let m = 0.05;
+    let m = EDGE_MARGIN;
     let x1 = hx - pad.unwrap_or(m);
     if arm_here {
         // All but the back strip, where the arm stands.
-        [-hx + m, -hz + m, x1, hz - 0.32]
+        [-hx + m, -hz + m, x1, hz - ARM_STRIP]
     } else {
         // Centre band first, so that the legged robot reaches from either long side.
-        [-hx + m, (-0.15f32).max(-hz + m), x1, hz - m]
+        [-hx + m, (-CENTRE_BAND).max(-hz + m), x1, hz - m]
     }
 }
 

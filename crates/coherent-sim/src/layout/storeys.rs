@@ -11,15 +11,20 @@ use super::error::{LayoutError, err};
 pub const MAX_FLIGHT_SLOPE: f32 = 0.75;
 /// Narrowest flight: the quadrotor (0.6 m) and the legged robot (0.6 m) pass with room.
 pub const MIN_FLIGHT_WIDTH: f32 = 1.0;
+/// A point is on a storey whose floor is at most this far (m) above it: a robot's body
+/// or a thing's underside stands a little above its floor.
+const LEVEL_SLACK: f32 = 0.05;
+/// Lengths (m) of a flight's check closer than this are the same: a millimetre.
+const EPS: f32 = 1e-3;
 
 /// The room whose footprint holds `p` on the storey `p` is on: among the rooms whose
-/// footprint holds `(x, z)`, the one with the highest level at most 5 cm above `p`'s
-/// height (the first in file order on a tie).
+/// footprint holds `(x, z)`, the one with the highest level at most `LEVEL_SLACK` above
+/// `p`'s height (the first in file order on a tie).
 pub fn room_at(layout: &Layout, p: [f32; 3]) -> Option<&RoomGeom> {
     let mut best: Option<&RoomGeom> = None;
     for r in &layout.rooms {
         let inside = p[0] >= r.min[0] && p[0] <= r.max[0] && p[2] >= r.min[1] && p[2] <= r.max[1];
-        if inside && r.level <= p[1] + 0.05 && best.is_none_or(|b| r.level > b.level) {
+        if inside && r.level <= p[1] + LEVEL_SLACK && best.is_none_or(|b| r.level > b.level) {
             best = Some(r);
         }
     }
@@ -134,14 +139,14 @@ pub fn flights(layout: &Layout) -> Result<Vec<Flight>, LayoutError> {
             ));
         }
         let (dx, dz) = (s.head[0] - s.foot[0], s.head[1] - s.foot[1]);
-        if dx.abs() > 1e-3 && dz.abs() > 1e-3 {
+        if dx.abs() > EPS && dz.abs() > EPS {
             return err(format!(
                 "stairs {}: foot ({:.2}, {:.2}) and head ({:.2}, {:.2}) are not on a line along x or z",
                 s.id, s.foot[0], s.foot[1], s.head[0], s.head[1]
             ));
         }
         let run = dx.abs().max(dz.abs());
-        if run < 1e-3 || rise / run > MAX_FLIGHT_SLOPE {
+        if run < EPS || rise / run > MAX_FLIGHT_SLOPE {
             return err(format!(
                 "stairs {}: it rises {rise:.2} m over a run of {run:.2} m; the steepest flight rises {MAX_FLIGHT_SLOPE} m per metre (a run of at least {:.2} m)",
                 s.id,
@@ -171,7 +176,7 @@ pub fn flights(layout: &Layout) -> Result<Vec<Flight>, LayoutError> {
             width: s.width,
         };
         let r = f.rect();
-        let eps = 1e-3;
+        let eps = EPS;
         if r[0] < lo.min[0] - eps
             || r[1] < lo.min[1] - eps
             || r[2] > lo.max[0] + eps

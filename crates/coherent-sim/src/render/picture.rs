@@ -14,8 +14,8 @@ use super::{items, legend, plan, robots};
 pub(super) enum Movers<'p> {
     /// At their start poses, with their paths when given.
     Drawn(Option<&'p Paths>),
-    /// Not drawn: a viewer places them ([`Stage`]); `defs` (their symbols) goes into the
-    /// picture, and the legend explains the paths.
+    /// Not drawn: a viewer places them ([`Stage`](super::Stage)); `defs` (their symbols)
+    /// goes into the picture, and the legend explains the paths.
     Placed { defs: &'p str },
 }
 

@@ -9,7 +9,7 @@ use rapier3d::na::DVector;
 use rapier3d::prelude::*;
 
 use super::motion::{ArmMove, Stage, Tick};
-use super::{Arm, DT, FailureKind, PhysicsError, World, fail};
+use super::{Arm, FailureKind, PhysicsError, World, fail};
 
 /// The joint angles (yaw, shoulder, elbow) an arm rests at, folded up.
 pub(super) const ARM_HOME: [f32; 3] = [0.0, -1.3, 2.4];
@@ -65,7 +65,7 @@ impl World {
     }
 
     /// Joint angles that put the hand at `target`, within the limits; error with the
-    /// numbers when the clamped solution misses by more than 2 cm.
+    /// numbers when the clamped solution misses by more than `ik_miss`.
     fn solve_ik(&self, arm: &Arm, target: Vector, what: &str) -> Result<[f32; 3], PhysicsError> {
         let shoulder = self.shoulder(arm);
         let dist = (target - shoulder).length();
@@ -74,12 +74,13 @@ impl World {
             return fail(FailureKind::Layout, format!("{me} has no arm"));
         };
         let fore_link = 3;
+        let t = &self.tol;
         let options = InverseKinematicsOption {
-            damping: 0.05,
-            max_iters: 80,
+            damping: t.ik_damping,
+            max_iters: t.ik_max_iters,
             constrained_axes: JointAxesMask::LIN_AXES,
-            epsilon_linear: 1e-3,
-            epsilon_angular: 1.0,
+            epsilon_linear: t.ik_epsilon_linear,
+            epsilon_angular: t.ik_epsilon_angular,
         };
         let pose = Pose::from_translation(target);
         // The yaw towards the target as a seed avoids the solver's local minima.
@@ -89,11 +90,8 @@ impl World {
             - arm.shoulder_local;
         let yaw = local.x.atan2(local.z);
         let mut best: Option<([f32; 3], f32)> = None;
-        for seed in [
-            [yaw, -0.6, 1.4],
-            [yaw, 0.2, 0.6],
-            [arm.q[0], arm.q[1], arm.q[2]],
-        ] {
+        let [[s1, e1], [s2, e2]] = t.ik_seeds;
+        for seed in [[yaw, s1, e1], [yaw, s2, e2], [arm.q[0], arm.q[1], arm.q[2]]] {
             let mut disp = DVector::zeros(mb.ndofs());
             let assembly = |k: usize| mb.link(k + 1).map(|l| l.assembly_id());
             for k in 0..4 {
@@ -135,7 +133,7 @@ impl World {
             }
         }
         let (q, residual) = best.unwrap_or(([0.0; 3], f32::INFINITY));
-        if residual > 0.02 {
+        if residual > t.ik_miss {
             return fail(
                 FailureKind::Reach,
                 format!(
@@ -147,10 +145,11 @@ impl World {
         Ok(q)
     }
 
-    /// The next step of an arm's move: every joint at most 1.5 rad/s, in at least ten
-    /// steps.
+    /// The next step of an arm's move: every joint at most `arm_joint_speed`, in at least
+    /// `arm_min_steps`.
     pub(super) fn arm_tick(&mut self, m: &mut ArmMove) -> Tick {
         let (ai, q) = (m.arm, m.to);
+        let t = self.tol;
         let (from, dq, steps) = *m.plan.get_or_insert_with(|| {
             let a = &self.arms[ai];
             let from = [a.q[0], a.q[1], a.q[2]];
@@ -162,7 +161,7 @@ impl World {
                 }
             }
             let biggest = dq.iter().fold(0.0f32, |m, d| m.max(d.abs()));
-            let steps = ((biggest / 1.5 / DT).ceil() as usize).max(10);
+            let steps = ((biggest / t.arm_joint_speed / t.dt).ceil() as usize).max(t.arm_min_steps);
             (from, dq, steps)
         });
         if m.taken >= steps {
@@ -182,8 +181,8 @@ impl World {
     }
 
     /// Moving the hand of `robot` to `target`: the joint angles that put it there now,
-    /// then the move, then the hand must be within 3 cm of it. An error says why it
-    /// cannot.
+    /// then the move, then the hand must be within `hand_tolerance` of it. An error says
+    /// why it cannot.
     pub(super) fn reach(
         &self,
         robot: Idx,
@@ -198,12 +197,12 @@ impl World {
         };
         let arm = &self.arms[ai];
         if self.task.robot(robot).map(|r| r.kind) == Some(RobotKind::RobotDog) {
-            // Relative to the floor the robot stands on (its body walks 2 cm above it).
-            let stand = self.pw.bodies[arm.root].translation().y - 0.02;
+            // Relative to the floor the robot stands on (its body walks above it).
+            let stand = self.pw.bodies[arm.root].translation().y - self.tol.dog_floor_gap;
             let top = stand + self.layout.specs.dog_max_height();
             let shoulder = self.shoulder(arm);
             let top_here = shoulder.y + arm.reach;
-            if target.y > top_here.max(top) + 0.01 {
+            if target.y > top_here.max(top) + self.tol.dog_height_margin {
                 return fail(
                     FailureKind::Reach,
                     format!(
@@ -224,7 +223,7 @@ impl World {
         ])
     }
 
-    /// The hand of `robot` is within 3 cm of `target`.
+    /// The hand of `robot` is within `hand_tolerance` of `target`.
     pub(super) fn check_hand_at(
         &self,
         robot: Idx,
@@ -235,7 +234,7 @@ impl World {
             return Ok(());
         };
         let miss = (self.hand_pos(&self.arms[ai]) - target).length();
-        if miss > 0.03 {
+        if miss > self.tol.hand_tolerance {
             return fail(
                 FailureKind::Reach,
                 format!(

@@ -4,7 +4,7 @@
 //! models with their arms.
 
 use std::collections::HashMap;
-use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+use std::f32::consts::{FRAC_PI_2, PI};
 use std::sync::Arc;
 
 use coherent_core::{Idx, NodeId, PropSet, RobotKind, Task};
@@ -13,8 +13,8 @@ use rapier3d::prelude::*;
 
 use super::arm::ARM_HOME;
 use super::{
-    Arm, DT, Dog, FailureKind, G_DOG, G_OBJECT, G_QUAD, G_STATIC, Hinge, PhysicsError, Quad,
-    Volume, World, fail, groups, hinge_pose, v3,
+    Arm, Dog, FailureKind, G_DOG, G_OBJECT, G_QUAD, G_STATIC, Hinge, PhysicsError, Quad,
+    Tolerances, Volume, World, fail, groups, hinge_pose, v3,
 };
 use crate::layout::{
     self, ASIDE, DoorGeom, Flight, ItemGeom, Layout, Lid, RobotGeom, RobotSpecs, RoomGeom, WALL,
@@ -25,6 +25,65 @@ use crate::layout::{
 /// stairwell (the robots need no gap that narrow).
 const STAIRWELL_GAP: f32 = 0.35;
 
+// What the world is built of, beyond the layout's sizes: lengths in metres.
+
+/// Half extents of the ground slab under the things set aside off the plan (`ASIDE`, its
+/// corner), whose middle lies this far in from that corner.
+const ASIDE_GROUND_HALF: f32 = 8.0;
+const ASIDE_GROUND_INSET: f32 = 4.0;
+/// Half thickness of the ground and of each room's floor slab (below its level).
+const SLAB_HALF: f32 = 0.05;
+/// A door's panel: the gap it leaves at each side of its opening and above the floor,
+/// its half thickness, and its handle's distance from its free edge and height.
+const DOOR_SIDE_GAP: f32 = 0.02;
+const DOOR_FLOOR_GAP: f32 = 0.01;
+const DOOR_HALF_THICKNESS: f32 = 0.025;
+const DOOR_HANDLE_IN: f32 = 0.12;
+const DOOR_HANDLE_HEIGHT: f32 = 0.9;
+/// Friction of a flight's surface: the legged robot does not slip on it.
+const FLIGHT_FRICTION: f32 = 0.9;
+/// Friction of furniture and things, damping of loose things' motion and turning, and
+/// the densities (kg/m³) of loose things and of fixed furniture.
+const ITEM_FRICTION: f32 = 0.8;
+const ITEM_LINEAR_DAMPING: f32 = 0.1;
+const ITEM_ANGULAR_DAMPING: f32 = 0.5;
+const ITEM_DENSITY: f32 = 100.0;
+const FURNITURE_DENSITY: f32 = 1000.0;
+/// Where a hand takes a top lid (in from its front edge) and a front door (in from its
+/// free edge).
+const LID_HANDLE_IN: f32 = 0.03;
+const FRONT_DOOR_HANDLE_IN: f32 = 0.05;
+/// The angle (rad) lids and front doors open to: past upright, so that they stay open.
+const LID_OPEN_ANGLE: f32 = -1.9;
+/// The quadrotor: its damping in the air (linear, angular), its basket's wall thickness
+/// and height, the part of its mass in each of its ten parts (the basket's five, four
+/// rotors and the hub), its rotors (in from the frame's corners, their height, radius
+/// and half height), its hub (half extents and height), and the half height of the
+/// basket's inside.
+const QUAD_LINEAR_DAMPING: f32 = 0.3;
+const QUAD_ANGULAR_DAMPING: f32 = 1.0;
+const BASKET_WALL: f32 = 0.02;
+const BASKET_WALL_HEIGHT: f32 = 0.14;
+const BASKET_FRICTION: f32 = 0.9;
+const QUAD_PART_MASS: f32 = 0.1;
+const ROTOR_INSET: f32 = 0.08;
+const ROTOR_HEIGHT: f32 = 0.24;
+const ROTOR_RADIUS: f32 = 0.08;
+const ROTOR_HALF_HEIGHT: f32 = 0.01;
+const HUB_HALF: [f32; 3] = [0.06, 0.03, 0.06];
+const HUB_HEIGHT: f32 = 0.25;
+const BASKET_INSIDE_HALF: f32 = 0.06;
+/// A fixed arm's base: its radius.
+const ARM_BASE_RADIUS: f32 = 0.08;
+/// An arm's links: capsules of this radius and density, no shorter than the yaw link's
+/// half length; the hand's half length.
+const LINK_RADIUS: f32 = 0.03;
+const LINK_DENSITY: f32 = 500.0;
+const YAW_LINK_HALF: f32 = 0.01;
+const HAND_HALF: f32 = 0.02;
+/// An arm's joint limits (rad): yaw, shoulder, elbow (the wrist follows them).
+const ARM_LIMITS: [(f32, f32); 3] = [(-PI, PI), (-1.6, 1.6), (0.0, 2.6)];
+
 impl World {
     pub fn new(task: Arc<Task>, layout: Layout) -> Result<World, PhysicsError> {
         let n = task.nodes.len();
@@ -32,8 +91,9 @@ impl World {
             kind: FailureKind::Layout,
             message: e.0,
         })?;
+        let tol = Tolerances::default();
         let mut pw = PhysicsWorld::new();
-        pw.integration_parameters.dt = DT;
+        pw.integration_parameters.dt = tol.dt;
         let mut w = World {
             task: task.clone(),
             layout,
@@ -49,11 +109,11 @@ impl World {
             grasps: Vec::new(),
             kcc: KinematicCharacterController::default(),
             stairs_kcc: KinematicCharacterController {
-                // The robot's bottom stays 2 cm above what it walks on, as on a floor.
-                offset: CharacterLength::Absolute(0.02),
-                max_slope_climb_angle: FRAC_PI_4,
-                min_slope_slide_angle: FRAC_PI_4,
-                snap_to_ground: Some(CharacterLength::Absolute(0.2)),
+                // The robot's bottom stays as far above what it walks on as on a floor.
+                offset: CharacterLength::Absolute(tol.dog_floor_gap),
+                max_slope_climb_angle: tol.dog_stairs_max_slope,
+                min_slope_slide_angle: tol.dog_stairs_max_slope,
+                snap_to_ground: Some(CharacterLength::Absolute(tol.dog_stairs_snap)),
                 autostep: None,
                 ..KinematicCharacterController::default()
             },
@@ -62,8 +122,9 @@ impl World {
             sim_time: 0.0,
             paths: Vec::new(),
             quad_target: (Vector::ZERO, Vector::ZERO),
+            tol,
         };
-        w.kcc.offset = CharacterLength::Absolute(0.01);
+        w.kcc.offset = CharacterLength::Absolute(tol.dog_skin);
         w.kcc.snap_to_ground = None;
         w.kcc.autostep = None;
         w.build_rooms()?;
@@ -77,7 +138,7 @@ impl World {
                 b.set_position(pose, true);
             }
         }
-        w.settle(1.0);
+        w.settle(tol.initial_settle);
         Ok(w)
     }
 
@@ -103,8 +164,12 @@ impl World {
     fn build_rooms(&mut self) -> Result<(), PhysicsError> {
         let ground = self.pw.insert_body(RigidBodyBuilder::fixed());
         self.add_collider(
-            ColliderBuilder::cuboid(8.0, 0.05, 8.0)
-                .translation(Vector::new(ASIDE[0] - 4.0, -0.05, ASIDE[1] - 4.0))
+            ColliderBuilder::cuboid(ASIDE_GROUND_HALF, SLAB_HALF, ASIDE_GROUND_HALF)
+                .translation(Vector::new(
+                    ASIDE[0] - ASIDE_GROUND_INSET,
+                    -SLAB_HALF,
+                    ASIDE[1] - ASIDE_GROUND_INSET,
+                ))
                 .collision_groups(groups(G_STATIC)),
             ground,
             None,
@@ -115,8 +180,8 @@ impl World {
             let (cx, cz) = ((r.min[0] + r.max[0]) / 2.0, (r.min[1] + r.max[1]) / 2.0);
             let (hx, hz) = ((r.max[0] - r.min[0]) / 2.0, (r.max[1] - r.min[1]) / 2.0);
             self.add_collider(
-                ColliderBuilder::cuboid(hx, 0.05, hz)
-                    .translation(Vector::new(cx, r.level - 0.05, cz))
+                ColliderBuilder::cuboid(hx, SLAB_HALF, hz)
+                    .translation(Vector::new(cx, r.level - SLAB_HALF, cz))
                     .collision_groups(groups(G_STATIC)),
                 ground,
                 floor,
@@ -172,8 +237,9 @@ impl World {
                 start = c1;
             }
             pieces.push((start, a1, 0.0, wh));
+            let eps = self.tol.geometry_epsilon;
             for (p0, p1, y0, y1) in pieces {
-                if p1 - p0 < 1e-3 || y1 - y0 < 1e-3 {
+                if p1 - p0 < eps || y1 - y0 < eps {
                     continue;
                 }
                 self.wall_box(ground, r.level, (along_x, at), (p0, p1), (y0, y1));
@@ -188,6 +254,7 @@ impl World {
     /// `(from, to, height)` along the wall, in order; a door is as high as it is, a
     /// flight arriving through the wall leaves it open to the wall's full height.
     fn wall_cuts(&self, r: &RoomGeom, along_x: bool, at: f32) -> Vec<(f32, f32, f32)> {
+        let eps = self.tol.geometry_epsilon;
         let mut cuts: Vec<(f32, f32, f32)> = self
             .layout
             .doors
@@ -195,7 +262,7 @@ impl World {
             .filter(|d| {
                 d.along_x == along_x
                     && layout::door_level(&self.layout, d) == r.level
-                    && (if along_x { d.center[1] } else { d.center[0] } - at).abs() < 1e-3
+                    && (if along_x { d.center[1] } else { d.center[0] } - at).abs() < eps
             })
             .map(|d| {
                 let c = if along_x { d.center[0] } else { d.center[1] };
@@ -208,7 +275,7 @@ impl World {
                 .filter(|f| {
                     f.rooms[1] == r.id
                         && f.along_x() != along_x
-                        && (if along_x { f.head[1] } else { f.head[0] } - at).abs() < 1e-3
+                        && (if along_x { f.head[1] } else { f.head[0] } - at).abs() < eps
                 })
                 .map(|f| {
                     let c = if along_x { f.head[0] } else { f.head[1] };
@@ -252,18 +319,28 @@ impl World {
     fn build_door(&mut self, d: &DoorGeom) -> Result<(), PhysicsError> {
         let door = self.node_of(d.id)?;
         let level = layout::door_level(&self.layout, d);
-        let (w2, h2) = (d.width / 2.0 - 0.02, d.height / 2.0 - 0.01);
-        let (pivot, centre, shape) = if d.along_x {
+        let (w2, h2) = (
+            d.width / 2.0 - DOOR_SIDE_GAP,
+            d.height / 2.0 - DOOR_FLOOR_GAP,
+        );
+        let centre = Vector::new(d.center[0], level + h2 + DOOR_FLOOR_GAP, d.center[1]);
+        let (pivot, shape) = if d.along_x {
             (
-                Vector::new(d.center[0] - d.width / 2.0 + 0.02, level, d.center[1]),
-                Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
-                ColliderBuilder::cuboid(w2, h2, 0.025),
+                Vector::new(
+                    d.center[0] - d.width / 2.0 + DOOR_SIDE_GAP,
+                    level,
+                    d.center[1],
+                ),
+                ColliderBuilder::cuboid(w2, h2, DOOR_HALF_THICKNESS),
             )
         } else {
             (
-                Vector::new(d.center[0], level, d.center[1] - d.width / 2.0 + 0.02),
-                Vector::new(d.center[0], level + h2 + 0.01, d.center[1]),
-                ColliderBuilder::cuboid(0.025, h2, w2),
+                Vector::new(
+                    d.center[0],
+                    level,
+                    d.center[1] - d.width / 2.0 + DOOR_SIDE_GAP,
+                ),
+                ColliderBuilder::cuboid(DOOR_HALF_THICKNESS, h2, w2),
             )
         };
         let closed = Pose::from_translation(centre);
@@ -273,9 +350,17 @@ impl World {
         self.add_collider(shape.collision_groups(groups(G_STATIC)), body, Some(door));
         self.body[door.get()] = Some(body);
         let handle_world = if d.along_x {
-            Vector::new(d.center[0] + d.width / 2.0 - 0.12, level + 0.9, d.center[1])
+            Vector::new(
+                d.center[0] + d.width / 2.0 - DOOR_HANDLE_IN,
+                level + DOOR_HANDLE_HEIGHT,
+                d.center[1],
+            )
         } else {
-            Vector::new(d.center[0], level + 0.9, d.center[1] + d.width / 2.0 - 0.12)
+            Vector::new(
+                d.center[0],
+                level + DOOR_HANDLE_HEIGHT,
+                d.center[1] + d.width / 2.0 - DOOR_HANDLE_IN,
+            )
         };
         self.hinges.push(Hinge {
             node: door,
@@ -312,7 +397,9 @@ impl World {
             );
         };
         let h = self.pw.colliders.insert_with_parent(
-            wedge.friction(0.9).collision_groups(groups(G_STATIC)),
+            wedge
+                .friction(FLIGHT_FRICTION)
+                .collision_groups(groups(G_STATIC)),
             ground,
             &mut self.pw.bodies,
         );
@@ -328,15 +415,19 @@ impl World {
             let builder = if it.dynamic {
                 RigidBodyBuilder::dynamic()
                     .translation(base)
-                    .angular_damping(0.5)
-                    .linear_damping(0.1)
+                    .angular_damping(ITEM_ANGULAR_DAMPING)
+                    .linear_damping(ITEM_LINEAR_DAMPING)
             } else {
                 RigidBodyBuilder::fixed().translation(base)
             };
             let body = self.pw.insert_body(builder);
             self.body[n.get()] = Some(body);
             let gr = groups(if it.dynamic { G_OBJECT } else { G_STATIC });
-            let density = if it.dynamic { 100.0 } else { 1000.0 };
+            let density = if it.dynamic {
+                ITEM_DENSITY
+            } else {
+                FURNITURE_DENSITY
+            };
             if it.container {
                 let t = wall_of(h);
                 // Floor and four walls: an open box.
@@ -360,7 +451,7 @@ impl World {
                         ColliderBuilder::cuboid(e[0], e[1], e[2])
                             .translation(c)
                             .density(density)
-                            .friction(0.8)
+                            .friction(ITEM_FRICTION)
                             .collision_groups(gr),
                         body,
                         Some(n),
@@ -404,7 +495,7 @@ impl World {
                     ColliderBuilder::cuboid(w / 2.0, h / 2.0, d / 2.0)
                         .translation(Vector::new(0.0, h / 2.0, 0.0))
                         .density(density)
-                        .friction(0.8)
+                        .friction(ITEM_FRICTION)
                         .collision_groups(gr),
                     body,
                     Some(n),
@@ -426,14 +517,14 @@ impl World {
                 base + Vector::new(0.0, h, d / 2.0),
                 Vector::X,
                 ColliderBuilder::cuboid(w / 2.0, t / 2.0, d / 2.0),
-                Vector::new(0.0, t / 2.0, -d / 2.0 + 0.03),
+                Vector::new(0.0, t / 2.0, -d / 2.0 + LID_HANDLE_IN),
             ),
             _ => (
                 Pose::from_translation(base + Vector::new(0.0, h / 2.0, -d / 2.0 + t / 2.0)),
                 base + Vector::new(-w / 2.0, 0.0, -d / 2.0),
                 Vector::Y,
                 ColliderBuilder::cuboid(w / 2.0, h / 2.0, t / 2.0),
-                Vector::new(w / 2.0 - 0.05, 0.0, -t / 2.0),
+                Vector::new(w / 2.0 - FRONT_DOOR_HANDLE_IN, 0.0, -t / 2.0),
             ),
         };
         let body = self
@@ -443,14 +534,13 @@ impl World {
         self.add_collider(shape.collision_groups(gr), body, Some(n));
         // Top lids open upwards (about +x with the pivot at the back: negative angle lifts
         // the front); front doors swing out to the left.
-        let open_angle = -1.9;
         self.hinges.push(Hinge {
             node: n,
             body,
             closed,
             pivot,
             axis,
-            open_angle,
+            open_angle: LID_OPEN_ANGLE,
             handle,
         });
         Ok(())
@@ -480,19 +570,20 @@ impl World {
     /// The quadrotor: a dynamic body whose basket (floor and walls) carries most of its
     /// mass, four rotors and a hub; the basket's inside is a volume of the basket node.
     fn build_quadrotor(&mut self, r: Idx, rg: &RobotGeom, rot: Rotation, specs: &RobotSpecs) {
-        let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.003, 0.0), rot);
+        let lift = Vector::new(0.0, self.tol.quad_start_lift, 0.0);
+        let pose = Pose::from_parts(v3(rg.pos) + lift, rot);
         let body = self.pw.insert_body(
             RigidBodyBuilder::dynamic()
                 .pose(pose)
-                .linear_damping(0.3)
-                .angular_damping(1.0)
+                .linear_damping(QUAD_LINEAR_DAMPING)
+                .angular_damping(QUAD_ANGULAR_DAMPING)
                 .can_sleep(false),
         );
         let basket = self.task.basket_of(r);
         let b = specs.basket_half;
         let q = specs.quad_half;
-        let t = 0.02;
-        let wall_h = 0.14;
+        let t = BASKET_WALL;
+        let wall_h = BASKET_WALL_HEIGHT;
         let gr = groups(G_QUAD);
         let owner = basket.or(Some(r));
         // Basket: floor and walls. Its mass is most of the craft's.
@@ -520,33 +611,34 @@ impl World {
             self.add_collider(
                 ColliderBuilder::cuboid(e[0], e[1], e[2])
                     .translation(c)
-                    .mass(total * 0.1)
-                    .friction(0.9)
+                    .mass(total * QUAD_PART_MASS)
+                    .friction(BASKET_FRICTION)
                     .collision_groups(gr),
                 body,
                 owner,
             );
         }
+        let (i, h) = (ROTOR_INSET, ROTOR_HEIGHT);
         let rotors = [
-            Vector::new(q - 0.08, 0.24, q - 0.08),
-            Vector::new(-q + 0.08, 0.24, q - 0.08),
-            Vector::new(-q + 0.08, 0.24, -q + 0.08),
-            Vector::new(q - 0.08, 0.24, -q + 0.08),
+            Vector::new(q - i, h, q - i),
+            Vector::new(-q + i, h, q - i),
+            Vector::new(-q + i, h, -q + i),
+            Vector::new(q - i, h, -q + i),
         ];
         for p in rotors {
             self.add_collider(
-                ColliderBuilder::cylinder(0.01, 0.08)
+                ColliderBuilder::cylinder(ROTOR_HALF_HEIGHT, ROTOR_RADIUS)
                     .translation(p)
-                    .mass(total * 0.1)
+                    .mass(total * QUAD_PART_MASS)
                     .collision_groups(gr),
                 body,
                 Some(r),
             );
         }
         self.add_collider(
-            ColliderBuilder::cuboid(0.06, 0.03, 0.06)
-                .translation(Vector::new(0.0, 0.25, 0.0))
-                .mass(total * 0.1)
+            ColliderBuilder::cuboid(HUB_HALF[0], HUB_HALF[1], HUB_HALF[2])
+                .translation(Vector::new(0.0, HUB_HEIGHT, 0.0))
+                .mass(total * QUAD_PART_MASS)
                 .collision_groups(gr),
             body,
             Some(r),
@@ -556,8 +648,8 @@ impl World {
             self.body[bk.get()] = Some(body);
             self.volume[bk.get()] = Some(Volume {
                 body,
-                local: Pose::from_translation(Vector::new(0.0, t + 0.06, 0.0)),
-                half: Vector::new(b - t, 0.06, b - t),
+                local: Pose::from_translation(Vector::new(0.0, t + BASKET_INSIDE_HALF, 0.0)),
+                half: Vector::new(b - t, BASKET_INSIDE_HALF, b - t),
             });
         }
         self.quad = Some(Quad {
@@ -580,7 +672,8 @@ impl World {
         specs: &RobotSpecs,
     ) -> Result<(), PhysicsError> {
         let h = specs.dog_half;
-        let pose = Pose::from_parts(v3(rg.pos) + Vector::new(0.0, 0.02, 0.0), rot);
+        let lift = Vector::new(0.0, self.tol.dog_floor_gap, 0.0);
+        let pose = Pose::from_parts(v3(rg.pos) + lift, rot);
         let body = self
             .pw
             .insert_body(RigidBodyBuilder::kinematic_position_based().pose(pose));
@@ -615,7 +708,7 @@ impl World {
         let pose = Pose::from_parts(v3(rg.pos), rot);
         let body = self.pw.insert_body(RigidBodyBuilder::fixed().pose(pose));
         self.add_collider(
-            ColliderBuilder::cylinder(specs.arm_shoulder / 2.0, 0.08)
+            ColliderBuilder::cylinder(specs.arm_shoulder / 2.0, ARM_BASE_RADIUS)
                 .translation(Vector::new(0.0, specs.arm_shoulder / 2.0, 0.0))
                 .collision_groups(InteractionGroups::none()),
             body,
@@ -644,19 +737,19 @@ impl World {
                     .can_sleep(false),
             );
             pw.colliders.insert_with_parent(
-                ColliderBuilder::capsule_z(half_len.max(0.01), 0.03)
+                ColliderBuilder::capsule_z(half_len.max(YAW_LINK_HALF), LINK_RADIUS)
                     .translation(Vector::new(0.0, 0.0, -half_len))
-                    .density(500.0)
+                    .density(LINK_DENSITY)
                     .collision_groups(InteractionGroups::none()),
                 b,
                 &mut pw.bodies,
             );
             b
         };
-        let yaw = link(&mut self.pw, 0.01);
+        let yaw = link(&mut self.pw, YAW_LINK_HALF);
         let upper = link(&mut self.pw, links[0] / 2.0);
         let fore = link(&mut self.pw, links[1] / 2.0);
-        let hand = link(&mut self.pw, 0.02);
+        let hand = link(&mut self.pw, HAND_HALF);
         let j = [
             RevoluteJointBuilder::new(Vector::Y)
                 .local_anchor1(shoulder)
@@ -691,10 +784,11 @@ impl World {
             joints,
             hand,
             q: [0.0; 4],
-            limits: [(-PI, PI), (-1.6, 1.6), (0.0, 2.6)],
+            limits: ARM_LIMITS,
             reach: links[0] + links[1],
             min_reach: {
-                let c = 2.6f32.cos();
+                // The elbow at its limit.
+                let c = ARM_LIMITS[2].1.cos();
                 (links[0] * links[0] + links[1] * links[1] + 2.0 * links[0] * links[1] * c)
                     .max(0.0)
                     .sqrt()

@@ -11,21 +11,19 @@
 //! step stand still, as between sequential steps, and are not watched.
 //!
 //! Before that comes to pass, robots give way by their order in the step: a moving one
-//! that comes within [`CLEARANCE`] of a robot earlier in the step that is moving too
-//! holds where it is (see `World::hold`) until that one has moved away or its action is
-//! over. The first robot
-//! never holds, so robots never wait on each other in a circle; a robot that runs into
-//! one holding still fails the step.
+//! that comes within the clearance ([`Tolerances::contact_clearance`]) of a robot earlier
+//! in the step that is moving too holds where it is (see `World::hold`) until that one
+//! has moved away or its action is over. The first robot never holds, so robots never
+//! wait on each other in a circle; a robot that runs into one holding still fails the
+//! step.
+//!
+//! [`Tolerances::contact_clearance`]: super::Tolerances::contact_clearance
 
 use coherent_core::{Action, Idx, Verb};
 use rapier3d::parry::query;
 use rapier3d::prelude::*;
 
 use super::{FailureKind, PhysicsError, World, fail};
-
-/// How close (m) what a robot brings may come to what a robot earlier in the step brings
-/// before it holds.
-pub(super) const CLEARANCE: f32 = 0.1;
 
 /// What one moving robot brings into the step now: each solid collider with its
 /// bounding box, and the box around them all.
@@ -64,9 +62,10 @@ impl World {
         }
     }
 
-    /// Whether what `a` and `b` bring are within [`CLEARANCE`] of each other.
+    /// Whether what `a` and `b` bring are within the clearance of each other.
     pub(super) fn near(&self, a: &Brought, b: &Brought) -> bool {
-        let close = |x: &Aabb, y: &Aabb| x.loosened(CLEARANCE).intersects(y);
+        let clearance = self.tol.contact_clearance;
+        let close = |x: &Aabb, y: &Aabb| x.loosened(clearance).intersects(y);
         let (Some(ba), Some(bb)) = (&a.aabb, &b.aabb) else {
             return false;
         };
@@ -77,7 +76,7 @@ impl World {
                     x != y
                         && close(xa, ya)
                         && query::distance(cx.position(), cx.shape(), cy.position(), cy.shape())
-                            .is_ok_and(|d| d.distance <= CLEARANCE)
+                            .is_ok_and(|d| d.distance <= clearance)
                 })
             })
     }

@@ -32,9 +32,6 @@ fn moving(s: &Slot) -> Option<&Motion> {
     }
 }
 
-/// How often (in simulation steps, half a second) a waiting action plans again.
-const RETRY_STEPS: usize = 30;
-
 impl World {
     /// Executes `a` by `robot` physically, without asking the rules.
     pub fn execute(&mut self, robot: Idx, a: Action) -> Result<(), PhysicsError> {
@@ -125,7 +122,7 @@ impl World {
                 }
             }
             for (i, slot) in slots.iter_mut().enumerate() {
-                let retry = taken > 0 && (!stepping || taken.is_multiple_of(RETRY_STEPS));
+                let retry = taken > 0 && (!stepping || taken.is_multiple_of(self.tol.retry_steps));
                 if !(retry && matches!(slot, Slot::Waiting(_))) {
                     continue;
                 }
@@ -227,7 +224,8 @@ impl World {
     }
 
     /// The quadrotor's flight to a room (over the middle of its floor, or a free spot
-    /// there, at cruise altitude) or to hover 0.7 m over a free spot on a surface.
+    /// there, at cruise altitude) or to hover `quad_hover_height` over a free spot on a
+    /// surface.
     fn quad_towards(&self, x: Idx) -> Result<Vec<Stage>, PhysicsError> {
         if self.task.node(x).kind == NodeKind::Room {
             let Some((lo, hi)) = self.room_rect(x) else {
@@ -248,7 +246,7 @@ impl World {
         } else {
             let p = self.quad_pos().unwrap_or(Vector::ZERO);
             let spot = self.landing_spot(x, p)?;
-            let y = self.top_height(x) + 0.7;
+            let y = self.top_height(x) + self.tol.quad_hover_height;
             self.quad_fly_to(spot, y)
         }
     }

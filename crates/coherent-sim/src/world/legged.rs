@@ -2,13 +2,13 @@
 //! grid, [`crate::path`], joined by flights of stairs), walking it with the character
 //! controller, and where it stands to work on a thing or to enter a room.
 
-use std::f32::consts::PI;
+use std::f32::consts::TAU;
 
 use coherent_core::{Idx, NodeKind};
 use rapier3d::prelude::*;
 
 use super::motion::{Stage, Tick, Turn, Walk};
-use super::{DT, FailureKind, PhysicsError, Placement, World, fail, solid, v3};
+use super::{FailureKind, PhysicsError, Placement, World, fail, solid, v3};
 use crate::layout::{self, Flight};
 use crate::path;
 
@@ -21,17 +21,20 @@ enum Leg {
     Flight(Flight, Vector),
 }
 
-/// How far before the foot and past the head the legged robot lines up with a flight.
-const FLIGHT_APPROACH: f32 = 0.55;
-
 impl World {
     /// One occupancy grid per storey, for the legged robot.
     fn grids(&self, dog: RigidBodyHandle) -> Vec<(f32, path::Grid)> {
         layout::levels(&self.layout)
             .into_iter()
             .map(|level| {
-                let grid =
-                    path::Grid::new(&self.layout, &self.flights, &self.pw.colliders, dog, level);
+                let grid = path::Grid::new(
+                    &self.layout,
+                    &self.flights,
+                    &self.pw.colliders,
+                    dog,
+                    level,
+                    &self.tol,
+                );
                 (level, grid)
             })
             .collect()
@@ -76,20 +79,15 @@ impl World {
             return None;
         }
         flights.reverse();
+        let (approach, gap) = (self.tol.dog_flight_approach, self.tol.dog_floor_gap);
         let mut legs = Vec::new();
         let mut at = start;
         for (f, up) in flights {
-            let (here, there) = if up {
-                (
-                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
-                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
-                )
-            } else {
-                (
-                    f.at(f.run + FLIGHT_APPROACH, f.upper + 0.02),
-                    f.at(-FLIGHT_APPROACH, f.lower + 0.02),
-                )
-            };
+            let (foot, head) = (
+                f.at(-approach, f.lower + gap),
+                f.at(f.run + approach, f.upper + gap),
+            );
+            let (here, there) = if up { (foot, head) } else { (head, foot) };
             let (here, there) = (v3(here), v3(there));
             legs.push(Leg::Floor(grid(self.level_at(at))?.route(at, here)?));
             legs.push(Leg::Flight(f, there));
@@ -142,13 +140,13 @@ impl World {
             return fail(FailureKind::Layout, "no legged robot".into());
         };
         let y = self.pw.bodies[dog.body].translation().y;
-        if (y - there.y).abs() > 0.03 {
+        if (y - there.y).abs() > self.tol.dog_off_stairs_tolerance {
             return fail(
                 FailureKind::Blocked,
                 format!(
                     "the legged robot on stairs {} stopped at height {y:.2} m, not on the floor at {:.2} m",
                     f.id,
-                    there.y - 0.02
+                    there.y - self.tol.dog_floor_gap
                 ),
             );
         }
@@ -184,10 +182,11 @@ impl World {
     /// The next step of a walk through waypoints on the floor plan with the character
     /// controller: at its height on a floor, or (`on_flight`) climbing and descending
     /// the flight's slope with the controller's vertical motion. Each waypoint gets
-    /// three times the steps its straight distance takes, and 120 more; it must end
-    /// within 5 cm of it.
+    /// `dog_walk_budget_factor` times the steps its straight distance takes, and
+    /// `dog_walk_budget_steps` more; it must end within `dog_waypoint_tolerance` of it.
     pub(super) fn walk_tick(&mut self, w: &mut Walk) -> Result<Tick, PhysicsError> {
         let speed = self.layout.specs.dog_speed;
+        let t = self.tol;
         let h = self.layout.specs.dog_half;
         // A cylinder: turning the robot never makes it collide.
         let shape = Cylinder::new(h[1], h[0].max(h[2]));
@@ -200,19 +199,20 @@ impl World {
         while let Some(&wp) = w.waypoints.get(w.next) {
             let budget = *w.budget.get_or_insert_with(|| {
                 let from = self.pw.bodies[w.body].translation();
-                ((wp - from).length() / (speed * DT) * 3.0) as usize + 120
+                ((wp - from).length() / (speed * t.dt) * t.dog_walk_budget_factor) as usize
+                    + t.dog_walk_budget_steps
             });
             let pos = self.pw.bodies[w.body].translation();
             let d = Vector::new(wp.x - pos.x, 0.0, wp.z - pos.z);
-            if w.taken < budget && d.length() >= 0.01 {
-                let want = d.normalize_or_zero() * (speed * DT).min(d.length());
+            if w.taken < budget && d.length() >= t.dog_waypoint_reached {
+                let want = d.normalize_or_zero() * (speed * t.dt).min(d.length());
                 let yaw = d.x.atan2(d.z);
                 let last_hit = &mut w.last_hit;
                 let moved = {
                     let filter = solid().exclude_rigid_body(w.body);
                     let qp = self.pw.query_pipeline_with_filter(filter);
                     let cpose = Pose::from_translation(pos + shape_off);
-                    kcc.move_shape(DT, &qp, &shape, &cpose, want, |c| {
+                    kcc.move_shape(t.dt, &qp, &shape, &cpose, want, |c| {
                         *last_hit = Some((c.handle, c.hit.witness1));
                     })
                     .translation
@@ -227,7 +227,7 @@ impl World {
                 return Ok(Tick::Step);
             }
             let off = d.length();
-            if off > 0.05 {
+            if off > t.dog_waypoint_tolerance {
                 return fail(
                     FailureKind::Blocked,
                     format!(
@@ -248,18 +248,19 @@ impl World {
         Ok(Tick::Done)
     }
 
-    /// After a step of a walk: the track recorded; blocked after more than 30 steps in
-    /// a row that moved it less than a fifth of the way it wanted to go.
+    /// After a step of a walk: the track recorded; blocked after more than
+    /// `dog_stuck_steps` in a row that moved it less than `dog_stuck_fraction` of the way
+    /// it wanted to go.
     pub(super) fn walk_after(&mut self, w: &mut Walk) -> Result<(), PhysicsError> {
         self.record_path(w.dog);
         let (pos, moved, want) = w.last_move;
         let horizontal = Vector::new(moved.x, 0.0, moved.z).length();
-        if horizontal >= 0.2 * want.length() {
+        if horizontal >= self.tol.dog_stuck_fraction * want.length() {
             w.stuck = 0;
             return Ok(());
         }
         w.stuck += 1;
-        if w.stuck > 30 {
+        if w.stuck > self.tol.dog_stuck_steps {
             let wp = w.waypoints[w.next];
             return fail(
                 FailureKind::Blocked,
@@ -295,7 +296,7 @@ impl World {
     /// The fixed thing a node ultimately stands on or in (furniture), or itself.
     fn anchor(&self, x: Idx) -> Idx {
         let mut cur = x;
-        for _ in 0..6 {
+        for _ in 0..self.tol.anchor_depth {
             match self.placement(cur) {
                 Placement::On(s) | Placement::Inside(s) => {
                     let k = self.task.node(s).kind;
@@ -346,7 +347,8 @@ impl World {
             on_top.iter().copied().sum::<Vector>() / on_top.len() as f32
         };
         let h = self.layout.specs.dog_half;
-        let gap = h[0].max(h[2]) + 0.12;
+        let t = &self.tol;
+        let gap = h[0].max(h[2]) + t.dog_service_gap;
         let c = aabb.center();
         let he = aabb.half_extents();
         // The storey of what the thing stands on.
@@ -362,7 +364,7 @@ impl World {
         let home = if self.task.node(a).kind == NodeKind::Door {
             None
         } else {
-            self.room_at(Vector::new(c.x, aabb.mins.y + 0.05, c.z))
+            self.room_at(Vector::new(c.x, aabb.mins.y + t.room_probe_lift, c.z))
         };
         let mut cands = Vec::new();
         for (nx, nz) in [(0.0, -1.0), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)] {
@@ -371,13 +373,13 @@ impl World {
             } else {
                 Vector::Z * he.z
             };
-            for f in [0.0f32, -0.6, 0.6, -0.3, 0.3] {
+            for f in t.dog_service_offsets {
                 // Nearest free cell straight out from that side (a wall beside a door
-                // or the grid's 10 cm cells can block the first one).
-                let free = [0.0f32, 0.1, 0.2, 0.3].into_iter().find_map(|extra| {
+                // or the grid's cells can block the first one).
+                let free = t.dog_service_steps_out.into_iter().find_map(|extra| {
                     let p = Vector::new(
                         c.x + nx * (he.x + gap + extra),
-                        level + 0.02,
+                        level + t.dog_floor_gap,
                         c.z + nz * (he.z + gap + extra),
                     ) + lateral * f;
                     (grid.free(p) && (home.is_none() || self.room_at(p) == home)).then_some(p)
@@ -428,21 +430,22 @@ impl World {
             );
         };
         let level = self.room_level(room);
+        let t = &self.tol;
         // The robot's height on the room's floor.
         let y = if level == self.level_at(p) {
             p.y
         } else {
-            level + 0.02
+            level + t.dog_floor_gap
         };
         // A free spot inside the room, just past the door or the flight when there is one.
         let mid = Vector::new((lo[0] + hi[0]) / 2.0, y, (lo[1] + hi[1]) / 2.0);
         let seed = match (&door, flight) {
             (Some(d), _) => {
                 let c = Vector::new(d.center[0], y, d.center[1]);
-                c + (mid - c).normalize_or_zero() * 1.0
+                c + (mid - c).normalize_or_zero() * t.dog_room_entry
             }
-            (None, Some(f)) if f.rooms[1] == rid => v3(f.at(f.run + 1.0, y)),
-            (None, Some(f)) => v3(f.at(-1.0, y)),
+            (None, Some(f)) if f.rooms[1] == rid => v3(f.at(f.run + t.dog_room_entry, y)),
+            (None, Some(f)) => v3(f.at(-t.dog_room_entry, y)),
             (None, None) => mid,
         };
         let grids = self.grids(dog.body);
@@ -453,10 +456,12 @@ impl World {
             );
         };
         let mut goal = None;
-        'search: for r in 0..20 {
-            for k in 0..16 {
-                let a = k as f32 * PI / 8.0;
-                let q = seed + Vector::new(a.cos(), 0.0, a.sin()) * (r as f32 * 0.15);
+        let directions = t.dog_room_search_directions;
+        'search: for r in 0..t.dog_room_search_rings {
+            for k in 0..directions {
+                let a = k as f32 * TAU / directions as f32;
+                let ring = r as f32 * t.dog_room_search_spacing;
+                let q = seed + Vector::new(a.cos(), 0.0, a.sin()) * ring;
                 if self.room_at(q) == Some(room) && grid.free(q) {
                     goal = Some(q);
                     break 'search;

@@ -12,6 +12,9 @@ use super::{
     FailureKind, G_OBJECT, Grasp, PhysicsError, Placement, World, fail, groups, hinge_pose, solid,
 };
 
+/// The size (m) taken for a thing the layout does not size: a small thing's.
+const UNKNOWN_SIZE: [f32; 3] = [0.12; 3];
+
 impl World {
     /// A free spot for `h` on surface `s` or in container `c`, nearest to the robot's
     /// shoulder and within its reach; returns the bottom centre for `h`.
@@ -26,7 +29,7 @@ impl World {
             .layout
             .item(self.task.id(h))
             .map(|it| it.size)
-            .unwrap_or([0.12; 3]);
+            .unwrap_or(UNKNOWN_SIZE);
         let (body, centre, half) = if inside {
             let Some(v) = self.volume[holder.get()] else {
                 return fail(
@@ -51,19 +54,20 @@ impl World {
                 format!("{} has no arm", self.label(robot)),
             );
         };
+        let t = &self.tol;
         let shoulder = self.shoulder(&self.arms[ai]);
         let reach = self.arms[ai].reach;
-        let min_reach = self.arms[ai].min_reach + 0.05;
+        let min_reach = self.arms[ai].min_reach + t.put_min_reach_margin;
         let pose = *self.pw.bodies[body].position();
         let shape = Cuboid::new(Vector::new(
-            size[0] / 2.0 - 0.005,
-            size[1] / 2.0 - 0.005,
-            size[2] / 2.0 - 0.005,
+            size[0] / 2.0 - t.put_probe_shrink,
+            size[1] / 2.0 - t.put_probe_shrink,
+            size[2] / 2.0 - t.put_probe_shrink,
         ));
         let hb = self.body[h.get()];
-        let hx = half[0] - size[0] / 2.0 - 0.01;
-        let hz = half[1] - size[2] / 2.0 - 0.01;
-        if hx < -0.005 || hz < -0.005 {
+        let hx = half[0] - size[0] / 2.0 - t.put_edge_margin;
+        let hz = half[1] - size[2] / 2.0 - t.put_edge_margin;
+        if hx < -t.put_fit_tolerance || hz < -t.put_fit_tolerance {
             return fail(
                 FailureKind::Blocked,
                 format!(
@@ -75,7 +79,7 @@ impl World {
                 ),
             );
         }
-        let step = 0.04;
+        let step = t.put_grid;
         let (nx, nz) = (
             (hx.max(0.0) / step).floor() as i32,
             (hz.max(0.0) / step).floor() as i32,
@@ -86,16 +90,16 @@ impl World {
         let mut in_the_way: Option<Option<Idx>> = None;
         for i in -nx..=nx {
             for k in -nz..=nz {
-                let local = centre + Vector::new(i as f32 * step, 0.003, k as f32 * step);
+                let local = centre + Vector::new(i as f32 * step, t.put_lift, k as f32 * step);
                 let p = pose.transform_point(local);
                 let grip = p + Vector::new(0.0, size[1], 0.0);
                 let d = (grip - shoulder).length();
                 nearest_any = nearest_any.min(d);
-                if d > reach - 0.03 || d < min_reach {
+                if d > reach - t.put_reach_margin || d < min_reach {
                     continue;
                 }
-                let probe =
-                    Pose::from_translation(p + Vector::new(0.0, size[1] / 2.0 + 0.004, 0.0));
+                let lift = size[1] / 2.0 + t.put_probe_lift;
+                let probe = Pose::from_translation(p + Vector::new(0.0, lift, 0.0));
                 let mut filter = solid();
                 if let Some(b) = hb {
                     filter = filter.exclude_rigid_body(b);
@@ -119,7 +123,7 @@ impl World {
         }
         match best {
             Some((_, p)) => Ok(p),
-            None if nearest_any > reach - 0.03 => fail(
+            None if nearest_any > reach - t.put_reach_margin => fail(
                 FailureKind::Reach,
                 format!(
                     "every spot {} {} is beyond the reach of {}: the nearest is {:.2} m from its shoulder, its reach is {:.2} m",
@@ -160,7 +164,7 @@ impl World {
             .layout
             .item(self.task.id(x))
             .map(|it| it.size)
-            .unwrap_or([0.12; 3]);
+            .unwrap_or(UNKNOWN_SIZE);
         // The middle of its top as it lies now (it may have tipped over).
         let top = match self.node_aabb(x) {
             Some(a) => Vector::new(a.center().x, a.maxs.y, a.center().z),
@@ -168,7 +172,8 @@ impl World {
                 .position()
                 .transform_point(Vector::new(0.0, size[1], 0.0)),
         };
-        let mut stages = self.reach(robot, top + Vector::new(0.0, 0.01, 0.0), &self.label(x))?;
+        let above = Vector::new(0.0, self.tol.grasp_above, 0.0);
+        let mut stages = self.reach(robot, top + above, &self.label(x))?;
         stages.push(Stage::Fasten { robot, object: x });
         stages.extend(self.arm_home(robot));
         Ok(stages)
@@ -258,11 +263,11 @@ impl World {
             .layout
             .item(self.task.id(h))
             .map(|it| it.size)
-            .unwrap_or([0.12; 3]);
+            .unwrap_or(UNKNOWN_SIZE);
         let Some(ai) = self.arm_index(robot) else {
             return Ok(Vec::new());
         };
-        // Hand target: where the middle of the object's underside is 1 cm above the
+        // Hand target: where the middle of the object's underside is `put_drop` above the
         // spot (its lowest point, whichever way up it is held).
         let offset = match self.node_aabb(h) {
             Some(a) => {
@@ -270,7 +275,7 @@ impl World {
             }
             None => Vector::new(0.0, size[1], 0.0),
         };
-        let target = spot + Vector::new(0.0, 0.01, 0.0) + offset;
+        let target = spot + Vector::new(0.0, self.tol.put_drop, 0.0) + offset;
         let what = format!(
             "the spot {} {}",
             if inside { "in" } else { "on" },
@@ -278,9 +283,10 @@ impl World {
         );
         let mut stages = self.reach(robot, target, &what)?;
         stages.push(Stage::Unfasten { robot, object: h });
-        stages.push(Stage::Settle(Settle::new(0.5)));
+        let dt = self.tol.dt;
+        stages.push(Stage::Settle(Settle::new(self.tol.release_settle, dt)));
         stages.extend(self.arm_home(robot));
-        stages.push(Stage::Settle(Settle::new(1.0)));
+        stages.push(Stage::Settle(Settle::new(self.tol.home_settle, dt)));
         Ok(stages)
     }
 
@@ -316,7 +322,7 @@ impl World {
 
     fn check_open(&self, c: Idx) -> Result<(), PhysicsError> {
         if let Some(angle) = self.hinge_angle(c)
-            && angle.abs() < 1.0
+            && angle.abs() < self.tol.lid_open_min
         {
             return fail(
                 FailureKind::Blocked,
@@ -331,7 +337,7 @@ impl World {
     }
 
     /// Opening or closing `n` by its handle: the hand to the handle, the panel turned
-    /// over 60 steps, the arm folded back.
+    /// over `hinge_steps`, the arm folded back.
     pub(super) fn drive_hinge(
         &mut self,
         robot: Idx,
@@ -380,19 +386,19 @@ impl World {
         Ok(stages)
     }
 
-    /// The next of the 60 steps that turn a panel from the angle it had when it
+    /// The next of the `hinge_steps` that turn a panel from the angle it had when it
     /// started.
     pub(super) fn hinge_tick(&mut self, t: &mut HingeTurn) -> Tick {
-        const STEPS: usize = 60;
+        let steps = self.tol.hinge_steps;
         let from = match t.from {
             Some(a) => a,
             None => *t.from.insert(self.hinge_angle(t.hinge.node).unwrap_or(0.0)),
         };
-        if t.taken >= STEPS {
+        if t.taken >= steps {
             return Tick::Done;
         }
         t.taken += 1;
-        let a = from + (t.to - from) * t.taken as f32 / STEPS as f32;
+        let a = from + (t.to - from) * t.taken as f32 / steps as f32;
         self.pw.bodies[t.hinge.body].set_next_kinematic_position(hinge_pose(&t.hinge, a));
         Tick::Step
     }

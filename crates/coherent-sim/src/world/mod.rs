@@ -17,6 +17,9 @@
 //! - `contact.rs`: robots acting at once that touch each other or what another handles;
 //! - `execute.rs`: one action, or a joint step's actions at once, dispatched to the
 //!   jobs above.
+//!
+//! Every step, tolerance, margin, speed and limit they work to is a field of the
+//! world's [`Tolerances`] (`tolerances.rs`, which uses nothing of the others).
 
 mod arm;
 mod build;
@@ -28,6 +31,7 @@ mod motion;
 mod quadrotor;
 mod relations;
 mod step;
+mod tolerances;
 
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -38,7 +42,7 @@ use rapier3d::prelude::*;
 
 use crate::layout::{self, Flight, Layout};
 
-pub const DT: f32 = 1.0 / 60.0;
+pub use self::tolerances::Tolerances;
 
 /// A physical failure, with numbers.
 #[derive(Clone, Debug, PartialEq)]
@@ -112,6 +116,8 @@ pub struct World {
     /// floor plan and where it changes storey.
     pub paths: Vec<(NodeId, Vec<[f32; 3]>)>,
     quad_target: (Vector, Vector),
+    /// What every job of the world works to.
+    tol: Tolerances,
 }
 
 impl std::fmt::Debug for World {
@@ -222,6 +228,11 @@ fn v3(a: [f32; 3]) -> Vector {
 }
 
 impl World {
+    /// The step, tolerances, margins, speeds and limits the world works to.
+    pub fn tolerances(&self) -> &Tolerances {
+        &self.tol
+    }
+
     fn label(&self, n: Idx) -> String {
         self.task.node(n).label()
     }
@@ -242,8 +253,8 @@ impl World {
             return;
         };
         let last = p.last().copied().unwrap_or([f32::NAN; 3]);
-        // Every 20 cm on the floor plan, and where the robot changes storey.
-        let moved = (last[0] - t.x).hypot(last[2] - t.z) > 0.2;
+        // Every `track_spacing` on the floor plan, and where the robot changes storey.
+        let moved = (last[0] - t.x).hypot(last[2] - t.z) > self.tol.track_spacing;
         let changed = self.level_at(Vector::new(last[0], last[1], last[2])) != level;
         if (moved || changed)
             && let Some((_, p)) = self.paths.iter_mut().find(|(i, _)| *i == id)

@@ -15,7 +15,7 @@ use std::collections::VecDeque;
 use coherent_core::{Action, Idx};
 use rapier3d::prelude::*;
 
-use super::{DT, Hinge, PhysicsError, World};
+use super::{Hinge, PhysicsError, World};
 use crate::layout::Flight;
 
 /// One robot's action in progress: the stages still to run, the current one first.
@@ -214,10 +214,10 @@ pub(super) struct Settle {
 }
 
 impl Settle {
-    /// At most `max_s` simulated seconds.
-    pub(super) fn new(max_s: f32) -> Settle {
+    /// At most `max_s` simulated seconds, of steps of `dt` seconds.
+    pub(super) fn new(max_s: f32, dt: f32) -> Settle {
         Settle {
-            steps: (max_s / DT) as usize,
+            steps: (max_s / dt) as usize,
             taken: 0,
             resting: false,
         }

@@ -7,7 +7,7 @@ use coherent_core::{Idx, NodeKind, Relation};
 use rapier3d::prelude::*;
 
 use super::motion::{Descend, Fly, Hover, Settle, Stage, Tick};
-use super::{DT, FailureKind, PhysicsError, World, fail, solid, v3};
+use super::{FailureKind, PhysicsError, World, fail, solid, v3};
 
 impl World {
     /// The next step of a flight: the set point moves towards the next waypoint at
@@ -21,13 +21,14 @@ impl World {
             (rb.translation(), rb.center_of_mass() - rb.translation())
         });
         let speed = self.layout.specs.flight_speed;
+        let dt = self.tol.dt;
         while let Some(&wp) = f.waypoints.get(f.next) {
-            if (wp - setpoint).length() > 1e-4 {
+            if (wp - setpoint).length() > self.tol.quad_waypoint_epsilon {
                 let d = wp - setpoint;
-                let stepv = d.normalize_or_zero() * (speed * DT).min(d.length());
+                let stepv = d.normalize_or_zero() * (speed * dt).min(d.length());
                 setpoint += stepv;
                 f.at = Some((setpoint, com_off));
-                self.quad_target = (setpoint + com_off, stepv / DT);
+                self.quad_target = (setpoint + com_off, stepv / dt);
                 return Ok(Tick::Step);
             }
             f.next += 1;
@@ -49,12 +50,12 @@ impl World {
         Ok(())
     }
 
-    /// Holding the end of a flight, for at most 600 steps.
+    /// Holding the end of a flight, for at most `quad_hover_max_steps`.
     pub(super) fn hover_tick(&mut self, h: &mut Hover) -> Result<Tick, PhysicsError> {
         if h.still {
             return Ok(Tick::Done);
         }
-        if h.steps >= 600 {
+        if h.steps >= self.tol.quad_hover_max_steps {
             let at = self.quad_pos().unwrap_or(h.end);
             let end = h.end;
             return fail(
@@ -72,15 +73,15 @@ impl World {
         Ok(Tick::Step)
     }
 
-    /// After a step of hovering: no crash; still once it is within 5 cm of the end and
-    /// slower than 8 cm/s (not in the first 21 steps).
+    /// After a step of hovering: no crash; still once it is within `quad_hover_radius`
+    /// of the end and slower than `quad_hover_speed` (after `quad_hover_min_steps`).
     pub(super) fn hover_after(&mut self, h: &mut Hover) -> Result<(), PhysicsError> {
         self.check_quad_hits()?;
         if let Some(q) = &self.quad {
             let rb = &self.pw.bodies[q.body];
-            if h.steps > 20
-                && (rb.translation() - h.end).length() < 0.05
-                && rb.linvel().length() < 0.08
+            if h.steps > self.tol.quad_hover_min_steps
+                && (rb.translation() - h.end).length() < self.tol.quad_hover_radius
+                && rb.linvel().length() < self.tol.quad_hover_speed
             {
                 h.still = true;
             }
@@ -104,12 +105,13 @@ impl World {
                 };
                 let owner = self.owner.get(&other).copied();
                 let is_door = owner.is_some_and(|o| self.task.node(o).kind == NodeKind::Door);
-                let is_wall =
-                    owner.is_none()
-                        && self.pw.colliders.get(other).is_some_and(|c| {
-                            c.parent().is_some_and(|p| self.pw.bodies[p].is_fixed())
-                        })
-                        && self.pw.colliders[other].compute_aabb().maxs.y > 0.5;
+                let is_wall = owner.is_none()
+                    && self
+                        .pw
+                        .colliders
+                        .get(other)
+                        .is_some_and(|c| c.parent().is_some_and(|p| self.pw.bodies[p].is_fixed()))
+                    && self.pw.colliders[other].compute_aabb().maxs.y > self.tol.quad_wall_min_top;
                 if is_door || is_wall {
                     let p = self.pw.bodies[q.body].translation();
                     let v = self.pw.bodies[q.body].linvel().length();
@@ -156,14 +158,19 @@ impl World {
                     .has(coherent_core::Edge::new(a.robot, Relation::On, s))
             })
             .map(|a| self.pw.bodies[a.root].translation());
+        let t = &self.tol;
         // A margin around the craft: it must not brush a wall or the arm on arrival.
-        let shape = Cuboid::new(Vector::new(qh + 0.25, 0.13, qh + 0.25));
+        let shape = Cuboid::new(Vector::new(
+            qh + t.quad_landing_margin,
+            t.quad_landing_probe_half_height,
+            qh + t.quad_landing_margin,
+        ));
         let qbody = self.quad.as_ref().map(|q| q.body);
         let mut best: Option<(f32, Vector)> = None;
-        let step = 0.1;
+        let step = t.quad_landing_grid;
         // A floor is walled: keep the craft's overshoot on arrival off the walls.
         let wall_gap = if self.task.node(s).kind == NodeKind::Floor {
-            0.45
+            t.quad_floor_wall_gap
         } else {
             0.0
         };
@@ -171,9 +178,10 @@ impl World {
         let nz = ((half[1] - qh - wall_gap) / step).floor() as i32;
         for i in -nx..=nx {
             for k in -nz..=nz {
-                let local = c + Vector::new(i as f32 * step, 0.005, k as f32 * step);
+                let local = c + Vector::new(i as f32 * step, t.quad_landing_lift, k as f32 * step);
                 let p = pose.transform_point(local);
-                let probe = Pose::from_translation(p + Vector::new(0.0, 0.14, 0.0));
+                let probe =
+                    Pose::from_translation(p + Vector::new(0.0, t.quad_landing_probe_lift, 0.0));
                 let mut filter = solid();
                 if let Some(qb) = qbody {
                     filter = filter.exclude_rigid_body(qb);
@@ -188,7 +196,7 @@ impl World {
                 }
                 let key = match arm_at {
                     // Close to the arm, but with room for its base.
-                    Some(a) => ((p - a).length() - 0.55).abs(),
+                    Some(a) => ((p - a).length() - t.quad_arm_distance).abs(),
                     None => (p - near).length(),
                 };
                 if best.is_none_or(|(k0, _)| key < k0) {
@@ -216,8 +224,8 @@ impl World {
     /// Flies to hover at `hover_y` over `dest` (a point on the destination's surface) at
     /// the cruise altitude above each storey's floor: through the door between two rooms
     /// of a storey, or up or down the stairwell between storeys (over the flight's first
-    /// 0.6 m, where nothing is above it, then along the run through the opening in the
-    /// upper room's wall).
+    /// `quad_stairs_climb_at`, where nothing is above it, then along the run through the
+    /// opening in the upper room's wall).
     pub(super) fn quad_fly_to(
         &self,
         dest: Vector,
@@ -227,6 +235,7 @@ impl World {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
         let cruise = self.layout.specs.cruise_altitude;
+        let t = &self.tol;
         let here = self.level_at(p) + cruise;
         let mut wps = vec![Vector::new(p.x, here, p.z)];
         let from_room = self.room_at(p);
@@ -253,12 +262,14 @@ impl World {
                 // An open door's panel stands out from the wall as far as the door is
                 // wide: leave the wall straight out to beyond it before turning to the
                 // doorway, and come back to it the same way on the far side.
-                let clear = (d.width + self.layout.specs.quad_half + 0.2).max(1.6);
-                // Points kept 0.8 m inside `room` (its middle line when it is narrower):
-                // a narrow room, a hallway, is crossed, not flown out of.
+                let clear = (d.width + self.layout.specs.quad_half + t.quad_door_clearance)
+                    .max(t.quad_door_min_clear);
+                // Points kept `quad_room_margin` inside `room` (its middle line when it is
+                // narrower): a narrow room, a hallway, is crossed, not flown out of.
+                let margin = t.quad_room_margin;
                 let fit = |v: f32, lo: f32, hi: f32| {
-                    if hi - lo > 1.6 {
-                        v.clamp(lo + 0.8, hi - 0.8)
+                    if hi - lo > 2.0 * margin {
+                        v.clamp(lo + margin, hi - margin)
                     } else {
                         (lo + hi) / 2.0
                     }
@@ -286,7 +297,12 @@ impl World {
                 wps.push(out(Vector::new(dest.x, there, dest.z), -side, b));
             } else if let Some(f) = flight {
                 let (low, high) = (f.lower + cruise, f.upper + cruise);
-                let mut legs = [f.at(0.6, low), f.at(0.6, high), f.at(f.run + 1.6, high)];
+                let (climb, past) = (t.quad_stairs_climb_at, t.quad_stairs_past_head);
+                let mut legs = [
+                    f.at(climb, low),
+                    f.at(climb, high),
+                    f.at(f.run + past, high),
+                ];
                 if f.rooms[0] != ia {
                     legs.reverse();
                 }
@@ -308,28 +324,27 @@ impl World {
         Ok(vec![Fly::stage(wps)])
     }
 
-    /// Motors on, then straight up 0.7 m.
+    /// Motors on, then straight up `quad_takeoff_height`.
     pub(super) fn quad_takeoff(&self) -> Result<Vec<Stage>, PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
-        Ok(vec![
-            Stage::Motors(true),
-            Fly::stage(vec![p + Vector::new(0.0, 0.7, 0.0)]),
-        ])
+        let up = Vector::new(0.0, self.tol.quad_takeoff_height, 0.0);
+        Ok(vec![Stage::Motors(true), Fly::stage(vec![p + up])])
     }
 
-    /// Over a free spot on `s`, down to 25 cm above it, then slowly down until the
-    /// basket touches it; the motors cut, it must rest there.
+    /// Over a free spot on `s`, down to `quad_descent_start` above it, then slowly down
+    /// until the basket touches it; the motors cut, it must rest there.
     pub(super) fn quad_land(&self, s: Idx) -> Result<Vec<Stage>, PhysicsError> {
         let Some(p) = self.quad_pos() else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
         let spot = self.landing_spot(s, p)?;
+        let t = &self.tol;
         Ok(vec![
             Fly::stage(vec![
-                Vector::new(spot.x, p.y.max(spot.y + 0.5), spot.z),
-                spot + Vector::new(0.0, 0.25, 0.0),
+                Vector::new(spot.x, p.y.max(spot.y + t.quad_approach_height), spot.z),
+                spot + Vector::new(0.0, t.quad_descent_start, 0.0),
             ]),
             Stage::Descend(Descend {
                 surface: s,
@@ -341,27 +356,30 @@ impl World {
         ])
     }
 
-    /// The next step of the descent (at 0.3 m/s, for at most 600 steps); once the craft
-    /// touches, the motors are cut and it settles.
+    /// The next step of the descent (at `quad_descent_speed`, for at most
+    /// `quad_descent_max_steps`); once the craft touches, the motors are cut and it
+    /// settles.
     pub(super) fn descend_tick(&mut self, d: &mut Descend) -> Result<Tick, PhysicsError> {
         let Some(body) = self.quad.as_ref().map(|q| q.body) else {
             return fail(FailureKind::Layout, "no quadrotor".into());
         };
+        let t = self.tol;
         let (y, com_off) = d.at.get_or_insert_with(|| {
             let rb = &self.pw.bodies[body];
-            (d.spot.y + 0.25, rb.center_of_mass() - rb.translation())
+            let start = d.spot.y + t.quad_descent_start;
+            (start, rb.center_of_mass() - rb.translation())
         });
-        if d.touches || d.steps >= 600 {
+        if d.touches || d.steps >= t.quad_descent_max_steps {
             return Ok(Tick::Then(vec![
                 Stage::Motors(false),
-                Stage::Settle(Settle::new(1.5)),
+                Stage::Settle(Settle::new(t.quad_landing_settle, t.dt)),
                 Stage::Landed(d.surface),
             ]));
         }
-        *y -= 0.3 * DT;
+        *y -= t.quad_descent_speed * t.dt;
         self.quad_target = (
             Vector::new(d.spot.x, *y, d.spot.z) + *com_off,
-            Vector::new(0.0, -0.3, 0.0),
+            Vector::new(0.0, -t.quad_descent_speed, 0.0),
         );
         Ok(Tick::Step)
     }

@@ -60,8 +60,8 @@ impl World {
             .map_or(Placement::Loose, Placement::On)
     }
 
-    /// The middle of body `b`'s underside (1 cm up) in the frame `frame`, not above
-    /// the middle of its extent there.
+    /// The middle of body `b`'s underside (`underside_lift` up) in the frame `frame`, not
+    /// above the middle of its extent there.
     fn underside_in(&self, b: RigidBodyHandle, frame: Pose) -> Option<Vector> {
         let inv = frame.inverse();
         let aabb = self.pw.bodies[b]
@@ -73,11 +73,12 @@ impl World {
             })
             .reduce(|a, b| a.merged(&b))?;
         let c = aabb.center();
-        Some(Vector::new(c.x, (aabb.mins.y + 0.01).min(c.y), c.z))
+        let low = aabb.mins.y + self.tol.underside_lift;
+        Some(Vector::new(c.x, low.min(c.y), c.z))
     }
 
-    /// A point 1 cm above the lowest point of a body's colliders, below its centre of
-    /// mass.
+    /// A point `underside_lift` above the lowest point of a body's colliders, below its
+    /// centre of mass.
     fn underside(&self, b: RigidBodyHandle) -> Option<Vector> {
         let rb = &self.pw.bodies[b];
         let com = rb.center_of_mass();
@@ -86,7 +87,8 @@ impl World {
             .iter()
             .map(|c| self.pw.colliders[*c].compute_aabb().mins.y)
             .reduce(f32::min)?;
-        Some(Vector::new(com.x, (low + 0.01).min(com.y), com.z))
+        let low = low + self.tol.underside_lift;
+        Some(Vector::new(com.x, low.min(com.y), com.z))
     }
 
     /// The named thing under body `xb` that it touches.
@@ -101,7 +103,7 @@ impl World {
         }
         let qp = self.pw.query_pipeline_with_filter(filter);
         let ray = Ray::new(origin, -Vector::Y);
-        let (hit, _) = qp.cast_ray(&ray, 3.0, true)?;
+        let (hit, _) = qp.cast_ray(&ray, self.tol.support_ray, true)?;
         let s = *self.owner.get(&hit)?;
         if s == x {
             return None;
@@ -192,7 +194,8 @@ impl World {
         }
         let rb = &self.pw.bodies[q.body];
         let on = self.support_of(q.body, q.robot);
-        Some((rb.linvel().length() < 0.05 && on.is_some(), on))
+        let resting = rb.linvel().length() < self.tol.quad_landed_speed;
+        Some((resting && on.is_some(), on))
     }
 
     /// Whether the flying quadrotor is over `s`'s top (a floor: its room).

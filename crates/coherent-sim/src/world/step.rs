@@ -6,8 +6,8 @@
 use coherent_core::NodeId;
 use rapier3d::prelude::*;
 
+use super::World;
 use super::motion::{Settle, Tick};
-use super::{DT, World};
 
 impl World {
     pub(super) fn step(&mut self) {
@@ -31,12 +31,12 @@ impl World {
             let (j, r) = (self.arms[i].joints[0], self.arms[i].root);
             self.sync_arm(j, r);
         }
-        self.sim_time += f64::from(DT);
+        self.sim_time += f64::from(self.tol.dt);
     }
 
     /// Steps until loose things rest (or `max_s` simulated seconds).
     pub(super) fn settle(&mut self, max_s: f32) {
-        let mut s = Settle::new(max_s);
+        let mut s = Settle::new(max_s, self.tol.dt);
         while let Tick::Step = self.settle_tick(&mut s) {
             self.step();
             self.settle_after(&mut s);
@@ -51,9 +51,9 @@ impl World {
         }
     }
 
-    /// Loose things count as resting only after the first ten steps.
+    /// Loose things count as resting only after the first `settle_min_steps` steps.
     pub(super) fn settle_after(&mut self, s: &mut Settle) {
-        if s.taken >= 10 && self.resting() {
+        if s.taken >= self.tol.settle_min_steps && self.resting() {
             s.resting = true;
         }
         s.taken += 1;
@@ -66,7 +66,8 @@ impl World {
                 .and_then(|n| self.body[n.get()])
                 .is_none_or(|b| {
                     let rb = &self.pw.bodies[b];
-                    rb.linvel().length() < 0.01 && rb.angvel().length() < 0.05
+                    rb.linvel().length() < self.tol.rest_speed
+                        && rb.angvel().length() < self.tol.rest_spin
                 })
         })
     }
@@ -79,6 +80,7 @@ impl World {
         } else {
             (0.0, Vector::ZERO)
         };
+        let t = self.tol;
         let rb = &mut self.pw.bodies[q.body];
         rb.reset_forces(false);
         rb.reset_torques(false);
@@ -97,29 +99,31 @@ impl World {
         // Horizontally only while hovering: it would wind up on the tracking lag of a
         // long flight and overshoot at the end of it.
         let err = tp - p;
-        let err = if tv.length() < 1e-3 {
+        let err = if tv.length() < t.quad_hover_setpoint_speed {
             err
         } else {
             Vector::new(0.0, err.y, 0.0)
         };
-        let mut integral = q.integral + err * DT;
-        if integral.length() > 0.5 {
-            integral = integral.normalize() * 0.5;
+        let mut integral = q.integral + err * t.dt;
+        if integral.length() > t.quad_integral_limit {
+            integral = integral.normalize() * t.quad_integral_limit;
         }
         if let Some(qm) = self.quad.as_mut() {
             qm.integral = integral;
         }
         let rb = &mut self.pw.bodies[q.body];
-        let mut acc = (tp - p) * 3.0 + (tv - v) * 3.5 + integral * 1.5;
+        let mut acc = (tp - p) * t.quad_kp + (tv - v) * t.quad_kd + integral * t.quad_ki;
         let horiz = Vector::new(acc.x, 0.0, acc.z);
-        let limit = 2.5;
+        let limit = t.quad_max_horizontal_accel;
         if horiz.length() > limit {
             let s = limit / horiz.length();
             acc.x *= s;
             acc.z *= s;
         }
-        acc.y = acc.y.clamp(-4.0, 4.0);
-        let f = (acc + Vector::new(0.0, 9.81, 0.0)) * m;
+        acc.y = acc
+            .y
+            .clamp(-t.quad_max_vertical_accel, t.quad_max_vertical_accel);
+        let f = (acc + Vector::new(0.0, t.gravity, 0.0)) * m;
         let up = rot * Vector::Y;
         let thrust = f.dot(up).max(0.0);
         // Attitude loop: align body up with the force direction, hold yaw at zero.
@@ -127,24 +131,28 @@ impl World {
         let err_tilt = up.cross(want_up);
         let fwd = rot * Vector::Z;
         let err_yaw = Vector::new(0.0, -fwd.x.atan2(fwd.z), 0.0);
-        let inertia = 0.08;
         // Feed-forward: cancel the load's weight torque about the centre of mass.
         let load_torque = if payload > 0.0 {
-            (load_at - p).cross(Vector::new(0.0, -9.81 * payload, 0.0))
+            (load_at - p).cross(Vector::new(0.0, -t.gravity * payload, 0.0))
         } else {
             Vector::ZERO
         };
-        let torque_world = (err_tilt * 60.0 + err_yaw * 4.0 - w * 12.0) * inertia - load_torque;
+        let torque_world = (err_tilt * t.quad_tilt_gain + err_yaw * t.quad_yaw_gain
+            - w * t.quad_rate_gain)
+            * t.quad_inertia
+            - load_torque;
         let torque = rot.inverse() * torque_world;
         // Mixer: four rotor thrusts along body up give the thrust and the roll/pitch
         // torques; yaw comes from rotor drag, applied as a torque.
         let l = q.rotors[0].x.abs();
+        let n = q.rotors.len() as f32;
         let mut fr = [0.0f32; 4];
         for (i, r) in q.rotors.iter().enumerate() {
             // A force f along +y at (x, y, z) gives the torque (-z f, 0, x f).
-            fr[i] = thrust / 4.0 - torque.x * r.z.signum() / (4.0 * l)
-                + torque.z * r.x.signum() / (4.0 * l);
-            fr[i] = fr[i].clamp(0.0, craft * 9.81);
+            fr[i] =
+                thrust / n - torque.x * r.z.signum() / (n * l) + torque.z * r.x.signum() / (n * l);
+            // A rotor lifts at most the craft's weight.
+            fr[i] = fr[i].clamp(0.0, craft * t.gravity);
         }
         let pose = *rb.position();
         for (i, r) in q.rotors.iter().enumerate() {
@@ -155,7 +163,8 @@ impl World {
     }
 
     /// Mass of the loose things resting in the quadrotor's basket (their centres within
-    /// the basket's footprint, up to 0.4 m above its floor).
+    /// the basket's footprint, from `basket_load_below` under its inner floor up to
+    /// `basket_load_height` above its middle).
     /// Returns the mass and its centre.
     fn basket_load(&self) -> (f32, Vector) {
         let none = (0.0, Vector::ZERO);
@@ -185,8 +194,8 @@ impl World {
             let l = frame.inverse_transform_point(rb.translation());
             if l.x.abs() <= v.half.x
                 && l.z.abs() <= v.half.z
-                && l.y >= -v.half.y - 0.02
-                && l.y <= 0.4
+                && l.y >= -v.half.y - self.tol.basket_load_below
+                && l.y <= self.tol.basket_load_height
             {
                 load += rb.mass();
                 moment += rb.center_of_mass() * rb.mass();
