@@ -60,7 +60,8 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
     ) -> None:
         self.env = Env(task, physics=physics)
         self.shaping = bool(shaping)
-        self.max_steps = budget(task, execution="parallel", max_steps=max_steps)
+        steps = None if max_steps is None else _count("max_steps", max_steps)
+        self.max_steps = budget(task, execution="parallel", max_steps=steps)
         names = task.robot_names
         self.possible_agents: list[str] = [names[robot] for robot in task.robots]
         self.agents: list[str] = []

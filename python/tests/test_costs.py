@@ -219,6 +219,7 @@ def test_an_episode_costs_what_its_transcript_costs(
         "reports-its-own-calls": None,
         "mcts": 0.0,
         "optimal": 0.0,
+        "random": 0.0,
     }.get(method, "priced")
     if expected == "priced":
         assert episode.cost_usd is not None and episode.cost_usd > 0, method

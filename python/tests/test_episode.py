@@ -76,7 +76,7 @@ def test_every_method_runs(demo: coherent.Task, tmp_path: Path, method: str) -> 
     episode = coherent.run(demo, method, max_steps=3, out=tmp_path)
     assert episode.method == method
     assert episode.status == "failure" and episode.steps == 3
-    uses_model = method not in ("mcts", "optimal")
+    uses_model = method not in ("mcts", "optimal", "random")
     assert (episode.backend["kind"] == "builtin") == uses_model
 
 
