@@ -202,6 +202,8 @@ def test_methods_are_the_cli_methods() -> None:
         "mcts",
         "llm-mcts",
         "optimal",
+        "random",
+        "llm-pddl",
     ]
 
 
