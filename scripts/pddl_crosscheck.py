@@ -5,7 +5,10 @@ and Fast Downward's optimal plan of the same task read back and checked by our r
 docs/planner.md come from it.
 
     .venv/bin/python scripts/pddl_crosscheck.py .venv/bin/coherent \\
-        ../shared/coherent-original/env/env0.json ... native --out crosscheck.jsonl
+        ../shared/coherent-original/env/env*.json benchmark/tasks/s* --out crosscheck.jsonl
+
+Each source is one scene: a released file, or one folder of our benchmark (task ids
+repeat across our scenes).
 
 For each task: `coherent export --format pddl --plans` writes the domain, the problem
 and our optimal plan; unified-planning's plan validator checks our plan against the
@@ -20,7 +23,9 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import json
+import os
 import re
+import signal
 import statistics
 import subprocess
 import sys
@@ -57,8 +62,9 @@ class Downward:
     search_s: float | None
     expanded: int | None
     operators: int | None
-    exit: int
+    exit: int | None
     plan: Path | None
+    timed_out: bool = False
 
 
 def _number(pattern: str, log: str) -> float | None:
@@ -67,26 +73,33 @@ def _number(pattern: str, log: str) -> float | None:
 
 
 def run_downward(domain: Path, problem: Path, work: Path, timeout: float) -> Downward:
+    """Fast Downward on one problem; after `timeout` seconds its driver and the
+    translator or search it started are stopped together (their own process group)."""
     plan = work / (problem.stem + ".fd")
     start = time.monotonic()
-    out = subprocess.run(
+    with subprocess.Popen(
         [*fast_downward(), "--plan-file", str(plan), str(domain), str(problem), "--search", SEARCH],
-        capture_output=True, text=True, check=False, cwd=work, timeout=timeout,
-    )  # fmt: skip
+        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=work, start_new_session=True,
+    ) as proc:  # fmt: skip
+        try:
+            log, _ = proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.communicate()
+            return Downward(None, False, time.monotonic() - start, None, None, None, None, None, None, timed_out=True)
     wall = time.monotonic() - start
-    log = out.stdout + out.stderr
     length = _number(r"Plan length: (\d+) step", log)
     expanded = _number(r"Expanded (\d+) state", log)
     operators = _number(r"Translator operators: (\d+)", log)
     return Downward(
-        length=int(length) if length is not None and out.returncode == 0 else None,
-        unsolvable=out.returncode in UNSOLVABLE,
+        length=int(length) if length is not None and proc.returncode == 0 else None,
+        unsolvable=proc.returncode in UNSOLVABLE,
         wall_s=wall,
         translate_s=_number(r"Done! \[[\d.]+s CPU, ([\d.]+)s wall-clock\]", log),
         search_s=_number(r"Total time: ([\d.]+)s", log),
         expanded=int(expanded) if expanded is not None else None,
         operators=int(operators) if operators is not None else None,
-        exit=out.returncode,
+        exit=proc.returncode,
         plan=plan if plan.is_file() else None,
     )
 
@@ -124,6 +137,7 @@ class Result:
     downward_expanded: int | None = None
     downward_operators: int | None = None
     read_back: str = "-"
+    downward_timed_out: bool = False
     problems: list[str] = field(default_factory=list)
 
 
@@ -140,7 +154,13 @@ def check_task(exe: str, source: str, planned: dict, work: Path, timeout: float)
     timed = subprocess.run(
         [exe, "plan", source, "--task", str(tid), "--json"], capture_output=True, text=True, check=True
     )
-    ours = json.loads(timed.stdout.splitlines()[0])
+    lines = [line for line in timed.stdout.splitlines() if line.strip()]
+    if len(lines) != 1:
+        raise ValueError(
+            f"{source} holds {len(lines)} tasks with id {tid} (several scenes): "
+            "give each scene's file or folder as a source of its own"
+        )
+    ours = json.loads(lines[0])
     r = Result(source, ours["scene"], tid, ours["task_type"], ours["optimal_steps"], ours["elapsed_ms"])
     subprocess.run(
         [exe, "export", source, "--task", str(tid), "--format", "pddl", "--plans", "--out", str(work)],
@@ -162,6 +182,10 @@ def check_task(exe: str, source: str, planned: dict, work: Path, timeout: float)
     r.downward, r.downward_unsolvable, r.downward_s = fd.length, fd.unsolvable, fd.wall_s
     r.downward_translate_s, r.downward_search_s = fd.translate_s, fd.search_s
     r.downward_expanded, r.downward_operators = fd.expanded, fd.operators
+    if fd.timed_out:
+        # Undecided, not a disagreement: said apart in the summary.
+        r.downward_timed_out = True
+        return r
     if r.ours is None and not fd.unsolvable:
         r.problems.append(f"we find no plan; Fast Downward: exit {fd.exit}, length {fd.length}")
     if r.ours is not None and fd.length != r.ours:
@@ -183,7 +207,7 @@ def table(results: list[Result]) -> str:
     rows = ["| type | tasks | ours: median | ours: slowest | Fast Downward: median | Fast Downward: slowest | median ratio |",
             "|---|---|---|---|---|---|---|"]  # fmt: skip
     for kind in ("mono", "dual", "trio"):
-        of = [r for r in results if r.task_type == kind and r.ours is not None]
+        of = [r for r in results if r.task_type == kind and r.ours is not None and not r.downward_timed_out]
         if not of:
             continue
         ours = [r.ours_ms / 1e3 for r in of]
@@ -199,7 +223,7 @@ def table(results: list[Result]) -> str:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("binary", help="the coherent executable")
-    parser.add_argument("sources", nargs="+", help="task files, folders, or native")
+    parser.add_argument("sources", nargs="+", help="task files or folders, one scene each")
     parser.add_argument("--out", type=Path, help="one JSON line per task")
     parser.add_argument("--timeout", type=float, default=600.0, help="seconds for one Fast Downward run")
     args = parser.parse_args()
@@ -219,12 +243,14 @@ def main() -> int:
                     with args.out.open("a") as f:
                         f.write(json.dumps(asdict(r)) + "\n")
     solvable = [r for r in results if r.ours is not None]
-    agree = [r for r in solvable if not r.problems]
+    agree = [r for r in solvable if not r.problems and not r.downward_timed_out]
+    undecided = [r for r in results if r.downward_timed_out]
     unsolvable = [r for r in results if r.ours is None]
     print(f"{len(results)} tasks: {len(solvable)} solvable, {len(agree)} in full agreement "
           f"(our plan valid in PDDL, Fast Downward's as long and valid in our rules); "
           f"{sum(r.downward_unsolvable for r in unsolvable)} of {len(unsolvable)} unsolvable ones "
-          f"unsolvable for Fast Downward too\n")  # fmt: skip
+          f"unsolvable for Fast Downward too; {len(undecided)} where Fast Downward did not finish "
+          f"in {args.timeout:.0f} s\n")  # fmt: skip
     print(table(results))
     for r in results:
         for p in r.problems:

@@ -21,7 +21,9 @@ use std::sync::Arc;
 use coherent_core::action::mentions;
 use coherent_core::makespan::{self, JointStep};
 use coherent_core::planner::{self, Limits, Step};
-use coherent_core::{Execution, GoalPredicate, Relation, State, Task};
+use coherent_core::relaxed;
+use coherent_core::task::predicate_holds;
+use coherent_core::{Execution, GoalPredicate, Relation, RobotKind, State, Task};
 use serde_json::{Value, json};
 
 use crate::episode::ask::{Side, ask};
@@ -182,7 +184,10 @@ fn goal_words(task: &Task, goal: &[GoalPredicate]) -> String {
 }
 
 /// A plan for `goal` from `state`: the shortest, or the fewest joint steps; or why
-/// there is none (the goal cannot be reached, or a search limit).
+/// there is none (the goal cannot be reached, or a search limit). A goal that no action
+/// can ever reach (a predicate that does not hold with an obstacle visible without
+/// search, or one the relaxed analysis cannot derive with the whole team) is refused
+/// before searching: a misread goal's state space can take minutes to exhaust.
 fn search(
     task: &Task,
     state: &State,
@@ -190,6 +195,23 @@ fn search(
     limits: &Limits,
     execution: Execution,
 ) -> Result<Plan, String> {
+    let obstacle = goal
+        .iter()
+        .filter(|p| !predicate_holds(state, p))
+        .find_map(|p| {
+            planner::static_obstacle(task, p)
+                .map(|why| format!("{}: {why}", task.predicate_label(p)))
+        });
+    if let Some(why) = obstacle {
+        return Err(format!("goal unreachable: {why}"));
+    }
+    let kinds: Vec<RobotKind> = task.robots.iter().map(|r| r.kind).collect();
+    if !relaxed::may_reach(task, &kinds, goal) {
+        return Err(format!(
+            "goal unreachable: no plan of the team reaches the goal written ({}), not even with every action's deletions ignored",
+            goal_words(task, goal)
+        ));
+    }
     let sequential = planner::search_from(task, state, &task.robots, goal, limits);
     let unreachable = |stopped: bool| {
         if stopped {
