@@ -43,6 +43,10 @@ venv:
 	$(BIN)/pip install --quiet "ray==2.60.0"
 	# Drives a real browser in the tests of `coherent view` (the browser itself: `browser`).
 	$(BIN)/pip install --quiet "playwright==1.65.2"
+	# The PDDL cross-check (python/tests/test_pddl.py, scripts/pddl_crosscheck.py, docs/pddl.md):
+	# Fast Downward, its planner binary inside the wheel, and unified-planning's plan
+	# validator (it brings ConfigSpace, SciPy and NetworkX).
+	$(BIN)/pip install --quiet "up-fast-downward==1.0.0" "unified-planning==1.3.0"
 
 # The browser the tests of `coherent view` drive (python/tests/test_view.py): Debian's
 # chromium-headless-shell, installed with apt when it is missing and this runs as root;

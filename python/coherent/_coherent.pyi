@@ -301,6 +301,17 @@ def plan(task: Task, max_states: int = ..., parallel: bool = False, physics: boo
     moving at once (``makespan_physics_ok``, ``makespan_sim_seconds``...).
     Ctrl-C interrupts it and stops the search."""
 
+def pddl(task: Task) -> tuple[str, str]:
+    """The task in PDDL (docs/pddl.md): ``(domain, problem)``, its rule set's domain and
+    its problem, each naming the task and coherent's version. A task the domain cannot
+    express exactly raises ``TaskFormatError`` with the reason."""
+
+def check_pddl_plan(task: Task, text: str) -> dict[str, Any]:
+    """Plays the PDDL plan ``text`` (a planner's output, one ``(action args...)`` a line)
+    through ``task``'s rules: ``valid`` (every action allowed in turn and the goal holds
+    after the last), ``length``, ``goal_reached``, ``failure`` (``(line, reason)`` of the
+    first action refused, or None) and ``actions`` (the rules' actions up to it)."""
+
 def budget(
     task: Task,
     execution: str = "sequential",

@@ -203,6 +203,7 @@ def test_methods_are_the_cli_methods() -> None:
         "llm-mcts",
         "optimal",
         "random",
+        "llm-pddl",
     ]
 
 

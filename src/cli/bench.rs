@@ -36,7 +36,7 @@ pub struct BenchArgs {
     #[arg(long, default_value = "all")]
     subset: String,
     /// Comma-separated methods: pefa, pefa-no-history, cmrs, dmrs-1d, dmrs-2d, mcts,
-    /// llm-mcts, optimal, random, or MODULE:CLASS, a method written in Python (a module or
+    /// llm-mcts, optimal, random, llm-pddl, or MODULE:CLASS, a method written in Python (a module or
     /// a .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, value_delimiter = ',', required_unless_present = "report", value_parser = method_name)]
     methods: Vec<String>,

@@ -5,6 +5,7 @@
 
 mod args;
 mod bench;
+mod pddl;
 mod prompts;
 mod render;
 mod robots;
@@ -73,6 +74,10 @@ enum Command {
         #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
         max_memory: usize,
     },
+    /// Write tasks in another format: `--format pddl`, a PDDL domain per rule set and a
+    /// problem per task (docs/pddl.md). Exit 1 when a task cannot be written, 2 on
+    /// malformed input.
+    Export(pddl::ExportArgs),
     /// Convert original env files into native task files, one per task.
     Import {
         #[arg(required = true)]
@@ -115,6 +120,11 @@ enum Command {
         /// makespan_states_expanded, makespan_ms).
         #[arg(long)]
         parallel: bool,
+        /// Instead of planning, play this PDDL plan (a planner's output, one action a
+        /// line) through the rules of the one task chosen: exit 0 when every action is
+        /// allowed in turn and the goal holds after the last.
+        #[arg(long, value_name = "PLAN", conflicts_with_all = ["physics", "parallel"])]
+        check: Option<PathBuf>,
     },
 }
 
@@ -156,6 +166,21 @@ where
             max_memory,
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
+        Command::Export(args) => {
+            let limits = limits(Limits::DEFAULT_MAX_STATES, Limits::DEFAULT_MAX_MEMORY >> 20);
+            chosen(&args.files, &args.tasks).and_then(|(tasks, malformed)| {
+                Ok(pddl::export(&tasks, &args, &limits)?.max(malformed))
+            })
+        }
+        Command::Plan {
+            files,
+            tasks,
+            json,
+            check: Some(plan_file),
+            ..
+        } => chosen(&files, &tasks).and_then(|(chosen, malformed)| {
+            Ok(pddl::check(&chosen, &plan_file, json)?.max(malformed))
+        }),
         Command::Plan {
             files,
             tasks,
@@ -164,6 +189,7 @@ where
             max_memory,
             physics,
             parallel,
+            check: None,
         } => plan(
             &files,
             &tasks,
@@ -257,21 +283,7 @@ fn plan(
     limits: &Limits,
 ) -> Result<u8, Error> {
     let (mut malformed, mut empty) = (0, 0);
-    let mut tasks = read_all(files, &mut malformed, &mut empty);
-    if !only.is_empty() {
-        let known = tasks::id_list(tasks.iter().map(|t| t.meta.task_id));
-        tasks.retain(|t| only.contains(&t.meta.task_id));
-        if let Some(missing) = only
-            .iter()
-            .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
-        {
-            let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
-            return Err(Error::Task(TaskError::Io {
-                file: names.join(", "),
-                message: format!("no task with task_id {missing}; its task ids: {known}"),
-            }));
-        }
-    }
+    let tasks = select(read_all(files, &mut malformed, &mut empty), files, only)?;
     let stdout = std::io::stdout();
     let mut out = stdout.lock();
     let mut total_ms = 0.0;
@@ -316,6 +328,40 @@ fn plan(
     } else {
         0
     })
+}
+
+/// The tasks of `files` whose ids are in `only` (all when it is empty), and the exit
+/// status the malformed ones call for (2, else 0; a file with no tasks, 1).
+fn chosen(files: &[PathBuf], only: &[i64]) -> Result<(Vec<Task>, u8), Error> {
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = select(read_all(files, &mut malformed, &mut empty), files, only)?;
+    let status = if malformed > 0 {
+        2
+    } else {
+        u8::from(empty > 0)
+    };
+    Ok((tasks, status))
+}
+
+/// The tasks whose ids are in `only` (all when it is empty); an id no task has is an
+/// error naming the ids there are.
+fn select(mut tasks: Vec<Task>, files: &[PathBuf], only: &[i64]) -> Result<Vec<Task>, Error> {
+    if only.is_empty() {
+        return Ok(tasks);
+    }
+    let known = tasks::id_list(tasks.iter().map(|t| t.meta.task_id));
+    tasks.retain(|t| only.contains(&t.meta.task_id));
+    if let Some(missing) = only
+        .iter()
+        .find(|id| !tasks.iter().any(|t| t.meta.task_id == **id))
+    {
+        let names: Vec<String> = files.iter().map(|f| f.display().to_string()).collect();
+        return Err(Error::Task(TaskError::Io {
+            file: names.join(", "),
+            message: format!("no task with task_id {missing}; its task ids: {known}"),
+        }));
+    }
+    Ok(tasks)
 }
 
 /// Says on stderr how far `plan --physics` is through its tasks (each is planned, then

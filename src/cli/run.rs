@@ -36,7 +36,7 @@ pub(crate) struct RunArgs {
     #[arg(long = "task")]
     task_id: Option<i64>,
     /// The planning method: pefa, pefa-no-history, cmrs, dmrs-1d, dmrs-2d, mcts,
-    /// llm-mcts, optimal, random, or MODULE:CLASS, a method written in Python (a module or
+    /// llm-mcts, optimal, random, llm-pddl, or MODULE:CLASS, a method written in Python (a module or
     /// a .py file, and its class; from the Python package's `coherent` only).
     #[arg(long, default_value = "pefa", value_parser = method_name)]
     method: String,

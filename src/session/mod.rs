@@ -15,6 +15,8 @@
 //! - [`robots`]: who carries the actions out, the reference robot servers over ROS 2;
 //! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
+//! - [`pddl`](mod@pddl): the tasks in PDDL, our plans as PDDL plans, PDDL plans checked
+//!   against the rules;
 //! - [`render`]: the scene from above and the robots' paths;
 //! - [`lines`]: the line `coherent run` prints for each step;
 //! - [`view`]: episodes and results as pages in the browser;
@@ -31,6 +33,7 @@ pub mod engine;
 pub mod episode;
 pub mod error;
 pub mod lines;
+pub mod pddl;
 pub mod prompts;
 pub mod render;
 pub mod robots;

@@ -1,7 +1,7 @@
 //! Every method through `episode::run` on the built-in backend (the optimal planner in
 //! every role, no mistakes) and on the simulated one (the same with seeded mistakes).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use coherent_agents::episode::Budget;
@@ -10,7 +10,7 @@ use coherent_agents::{Builtin, Settings};
 use coherent_agents::{BuiltinBackend, Cancel, Episode, ErrorRates};
 use coherent_core::Execution;
 use coherent_core::planner::{self, Limits};
-use coherent_core::{SymbolicEnv, Task};
+use coherent_core::{SymbolicEnv, Task, load_tasks};
 
 mod common;
 
@@ -64,21 +64,50 @@ async fn without_mistakes_every_method_that_asks_a_model_solves_and_the_direct_o
             let e = run(&task, method, &BuiltinBackend::new(Limits::default())).await;
             let s = &e.summary;
             assert_eq!(s.status, Status::Success, "{name} {}", method.name());
-            let per_step = match method {
-                Builtin::Pefa | Builtin::PefaNoHistory => 2,
-                Builtin::Cmrs => 1,
-                Builtin::Dmrs1d => robots,
-                Builtin::Dmrs2d => 2 * robots,
-                Builtin::LlmMcts => 5,
+            let calls = match method {
+                Builtin::Pefa | Builtin::PefaNoHistory => 2 * s.steps,
+                Builtin::Cmrs => s.steps,
+                Builtin::Dmrs1d => robots * s.steps,
+                Builtin::Dmrs2d => 2 * robots * s.steps,
+                Builtin::LlmMcts => 5 * s.steps,
+                // The goal, written once.
+                Builtin::LlmPddl => 1,
                 Builtin::Mcts | Builtin::Optimal | Builtin::Random => 0,
             };
-            assert_eq!(s.llm_calls, per_step * s.steps, "{name} {}", method.name());
+            assert_eq!(s.llm_calls, calls, "{name} {}", method.name());
             if method != Builtin::LlmMcts {
                 // The others take the planner's step every round.
                 assert_eq!(s.steps, optimum, "{name} {}", method.name());
             }
         }
     }
+}
+
+/// LLM+P on the built-in backend, which writes the true goal: every solvable released and
+/// native task at its optimum (the ground truth), with the one model call for the goal.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn llm_pddl_solves_every_solvable_task_at_its_optimum_with_one_model_call() {
+    let native = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../benchmark/tasks");
+    let mut tasks = common::released_tasks();
+    tasks.extend(load_tasks(&native).expect("the native tasks load"));
+    let backend = BuiltinBackend::new(Limits::default());
+    let mut solved = 0;
+    for task in tasks {
+        let task = Arc::new(task);
+        let Some(plan) = planner::analyse(&task, &Limits::default()).plan else {
+            continue;
+        };
+        let name = format!("{} task {}", task.meta.scene, task.meta.task_id);
+        let s = run(&task, Builtin::LlmPddl, &backend).await.summary;
+        assert_eq!(s.status, Status::Success, "{name}");
+        assert_eq!(s.steps, plan.len() as u32, "{name}");
+        assert_eq!(s.llm_calls, 1, "{name}");
+        solved += 1;
+    }
+    assert_eq!(
+        solved, 180,
+        "80 solvable released tasks and 100 native ones"
+    );
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

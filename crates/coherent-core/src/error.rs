@@ -22,6 +22,9 @@ pub enum Error {
     /// An action string that does not follow the grammar `[verb] <name>(id)`.
     #[error("cannot parse action {}: {reason}", quoted(action))]
     BadAction { action: String, reason: String },
+    /// A task the PDDL domain cannot express exactly (docs/pddl.md, "What is refused").
+    #[error("{task} cannot be written in PDDL: {reason}")]
+    Inexpressible { task: String, reason: String },
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

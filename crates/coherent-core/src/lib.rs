@@ -4,7 +4,8 @@
 //! format ([`native`]). [`rules`] gives observations, action lists and transitions,
 //! [`feasibility`] says why an action cannot be done, [`reach`] what a robot can get at, [`planner`] finds shortest plans
 //! and task types, [`validate`] lists semantic problems, and [`Environment`] is what
-//! planners and physics plug into. [`benchmark`] is the project's own benchmark, compiled in.
+//! planners and physics plug into. [`benchmark`] is the project's own benchmark, compiled in; [`pddl`] writes tasks
+//! in PDDL and reads PDDL plans back.
 
 pub mod action;
 pub mod benchmark;
@@ -24,6 +25,7 @@ pub mod load;
 pub mod makespan;
 pub mod native;
 pub mod original;
+pub mod pddl;
 pub mod planner;
 pub mod reach;
 pub mod relaxed;

@@ -310,6 +310,13 @@ pub(crate) fn core_err(py: Python<'_>, e: TaskError) -> PyErr {
                 v.setattr("reason", reason)?;
                 v
             }
+            // A task the PDDL domain cannot express: no file or path is at fault.
+            TaskError::Inexpressible { .. } => {
+                let v = exc.task_format.bind(py).call1((message.clone(),))?;
+                v.setattr("file", py.None())?;
+                v.setattr("json_path", py.None())?;
+                v
+            }
         };
         Ok(PyErr::from_value(value))
     });

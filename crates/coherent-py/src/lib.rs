@@ -14,6 +14,7 @@ mod distributed;
 mod errors;
 mod llm;
 mod method;
+mod pddl;
 mod prompts;
 mod run;
 mod scene;
@@ -269,6 +270,8 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
+    m.add_function(wrap_pyfunction!(pddl::pddl_texts, m)?)?;
+    m.add_function(wrap_pyfunction!(pddl::check_pddl_plan, m)?)?;
     m.add_function(wrap_pyfunction!(budget, m)?)?;
     m.add_function(wrap_pyfunction!(validate_task, m)?)?;
     m.add_function(wrap_pyfunction!(parse_action, m)?)?;

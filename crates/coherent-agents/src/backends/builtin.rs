@@ -19,7 +19,7 @@ use std::time::Instant;
 use coherent_core::makespan::{self, JointStep};
 use coherent_core::planner::{self, Limits, Step};
 use coherent_core::task::predicate_holds;
-use coherent_core::{Idx, State, Task, rules};
+use coherent_core::{Idx, PropSet, Relation, State, Task, rules};
 use serde_json::json;
 
 use crate::backends::simulated::{ErrorRates, Mistake, hallucinated, other_robot};
@@ -336,6 +336,7 @@ impl Planner {
         let state = &q.situation.state;
         let text = match q.schema_name {
             "proposals" | "joint_step" | "own_action" => return self.joint_answer(q, mistake),
+            "goal" => goal_answer(task, mistake),
             "decision" => {
                 let subtask = q.situation.subtask.as_deref().unwrap_or_default();
                 let actions: Vec<String> = q
@@ -414,6 +415,58 @@ impl Planner {
         };
         answer(text, Finish::Stop)
     }
+}
+
+/// The goal LLM+P asks for (`llm-pddl`): the task's own, unless `mistake` makes it a
+/// misread one. The simulated backend's kinds of mistake become the ways a model
+/// misreads a goal: a hallucination names another thing as a fact's subject, a wrong
+/// robot another place as its target, a suboptimal answer leaves a fact out (or, with
+/// one fact, names another place).
+fn goal_answer(task: &Task, mistake: Option<(Mistake, &mut Rng)>) -> String {
+    let mut facts: Vec<(Relation, Idx, Idx, u32)> = task
+        .goal
+        .iter()
+        .map(|p| (p.relation, p.subject, p.target, p.count))
+        .collect();
+    let pick = |of: &dyn Fn(Idx) -> bool, not: Idx, rng: &mut Rng| {
+        let some: Vec<Idx> = task.indices().filter(|&n| n != not && of(n)).collect();
+        (!some.is_empty()).then(|| some[rng.below(some.len())])
+    };
+    let has = |n: Idx, p: PropSet| task.node(n).properties.contains(p);
+    let place = |n: Idx| has(n, PropSet::SURFACES) || has(n, PropSet::CONTAINERS);
+    if let Some((mistake, rng)) = mistake
+        && !facts.is_empty()
+    {
+        let i = rng.below(facts.len());
+        match mistake {
+            Mistake::Hallucinate => {
+                let thing = |n: Idx| has(n, PropSet::GRABABLE);
+                if let Some(n) = pick(&thing, facts[i].1, rng) {
+                    facts[i].1 = n;
+                }
+            }
+            Mistake::Suboptimal if facts.len() > 1 => {
+                facts.remove(i);
+            }
+            _ => {
+                if let Some(n) = pick(&place, facts[i].2, rng) {
+                    facts[i].2 = n;
+                }
+            }
+        }
+    }
+    let goal: Vec<serde_json::Value> = facts
+        .iter()
+        .map(|&(relation, subject, target, count)| {
+            json!({
+                "relation": relation.name(),
+                "subject": task.node(subject).label(),
+                "target": task.node(target).label(),
+                "count": count,
+            })
+        })
+        .collect();
+    json!({"goal": goal}).to_string()
 }
 
 /// Why no action can ever reach the goal from `state`, when a predicate that does not

@@ -6,6 +6,8 @@
 //!   [`executor::RobotExecutor`].
 //! - The paper's baselines: [`cmrs`] (one central model, its prompt [`central`]),
 //!   [`dmrs`] (decentralised dialogue), [`mcts`] (primitive MCTS and LLM-MCTS).
+//! - [`llm_pddl`]: LLM+P, the model writing the goal once and the optimal planner
+//!   planning for it.
 //! - [`optimal`]: the optimal planner's plan, the tables' ground-truth row; [`random`]:
 //!   a random feasible action each round, the floor.
 //! - [`external`]: a method written outside the crate (a Python class, say), asked once
@@ -22,6 +24,7 @@ pub mod dmrs;
 pub mod executor;
 pub mod external;
 pub mod feedback;
+pub mod llm_pddl;
 pub mod mcts;
 pub mod optimal;
 pub mod pefa;

@@ -71,10 +71,12 @@ pub enum Template {
     CentralParallel,
     /// DMRS in joint steps: one robot's turn, proposing its own action.
     DmrsSpeakerParallel,
+    /// LLM+P (`llm-pddl`): the model writes the task's goal as facts, once an episode.
+    Goal,
 }
 
 impl Template {
-    pub const ALL: [Template; 12] = [
+    pub const ALL: [Template; 13] = [
         Template::AssignerSystem,
         Template::AssignerUser,
         Template::ExecutorQuadrotor,
@@ -87,6 +89,7 @@ impl Template {
         Template::AssignerParallelUser,
         Template::CentralParallel,
         Template::DmrsSpeakerParallel,
+        Template::Goal,
     ];
 
     /// Whether only parallel episodes render it.
@@ -120,6 +123,7 @@ impl Template {
             Template::AssignerParallelUser => "assigner_parallel_user.txt",
             Template::CentralParallel => "central_parallel.txt",
             Template::DmrsSpeakerParallel => "dmrs_speaker_parallel.txt",
+            Template::Goal => "goal.txt",
         }
     }
 
@@ -149,6 +153,7 @@ impl Template {
             Template::DmrsSpeakerParallel => {
                 include_str!("../../prompts/dmrs_speaker_parallel.txt")
             }
+            Template::Goal => include_str!("../../prompts/goal.txt"),
         }
     }
 
@@ -184,6 +189,8 @@ impl Template {
             Template::DmrsSpeakerParallel => {
                 include_str!("../../prompts/paper-layout/dmrs_speaker_parallel.txt")
             }
+            // The paper has no LLM+P method: one text in both layouts.
+            Template::Goal => self.builtin(),
         }
     }
 
@@ -225,6 +232,7 @@ impl Template {
                 "history",
                 "actions",
             ],
+            Template::Goal => &["team", "instruction", "observation", "scene", "state"],
             Template::DmrsSpeaker | Template::DmrsSpeakerParallel => &[
                 "robot",
                 "kind",

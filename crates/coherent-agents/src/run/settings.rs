@@ -19,6 +19,7 @@ use crate::error::Error;
 use crate::methods::cmrs::Cmrs;
 use crate::methods::dmrs::Dmrs;
 use crate::methods::external::ExternalMethod;
+use crate::methods::llm_pddl::LlmPddl;
 use crate::methods::mcts::{Mcts, MctsConfig};
 use crate::methods::optimal::Optimal;
 use crate::methods::pefa::Pefa;
@@ -47,10 +48,12 @@ pub enum Builtin {
     Optimal,
     /// A random feasible action each round, seeded: the floor; no model.
     Random,
+    /// LLM+P: the model writes the goal once, the optimal planner plans for it.
+    LlmPddl,
 }
 
 impl Builtin {
-    pub const ALL: [Builtin; 9] = [
+    pub const ALL: [Builtin; 10] = [
         Builtin::Pefa,
         Builtin::PefaNoHistory,
         Builtin::Cmrs,
@@ -60,6 +63,7 @@ impl Builtin {
         Builtin::LlmMcts,
         Builtin::Optimal,
         Builtin::Random,
+        Builtin::LlmPddl,
     ];
 
     pub fn name(self) -> &'static str {
@@ -73,6 +77,7 @@ impl Builtin {
             Builtin::LlmMcts => "llm-mcts",
             Builtin::Optimal => "optimal",
             Builtin::Random => "random",
+            Builtin::LlmPddl => "llm-pddl",
         }
     }
 
@@ -277,6 +282,13 @@ impl MethodSpec {
                 ..Limits::default()
             })),
             MethodSpec::Builtin(Builtin::Random) => Box::new(Random::new(seed)),
+            MethodSpec::Builtin(Builtin::LlmPddl) => Box::new(LlmPddl::new(
+                prompts,
+                Limits {
+                    cancel: Some(cancel.flag()),
+                    ..Limits::default()
+                },
+            )),
             MethodSpec::External(e) => {
                 Box::new(ExternalMethod::new(e.make(task), e.step_timeout()))
             }
