@@ -1,10 +1,11 @@
-//! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
-//! `view`, `prompts`. One implementation serves the `coherent` binary and the console script
+//! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `export`,
+//! `generate`, `render`, `view`, `prompts`. One implementation serves the `coherent` binary and the console script
 //! that `pip install` puts on the PATH (which also loads methods written in Python,
 //! [`LoadMethod`]).
 
 mod args;
 mod bench;
+mod generate;
 mod prompts;
 mod render;
 mod robots;
@@ -59,6 +60,10 @@ enum Command {
     /// finished (whatever the success rate), 2 on bad input, 70 when coherent itself
     /// fails, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
+    /// Generate a task set: scenes from a catalogue, any team, goals with their proven
+    /// optimum, written to a folder with a manifest and a datasheet. Exit 2 on a request
+    /// that cannot be met (the message names the knob), 130 on Ctrl-C.
+    Generate(Box<generate::GenerateArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
     /// no tasks, 0 when clean.
     Validate {
@@ -72,6 +77,21 @@ enum Command {
         /// Most memory one search's tables may take, in MiB (an estimate).
         #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
         max_memory: usize,
+    },
+    /// Write tasks in another format: `--format original`, the paper's env lists (one
+    /// file per scene, `<out>/<scene>.json`, heights as labels), which the authors' code
+    /// runs and `coherent import` reads back.
+    Export {
+        /// Original env files, native task files or folders of them; `native`: the
+        /// project's own benchmark, compiled in.
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// The format to write.
+        #[arg(long, value_enum)]
+        format: ExportFormat,
+        /// Folder to write the files into.
+        #[arg(short, long)]
+        out: PathBuf,
     },
     /// Convert original env files into native task files, one per task.
     Import {
@@ -118,6 +138,13 @@ enum Command {
     },
 }
 
+/// The formats `coherent export` writes.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum ExportFormat {
+    /// The paper's released format: a JSON list of tasks per scene.
+    Original,
+}
+
 /// Runs the command line `args` (program name first) and returns the exit status:
 /// 0 success, 1 semantic problems found, 2 malformed input or a usage error.
 pub fn run<I, T>(args: I) -> u8
@@ -149,6 +176,7 @@ where
         Command::View(args) => view::view(&args).map_err(Error::Invalid),
         Command::Robots(args) => robots::robots(args),
         Command::Bench(args) => bench::bench(*args, load),
+        Command::Generate(args) => generate::generate(&args),
         Command::Prompts(args) => prompts::prompts(&args),
         Command::Validate {
             files,
@@ -156,6 +184,11 @@ where
             max_memory,
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
+        Command::Export {
+            files,
+            format: ExportFormat::Original,
+            out,
+        } => export(&files, &out),
         Command::Plan {
             files,
             tasks,
@@ -245,6 +278,19 @@ fn import(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
         "wrote {} native task files to {}",
         written.len(),
         out.display()
+    );
+    Ok(if malformed > 0 { 2 } else { 0 })
+}
+
+fn export(files: &[PathBuf], out: &Path) -> Result<u8, Error> {
+    let (mut malformed, mut empty) = (0, 0);
+    let tasks = read_all(files, &mut malformed, &mut empty);
+    let written = check::export_original(&tasks, out)?;
+    println!(
+        "wrote {} tasks in {} files of the original format to {}",
+        tasks.len(),
+        written.len(),
+        shown(&out.display().to_string())
     );
     Ok(if malformed > 0 { 2 } else { 0 })
 }

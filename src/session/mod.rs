@@ -15,6 +15,7 @@
 //! - [`robots`]: who carries the actions out, the reference robot servers over ROS 2;
 //! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
+//! - [`generate`](mod@generate): generated task sets, written to a folder;
 //! - [`render`]: the scene from above and the robots' paths;
 //! - [`lines`]: the line `coherent run` prints for each step;
 //! - [`view`]: episodes and results as pages in the browser;
@@ -30,6 +31,7 @@ pub mod check;
 pub mod engine;
 pub mod episode;
 pub mod error;
+pub mod generate;
 pub mod lines;
 pub mod prompts;
 pub mod render;
