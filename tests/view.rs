@@ -6,19 +6,8 @@ mod common;
 
 use std::path::Path;
 
-use common::{coherent, demo, scratch, show, utf8};
+use common::{coherent, demo, embedded, scratch, show, utf8};
 use serde_json::Value;
-
-/// The data a page embeds, as its script reads it.
-fn embedded(page: &Path) -> Value {
-    let html = std::fs::read_to_string(page).expect("the page");
-    let start = html
-        .find(r#"<script type="application/json" id="data">"#)
-        .expect("the data element")
-        + r#"<script type="application/json" id="data">"#.len();
-    let end = start + html[start..].find("</script>").expect("its end");
-    serde_json::from_str(&html[start..end]).expect("the data is JSON")
-}
 
 /// `coherent run` on the demo: its step lines and its transcript.
 fn run_demo(dir: &Path, extra: &[&str]) -> (Vec<String>, String) {

@@ -758,7 +758,10 @@ def render_svg(source: Task | Episode, *, paths: bool = True) -> str:
 
 def view_page(source_: Episode | _PathLike, other: Episode | _PathLike | None = None) -> str:
     """The HTML page of an episode (an :class:`Episode` or a transcript's path), of two
-    side by side, or of a results file's index (``coherent.view`` wraps it)."""
+    side by side, or of a results file's index (``coherent.view`` wraps it). Raises
+    :class:`DataFileError` for a file that cannot be read or does not follow its format,
+    :class:`ArgumentError` for two episodes of different tasks or results where an
+    episode belongs."""
 
 def results_page(lines: list[dict[str, Any]], name: str) -> str:
     """The HTML index page of results lines, titled ``name``."""

@@ -45,7 +45,12 @@ def view(source: Any, other: Any = None) -> Page:
     episode shown beside it, stepping together, the first round where their decisions
     differ marked; a results file's path or a results DataFrame (:func:`coherent.results`,
     :func:`coherent.bench`): the index of the results, its tables, figures and episodes
-    (``coherent view RESULTS -o DIR`` also writes a page per episode)."""
+    (``coherent view RESULTS -o DIR`` also writes a page per episode).
+
+    A transcript cut in the middle of its last line shows its whole rounds, the page
+    saying so. Raises :class:`~coherent.DataFileError` for a file that cannot be read
+    or does not follow its format, :class:`~coherent.ArgumentError` for two episodes of
+    different tasks or a results file where an episode belongs."""
     if other is None and hasattr(source, "to_dict") and hasattr(source, "columns"):
         from .analysis import _lines
 

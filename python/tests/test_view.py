@@ -359,3 +359,23 @@ def test_coherent_view_in_python_gives_the_page_and_a_frame_for_jupyter(tmp_path
     w.page.keyboard.press("End")
     assert w.page.text_content(".steps li.current").startswith(f"step {episode.steps}/")
     w.assert_quiet("about:")
+
+
+def test_a_view_that_cannot_be_made_raises_the_exception_of_its_kind(tmp_path: Path, env0_tasks: list[coherent.Task]) -> None:
+    task = coherent.load_tasks(DEMO)[0]
+    episode = coherent.run(task, out=tmp_path / "runs")
+    text = Path(episode.path).read_text(encoding="utf-8")
+    # A transcript whose second line follows no record of the format.
+    broken = tmp_path / "broken.jsonl"
+    broken.write_text(text.replace('"type":"round"', '"type":"roundabout"', 1), encoding="utf-8")
+    with pytest.raises(coherent.DataFileError) as raised:
+        coherent.view(broken)
+    assert (raised.value.file, raised.value.line) == (str(broken), 2)
+    # Cut in the middle of its last line: the whole rounds are shown, and the page says so.
+    cut = tmp_path / "cut.jsonl"
+    cut.write_text(text[: len(text) - 40], encoding="utf-8")
+    assert "cut short" in coherent.view(cut).html
+    # Two episodes of different tasks side by side: arguments that cannot be used.
+    other = coherent.run(env0_tasks[0], method="optimal", out=tmp_path / "runs")
+    with pytest.raises(coherent.ArgumentError, match="different tasks"):
+        coherent.view(episode, other)

@@ -173,7 +173,7 @@ where
     let result = match cli.command {
         Command::Render(args) => render::render(&args),
         Command::Run(args) => run::run(*args, load),
-        Command::View(args) => view::view(&args).map_err(Error::Invalid),
+        Command::View(args) => view::view(args),
         Command::Robots(args) => robots::robots(args),
         Command::Bench(args) => bench::bench(*args, load),
         Command::Generate(args) => generate::generate(&args),

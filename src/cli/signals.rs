@@ -21,8 +21,12 @@ impl Stop {
     pub(crate) fn watch(cancel: &Cancel) -> Stop {
         let status = Arc::new(AtomicU8::new(INTERRUPTED));
         let (cancel, seen) = (cancel.clone(), Arc::clone(&status));
+        // Installed now, not when the watching task first runs: a signal that came before
+        // (a busy machine, a model call already under way) would end the process the
+        // default way, with no transcript closed and no 130.
+        let signals = Signals::install();
         let watch = tokio::spawn(async move {
-            if signalled().await == Signal::Term {
+            if signals.first().await == Signal::Term {
                 seen.store(TERMINATED, Ordering::SeqCst);
             }
             cancel.cancel();
@@ -48,18 +52,38 @@ enum Signal {
     Term,
 }
 
-/// Resolves with the first of Ctrl-C and SIGTERM.
-async fn signalled() -> Signal {
+/// The handlers of Ctrl-C and SIGTERM, installed.
+struct Signals {
     #[cfg(unix)]
-    {
-        use tokio::signal::unix::{SignalKind, signal};
-        if let Ok(mut term) = signal(SignalKind::terminate()) {
+    int: Option<tokio::signal::unix::Signal>,
+    #[cfg(unix)]
+    term: Option<tokio::signal::unix::Signal>,
+}
+
+impl Signals {
+    fn install() -> Signals {
+        #[cfg(unix)]
+        {
+            use tokio::signal::unix::{SignalKind, signal};
+            Signals {
+                int: signal(SignalKind::interrupt()).ok(),
+                term: signal(SignalKind::terminate()).ok(),
+            }
+        }
+        #[cfg(not(unix))]
+        Signals {}
+    }
+
+    /// Resolves with the first of Ctrl-C and SIGTERM.
+    async fn first(self) -> Signal {
+        #[cfg(unix)]
+        if let (Some(mut int), Some(mut term)) = (self.int, self.term) {
             return tokio::select! {
-                _ = tokio::signal::ctrl_c() => Signal::Int,
+                _ = int.recv() => Signal::Int,
                 _ = term.recv() => Signal::Term,
             };
         }
+        let _ = tokio::signal::ctrl_c().await;
+        Signal::Int
     }
-    let _ = tokio::signal::ctrl_c().await;
-    Signal::Int
 }

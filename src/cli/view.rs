@@ -1,14 +1,18 @@
-//! `coherent view`: episodes and benchmark results as pages in the browser (made by
-//! [`crate::session::view`]).
+//! `coherent view`: episodes and benchmark results as pages in the browser (asked of
+//! [`crate::session::view`] with one [`ViewRequest`]).
 
-use std::path::{Path, PathBuf};
+use std::io::IsTerminal;
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
 
-use crate::session::engine::{
-    DEFAULT_MAX_RESULTS_BYTES, DEFAULT_MAX_TRANSCRIPT_BYTES, MIB, ReadLimits, shown,
-};
 use clap::Args;
 
-use crate::session::view::{self, Holds, Shown, serve};
+use crate::session::Error;
+use crate::session::engine::{
+    DEFAULT_MAX_RESULTS_BYTES, DEFAULT_MAX_TRANSCRIPT_BYTES, MIB, ReadLimits, shown, shown_lines,
+};
+use crate::session::view::{Progress, Source, ViewRequest, Written};
 
 #[derive(Args)]
 pub(crate) struct ViewArgs {
@@ -20,8 +24,8 @@ pub(crate) struct ViewArgs {
     /// folder (a results file; by default beside it, ending in .view).
     #[arg(short, long)]
     out: Option<PathBuf>,
-    /// Serve a results file, or the folder that holds it, on 127.0.0.1: the index
-    /// follows the file as a benchmark writes it.
+    /// Serve a results file, or the folder that holds it (or will), on 127.0.0.1: the
+    /// index follows the file as a benchmark writes it.
     #[arg(long, value_name = "DIR", conflicts_with_all = ["files", "out"])]
     serve: Option<PathBuf>,
     /// The port to serve on (0: any free one).
@@ -35,92 +39,112 @@ pub(crate) struct ViewArgs {
     max_transcript_mib: u64,
 }
 
-pub(crate) fn view(args: &ViewArgs) -> Result<u8, String> {
+pub(crate) fn view(args: ViewArgs) -> Result<u8, Error> {
     let limits = ReadLimits {
         results_bytes: args.max_results_mib.saturating_mul(MIB),
         transcript_bytes: args.max_transcript_mib.saturating_mul(MIB),
     };
-    if let Some(dir) = &args.serve {
-        let results = serve::results_in(dir, limits)?;
-        let server = serve::Server::bind(&results, args.port, limits)?;
+    if let Some(path) = args.serve {
+        let request = ViewRequest {
+            source: Source::File(path.clone()),
+            other: None,
+            limits,
+        };
+        let server = request.serve(args.port)?;
+        let serving = match server.results()? {
+            Some(file) => file.display().to_string(),
+            None => format!("{} (no results file yet)", path.display()),
+        };
         println!(
             "serving {} on http://{}/ (Ctrl-C stops)",
-            shown(&results.display().to_string()),
+            shown(&serving),
             server.address()?
         );
         server.run()?;
         return Ok(0);
     }
-    match args.files.as_slice() {
-        [one] => match view::holds(one, limits)? {
-            Holds::Transcript => {
-                let (task, t) = view::read_episode(one, limits.transcript_bytes)?;
-                let html = view::episode_html(&Shown {
-                    task: &task,
-                    transcript: &t,
-                    cost_usd: None,
-                })?;
-                let out = args
-                    .out
-                    .clone()
-                    .unwrap_or_else(|| one.with_extension("html"));
-                view::write(&out, &html)?;
-                println!("wrote {}", shown(&out.display().to_string()));
-            }
-            Holds::Results => {
-                let dir = args
-                    .out
-                    .clone()
-                    .unwrap_or_else(|| one.with_extension("view"));
-                let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-                let site = view::results_site(one, &dir, threads, limits)?;
-                for why in &site.missing {
-                    eprintln!("warning: no page for {why}");
-                }
-                println!(
-                    "wrote {} and {} episode pages",
-                    shown(&site.index.display().to_string()),
-                    site.pages
+    let mut files = args.files.into_iter().map(Source::File);
+    let source = files
+        .next()
+        .ok_or_else(|| Error::Invalid("give one transcript, two, or a results file".into()))?;
+    let request = ViewRequest {
+        source,
+        other: files.next(),
+        limits,
+    };
+    let told = Told::new(std::io::stderr().is_terminal());
+    let written = request.write(args.out, &|p| told.tell(p));
+    told.clear();
+    let path = |p: &std::path::Path| shown(&p.display().to_string()).into_owned();
+    match written? {
+        Written::Page { path: page, cut } => {
+            for (file, line) in cut {
+                eprintln!(
+                    "warning: {}: line {line} is cut short (the episode's process stopped or \
+                     the disk filled while writing it): the rounds before it are shown",
+                    path(&file)
                 );
             }
-        },
-        [a, b] => {
-            for path in [a, b] {
-                if view::holds(path, limits)? != Holds::Transcript {
-                    return Err(format!(
-                        "{}: side by side shows two transcripts, and this is a results file",
-                        shown(&path.display().to_string())
-                    ));
-                }
-            }
-            let (task_a, ta) = view::read_episode(a, limits.transcript_bytes)?;
-            let (task_b, tb) = view::read_episode(b, limits.transcript_bytes)?;
-            let html = view::compare_html(
-                &Shown {
-                    task: &task_a,
-                    transcript: &ta,
-                    cost_usd: None,
-                },
-                &Shown {
-                    task: &task_b,
-                    transcript: &tb,
-                    cost_usd: None,
-                },
-            )?;
-            let out = args.out.clone().unwrap_or_else(|| side_by_side(a, b));
-            view::write(&out, &html)?;
-            println!("wrote {}", shown(&out.display().to_string()));
+            println!("wrote {}", path(&page));
         }
-        _ => return Err("give one transcript, two, or a results file".into()),
+        Written::Site(site) => {
+            for (episode, why) in &site.missing {
+                eprintln!(
+                    "warning: no page for {}: {}",
+                    shown_lines(episode),
+                    shown_lines(&why.to_string())
+                );
+            }
+            println!(
+                "wrote {} and {} episode pages",
+                path(&site.index),
+                site.pages
+            );
+        }
     }
     Ok(0)
 }
 
-/// `A-vs-B.html` beside `a`.
-fn side_by_side(a: &Path, b: &Path) -> PathBuf {
-    let stem = |p: &Path| {
-        p.file_stem()
-            .map_or_else(String::new, |s| s.to_string_lossy().into_owned())
-    };
-    a.with_file_name(format!("{}-vs-{}.html", stem(a), stem(b)))
+/// How far a view is, on stderr when it is a terminal: one line, redrawn at most ten
+/// times a second, cleared at the end. A long episode takes seconds to follow, a
+/// results file's pages minutes.
+struct Told {
+    terminal: bool,
+    /// When the line was last drawn.
+    last: Mutex<Option<Instant>>,
+}
+
+impl Told {
+    fn new(terminal: bool) -> Told {
+        Told {
+            terminal,
+            last: Mutex::new(None),
+        }
+    }
+
+    fn tell(&self, progress: Progress) {
+        if !self.terminal {
+            return;
+        }
+        let (done, of, what) = match progress {
+            Progress::Rounds { done, of } => (done, of, "rounds followed"),
+            Progress::Pages { done, of } => (done, of, "episode pages written"),
+        };
+        let Ok(mut last) = self.last.lock() else {
+            return;
+        };
+        let now = Instant::now();
+        if last.is_some_and(|t| now - t < Duration::from_millis(100)) && done < of {
+            return;
+        }
+        *last = Some(now);
+        eprint!("\r\x1b[2Kviewing: {done}/{of} {what}");
+    }
+
+    /// Clears the line, if one was drawn.
+    fn clear(&self) {
+        if self.last.lock().is_ok_and(|last| last.is_some()) {
+            eprint!("\r\x1b[2K");
+        }
+    }
 }

@@ -58,20 +58,18 @@ pub fn block_on<F: Future>(future: F) -> Result<F::Output> {
 /// signals) and threads; when the process may have no more (`ulimit -n`, `ulimit -u`),
 /// the error says which part failed and the OS's words, and every later call gets it too.
 pub fn runtime() -> Result<&'static tokio::runtime::Runtime> {
-    static RUNTIME: OnceLock<std::result::Result<tokio::runtime::Runtime, String>> =
-        OnceLock::new();
+    static RUNTIME: OnceLock<Result<tokio::runtime::Runtime>> = OnceLock::new();
     RUNTIME
-        .get_or_init(|| {
-            build_runtime().map_err(|why| format!("cannot start the async runtime: {why}"))
-        })
+        .get_or_init(build_runtime)
         .as_ref()
-        .map_err(|why| Error::Internal(why.clone()))
+        // Each caller gets the error of the one build, as its own value.
+        .map_err(|e| Error::Internal(e.to_string()))
 }
 
 /// Builds the runtime, with tokio's panics as errors: tokio returns most failures, but
 /// panics on some (the signal driver's socket pair, "failed to create UnixStream"; a
 /// worker thread the OS will not start), and a panic must not be what a user sees.
-fn build_runtime() -> std::result::Result<tokio::runtime::Runtime, String> {
+fn build_runtime() -> Result<tokio::runtime::Runtime> {
     // The default hook would print the panic (and a backtrace) before the error that
     // explains it; silenced for the build only, which happens once per process.
     let hook = std::panic::take_hook();
@@ -83,8 +81,12 @@ fn build_runtime() -> std::result::Result<tokio::runtime::Runtime, String> {
             .build()
     });
     std::panic::set_hook(hook);
-    match built {
-        Ok(result) => result.map_err(|e| e.to_string()),
-        Err(panic) => Err(error::panic_message(panic.as_ref())),
-    }
+    let why = match built {
+        Ok(Ok(runtime)) => return Ok(runtime),
+        Ok(Err(e)) => e.to_string(),
+        Err(panic) => error::panic_message(panic.as_ref()),
+    };
+    Err(Error::Internal(format!(
+        "cannot start the async runtime: {why}"
+    )))
 }

@@ -1,7 +1,7 @@
 //! What the command-line tests share: the `coherent` binary run with no endpoint from
 //! the environment, its output shown in a failure message, scratch folders, the bundled
-//! and the released tasks, and the server side of a stub model server (one blocking
-//! thread per connection).
+//! and the released tasks, the data of a `coherent view` page, and the server side of a
+//! stub model server (one blocking thread per connection).
 
 #![allow(dead_code)]
 
@@ -48,6 +48,15 @@ pub fn scratch(name: &str) -> PathBuf {
 
 pub fn utf8(path: &Path) -> &str {
     path.to_str().expect("a UTF-8 path")
+}
+
+/// The data a page of `coherent view` embeds, as its script reads it.
+pub fn embedded(page: &Path) -> Value {
+    let html = std::fs::read_to_string(page).expect("the page");
+    let marker = r#"<script type="application/json" id="data">"#;
+    let start = html.find(marker).expect("the data element") + marker.len();
+    let end = start + html[start..].find("</script>").expect("its end");
+    serde_json::from_str(&html[start..end]).expect("the data is JSON")
 }
 
 /// The bundled demo task.

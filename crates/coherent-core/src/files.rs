@@ -62,15 +62,46 @@ fn io_error(path: &Path, e: &std::io::Error) -> Error {
     }
 }
 
-/// Opens `path` to read, refusing a folder (which opens, but reads as an error later).
-fn open(path: &Path) -> Result<(File, std::fs::Metadata)> {
-    let file = File::open(path).map_err(|e| io_error(path, &e))?;
+/// What a reader opens besides a regular file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Opens {
+    /// A pipe or a device too, read up to the limit: what a user names on the command
+    /// line may be one (`/dev/stdin`, `<(...)`).
+    #[default]
+    Anything,
+    /// Regular files only: a server reading files others may replace must never wait
+    /// on a pipe that nobody writes to.
+    RegularFiles,
+}
+
+/// Opens `path` to read, refusing a folder (which opens, but reads as an error later)
+/// and, when `opens` says so, anything but a regular file. The open itself never
+/// waits: `open(2)` of a FIFO without a writer blocks until one comes, so the file is
+/// opened non-blocking and its kind taken from what was opened (no window between a
+/// look and the open), then made blocking again to read a pipe as before.
+fn open(path: &Path, opens: Opens) -> Result<(File, std::fs::Metadata)> {
+    use rustix::fs::{Mode, OFlags};
+    let flags = OFlags::RDONLY | OFlags::NONBLOCK | OFlags::CLOEXEC;
+    let fd = rustix::fs::open(path, flags, Mode::empty())
+        .map_err(|e| io_error(path, &std::io::Error::from(e)))?;
+    let file = File::from(fd);
     let meta = file.metadata().map_err(|e| io_error(path, &e))?;
-    if meta.is_dir() {
-        return Err(Error::Io {
+    let refuse = |message: &str| {
+        Err(Error::Io {
             file: path.display().to_string(),
-            message: "is a folder, not a file".to_owned(),
-        });
+            message: message.to_owned(),
+        })
+    };
+    if meta.is_dir() {
+        return refuse("is a folder, not a file");
+    }
+    if !meta.is_file() {
+        if opens == Opens::RegularFiles {
+            return refuse("not a regular file (a pipe, a device?): it is not read here");
+        }
+        rustix::fs::fcntl_getfl(&file)
+            .and_then(|now| rustix::fs::fcntl_setfl(&file, now - OFlags::NONBLOCK))
+            .map_err(|e| io_error(path, &std::io::Error::from(e)))?;
     }
     Ok((file, meta))
 }
@@ -79,7 +110,7 @@ fn open(path: &Path) -> Result<(File, std::fs::Metadata)> {
 /// its size before anything is read, anything else (a pipe, a device) once the limit
 /// is passed.
 pub fn read(path: &Path, limit: &Limit) -> Result<Vec<u8>> {
-    let (file, meta) = open(path)?;
+    let (file, meta) = open(path, Opens::Anything)?;
     if meta.is_file() && meta.len() > limit.bytes {
         return Err(limit.exceeded(path));
     }
@@ -132,7 +163,12 @@ pub struct Lines {
 impl Lines {
     /// Opens `path`; a regular file larger than `total` is refused at once.
     pub fn open(path: &Path, line: Limit, total: Limit) -> Result<Lines> {
-        let (file, meta) = open(path)?;
+        Lines::open_as(path, line, total, Opens::Anything)
+    }
+
+    /// [`Lines::open`], opening only what `opens` allows.
+    pub fn open_as(path: &Path, line: Limit, total: Limit, opens: Opens) -> Result<Lines> {
+        let (file, meta) = open(path, opens)?;
         if meta.is_file() && meta.len() > total.bytes {
             return Err(total.exceeded(path));
         }
@@ -266,5 +302,29 @@ mod tests {
             Lines::open(Path::new("/dev/zero"), limit(MIB), limit(4 * MIB)).expect("opens");
         let e = endless.next_line().expect_err("one endless line");
         assert!(e.to_string().contains("line 1: longer than 1 MiB"), "{e}");
+    }
+
+    #[test]
+    fn a_fifo_without_a_writer_is_opened_without_waiting_or_refused() {
+        let path = std::env::temp_dir().join(format!("coherent-files-{}-fifo", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        let made = std::process::Command::new("mkfifo").arg(&path).status();
+        assert!(made.expect("mkfifo runs").success());
+        // Opened as before (read as empty: nobody writes), where open(2) used to wait
+        // for a writer for ever.
+        let mut lines = Lines::open(&path, limit(10), limit(10)).expect("opens");
+        assert!(lines.next_line().expect("reads").is_none());
+        let e = Lines::open_as(&path, limit(10), limit(10), Opens::RegularFiles)
+            .expect_err("no regular file");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
+        std::fs::remove_file(&path).expect("removed");
+        let e = Lines::open_as(
+            Path::new("/dev/zero"),
+            limit(10),
+            limit(10),
+            Opens::RegularFiles,
+        )
+        .expect_err("a device");
+        assert!(e.to_string().contains("not a regular file"), "{e}");
     }
 }

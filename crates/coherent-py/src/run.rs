@@ -8,12 +8,12 @@ use std::time::Duration;
 
 use coherent::session::backend::{BackendRequest, EndpointSource};
 use coherent::session::engine::{
-    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Execution, Limits, PriceTable, Summary,
-    Transcript, executed_actions,
+    Cancel, DEFAULT_MAX_TRANSCRIPT_BYTES, ErrorRates, Execution, Limits, PriceTable, ReadLimits,
+    Summary, Transcript, executed_actions,
 };
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
 use coherent::session::tasks::TaskSource;
-use coherent::session::view;
+use coherent::session::view::{Given, Source, ViewRequest, page};
 use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
@@ -53,6 +53,16 @@ impl PyEpisode {
         })
     }
 
+    /// The episode (a copy), to show.
+    pub(crate) fn given(&self) -> Given {
+        Given {
+            task: Arc::clone(&self.task.get().task),
+            transcript: self.transcript.clone(),
+            cost_usd: self.cost_usd,
+            cut: None,
+        }
+    }
+
     /// The episode as it ran, from memory: its transcript and the very task it ran.
     fn from_ran(ran: Ran, task: Py<PyTask>) -> PyEpisode {
         let summary = ran.summary().clone();
@@ -70,16 +80,16 @@ impl PyEpisode {
 impl PyEpisode {
     /// The episode's page (`coherent.view`) in a frame, as a notebook shows it inline.
     fn _repr_html_(&self, py: Python<'_>) -> PyResult<String> {
-        let shown = view::Shown {
-            task: &self.task.get().task,
-            transcript: &self.transcript,
-            cost_usd: self.cost_usd,
+        let request = ViewRequest {
+            source: Source::Episode(Box::new(self.given())),
+            other: None,
+            limits: ReadLimits::default(),
         };
         // The view's errors are text, of no kind to convert by.
         let html = py
-            .detach(|| view::episode_html(&shown))
-            .map_err(|e| errors::error(py, errors::Kind::Coherent, e, None))?;
-        Ok(view::page::framed(&html))
+            .detach(|| request.page(&|_| {}))
+            .map_err(|e| errors::session_err(py, e))?;
+        Ok(page::framed(&html))
     }
 
     /// The task the episode ran (for a loaded transcript, as recorded in it).

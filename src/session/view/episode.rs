@@ -24,6 +24,19 @@ use serde::Serialize;
 use super::scene::{self, Scene};
 use crate::session::lines;
 
+/// An episode to show: its task, its transcript, and its cost when known.
+#[derive(Debug)]
+pub struct Given {
+    pub task: Arc<Task>,
+    pub transcript: Transcript,
+    /// From a results line (priced as the run was); `None` prices the recorded tokens
+    /// with the built-in table.
+    pub cost_usd: Option<f64>,
+    /// The number of the transcript's last line when it was cut in the middle (a crash,
+    /// a full disk): left out, and the rounds before it shown.
+    pub cut: Option<usize>,
+}
+
 /// An episode's page, as data.
 #[derive(Debug, Serialize)]
 pub struct EpisodeView {
@@ -136,10 +149,11 @@ pub struct CallView {
     pub error: Option<String>,
 }
 
-/// The page's data for `t`, an episode of `task`; `cost_usd` when known (a results
-/// line's), else priced with the built-in table; `ids` keeps its picture's ids apart
-/// from another's in the same page.
-pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) -> EpisodeView {
+/// The page's data for the episode `e`: its cost when known (a results line's), else
+/// priced with the built-in table; `ids` keeps its picture's ids apart from another's
+/// in the same page; `progress` is told how many rounds of how many are followed.
+pub fn view(e: &Given, ids: &str, progress: &mut dyn FnMut(usize, usize)) -> EpisodeView {
+    let (task, t, cost_usd) = (&e.task, &e.transcript, e.cost_usd);
     let h = &t.header;
     let header = Header {
         task: format!("{} task {}", shown(&task.meta.scene), task.meta.task_id),
@@ -202,7 +216,7 @@ pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) 
                 cached_tokens: answers().map(|a| a.usage.cached_tokens).sum(),
                 cost_usd,
                 wall_ms: t.rounds.iter().map(|r| r.wall_ms).sum(),
-                error: Some("the transcript has no summary: the episode did not finish".into()),
+                error: Some(unfinished(e.cut, t.rounds.len())),
             }
         }
     };
@@ -214,8 +228,21 @@ pub fn view(task: &Arc<Task>, t: &Transcript, cost_usd: Option<f64>, ids: &str) 
     EpisodeView {
         header,
         result,
-        scene: scene::follow(task, t, ids),
+        scene: scene::follow(task, t, ids, progress),
         steps,
+    }
+}
+
+/// Why an episode has no summary, in words: it did not finish, and if the transcript's
+/// last line (`cut`) was cut in the middle, that it was left out.
+fn unfinished(cut: Option<usize>, rounds: usize) -> String {
+    let why = "the transcript has no summary: the episode did not finish";
+    match cut {
+        Some(line) => format!(
+            "{why}; its last line (line {line}) is cut short (the process stopped or the \
+             disk filled while writing it): the {rounds} rounds written whole are shown"
+        ),
+        None => why.to_owned(),
     }
 }
 

@@ -12,6 +12,8 @@ use base64::Engine as _;
 use serde::Serialize;
 use sha2::{Digest, Sha256};
 
+use crate::session::{Error, Result};
+
 const SHELL: &str = include_str!("assets/page.html");
 const STYLE: &str = include_str!("assets/view.css");
 /// What every page's script starts with: building elements, text, keys, numbers.
@@ -45,7 +47,7 @@ pub fn html(
     pictures: &[(String, String)],
     script: Script,
     origin: Origin,
-) -> Result<String, String> {
+) -> Result<String> {
     let code = match script {
         Script::Episode => format!("{COMMON}\n{EPISODE}"),
         Script::Results => format!("{COMMON}\n{RESULTS}"),
@@ -98,8 +100,10 @@ fn sha256(text: &str) -> String {
 /// `data` as JSON that can sit inside a `<script>` element: `<`, `>` and `&` (which
 /// JSON has only inside strings) as `\u` escapes, so that no `</script>` or `<!--`
 /// can appear, and the two line separators JavaScript once refused in strings too.
-pub fn script_json(data: &impl Serialize) -> Result<String, String> {
-    let json = serde_json::to_string(data).map_err(|e| format!("the page's data: {e}"))?;
+pub fn script_json(data: &impl Serialize) -> Result<String> {
+    // The data is the session's own structs, which always serialise: failing is a bug.
+    let json = serde_json::to_string(data)
+        .map_err(|e| Error::Internal(format!("the page's data: {e}")))?;
     let mut out = String::with_capacity(json.len() + json.len() / 16);
     for c in json.chars() {
         match c {

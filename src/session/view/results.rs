@@ -2,6 +2,7 @@
 //! numbers `coherent bench --report` and `coherent.report` give), the figures the page
 //! draws from them, and every episode with a link to its own page.
 
+use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 
 use coherent_agents::bench::{ResultLine, transcripts_dir};
@@ -118,20 +119,32 @@ pub fn transcript_of(results: &Path, line: &ResultLine) -> Option<PathBuf> {
     beside.is_file().then_some(beside)
 }
 
-/// The page of `line`'s episode, relative to the index: `episodes/<seed folder>/<the
-/// transcript's name>.html`, the name made of safe characters and at most 200 bytes
+/// Each line's page, relative to the index: `episodes/<seed folder>/<the transcript's
+/// name>.html`, the name made of safe characters and at most 200 bytes
 /// ([`file_name_part`]: a name from the file never leaves the folder nor is too long
-/// for it).
-pub fn page_name(line: &ResultLine) -> String {
-    let stem = Path::new(&line.transcript)
-        .file_stem()
-        .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
-    format!(
-        "episodes/seed{}/{}.html",
-        line.seed,
-        file_name_part(&stem, MAX_PAGE_NAME)
-    )
+/// for it). Two transcripts of one name (in two folders) get two pages: the later
+/// line's name ends in `-2` (`-3`, ...), counted in the order of the lines, so that a
+/// page keeps its name while the file grows.
+pub fn page_names(lines: &[ResultLine]) -> Vec<String> {
+    let mut taken = HashSet::new();
+    lines
+        .iter()
+        .map(|line| {
+            let stem = Path::new(&line.transcript)
+                .file_stem()
+                .map_or_else(String::new, |s| s.to_string_lossy().into_owned());
+            let stem = file_name_part(&stem, MAX_PAGE_NAME);
+            let mut name = format!("episodes/seed{}/{stem}.html", line.seed);
+            let mut k = 1;
+            while !taken.insert(name.clone()) {
+                k += 1;
+                name = format!("episodes/seed{}/{stem}-{k}.html", line.seed);
+            }
+            name
+        })
+        .collect()
 }
 
-/// The longest page name, in bytes, short of the usual 255 with room for `.html`.
+/// The longest page name, in bytes, short of the usual 255 with room for a count and
+/// `.html`.
 const MAX_PAGE_NAME: usize = 200;

@@ -24,7 +24,7 @@ pub use report::Group;
 pub use results::{DEFAULT_MAX_BYTES as DEFAULT_MAX_RESULTS_BYTES, ERROR_BYTES};
 pub use results::{
     EpisodeKey, ReadLimits, ResultLine, ResultsFile, mark_orphans, read_results,
-    read_results_within, repair, transcripts_dir,
+    read_results_opening, read_results_within, repair, transcripts_dir,
 };
 pub use run_settings::RunSettings;
 pub use subset::{PAPER40, Selection, Subset, same_key_twice, select};

@@ -111,13 +111,7 @@ impl Progress {
                     self.successes += usize::from(line.success);
                 }
                 let head = self.head(self.start.elapsed());
-                let episode = format!(
-                    "{} {} task {} seed {}",
-                    shown(&line.method),
-                    shown(&line.scene),
-                    line.task_id,
-                    line.seed
-                );
+                let episode = line.episode();
                 let said = line.error.as_deref().unwrap_or("");
                 let error = match line.status {
                     Status::Error => Some(format!(

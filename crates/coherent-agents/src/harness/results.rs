@@ -8,7 +8,8 @@ use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use coherent_core::Execution;
-use coherent_core::files::{Limit, Lines, MIB};
+use coherent_core::files::{Limit, Lines, MIB, Opens};
+use coherent_core::text::shown;
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
@@ -106,6 +107,18 @@ impl ResultLine {
         }
     }
 
+    /// The episode in words, as progress lines and warnings name it: `pefa demo-apartment
+    /// task 0 seed 1`, the names from the file shown as on a terminal.
+    pub fn episode(&self) -> String {
+        format!(
+            "{} {} task {} seed {}",
+            shown(&self.method),
+            shown(&self.scene),
+            self.task_id,
+            self.seed
+        )
+    }
+
     /// The line with its `cost_usd` from `prices` ([`PriceTable::episode_cost`] of its
     /// backend's model and its tokens).
     pub fn priced(mut self, prices: &PriceTable) -> ResultLine {
@@ -201,8 +214,17 @@ pub fn read_results(path: &Path) -> Result<ResultsFile, Error> {
 /// does not parse is a write cut short (reported in `truncated_bytes`); any other bad
 /// line is an error naming the file, the line and the JSON path.
 pub fn read_results_within(path: &Path, max_bytes: u64) -> Result<ResultsFile, Error> {
+    read_results_opening(path, max_bytes, Opens::Anything)
+}
+
+/// [`read_results_within`], opening only what `opens` allows.
+pub fn read_results_opening(
+    path: &Path,
+    max_bytes: u64,
+    opens: Opens,
+) -> Result<ResultsFile, Error> {
     let (line_limit, total) = limits(max_bytes);
-    let mut lines = Lines::open(path, line_limit, total).map_err(Error::file)?;
+    let mut lines = Lines::open_as(path, line_limit, total, opens).map_err(Error::file)?;
     let mut out = ResultsFile::default();
     while let Some(line) = lines.next_line().map_err(Error::file)? {
         let parsed = std::str::from_utf8(line.bytes)

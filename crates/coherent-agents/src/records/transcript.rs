@@ -9,7 +9,7 @@ use std::io::{self, Write};
 use std::path::Path;
 
 use coherent_core::RobotReport;
-use coherent_core::files::{Limit, Lines, MIB};
+use coherent_core::files::{Limit, Lines, MIB, Opens};
 use serde::{Deserialize, Serialize};
 
 use coherent_core::{Execution, NodeId, Task, native};
@@ -534,18 +534,59 @@ pub fn read(path: &Path) -> Result<Transcript, Error> {
 
 /// Reads a transcript of at most `max_bytes`; errors name the file and the line.
 pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
-    let mut lines = Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(Error::file)?;
+    let lines = Lines::open(path, limit(max_bytes), limit(max_bytes)).map_err(Error::file)?;
+    read_lines(lines, path, false).map(|read| read.transcript)
+}
+
+/// A transcript read to be shown, which may end in a line cut short.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Shown {
+    pub transcript: Transcript,
+    /// The number of a last line cut in the middle (no newline, and not a record): the
+    /// episode's process died or the disk filled while it was written. The lines before
+    /// it are read as usual.
+    pub cut: Option<usize>,
+}
+
+/// Reads a transcript of at most `max_bytes` to show it, opening only what `opens`
+/// allows: as [`read_within`], except that a last line cut in the middle is left out
+/// and reported ([`Shown::cut`]) instead of refusing the rounds written whole before it.
+pub fn read_to_show(path: &Path, max_bytes: u64, opens: Opens) -> Result<Shown, Error> {
+    let lines =
+        Lines::open_as(path, limit(max_bytes), limit(max_bytes), opens).map_err(Error::file)?;
+    read_lines(lines, path, true)
+}
+
+/// The records of `lines` (the file `path`); `cut_allowed`: a last line without its
+/// newline that is no record is reported, not refused.
+fn read_lines(mut lines: Lines, path: &Path, cut_allowed: bool) -> Result<Shown, Error> {
     let mut header = None;
     let mut rounds = Vec::new();
     let mut summary = None;
+    let mut cut = None;
     while let Some(line) = lines.next_line().map_err(Error::file)? {
         let i = line.number - 1;
         let at = |message: String| Error::at_line(path, i + 1, message);
-        let line = std::str::from_utf8(line.bytes).map_err(|e| at(e.to_string()))?;
-        if line.trim().is_empty() {
-            continue;
-        }
-        let record: Record = serde_json::from_str(line).map_err(|e| at(e.to_string()))?;
+        let record = std::str::from_utf8(line.bytes)
+            .map_err(|e| e.to_string())
+            .and_then(|text| {
+                if text.trim().is_empty() {
+                    return Ok(None);
+                }
+                serde_json::from_str::<Record>(text)
+                    .map(Some)
+                    .map_err(|e| e.to_string())
+            });
+        let record = match record {
+            Ok(Some(record)) => record,
+            Ok(None) => continue,
+            // Nothing follows a line without its newline: it is the last.
+            Err(_) if cut_allowed && !line.complete() => {
+                cut = Some(line.number);
+                continue;
+            }
+            Err(why) => return Err(at(why)),
+        };
         match record {
             Record::Header(h) if i == 0 => {
                 if h.format != FORMAT || !(1..=VERSION).contains(&h.version) {
@@ -564,7 +605,10 @@ pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
     let header = header.ok_or_else(|| Error::Format {
         file: path.display().to_string(),
         line: None,
-        message: "no header line".into(),
+        message: match cut {
+            Some(_) => "no header line: the first line is cut short".into(),
+            None => "no header line".into(),
+        },
     })?;
     if header.version == 1 {
         let task = native::read(&path.display().to_string(), &header.task)?;
@@ -572,10 +616,13 @@ pub fn read_within(path: &Path, max_bytes: u64) -> Result<Transcript, Error> {
             upgrade_v1(&task, round);
         }
     }
-    Ok(Transcript {
-        header,
-        rounds,
-        summary,
+    Ok(Shown {
+        transcript: Transcript {
+            header,
+            rounds,
+            summary,
+        },
+        cut,
     })
 }
 

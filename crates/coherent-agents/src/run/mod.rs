@@ -62,12 +62,16 @@ pub fn new_transcript(out: &Path, task: &Task, method: &str) -> Result<Transcrip
         file_name_part(method, NAME_PART_BYTES),
         utc_stamp(secs)
     );
-    let cannot = |path: &Path, e: io::Error| Error::NoTranscript {
-        file: path.display().to_string(),
-        message: e.to_string(),
-    };
-    std::fs::create_dir_all(out).map_err(|e| cannot(out, e))?;
     let mut path = out.join(format!("{stem}.jsonl"));
+    // Named by the transcript it would have been (a benchmark's results line keeps it).
+    std::fs::create_dir_all(out).map_err(|e| Error::NoTranscript {
+        file: path.display().to_string(),
+        message: if out.exists() && !out.is_dir() {
+            "the folder it goes in is a file".to_owned()
+        } else {
+            format!("its folder cannot be made: {e}")
+        },
+    })?;
     let mut n = 2;
     loop {
         match OpenOptions::new().write(true).create_new(true).open(&path) {
@@ -76,7 +80,12 @@ pub fn new_transcript(out: &Path, task: &Task, method: &str) -> Result<Transcrip
                 path = out.join(format!("{stem}-{n}.jsonl"));
                 n += 1;
             }
-            Err(e) => return Err(cannot(&path, e)),
+            Err(e) => {
+                return Err(Error::NoTranscript {
+                    file: path.display().to_string(),
+                    message: e.to_string(),
+                });
+            }
         }
     }
 }
