@@ -8,11 +8,12 @@
 //! not the route, decides the type (`truth.rs`).
 
 use coherent_core::Relation;
-use coherent_core::geometry::{RobotSpecs, wall_of};
 
 use crate::rng::Rng;
 use crate::scene::Scene;
-use crate::start::{BASKET_HOLDS, Landing, Pose, Start, fits_in_thing, fits_inside, pack_on};
+use crate::start::{
+    BASKET_HOLDS, Landing, Pose, Start, fits_in_thing, fits_inside, high_pieces, pack_on,
+};
 
 /// The kinds a route needs, as bits: quadrotor, legged robot, arm (the order of
 /// [`crate::request::KINDS`]).
@@ -26,27 +27,6 @@ pub struct Pred {
     pub relation: Relation,
     pub subject: i64,
     pub target: i64,
-}
-
-/// Which pieces are high for the legged robot under the geometric rules: a surface
-/// whose top plus the scene's tallest thing is above its hand, a container that is no
-/// surface judged by its inner floor (`docs/task-format.md`, "Geometric rules").
-pub fn high_pieces(scene: &Scene) -> Vec<bool> {
-    let hand = RobotSpecs::default().dog_max_height();
-    let tallest = scene
-        .things
-        .iter()
-        .map(|t| t.kind.size[1])
-        .fold(0.0f32, f32::max);
-    scene
-        .pieces
-        .iter()
-        .map(|p| {
-            let h = p.kind.size[1];
-            let place = if p.kind.surface { h } else { wall_of(h) };
-            place + tallest > hand
-        })
-        .collect()
 }
 
 /// Who can get at a place at the start.

@@ -10,19 +10,30 @@
 //! [`generate`] makes a set; the session layer writes it out (`coherent generate`,
 //! `coherent.generate`).
 
-// Layers, lowest first
-pub mod catalogue;
-pub mod compose;
-mod furnish;
-pub mod goal;
-pub mod phrase;
-pub mod request;
+// Layers, lowest first: each module names only those above it (scripts/check-layout holds
+// the crate to it). The comment above each also keeps rustfmt from sorting them.
+// A random stream per draw.
 pub mod rng;
-pub mod scene;
-pub mod set;
+// The knobs, and the error that names one.
+pub mod request;
+// Rooms, furniture and things with their dimensions.
+pub mod catalogue;
+// The manifest line and the datasheet's counts.
 pub mod sheet;
+// A scene laid out and furnished.
+pub mod scene;
+// A team, and where it and the things start.
 pub mod start;
+// Goal predicates, drawn by the robot kinds they need.
+pub mod goal;
+// The English instruction.
+pub mod phrase;
+// The native task file.
+pub mod compose;
+// The ground truth from the planner's searches.
 pub mod truth;
+// The driver: draws, threads, filters, order.
+pub mod set;
 
 pub use request::{KnobError, Ratio, Request, Span, TeamSpec};
 pub use set::{Generated, Outcome, Progress, generate};

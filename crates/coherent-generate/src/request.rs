@@ -378,6 +378,9 @@ impl Request {
     /// The checks that need no draw: a knob out of range, a type or a number of robots
     /// no team of the spec can give.
     pub fn check(&self) -> Result<(), KnobError> {
+        if self.tasks == 0 {
+            return knob("--tasks", "0: a set needs at least one task".into());
+        }
         if self.scenes == 0 {
             return knob("--scenes", "a set needs at least one scene".into());
         }

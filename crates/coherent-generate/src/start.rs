@@ -5,7 +5,7 @@
 //! which the goals use too.
 
 use coherent_core::RobotKind;
-use coherent_core::geometry::{Lid, WALL, wall_of};
+use coherent_core::geometry::{Lid, RobotSpecs, WALL, wall_of};
 
 use crate::catalogue::{COUNTER, MAX_FOOTPRINT};
 use crate::request::KINDS;
@@ -190,7 +190,7 @@ fn place_things(scene: &Scene, counters: &[usize], rng: &mut Rng) -> Option<Vec<
             on.into_iter().chain(inside)
         })
         .collect();
-    let high = crate::goal::high_pieces(scene);
+    let high = high_pieces(scene);
     let mut loads: Vec<Vec<[f32; 3]>> = vec![Vec::new(); holders.len()];
     let mut out = Vec::with_capacity(scene.things.len());
     for t in &scene.things {
@@ -348,5 +348,26 @@ pub fn kinds_of(team: [usize; 3]) -> Vec<RobotKind> {
         .zip(team)
         .filter(|(_, n)| *n > 0)
         .map(|(k, _)| *k)
+        .collect()
+}
+
+/// Which pieces are high for the legged robot under the geometric rules: a surface
+/// whose top plus the scene's tallest thing is above its hand, a container that is no
+/// surface judged by its inner floor (`docs/task-format.md`, "Geometric rules").
+pub fn high_pieces(scene: &Scene) -> Vec<bool> {
+    let hand = RobotSpecs::default().dog_max_height();
+    let tallest = scene
+        .things
+        .iter()
+        .map(|t| t.kind.size[1])
+        .fold(0.0f32, f32::max);
+    scene
+        .pieces
+        .iter()
+        .map(|p| {
+            let h = p.kind.size[1];
+            let place = if p.kind.surface { h } else { wall_of(h) };
+            place + tallest > hand
+        })
         .collect()
 }
