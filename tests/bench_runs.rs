@@ -97,6 +97,7 @@ fn hand_line(
         scene: task.meta.scene.clone(),
         task_id: task.meta.task_id,
         task_type: Some("mono".into()),
+        team_size: Some(task.robots.len() as u32),
         seed,
         episode_seed: 0,
         success: status == Status::Success,

@@ -295,8 +295,9 @@ def _in_ipython() -> bool:
 class Report:
     """The paper's tables of a benchmark's results (:func:`report`).
 
-    ``table1`` (by task type: mono, dual, trio, Avg) and ``table2`` (by scene, then Avg)
-    have one row per method and a last ``ground truth`` row (its AS is the mean GT
+    ``table1`` (by task type: mono, dual, trio, Avg), ``table2`` (by scene, then Avg)
+    and ``table3`` (by team size, ``"3 robots"`` and so on, then Avg; None unless the
+    tasks have teams of more than one size, as generated sets do) have one row per method and a last ``ground truth`` row (its AS is the mean GT
     steps), and columns ``(column, stat)`` with ``stat`` one of ``SR``, ``SR ci95``,
     ``AS``, ``AS ci95`` (the half-width of a 95% interval over seeds; NaN with one
     seed). ``costs`` has a row per method: LLM calls and tokens per episode and per
@@ -315,6 +316,7 @@ class Report:
 
     table1: pd.DataFrame
     table2: pd.DataFrame
+    table3: pd.DataFrame | None
     costs: pd.DataFrame
     makespan: pd.DataFrame
     backends: list[str]
@@ -381,6 +383,7 @@ def report(data: Results, *, prices: Prices | None = None) -> Report:
     return Report(
         table1=_table(pandas, r["table1"]),
         table2=_table(pandas, r["table2"]),
+        table3=_table(pandas, r["table3"]) if r.get("table3") else None,
         costs=costs,
         makespan=makespan,
         backends=r["backends"],

@@ -1,10 +1,12 @@
-//! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `render`,
-//! `view`, `prompts`. One implementation serves the `coherent` binary and the console script
+//! The `coherent` command line: `run`, `bench`, `plan`, `validate`, `import`, `export`,
+//! `generate`, `render`, `view`, `prompts`. One implementation serves the `coherent` binary and the console script
 //! that `pip install` puts on the PATH (which also loads methods written in Python,
 //! [`LoadMethod`]).
 
 mod args;
 mod bench;
+mod export;
+mod generate;
 mod pddl;
 mod prompts;
 mod render;
@@ -60,6 +62,10 @@ enum Command {
     /// finished (whatever the success rate), 2 on bad input, 70 when coherent itself
     /// fails, 130 on Ctrl-C.
     Bench(Box<bench::BenchArgs>),
+    /// Generate a task set: scenes from a catalogue, any team, goals with their proven
+    /// optimum, written to a folder with a manifest and a datasheet. Exit 2 on a request
+    /// that cannot be met (the message names the knob), 130 on Ctrl-C.
+    Generate(Box<generate::GenerateArgs>),
     /// Check task files: exit 2 on malformed input, 1 on semantic problems or a file with
     /// no tasks, 0 when clean.
     Validate {
@@ -75,9 +81,10 @@ enum Command {
         max_memory: usize,
     },
     /// Write tasks in another format: `--format pddl`, a PDDL domain per rule set and a
-    /// problem per task (docs/pddl.md). Exit 1 when a task cannot be written, 2 on
-    /// malformed input.
-    Export(pddl::ExportArgs),
+    /// problem per task (docs/pddl.md); `--format original`, the paper's env lists (one
+    /// file per scene, `<out>/<scene>.json`), which `coherent import` reads back. Exit 1
+    /// when a task cannot be written, 2 on malformed input.
+    Export(export::ExportArgs),
     /// Convert original env files into native task files, one per task.
     Import {
         #[arg(required = true)]
@@ -159,6 +166,7 @@ where
         Command::View(args) => view::view(args),
         Command::Robots(args) => robots::robots(args),
         Command::Bench(args) => bench::bench(*args, load),
+        Command::Generate(args) => generate::generate(&args),
         Command::Prompts(args) => prompts::prompts(&args),
         Command::Validate {
             files,
@@ -169,7 +177,7 @@ where
         Command::Export(args) => {
             let limits = limits(Limits::DEFAULT_MAX_STATES, Limits::DEFAULT_MAX_MEMORY >> 20);
             chosen(&args.files, &args.tasks).and_then(|(tasks, malformed)| {
-                Ok(pddl::export(&tasks, &args, &limits)?.max(malformed))
+                Ok(export::export(&tasks, &args, &limits)?.max(malformed))
             })
         }
         Command::Plan {

@@ -4,42 +4,13 @@
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use clap::{Args, ValueEnum};
-
+use super::export::ExportArgs;
 use crate::session::engine::{Limits, Task, shown};
 use crate::session::{Error, pddl};
 
-/// The formats `coherent export` writes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Format {
-    /// A PDDL domain per rule set and a PDDL problem per task.
-    Pddl,
-}
-
-#[derive(Args)]
-pub struct ExportArgs {
-    /// Original env files, native task files or folders of them; `native`: the project's
-    /// own benchmark, compiled in.
-    #[arg(required = true)]
-    pub files: Vec<PathBuf>,
-    /// Only these task ids (repeatable).
-    #[arg(long = "task")]
-    pub tasks: Vec<i64>,
-    /// What to write.
-    #[arg(long, value_enum)]
-    pub format: Format,
-    /// Folder to write `domain-<rules>.pddl` and `<scene>_task-<id>.pddl` into.
-    #[arg(short, long)]
-    pub out: PathBuf,
-    /// Also write each task's optimal plan as `<scene>_task-<id>.plan`, a PDDL plan.
-    #[arg(long)]
-    pub plans: bool,
-}
-
-/// Writes the files; exit 1 when a task could not be written (the domain cannot express
-/// it) or, with `--plans`, has no plan.
+/// Writes the files of `--format pddl`; exit 1 when a task could not be written (the
+/// domain cannot express it) or, with `--plans`, has no plan.
 pub fn export(tasks: &[Task], args: &ExportArgs, limits: &Limits) -> Result<u8, Error> {
-    let Format::Pddl = args.format;
     let written = pddl::export_files(tasks, &args.out, args.plans, limits)?;
     for refused in &written.refused {
         eprintln!("refused: {}", shown(&refused.to_string()));
@@ -50,7 +21,7 @@ pub fn export(tasks: &[Task], args: &ExportArgs, limits: &Limits) -> Result<u8, 
     println!(
         "wrote {} files to {} ({} tasks, {} refused)",
         written.files.len(),
-        args.out.display(),
+        shown(&args.out.display().to_string()),
         tasks.len() - written.refused.len(),
         written.refused.len()
     );

@@ -9,7 +9,7 @@ use std::sync::Arc;
 use coherent_core::makespan::{self, Makespan};
 use coherent_core::planner::{self, Analysis, Limits, Stop};
 use coherent_core::text::{file_name_part, shown};
-use coherent_core::{Error, Task, native, validate};
+use coherent_core::{Error, Task, native, original, validate};
 use coherent_sim::PlanReport;
 
 /// Every problem of `task`, empty when it is clean: the rules' findings (unknown ids,
@@ -191,6 +191,46 @@ pub fn import(tasks: &[Task], out: &Path) -> Result<Vec<PathBuf>, Error> {
         };
         std::fs::create_dir_all(&dir).map_err(io)?;
         let text = serde_json::to_string_pretty(&native::to_value(t))
+            .expect("JSON values always serialize");
+        std::fs::write(&path, text + "\n").map_err(io)?;
+        files.push(path);
+    }
+    Ok(files)
+}
+
+/// Writes tasks in the paper's own format: one env file per scene, `<out>/<scene>.json`
+/// (the scene's name in safe characters, as [`import`] names folders), a list of its
+/// tasks in the order given, each as [`original::to_value`] writes it: the graph at the
+/// start with every height a label (under the `geometric` rules the labels the geometry
+/// gives), the goal as keys, the ground truth and the instruction in lists. The
+/// authors' code reads such files; `coherent import` reads them back to the same tasks.
+/// Returns the files written.
+pub fn export_original(tasks: &[Task], out: &Path) -> Result<Vec<PathBuf>, Error> {
+    let mut scenes: Vec<(&str, Vec<serde_json::Value>)> = Vec::new();
+    for t in tasks {
+        let value = original::to_value(t);
+        match scenes.iter_mut().find(|(s, _)| *s == t.meta.scene) {
+            Some((_, list)) => list.push(value),
+            None => scenes.push((&t.meta.scene, vec![value])),
+        }
+    }
+    let mut files: Vec<PathBuf> = Vec::new();
+    for (scene, list) in scenes {
+        let path = out.join(format!("{}.json", file_name_part(scene, 64)));
+        if files.contains(&path) {
+            return Err(Error::Io {
+                file: path.display().to_string(),
+                message: format!(
+                    "two scenes map to this file ({scene:?} and another whose name differs only in characters a file name cannot hold)"
+                ),
+            });
+        }
+        let io = |e: std::io::Error| Error::Io {
+            file: path.display().to_string(),
+            message: e.to_string(),
+        };
+        std::fs::create_dir_all(out).map_err(io)?;
+        let text = serde_json::to_string_pretty(&serde_json::Value::Array(list))
             .expect("JSON values always serialize");
         std::fs::write(&path, text + "\n").map_err(io)?;
         files.push(path);

@@ -15,6 +15,7 @@
 //! - [`robots`]: who carries the actions out, the reference robot servers over ROS 2;
 //! - [`tasks`], [`prompts`]: where tasks, prompt sets and prices come from;
 //! - [`check`]: validation findings (rules and geometry), optimal plans, import;
+//! - [`generate`](mod@generate): generated task sets, written to a folder;
 //! - [`pddl`](mod@pddl): the tasks in PDDL, our plans as PDDL plans, PDDL plans checked
 //!   against the rules;
 //! - [`render`]: the scene from above and the robots' paths;
@@ -32,6 +33,7 @@ pub mod check;
 pub mod engine;
 pub mod episode;
 pub mod error;
+pub mod generate;
 pub mod lines;
 pub mod pddl;
 pub mod prompts;

@@ -100,6 +100,7 @@ impl Hand {
             scene: self.scene.into(),
             task_id: self.task_id,
             task_type: Some(self.task_type.into()),
+            team_size: Some(3),
             seed: self.seed,
             episode_seed: 0,
             success: self.status == Status::Success,

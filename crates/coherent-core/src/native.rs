@@ -213,7 +213,30 @@ pub fn to_value(task: &Task) -> Value {
         geometry: task.meta.geometry.clone(),
         source: task.meta.source.clone(),
     };
-    serde_json::to_value(out).expect("plain data always serializes")
+    let mut value = serde_json::to_value(out).expect("plain data always serializes");
+    if let Some(g) = value.get_mut("geometry") {
+        shortest_f32(g);
+    }
+    value
+}
+
+/// Every fractional number of `v` written as the shortest decimal that reads back to
+/// the same `f32`: the geometry is kept in `f32`, and widened to `f64` for JSON, 6.9
+/// would be written 6.900000095367432. Both read back to the same value.
+fn shortest_f32(v: &mut Value) {
+    match v {
+        Value::Number(n) if n.is_f64() => {
+            if let Some(x) = n.as_f64() {
+                let short: Option<f64> = (x as f32).to_string().parse().ok();
+                if let Some(m) = short.and_then(serde_json::Number::from_f64) {
+                    *n = m;
+                }
+            }
+        }
+        Value::Array(items) => items.iter_mut().for_each(shortest_f32),
+        Value::Object(map) => map.values_mut().for_each(shortest_f32),
+        _ => {}
+    }
 }
 
 /// The initial graph, without the labels the geometric rules derive (a file under them

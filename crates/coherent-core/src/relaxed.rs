@@ -2,16 +2,31 @@
 //! when only some robot types act. Facts are only ever added (nothing is deleted,
 //! visibility and hand capacity are ignored), so every fact of every reachable state is
 //! derived. When a goal predicate is not derived, no plan of that team can reach it,
-//! which rules out teams without searching their (often huge) state spaces.
+//! which rules out teams without searching their (often huge) state spaces. A team is
+//! robot kinds (`may_reach`: the task types) or any set of the task's robots
+//! (`may_reach_with`: how many robots a task needs).
 
 use crate::graph::{Idx, NodeKind, RobotKind};
-use crate::task::{GoalPredicate, RuleSet, Task};
+use crate::task::{GoalPredicate, Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
 /// Whether every goal predicate of `goal` might hold with only robots of `kinds` acting.
 /// `false` is a proof that the team cannot reach the goal; `true` proves nothing.
 pub fn may_reach(task: &Task, kinds: &[RobotKind], goal: &[GoalPredicate]) -> bool {
-    let facts = Facts::derive(task, kinds);
+    let team: Vec<Robot> = task
+        .robots
+        .iter()
+        .copied()
+        .filter(|r| kinds.contains(&r.kind))
+        .collect();
+    may_reach_with(task, &team, goal)
+}
+
+/// Whether every goal predicate of `goal` might hold with only the robots of `team`
+/// acting (the others stay where they are). `false` is a proof that this team cannot
+/// reach the goal; `true` proves nothing.
+pub fn may_reach_with(task: &Task, team: &[Robot], goal: &[GoalPredicate]) -> bool {
+    let facts = Facts::derive(task, team);
     goal.iter()
         .all(|p| p.count != 1 || facts.at(p.subject, p.relation, p.target))
 }
@@ -37,7 +52,7 @@ struct Facts {
 }
 
 impl Facts {
-    fn derive(task: &Task, kinds: &[RobotKind]) -> Facts {
+    fn derive(task: &Task, team: &[Robot]) -> Facts {
         let n = task.nodes.len();
         let s = &task.init;
         let mut f = Facts {
@@ -61,32 +76,30 @@ impl Facts {
                 }
             }
         }
-        let dog = kinds.contains(&RobotKind::RobotDog);
-        let quad = kinds.contains(&RobotKind::Quadrotor);
-        let arm = kinds.contains(&RobotKind::RobotArm);
+        let has_kind = |k: RobotKind| team.iter().any(|r| r.kind == k);
+        let (dog, quad, arm) = (
+            has_kind(RobotKind::RobotDog),
+            has_kind(RobotKind::Quadrotor),
+            has_kind(RobotKind::RobotArm),
+        );
+        let acts = |x: Idx| team.iter().any(|r| r.node == x);
         // A task may start with a robot next to something or holding it.
         for e in s.edges() {
             let (from, to) = (e.from().get(), e.to().get());
+            if !acts(e.from()) {
+                continue;
+            }
             match (e.rel(), task.node(e.from()).kind) {
-                (Relation::Close, NodeKind::Robot(RobotKind::RobotDog)) if dog => {
-                    f.dog_close[to] = true
-                }
-                (Relation::Hold, NodeKind::Robot(RobotKind::RobotDog)) if dog => {
-                    f.dog_holds[to] = true
-                }
-                (Relation::Hold, NodeKind::Robot(RobotKind::RobotArm)) if arm => {
+                (Relation::Close, NodeKind::Robot(RobotKind::RobotDog)) => f.dog_close[to] = true,
+                (Relation::Hold, NodeKind::Robot(RobotKind::RobotDog)) => f.dog_holds[to] = true,
+                (Relation::Hold, NodeKind::Robot(RobotKind::RobotArm)) => {
                     f.arm_holds[from * n + to] = true;
                 }
                 _ => {}
             }
         }
-        let robots_of = |k: RobotKind| {
-            task.robots
-                .iter()
-                .filter(move |r| r.kind == k)
-                .map(|r| r.node)
-        };
-        for r in &task.robots {
+        let robots_of = |k: RobotKind| team.iter().filter(move |r| r.kind == k).map(|r| r.node);
+        for r in team {
             if let Some(room) = crate::rules::room_of(task, s, r.node) {
                 match r.kind {
                     RobotKind::RobotDog => f.dog_room[room.get()] = true,
@@ -161,7 +174,7 @@ impl Facts {
                 }
             }
             if quad {
-                changed |= f.fly(task);
+                changed |= f.fly(task, team);
             }
             if dog {
                 changed |= f.dog(task, &has, &kind);
@@ -189,16 +202,12 @@ impl Facts {
         (0..self.n).any(|r| rooms[r] && self.in_room[x * self.n + r])
     }
 
-    /// The quadrotor lands on landable surfaces of the rooms it may reach; what is in
-    /// its basket loses ON_HIGH_SURFACE when it lands on a low surface.
-    fn fly(&mut self, task: &Task) -> bool {
+    /// The quadrotors of `team` land on landable surfaces of the rooms they may reach;
+    /// what is in a basket loses ON_HIGH_SURFACE when it lands on a low surface.
+    fn fly(&mut self, task: &Task, team: &[Robot]) -> bool {
         let n = self.n;
         let mut changed = false;
-        for r in task
-            .robots
-            .iter()
-            .filter(|r| r.kind == RobotKind::Quadrotor)
-        {
+        for r in team.iter().filter(|r| r.kind == RobotKind::Quadrotor) {
             for s in 0..n {
                 let landable = task.nodes[s].properties.contains(PropSet::LANDABLE);
                 let reachable = self.may_be_in(s, &self.quad_room);

@@ -307,7 +307,7 @@ pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
         match r.kind {
             RobotKind::Quadrotor => {
                 let flying = s.states(r.node).contains(StateSet::FLYING);
-                let Some((landed, on)) = w.quad_landed_on() else {
+                let Some((landed, on)) = w.quad_landed_on(r.node) else {
                     continue;
                 };
                 let sym_on = s.target(r.node, Relation::On);
@@ -326,7 +326,7 @@ pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
                 }
                 if flying
                     && let Some(a) = s.target(r.node, Relation::Above)
-                    && !w.quad_above(a)
+                    && !w.quad_above(r.node, a)
                 {
                     out.push(format!(
                         "{me}: symbolic ABOVE {}, physically not over it",
@@ -335,9 +335,9 @@ pub fn disagreements(task: &Task, s: &State, w: &World) -> Vec<String> {
                 }
             }
             RobotKind::RobotDog => {
-                let reach = w.dog_reach();
+                let reach = w.dog_reach(r.node);
                 for x in s.targets(r.node, Relation::Close) {
-                    match w.dog_distance(x) {
+                    match w.dog_distance(r.node, x) {
                         Some(d) if d <= reach + tol.close_margin => {}
                         Some(d) => out.push(format!(
                             "{me}: symbolic CLOSE {}, physically {d:.2} m from its shoulder (reach {reach:.2} m)",

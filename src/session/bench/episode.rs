@@ -32,6 +32,8 @@ use crate::session::waiting::Waiting;
 #[derive(Clone, Debug)]
 struct TaskInfo {
     task_type: Option<String>,
+    /// The robots of its team.
+    team_size: u32,
     optimal: Result<u32, NoPlan>,
     /// `None` when the run has no parallel episode (not searched).
     makespan: Option<Result<PlannedMakespan, NoPlan>>,
@@ -307,6 +309,7 @@ fn line(
         scene: key.scene.clone(),
         task_id: key.task_id,
         task_type: info.task_type.clone(),
+        team_size: Some(info.team_size),
         seed: key.seed,
         episode_seed: seed,
         success: s.success,
@@ -364,6 +367,7 @@ impl NotRun {
             scene: key.scene.clone(),
             task_id: key.task_id,
             task_type: info.task_type.clone(),
+            team_size: Some(info.team_size),
             seed: key.seed,
             episode_seed: self.seed,
             success: false,
@@ -433,6 +437,7 @@ fn task_info(task: &Task, limits: &Limits, parallel: bool) -> TaskInfo {
     TaskInfo {
         makespan,
         task_type: analysis.task_type.map(|t| t.name().to_owned()),
+        team_size: u32::try_from(task.robots.len()).unwrap_or(u32::MAX),
         optimal: match &analysis.plan {
             Some(plan) => Ok(u32::try_from(plan.len()).unwrap_or(u32::MAX)),
             None => Err(NoPlan(

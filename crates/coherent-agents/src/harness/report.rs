@@ -1,6 +1,7 @@
 //! The paper's tables from a results file ([`crate::harness`]): Table I (success rate and
 //! average steps by task type, mono/dual/trio and the average), Table II (the same by
-//! scene), each with the ground-truth row, and each method's LLM calls, tokens and cost
+//! scene), Table III (the same by team size, when the tasks have teams of more than one
+//! size: generated sets, `coherent generate`), each with the ground-truth row, and each method's LLM calls, tokens and cost
 //! (per task and per success, from the lines' `cost_usd`). A method's parallel episodes
 //! are a row of their own, `<method> (parallel)`, and a run with parallel episodes adds
 //! the makespan table ([`crate::harness::speedup`]).
@@ -118,6 +119,9 @@ pub struct Report {
     pub seeds: Vec<u32>,
     pub table1: Table,
     pub table2: Table,
+    /// By the robots in the task's team, when the tasks have more than one team size.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub table3: Option<Table>,
     pub costs: Vec<Cost>,
     /// Episodes with no final line (only backend errors, the method's errors or
     /// interruptions).
@@ -326,6 +330,7 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
         &tasks,
         &by_scene,
     );
+    let table3 = team_table(&methods, &finals, &tasks);
     let costs = methods
         .iter()
         .map(|m| {
@@ -375,6 +380,7 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
         seeds: seeds.into_iter().collect(),
         table1,
         table2,
+        table3,
         costs,
         unfinished,
         errors: errors.len(),
@@ -384,6 +390,32 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
         method_settings,
         failures: failures(&errors),
     }
+}
+
+/// Table III, by team size (`"3 robots"`), when the tasks have teams of more than one
+/// size.
+fn team_table(
+    methods: &[String],
+    finals: &[&ResultLine],
+    tasks: &HashMap<(String, i64), &ResultLine>,
+) -> Option<Table> {
+    let sizes: BTreeSet<u32> = tasks.values().filter_map(|l| l.team_size).collect();
+    if sizes.len() < 2 {
+        return None;
+    }
+    let name = |n: u32| format!("{n} robot{}", if n == 1 { "" } else { "s" });
+    let mut cols: Vec<String> = sizes.into_iter().map(name).collect();
+    cols.push("Avg".into());
+    let by_size =
+        |l: &ResultLine, col: &str| col == "Avg" || l.team_size.map(name).as_deref() == Some(col);
+    Some(table(
+        "Table III: success rate (SR) and average steps (AS) by team size",
+        &cols,
+        methods,
+        finals,
+        tasks,
+        &by_size,
+    ))
 }
 
 /// The row of `l` in the tables: its method, and its execution when parallel.
@@ -546,7 +578,10 @@ fn md(name: &str) -> String {
 /// Names from the results (methods, scenes, backends) are shown escaped.
 pub fn markdown(r: &Report) -> String {
     let mut out = String::new();
-    for t in [&r.table1, &r.table2] {
+    for t in [Some(&r.table1), Some(&r.table2), r.table3.as_ref()]
+        .into_iter()
+        .flatten()
+    {
         out.push_str(&format!("### {}\n\n", t.title));
         for h in header_lines(r) {
             out.push_str(&format!("{}  \n", shown(&h)));
@@ -653,7 +688,12 @@ pub fn csv(r: &Report) -> String {
     let seeds = r.seeds.len();
     // The makespan table's columns, empty in the other tables' rows.
     let pad = if r.makespan.is_empty() { "" } else { ",,,,,,," };
-    for (name, t) in [("I", &r.table1), ("II", &r.table2)] {
+    let tables = [
+        ("I", Some(&r.table1)),
+        ("II", Some(&r.table2)),
+        ("III", r.table3.as_ref()),
+    ];
+    for (name, t) in tables.into_iter().filter_map(|(n, t)| t.map(|t| (n, t))) {
         for row in &t.rows {
             for ((c, n), cell) in t.columns.iter().zip(&t.tasks).zip(&row.cells) {
                 let Some(cell) = cell else { continue };

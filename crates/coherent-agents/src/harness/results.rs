@@ -30,6 +30,9 @@ pub struct ResultLine {
     pub task_id: i64,
     /// `mono`, `dual` or `trio`; null when the planner finds no plan.
     pub task_type: Option<String>,
+    /// The robots of the task's team; null in lines written before it was kept.
+    #[serde(default)]
+    pub team_size: Option<u32>,
     /// The seed index (0-based).
     pub seed: u32,
     /// The seed the episode actually ran with, derived from the index, method and task.

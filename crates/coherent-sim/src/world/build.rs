@@ -104,8 +104,8 @@ impl World {
             top: vec![None; n],
             hinges: Vec::new(),
             arms: Vec::new(),
-            quad: None,
-            dog: None,
+            quads: Vec::new(),
+            dogs: Vec::new(),
             grasps: Vec::new(),
             kcc: KinematicCharacterController::default(),
             stairs_kcc: KinematicCharacterController {
@@ -121,7 +121,6 @@ impl World {
             flight_colliders: Vec::new(),
             sim_time: 0.0,
             paths: Vec::new(),
-            quad_target: (Vector::ZERO, Vector::ZERO),
             tol,
         };
         w.kcc.offset = CharacterLength::Absolute(tol.dog_skin);
@@ -652,12 +651,13 @@ impl World {
                 half: Vector::new(b - t, BASKET_INSIDE_HALF, b - t),
             });
         }
-        self.quad = Some(Quad {
+        self.quads.push(Quad {
             robot: r,
             body,
             motors_on: false,
             integral: Vector::ZERO,
             rotors,
+            target: (Vector::ZERO, Vector::ZERO),
         });
         self.paths.push((self.task.id(r), vec![rg.pos]));
     }
@@ -686,7 +686,7 @@ impl World {
         );
         self.owner.insert(collider, r);
         self.body[r.get()] = Some(body);
-        self.dog = Some(Dog {
+        self.dogs.push(Dog {
             robot: r,
             body,
             yaw: rg.yaw,

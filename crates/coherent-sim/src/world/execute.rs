@@ -198,15 +198,15 @@ impl World {
         };
         let x = a.object;
         let stages = match (kind, a.verb) {
-            (RobotKind::Quadrotor, Verb::TakeoffFrom) => self.quad_takeoff()?,
-            (RobotKind::Quadrotor, Verb::LandOn) => self.quad_land(x)?,
-            (RobotKind::Quadrotor, Verb::MoveTowards) => self.quad_towards(x)?,
+            (RobotKind::Quadrotor, Verb::TakeoffFrom) => self.quad_takeoff(robot)?,
+            (RobotKind::Quadrotor, Verb::LandOn) => self.quad_land(robot, x)?,
+            (RobotKind::Quadrotor, Verb::MoveTowards) => self.quad_towards(robot, x)?,
             (RobotKind::RobotDog, Verb::MoveTowards) => {
                 if self.task.node(x).kind == NodeKind::Room {
-                    self.dog_to_room(x)?
+                    self.dog_to_room(robot, x)?
                 } else {
-                    let (p, face) = self.service_point(x)?;
-                    self.walk(p, face)?
+                    let (p, face) = self.service_point(robot, x)?;
+                    self.walk(robot, p, face)?
                 }
             }
             (_, Verb::Open) => self.drive_hinge(robot, x, true)?,
@@ -223,10 +223,10 @@ impl World {
         Ok(Motion::new(robot, a, stages))
     }
 
-    /// The quadrotor's flight to a room (over the middle of its floor, or a free spot
-    /// there, at cruise altitude) or to hover `quad_hover_height` over a free spot on a
-    /// surface.
-    fn quad_towards(&self, x: Idx) -> Result<Vec<Stage>, PhysicsError> {
+    /// The quadrotor `robot`'s flight to a room (over the middle of its floor, or a free
+    /// spot there, at cruise altitude) or to hover `quad_hover_height` over a free spot
+    /// on a surface.
+    fn quad_towards(&self, robot: Idx, x: Idx) -> Result<Vec<Stage>, PhysicsError> {
         if self.task.node(x).kind == NodeKind::Room {
             let Some((lo, hi)) = self.room_rect(x) else {
                 return fail(
@@ -238,16 +238,16 @@ impl World {
             let level = self.room_level(x);
             let mid = Vector::new((lo[0] + hi[0]) / 2.0, level, (lo[1] + hi[1]) / 2.0);
             let spot = match floor {
-                Some(f) => self.landing_spot(f, mid).unwrap_or(mid),
+                Some(f) => self.landing_spot(robot, f, mid).unwrap_or(mid),
                 None => mid,
             };
             let cruise = self.layout.specs.cruise_altitude;
-            self.quad_fly_to(spot, level + cruise)
+            self.quad_fly_to(robot, spot, level + cruise)
         } else {
-            let p = self.quad_pos().unwrap_or(Vector::ZERO);
-            let spot = self.landing_spot(x, p)?;
+            let p = self.quad_pos(robot).unwrap_or(Vector::ZERO);
+            let spot = self.landing_spot(robot, x, p)?;
             let y = self.top_height(x) + self.tol.quad_hover_height;
-            self.quad_fly_to(spot, y)
+            self.quad_fly_to(robot, spot, y)
         }
     }
 }

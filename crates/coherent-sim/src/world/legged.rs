@@ -97,12 +97,16 @@ impl World {
         Some(legs)
     }
 
-    /// The way of the dog to `goal` (body origin, on the storey its height says), as
-    /// walks along the floor and the flights, then a turn to face `face`.
-    pub(super) fn walk(&self, goal: Vector, face: Vector) -> Result<Vec<Stage>, PhysicsError> {
-        let Some(dog) = self.dog.clone() else {
-            return fail(FailureKind::Layout, "no legged robot".into());
-        };
+    /// The way of the legged robot `robot` to `goal` (body origin, on the storey its
+    /// height says), as walks along the floor and the flights, then a turn to face
+    /// `face`.
+    pub(super) fn walk(
+        &self,
+        robot: Idx,
+        goal: Vector,
+        face: Vector,
+    ) -> Result<Vec<Stage>, PhysicsError> {
+        let dog = self.dog_of(robot)?.clone();
         let start = self.pw.bodies[dog.body].translation();
         let grids = self.grids(dog.body);
         let Some(legs) = self.dog_route(&grids, start, goal) else {
@@ -135,10 +139,13 @@ impl World {
     }
 
     /// Off a flight, the dog stands on the floor at the far end.
-    pub(super) fn check_off_stairs(&self, f: &Flight, there: Vector) -> Result<(), PhysicsError> {
-        let Some(dog) = &self.dog else {
-            return fail(FailureKind::Layout, "no legged robot".into());
-        };
+    pub(super) fn check_off_stairs(
+        &self,
+        robot: Idx,
+        f: &Flight,
+        there: Vector,
+    ) -> Result<(), PhysicsError> {
+        let dog = self.dog_of(robot)?;
         let y = self.pw.bodies[dog.body].translation().y;
         if (y - there.y).abs() > self.tol.dog_off_stairs_tolerance {
             return fail(
@@ -154,8 +161,8 @@ impl World {
     }
 
     /// Turning on the spot: the pose set, two steps, and its heading kept.
-    pub(super) fn turn_tick(&mut self, t: &mut Turn) -> Tick {
-        let Some(body) = self.dog.as_ref().map(|d| d.body) else {
+    pub(super) fn turn_tick(&mut self, robot: Idx, t: &mut Turn) -> Tick {
+        let Ok(body) = self.dog_of(robot).map(|d| d.body) else {
             return Tick::Done;
         };
         t.steps += 1;
@@ -171,7 +178,7 @@ impl World {
             }
             2 => Tick::Step,
             _ => {
-                if let Some(d) = self.dog.as_mut() {
+                if let Some(d) = self.dogs.iter_mut().find(|d| d.robot == robot) {
                     d.yaw = t.yaw;
                 }
                 Tick::Done
@@ -314,11 +321,14 @@ impl World {
         cur
     }
 
-    /// Where the dog stands to work on `x`: beside what `x` stands on, nearest to `x`.
-    pub(super) fn service_point(&self, x: Idx) -> Result<(Vector, Vector), PhysicsError> {
-        let Some(dog) = &self.dog else {
-            return fail(FailureKind::Layout, "no legged robot".into());
-        };
+    /// Where the legged robot `robot` stands to work on `x`: beside what `x` stands on,
+    /// nearest to `x`.
+    pub(super) fn service_point(
+        &self,
+        robot: Idx,
+        x: Idx,
+    ) -> Result<(Vector, Vector), PhysicsError> {
+        let dog = self.dog_of(robot)?;
         let a = self.anchor(x);
         let aabb = self
             .node_aabb(a)
@@ -360,9 +370,12 @@ impl World {
                 format!("no storey at {level:.2} m for {}", self.label(a)),
             );
         };
-        // A spot in the thing's own room: the far side of a wall is not beside it.
+        // A spot in the thing's own room: the far side of a wall is not beside it. A
+        // door has two rooms; the rules keep the robot in its own as it walks up to the
+        // door, so the spot is on its side (the far side, when the two were as near,
+        // was taken first, and reached the long way round through other doors).
         let home = if self.task.node(a).kind == NodeKind::Door {
-            None
+            self.room_at(self.pw.bodies[dog.body].translation())
         } else {
             self.room_at(Vector::new(c.x, aabb.mins.y + t.room_probe_lift, c.z))
         };
@@ -412,10 +425,8 @@ impl World {
         )
     }
 
-    pub(super) fn dog_to_room(&self, room: Idx) -> Result<Vec<Stage>, PhysicsError> {
-        let Some(dog) = self.dog.clone() else {
-            return fail(FailureKind::Layout, "no legged robot".into());
-        };
+    pub(super) fn dog_to_room(&self, robot: Idx, room: Idx) -> Result<Vec<Stage>, PhysicsError> {
+        let dog = self.dog_of(robot)?.clone();
         let p = self.pw.bodies[dog.body].translation();
         let here = self.room_at(p).map(|h| self.task.id(h).0);
         let rid = self.task.id(room).0;
@@ -477,6 +488,6 @@ impl World {
                 format!("no free floor in {}", self.label(room)),
             );
         };
-        self.walk(goal, goal + (goal - p))
+        self.walk(robot, goal, goal + (goal - p))
     }
 }

@@ -102,8 +102,10 @@ pub struct World {
     top: Vec<Option<(RigidBodyHandle, Vector, [f32; 2])>>,
     hinges: Vec<Hinge>,
     arms: Vec<Arm>,
-    quad: Option<Quad>,
-    dog: Option<Dog>,
+    /// The quadrotors and the legged robots, in the layout's order: a team may have
+    /// several of each.
+    quads: Vec<Quad>,
+    dogs: Vec<Dog>,
     grasps: Vec<Grasp>,
     kcc: KinematicCharacterController,
     /// The legged robot on a flight: climbs slopes up to 45 degrees and keeps to the
@@ -115,7 +117,6 @@ pub struct World {
     /// Each mobile robot's track, `[x, y, z]` of its body, sampled every 20 cm on the
     /// floor plan and where it changes storey.
     pub paths: Vec<(NodeId, Vec<[f32; 3]>)>,
-    quad_target: (Vector, Vector),
     /// What every job of the world works to.
     tol: Tolerances,
 }
@@ -177,6 +178,8 @@ struct Quad {
     integral: Vector,
     /// Rotor positions in the body frame.
     rotors: [Vector; 4],
+    /// Where its controller steers the centre of mass, and at what velocity.
+    target: (Vector, Vector),
 }
 
 #[derive(Clone, Debug)]
@@ -237,8 +240,35 @@ impl World {
         self.task.node(n).label()
     }
 
-    fn quad_pos(&self) -> Option<Vector> {
-        let q = self.quad.as_ref()?;
+    /// The quadrotor `robot`'s index in `quads`.
+    fn quad_index(&self, robot: Idx) -> Option<usize> {
+        self.quads.iter().position(|q| q.robot == robot)
+    }
+
+    /// The quadrotor `robot`, or a layout failure naming it.
+    fn quad_of(&self, robot: Idx) -> Result<&Quad, PhysicsError> {
+        self.quads
+            .iter()
+            .find(|q| q.robot == robot)
+            .ok_or_else(|| PhysicsError {
+                kind: FailureKind::Layout,
+                message: format!("{} is no quadrotor of the world", self.label(robot)),
+            })
+    }
+
+    /// The legged robot `robot`, or a layout failure naming it.
+    fn dog_of(&self, robot: Idx) -> Result<&Dog, PhysicsError> {
+        self.dogs
+            .iter()
+            .find(|d| d.robot == robot)
+            .ok_or_else(|| PhysicsError {
+                kind: FailureKind::Layout,
+                message: format!("{} is no legged robot of the world", self.label(robot)),
+            })
+    }
+
+    fn quad_pos(&self, robot: Idx) -> Option<Vector> {
+        let q = self.quads.iter().find(|q| q.robot == robot)?;
         Some(self.pw.bodies[q.body].translation())
     }
 

@@ -231,23 +231,23 @@ impl World {
     pub(super) fn prepare(&mut self, m: &mut Motion) -> Result<bool, PhysicsError> {
         while let Some(stage) = m.stages.front_mut() {
             let tick = match stage {
-                Stage::Fly(f) => self.fly_tick(f)?,
-                Stage::Hover(h) => self.hover_tick(h)?,
-                Stage::Descend(d) => self.descend_tick(d)?,
+                Stage::Fly(f) => self.fly_tick(m.robot, f)?,
+                Stage::Hover(h) => self.hover_tick(m.robot, h)?,
+                Stage::Descend(d) => self.descend_tick(m.robot, d)?,
                 Stage::Motors(on) => {
-                    self.set_motors(*on);
+                    self.set_motors(m.robot, *on);
                     Tick::Done
                 }
                 Stage::Landed(s) => {
-                    self.check_landed(*s)?;
+                    self.check_landed(m.robot, *s)?;
                     Tick::Done
                 }
                 Stage::Walk(w) => self.walk_tick(w)?,
                 Stage::OffStairs(f, there) => {
-                    self.check_off_stairs(f, *there)?;
+                    self.check_off_stairs(m.robot, f, *there)?;
                     Tick::Done
                 }
-                Stage::Turn(t) => self.turn_tick(t),
+                Stage::Turn(t) => self.turn_tick(m.robot, t),
                 Stage::Arm(a) => self.arm_tick(a),
                 Stage::HandAt {
                     robot,
@@ -288,19 +288,22 @@ impl World {
     /// its motion: the quadrotor holds its set point (at rest), the others stay as they
     /// are (kinematic bodies and arm joints stay where they were last put).
     pub(super) fn hold(&mut self, m: &Motion) {
-        if let Some(Stage::Fly(_) | Stage::Hover(_) | Stage::Descend(_)) = m.stages.front() {
-            self.quad_target.1 = Vector::ZERO;
+        if let Some(Stage::Fly(_) | Stage::Hover(_) | Stage::Descend(_)) = m.stages.front()
+            && let Some(i) = self.quad_index(m.robot)
+        {
+            self.quads[i].target.1 = Vector::ZERO;
         }
     }
 
     /// What `m`'s current stage checks once the simulation step it asked for is done.
     pub(super) fn after_step(&mut self, m: &mut Motion) -> Result<(), PhysicsError> {
+        let robot = m.robot;
         match m.stages.front_mut() {
-            Some(Stage::Fly(_)) => self.fly_after(),
-            Some(Stage::Hover(h)) => self.hover_after(h),
+            Some(Stage::Fly(_)) => self.fly_after(robot),
+            Some(Stage::Hover(h)) => self.hover_after(robot, h),
             Some(Stage::Descend(d)) => {
                 d.steps += 1;
-                d.touches = self.quad_touches(d.surface);
+                d.touches = self.quad_touches(robot, d.surface);
                 Ok(())
             }
             Some(Stage::Walk(w)) => self.walk_after(w),

@@ -12,10 +12,8 @@ use super::{FailureKind, PhysicsError, World, fail, solid, v3};
 impl World {
     /// The next step of a flight: the set point moves towards the next waypoint at
     /// flight speed; at the last one the craft hovers there.
-    pub(super) fn fly_tick(&mut self, f: &mut Fly) -> Result<Tick, PhysicsError> {
-        let Some(body) = self.quad.as_ref().map(|q| q.body) else {
-            return fail(FailureKind::Layout, "no quadrotor".into());
-        };
+    pub(super) fn fly_tick(&mut self, robot: Idx, f: &mut Fly) -> Result<Tick, PhysicsError> {
+        let (i, body) = self.quad_and_body(robot)?;
         let (mut setpoint, com_off) = *f.at.get_or_insert_with(|| {
             let rb = &self.pw.bodies[body];
             (rb.translation(), rb.center_of_mass() - rb.translation())
@@ -28,7 +26,7 @@ impl World {
                 let stepv = d.normalize_or_zero() * (speed * dt).min(d.length());
                 setpoint += stepv;
                 f.at = Some((setpoint, com_off));
-                self.quad_target = (setpoint + com_off, stepv / dt);
+                self.quads[i].target = (setpoint + com_off, stepv / dt);
                 return Ok(Tick::Step);
             }
             f.next += 1;
@@ -42,21 +40,20 @@ impl World {
     }
 
     /// After a step of a flight: no crash, and the track recorded.
-    pub(super) fn fly_after(&mut self) -> Result<(), PhysicsError> {
-        self.check_quad_hits()?;
-        if let Some(robot) = self.quad.as_ref().map(|q| q.robot) {
-            self.record_path(robot);
-        }
+    pub(super) fn fly_after(&mut self, robot: Idx) -> Result<(), PhysicsError> {
+        self.check_quad_hits(robot)?;
+        self.record_path(robot);
         Ok(())
     }
 
     /// Holding the end of a flight, for at most `quad_hover_max_steps`.
-    pub(super) fn hover_tick(&mut self, h: &mut Hover) -> Result<Tick, PhysicsError> {
+    pub(super) fn hover_tick(&mut self, robot: Idx, h: &mut Hover) -> Result<Tick, PhysicsError> {
+        let (i, _) = self.quad_and_body(robot)?;
         if h.still {
             return Ok(Tick::Done);
         }
         if h.steps >= self.tol.quad_hover_max_steps {
-            let at = self.quad_pos().unwrap_or(h.end);
+            let at = self.quad_pos(robot).unwrap_or(h.end);
             let end = h.end;
             return fail(
                 FailureKind::Timeout,
@@ -69,15 +66,15 @@ impl World {
                 ),
             );
         }
-        self.quad_target = (h.end + h.com_off, Vector::ZERO);
+        self.quads[i].target = (h.end + h.com_off, Vector::ZERO);
         Ok(Tick::Step)
     }
 
     /// After a step of hovering: no crash; still once it is within `quad_hover_radius`
     /// of the end and slower than `quad_hover_speed` (after `quad_hover_min_steps`).
-    pub(super) fn hover_after(&mut self, h: &mut Hover) -> Result<(), PhysicsError> {
-        self.check_quad_hits()?;
-        if let Some(q) = &self.quad {
+    pub(super) fn hover_after(&mut self, robot: Idx, h: &mut Hover) -> Result<(), PhysicsError> {
+        self.check_quad_hits(robot)?;
+        if let Ok(q) = self.quad_of(robot) {
             let rb = &self.pw.bodies[q.body];
             if h.steps > self.tol.quad_hover_min_steps
                 && (rb.translation() - h.end).length() < self.tol.quad_hover_radius
@@ -91,8 +88,8 @@ impl World {
     }
 
     /// A flying quadrotor touching a door panel or a wall has crashed.
-    fn check_quad_hits(&self) -> Result<(), PhysicsError> {
-        let Some(q) = &self.quad else { return Ok(()) };
+    fn check_quad_hits(&self, robot: Idx) -> Result<(), PhysicsError> {
+        let q = self.quad_of(robot)?;
         for c in self.pw.bodies[q.body].colliders() {
             for pair in self.pw.narrow_phase.contact_pairs_with(*c) {
                 if !pair.has_any_active_contact() {
@@ -138,9 +135,14 @@ impl World {
         Ok(())
     }
 
-    /// A free spot for the quadrotor on `s` (body origin), preferring one next to a
-    /// fixed arm on `s`, else the one nearest `near`.
-    pub(super) fn landing_spot(&self, s: Idx, near: Vector) -> Result<Vector, PhysicsError> {
+    /// A free spot for the quadrotor `robot` on `s` (body origin), preferring one next
+    /// to a fixed arm on `s`, else the one nearest `near`.
+    pub(super) fn landing_spot(
+        &self,
+        robot: Idx,
+        s: Idx,
+        near: Vector,
+    ) -> Result<Vector, PhysicsError> {
         let Some((b, c, half)) = self.top[s.get()] else {
             return fail(
                 FailureKind::Blocked,
@@ -165,7 +167,7 @@ impl World {
             t.quad_landing_probe_half_height,
             qh + t.quad_landing_margin,
         ));
-        let qbody = self.quad.as_ref().map(|q| q.body);
+        let qbody = self.quad_of(robot).ok().map(|q| q.body);
         let mut best: Option<(f32, Vector)> = None;
         let step = t.quad_landing_grid;
         // A floor is walled: keep the craft's overshoot on arrival off the walls.
@@ -228,12 +230,11 @@ impl World {
     /// opening in the upper room's wall).
     pub(super) fn quad_fly_to(
         &self,
+        robot: Idx,
         dest: Vector,
         hover_y: f32,
     ) -> Result<Vec<Stage>, PhysicsError> {
-        let Some(p) = self.quad_pos() else {
-            return fail(FailureKind::Layout, "no quadrotor".into());
-        };
+        let p = self.pw.bodies[self.quad_of(robot)?.body].translation();
         let cruise = self.layout.specs.cruise_altitude;
         let t = &self.tol;
         let here = self.level_at(p) + cruise;
@@ -325,21 +326,17 @@ impl World {
     }
 
     /// Motors on, then straight up `quad_takeoff_height`.
-    pub(super) fn quad_takeoff(&self) -> Result<Vec<Stage>, PhysicsError> {
-        let Some(p) = self.quad_pos() else {
-            return fail(FailureKind::Layout, "no quadrotor".into());
-        };
+    pub(super) fn quad_takeoff(&self, robot: Idx) -> Result<Vec<Stage>, PhysicsError> {
+        let p = self.pw.bodies[self.quad_of(robot)?.body].translation();
         let up = Vector::new(0.0, self.tol.quad_takeoff_height, 0.0);
         Ok(vec![Stage::Motors(true), Fly::stage(vec![p + up])])
     }
 
     /// Over a free spot on `s`, down to `quad_descent_start` above it, then slowly down
     /// until the basket touches it; the motors cut, it must rest there.
-    pub(super) fn quad_land(&self, s: Idx) -> Result<Vec<Stage>, PhysicsError> {
-        let Some(p) = self.quad_pos() else {
-            return fail(FailureKind::Layout, "no quadrotor".into());
-        };
-        let spot = self.landing_spot(s, p)?;
+    pub(super) fn quad_land(&self, robot: Idx, s: Idx) -> Result<Vec<Stage>, PhysicsError> {
+        let p = self.pw.bodies[self.quad_of(robot)?.body].translation();
+        let spot = self.landing_spot(robot, s, p)?;
         let t = &self.tol;
         Ok(vec![
             Fly::stage(vec![
@@ -359,10 +356,12 @@ impl World {
     /// The next step of the descent (at `quad_descent_speed`, for at most
     /// `quad_descent_max_steps`); once the craft touches, the motors are cut and it
     /// settles.
-    pub(super) fn descend_tick(&mut self, d: &mut Descend) -> Result<Tick, PhysicsError> {
-        let Some(body) = self.quad.as_ref().map(|q| q.body) else {
-            return fail(FailureKind::Layout, "no quadrotor".into());
-        };
+    pub(super) fn descend_tick(
+        &mut self,
+        robot: Idx,
+        d: &mut Descend,
+    ) -> Result<Tick, PhysicsError> {
+        let (i, body) = self.quad_and_body(robot)?;
         let t = self.tol;
         let (y, com_off) = d.at.get_or_insert_with(|| {
             let rb = &self.pw.bodies[body];
@@ -377,7 +376,7 @@ impl World {
             ]));
         }
         *y -= t.quad_descent_speed * t.dt;
-        self.quad_target = (
+        self.quads[i].target = (
             Vector::new(d.spot.x, *y, d.spot.z) + *com_off,
             Vector::new(0.0, -t.quad_descent_speed, 0.0),
         );
@@ -385,8 +384,8 @@ impl World {
     }
 
     /// Motors on (the position controller starts afresh) or off.
-    pub(super) fn set_motors(&mut self, on: bool) {
-        if let Some(q) = self.quad.as_mut() {
+    pub(super) fn set_motors(&mut self, robot: Idx, on: bool) {
+        if let Some(q) = self.quads.iter_mut().find(|q| q.robot == robot) {
             q.motors_on = on;
             if on {
                 q.integral = Vector::ZERO;
@@ -395,8 +394,8 @@ impl World {
     }
 
     /// The landed quadrotor rests on `s`.
-    pub(super) fn check_landed(&self, s: Idx) -> Result<(), PhysicsError> {
-        if !self.quad_touches(s) {
+    pub(super) fn check_landed(&self, robot: Idx, s: Idx) -> Result<(), PhysicsError> {
+        if !self.quad_touches(robot, s) {
             return fail(
                 FailureKind::Blocked,
                 format!("the quadrotor did not come to rest on {}", self.label(s)),
@@ -405,10 +404,15 @@ impl World {
         Ok(())
     }
 
-    /// Whether a collider of the quadrotor is in contact with one of `s`.
-    pub(super) fn quad_touches(&self, s: Idx) -> bool {
-        self.quad
-            .as_ref()
-            .is_some_and(|q| self.body_touches(q.body, s))
+    /// Whether a collider of the quadrotor `robot` is in contact with one of `s`.
+    pub(super) fn quad_touches(&self, robot: Idx, s: Idx) -> bool {
+        self.quad_of(robot)
+            .is_ok_and(|q| self.body_touches(q.body, s))
+    }
+
+    /// The quadrotor `robot`'s index in `quads` and its body.
+    fn quad_and_body(&self, robot: Idx) -> Result<(usize, RigidBodyHandle), PhysicsError> {
+        let body = self.quad_of(robot)?.body;
+        Ok((self.quad_index(robot).unwrap_or(0), body))
     }
 }

@@ -17,9 +17,12 @@ impl World {
         let Some(xb) = self.body[x.get()] else {
             return Placement::Loose;
         };
-        // The basket rides with the quadrotor: on what the quadrotor has landed on.
+        // The basket rides with its quadrotor: on what the quadrotor has landed on.
         if self.task.node(x).kind == NodeKind::Tool {
-            let landed = self.quad.as_ref().is_some_and(|q| !q.motors_on);
+            let landed = self
+                .quads
+                .iter()
+                .any(|q| self.task.basket_of(q.robot) == Some(x) && !q.motors_on);
             if !landed {
                 return Placement::Loose;
             }
@@ -98,7 +101,7 @@ impl World {
         let origin = self.underside(xb)?;
         let mut filter = solid().exclude_rigid_body(xb);
         // The quadrotor rests on furniture or a floor, never on what is in its basket.
-        if self.quad.as_ref().is_some_and(|q| q.body == xb) {
+        if self.quads.iter().any(|q| q.body == xb) {
             filter.flags |= QueryFilterFlags::EXCLUDE_DYNAMIC;
         }
         let qp = self.pw.query_pipeline_with_filter(filter);
@@ -151,15 +154,10 @@ impl World {
         Some(angle * axis.dot(h.axis).signum())
     }
 
-    fn dog_shoulder_world(&self) -> Option<Vector> {
-        let d = self.dog.as_ref()?;
-        let ai = self.arm_index(d.robot)?;
-        Some(self.shoulder(&self.arms[ai]))
-    }
-
-    /// Distance from the dog's shoulder to the nearest point of `x`.
-    pub fn dog_distance(&self, x: Idx) -> Option<f32> {
-        let s = self.dog_shoulder_world()?;
+    /// Distance from the shoulder of the legged robot `dog` to the nearest point of `x`.
+    pub fn dog_distance(&self, dog: Idx, x: Idx) -> Option<f32> {
+        let ai = self.arm_index(self.dog_of(dog).ok()?.robot)?;
+        let s = self.shoulder(&self.arms[ai]);
         let b = self.body[x.get()]?;
         let mut best = f32::INFINITY;
         for c in self.pw.bodies[b].colliders() {
@@ -173,9 +171,10 @@ impl World {
         best.is_finite().then_some(best)
     }
 
-    pub fn dog_reach(&self) -> f32 {
-        self.dog
-            .as_ref()
+    /// How far the arm of the legged robot `dog` reaches.
+    pub fn dog_reach(&self, dog: Idx) -> f32 {
+        self.dog_of(dog)
+            .ok()
             .and_then(|d| self.arm_index(d.robot))
             .map_or(0.0, |ai| self.arms[ai].reach)
     }
@@ -186,9 +185,10 @@ impl World {
         self.room_at(self.pw.bodies[b].translation())
     }
 
-    /// `Some(true)` landed, `Some(false)` flying.
-    pub fn quad_landed_on(&self) -> Option<(bool, Option<Idx>)> {
-        let q = self.quad.as_ref()?;
+    /// Whether the quadrotor `robot` has landed, and on what (`None`: no such
+    /// quadrotor).
+    pub fn quad_landed_on(&self, robot: Idx) -> Option<(bool, Option<Idx>)> {
+        let q = self.quad_of(robot).ok()?;
         if q.motors_on {
             return Some((false, None));
         }
@@ -198,9 +198,9 @@ impl World {
         Some((resting && on.is_some(), on))
     }
 
-    /// Whether the flying quadrotor is over `s`'s top (a floor: its room).
-    pub fn quad_above(&self, s: Idx) -> bool {
-        let Some(p) = self.quad_pos() else {
+    /// Whether the flying quadrotor `robot` is over `s`'s top (a floor: its room).
+    pub fn quad_above(&self, robot: Idx, s: Idx) -> bool {
+        let Some(p) = self.quad_pos(robot) else {
             return false;
         };
         if self.task.node(s).kind == NodeKind::Floor {

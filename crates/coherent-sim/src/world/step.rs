@@ -11,7 +11,9 @@ use super::motion::{Settle, Tick};
 
 impl World {
     pub(super) fn step(&mut self) {
-        self.control_quad();
+        for i in 0..self.quads.len() {
+            self.control_quad(i);
+        }
         // A multibody writes its root link's pose into the root body during the step, so
         // the root link is put where a kinematic root (the walking dog) is going first;
         // otherwise the root's kinematic target is overwritten and it never moves.
@@ -72,11 +74,12 @@ impl World {
         })
     }
 
-    fn control_quad(&mut self) {
-        let Some(q) = self.quad.clone() else { return };
-        let target = self.quad_target;
+    /// The controller of the quadrotor `quads[i]`.
+    fn control_quad(&mut self, i: usize) {
+        let q = self.quads[i].clone();
+        let target = q.target;
         let (payload, load_at) = if q.motors_on {
-            self.basket_load()
+            self.basket_load(&q)
         } else {
             (0.0, Vector::ZERO)
         };
@@ -108,9 +111,7 @@ impl World {
         if integral.length() > t.quad_integral_limit {
             integral = integral.normalize() * t.quad_integral_limit;
         }
-        if let Some(qm) = self.quad.as_mut() {
-            qm.integral = integral;
-        }
+        self.quads[i].integral = integral;
         let rb = &mut self.pw.bodies[q.body];
         let mut acc = (tp - p) * t.quad_kp + (tv - v) * t.quad_kd + integral * t.quad_ki;
         let horiz = Vector::new(acc.x, 0.0, acc.z);
@@ -166,9 +167,8 @@ impl World {
     /// the basket's footprint, from `basket_load_below` under its inner floor up to
     /// `basket_load_height` above its middle).
     /// Returns the mass and its centre.
-    fn basket_load(&self) -> (f32, Vector) {
+    fn basket_load(&self, q: &super::Quad) -> (f32, Vector) {
         let none = (0.0, Vector::ZERO);
-        let Some(q) = &self.quad else { return none };
         let Some(v) = self
             .task
             .basket_of(q.robot)

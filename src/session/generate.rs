@@ -1,0 +1,198 @@
+//! Generated task sets (`coherent generate`, `coherent.generate`): a request, the set
+//! made by `coherent-generate`, and the folder it is written to: a native task file per
+//! task under `<scene>/`, `manifest.jsonl` and the datasheet `README.md`. Every file is
+//! written under a temporary name and renamed when whole, so that Ctrl-C (or a full
+//! disk) leaves whole files only; the manifest and the datasheet are written last, of
+//! the tasks written.
+
+use std::fs::{self, File};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use coherent_agents::Cancel;
+use coherent_core::Task;
+use coherent_generate::sheet::Tally;
+use coherent_generate::{About, Entry, Generated};
+
+use crate::session::Error;
+
+pub use coherent_generate::request::{parse_split, parse_types};
+pub use coherent_generate::{KnobError, Progress, Ratio, Request, Span, TeamSpec};
+
+/// What a front end asks for: the set, where it goes (`None`: nowhere, the tasks are
+/// only handed back), and the command that asks, for the datasheet.
+#[derive(Clone, Debug)]
+pub struct GenerateRequest {
+    pub request: Request,
+    pub out: Option<PathBuf>,
+    pub command: String,
+}
+
+/// A task the set kept, as a front end sees it.
+#[derive(Clone, Debug)]
+pub struct Kept {
+    pub task: Task,
+    /// Its manifest line.
+    pub manifest: serde_json::Value,
+}
+
+/// How a run ended.
+#[derive(Clone, Debug)]
+pub struct Made {
+    pub tally: Tally,
+    pub scenes: usize,
+    /// Ctrl-C stopped it before the set was complete.
+    pub interrupted: bool,
+}
+
+/// The version every datasheet names.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+impl GenerateRequest {
+    /// Makes the set: each kept task to `kept` (and to its file), the progress to
+    /// `progress`. A request that cannot be met is `Error::Invalid` naming the knob; an
+    /// output folder that cannot be written `Error::File`.
+    pub fn run(
+        &self,
+        cancel: &Cancel,
+        kept: &mut dyn FnMut(Kept),
+        progress: &mut dyn FnMut(Progress),
+    ) -> Result<Made, Error> {
+        self.request.check().map_err(knob)?;
+        let mut folder = match &self.out {
+            Some(dir) => Some(Folder::create(dir)?),
+            None => None,
+        };
+        let flag: Arc<std::sync::atomic::AtomicBool> = cancel.flag();
+        let mut write_error = None;
+        let outcome = {
+            let mut keep = |g: Generated| -> std::io::Result<()> {
+                if let Some(f) = folder.as_mut()
+                    && let Err(e) = f.task(&g)
+                {
+                    write_error = Some(e);
+                    return Err(std::io::Error::other("the task could not be written"));
+                }
+                kept(Kept {
+                    manifest: g.entry.to_json(),
+                    task: g.task,
+                });
+                Ok(())
+            };
+            coherent_generate::generate(&self.request, &flag, &mut keep, progress).map_err(knob)?
+        };
+        if let Some(e) = write_error {
+            return Err(e);
+        }
+        let outcome = outcome.map_err(|e| Error::Internal(e.to_string()))?;
+        let about = About {
+            command: &self.command,
+            version: VERSION,
+            seed: self.request.seed,
+            scenes: outcome.scenes.len(),
+            interrupted: outcome.interrupted,
+        };
+        if let Some(f) = folder {
+            f.finish(&outcome.tally.datasheet(&about))?;
+        }
+        Ok(Made {
+            scenes: outcome.scenes.len(),
+            interrupted: outcome.interrupted,
+            tally: outcome.tally,
+        })
+    }
+}
+
+/// A request the knobs cannot meet, as the session's error.
+fn knob(e: KnobError) -> Error {
+    Error::Invalid(e.to_string())
+}
+
+/// The output folder being written.
+struct Folder {
+    dir: PathBuf,
+    manifest: BufWriter<File>,
+}
+
+const MANIFEST: &str = "manifest.jsonl";
+const DATASHEET: &str = "README.md";
+
+impl Folder {
+    /// The folder, made if it does not exist; one that holds anything is refused, so
+    /// that no old task is mistaken for one of this set.
+    fn create(dir: &Path) -> Result<Folder, Error> {
+        let io = |e: std::io::Error| file_error(dir, &e.to_string());
+        if dir.exists() {
+            if !dir.is_dir() {
+                return Err(file_error(dir, "exists and is no folder"));
+            }
+            if fs::read_dir(dir).map_err(io)?.next().is_some() {
+                return Err(file_error(
+                    dir,
+                    "the folder is not empty: a generated set is written to a new or empty folder",
+                ));
+            }
+        }
+        fs::create_dir_all(dir).map_err(io)?;
+        let tmp = dir.join(temporary(MANIFEST));
+        let manifest =
+            BufWriter::new(File::create(&tmp).map_err(|e| file_error(&tmp, &e.to_string()))?);
+        Ok(Folder {
+            dir: dir.to_path_buf(),
+            manifest,
+        })
+    }
+
+    /// A kept task: its file, whole, then its manifest line.
+    fn task(&mut self, g: &Generated) -> Result<(), Error> {
+        let path = self.dir.join(format!("{}.json", g.entry.id));
+        write_whole(&path, g.text.as_bytes())?;
+        self.line(&g.entry)
+    }
+
+    fn line(&mut self, e: &Entry) -> Result<(), Error> {
+        let tmp = self.dir.join(temporary(MANIFEST));
+        writeln!(self.manifest, "{}", e.to_json()).map_err(|err| file_error(&tmp, &err.to_string()))
+    }
+
+    /// The manifest renamed into place, and the datasheet.
+    fn finish(mut self, datasheet: &str) -> Result<(), Error> {
+        let tmp = self.dir.join(temporary(MANIFEST));
+        self.manifest
+            .flush()
+            .and_then(|()| self.manifest.get_ref().sync_all())
+            .map_err(|e| file_error(&tmp, &e.to_string()))?;
+        let path = self.dir.join(MANIFEST);
+        fs::rename(&tmp, &path).map_err(|e| file_error(&path, &e.to_string()))?;
+        write_whole(&self.dir.join(DATASHEET), datasheet.as_bytes())
+    }
+}
+
+/// The temporary name of `name` while it is written: hidden, and no `.json`, so that no
+/// reader of task folders takes it for a task.
+fn temporary(name: &str) -> String {
+    format!(".{name}.partial")
+}
+
+/// Writes `bytes` to a temporary file beside `path`, then renames it to `path`.
+fn write_whole(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    let err = |e: std::io::Error| file_error(path, &e.to_string());
+    let dir = path.parent().unwrap_or(Path::new("."));
+    fs::create_dir_all(dir).map_err(err)?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(temporary(&name));
+    fs::write(&tmp, bytes).map_err(err)?;
+    fs::rename(&tmp, path).map_err(err)
+}
+
+fn file_error(path: &Path, message: &str) -> Error {
+    Error::File {
+        file: path.display().to_string(),
+        line: None,
+        message: message.to_owned(),
+    }
+}
