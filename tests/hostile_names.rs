@@ -282,3 +282,50 @@ fn numbers_given_to_flags_are_echoed_short() {
         assert!(!err.contains("0000000000"), "{err}");
     }
 }
+
+/// `render` of a task whose names hold control characters writes well-formed XML: every
+/// text of the picture goes through the one escaping of text that leaves the program
+/// (`coherent_core::text::markup`), so that no character XML 1.0 forbids reaches the
+/// file, even escaped. A raw ESC used to be written into the SVG, which then was not
+/// XML (no browser drew it), while `render` said "wrote" and exited 0.
+#[test]
+fn a_render_of_names_with_control_characters_is_well_formed_xml() {
+    let dir = scratch("render-escapes");
+    let text = std::fs::read_to_string(demo()).expect("the demo task");
+    let mut task: Value = serde_json::from_str(&text).expect("JSON");
+    let evil = "\u{1b}]0;owned\u{7}\u{1b}[2J\n<b>&amp;\"'\u{0}\u{202e}\u{fffe}";
+    task["scene"] = json!(format!("lab{evil}"));
+    for node in task["graph"]["nodes"].as_array_mut().expect("nodes") {
+        if node["category"] != "Agents" {
+            let name = node["class_name"].as_str().expect("a name").to_owned();
+            node["class_name"] = json!(format!("{name}{evil}"));
+        }
+    }
+    let path = dir.join("task.json");
+    std::fs::write(&path, task.to_string()).expect("written");
+    let svg = dir.join("scene.svg");
+    let out = coherent(&["render", utf8(&path), "-o", utf8(&svg)]);
+    assert_eq!(out.status.code(), Some(0), "{}", show(&out));
+    let picture = std::fs::read_to_string(&svg).expect("an SVG in UTF-8");
+    let forbidden = |c: char| matches!(c, '\u{0}'..='\u{8}' | '\u{b}' | '\u{c}' | '\u{e}'..='\u{1f}' | '\u{fffe}' | '\u{ffff}');
+    assert!(!picture.contains(forbidden), "a character XML 1.0 forbids");
+    raw_free("the SVG", &picture);
+    assert!(
+        picture.contains("kitchen\\u{1b}]0;owned\\u{7}"),
+        "shown as the terminal shows it"
+    );
+    let parsed = Command::new("python3")
+        .args([
+            "-c",
+            "import sys, xml.etree.ElementTree as E; E.parse(sys.argv[1])",
+            utf8(&svg),
+        ])
+        .output()
+        .expect("python3 runs (it checks the SVG with the standard library's XML parser)");
+    assert!(
+        parsed.status.success(),
+        "not well-formed XML: {}",
+        String::from_utf8_lossy(&parsed.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

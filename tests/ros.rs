@@ -5,7 +5,7 @@
 mod common;
 
 use std::path::Path;
-use std::process::Command;
+use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use common::netns::{LONG, Netns, actions, report, transcript};
@@ -845,4 +845,171 @@ fn a_link_process_cancels_its_goal_and_ends_when_its_run_is_killed() {
         assert!(start.elapsed() < LONG, "the link process outlived its run");
         std::thread::sleep(Duration::from_millis(20));
     }
+}
+
+/// Sends `signal` to process `pid`.
+fn kill(signal: &str, pid: u32) {
+    let sent = Command::new("kill")
+        .args([&format!("-{signal}"), &pid.to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success(), "kill -{signal} {pid}");
+}
+
+/// A link process stopped by the test (SIGSTOP), killed when the test ends however it
+/// ends: a stopped process would outlive it.
+struct Stopped(u32);
+
+impl Stopped {
+    fn new(pid: u32) -> Stopped {
+        kill("STOP", pid);
+        Stopped(pid)
+    }
+}
+
+impl Drop for Stopped {
+    fn drop(&mut self) {
+        // It may have been killed already: by the run, as it should be.
+        let _ = Command::new("kill")
+            .args(["-KILL", &self.0.to_string()])
+            .stderr(Stdio::null())
+            .status();
+    }
+}
+
+/// The demo's robot servers in `ns`, each action taking `delay` seconds, and a run of the
+/// demo over them with the flags `extra`, its transcript in `runs`; once the servers' log
+/// has `until`.
+fn demo_over_ros2(
+    ns: &Netns,
+    delay: &str,
+    extra: &[&str],
+    runs: &str,
+    until: &str,
+) -> (common::netns::Proc, common::netns::Proc) {
+    let demo = demo();
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo, "--delay", delay]);
+    let mut args = vec!["run", &demo, "--robots", "ros2", "--out", runs];
+    args.extend(extra);
+    let run = ns.spawn("run", &args);
+    server.wait_for(until, LONG);
+    (server, run)
+}
+
+/// A link process that is stopped (SIGSTOP: alive, but it answers nothing, not even its
+/// heartbeat) is unresponsive once it has been silent as long as a robot may be: the run
+/// kills it and stops, exit 5, naming it, within the robot timeout and a little. It used
+/// to wait for it for ever (SIGCONT let it go on, blaming the robot).
+#[test]
+fn a_stopped_link_process_ends_the_run_within_the_robot_timeout_naming_it() {
+    let ns = Netns::new("link-stopped");
+    let runs = ns.path("runs");
+    let accepted = "step 2 [movetowards] <door>(4) -> accepted";
+    let (_server, mut run) = demo_over_ros2(&ns, "0.5", &["--robot-timeout", "3"], &runs, accepted);
+    let _stopped = Stopped::new(link_process(&run));
+    let stopped = Instant::now();
+    assert_eq!(run.wait(LONG), 5, "{}", run.show());
+    assert!(
+        stopped.elapsed() < Duration::from_secs(8),
+        "{:?} after the link process was stopped\n{}",
+        stopped.elapsed(),
+        run.show()
+    );
+    let said = run.stdout();
+    assert!(
+        said.contains(": the ROS 2 link process is unresponsive: nothing from it for 3 s"),
+        "{said}"
+    );
+    let t = transcript(&runs);
+    assert_eq!(t.summary["status"], "interrupted");
+    let error = t.summary["error"].as_str().expect("the summary says why");
+    assert!(
+        error.contains("killed by SIGKILL") && !error.contains("flood"),
+        "{error}"
+    );
+}
+
+/// SIGTERM and Ctrl-C end a run at any time, its link process stopped too: the cancel
+/// is forwarded, and a link process that misses its heartbeats then is ended at once.
+#[test]
+fn sigterm_and_ctrl_c_end_a_run_whose_link_process_is_stopped() {
+    for (signal, status) in [("TERM", 143), ("INT", 130)] {
+        let ns = Netns::new(&format!("link-stopped-{signal}"));
+        let runs = ns.path("runs");
+        let accepted = "robot_arm_6 step 1 [grab] <mug>(7) -> accepted";
+        let extra = ["--robot-timeout", "60"];
+        let (_server, mut run) = demo_over_ros2(&ns, "30", &extra, &runs, accepted);
+        let _stopped = Stopped::new(link_process(&run));
+        std::thread::sleep(Duration::from_millis(500));
+        run.signal(signal);
+        let signalled = Instant::now();
+        assert_eq!(run.wait(LONG), status, "{}", run.show());
+        assert!(
+            signalled.elapsed() < Duration::from_secs(6),
+            "{:?} after SIG{signal}\n{}",
+            signalled.elapsed(),
+            run.show()
+        );
+        let t = transcript(&runs);
+        assert_eq!(t.summary["status"], "interrupted");
+        assert_eq!(t.rounds[0]["outcome"]["reason"], "cancelled");
+    }
+}
+
+/// Lines on the link process's stdin that the run did not write end it, and the run
+/// says so (exit 5), not that a flood reached its memory limit.
+#[test]
+fn garbage_on_the_link_processs_stdin_is_named_as_such() {
+    let ns = Netns::new("link-garbage");
+    let runs = ns.path("runs");
+    let accepted = "step 2 [movetowards] <door>(4) -> accepted";
+    let (_server, mut run) = demo_over_ros2(&ns, "0.5", &[], &runs, accepted);
+    let link = link_process(&run);
+    std::fs::write(format!("/proc/{link}/fd/0"), "garbage\n").expect("its stdin is a pipe");
+    assert_eq!(run.wait(LONG), 5, "{}", run.show());
+    let t = transcript(&runs);
+    let error = t.summary["error"].as_str().expect("the summary says why");
+    // Between two steps it ends at once; during one, the goal in flight fails with it.
+    assert!(
+        (error.contains("the ROS 2 link process ended (exit status 2): its stdin held")
+            || error.contains("the ROS 2 link process ends: its stdin held"))
+            && error.contains("a line that is not the protocol's")
+            && error.contains("something other than the run wrote to the link process's stdin")
+            && !error.contains("memory limit")
+            && !error.contains("flood"),
+        "{error}"
+    );
+}
+
+/// Two runs of one task in one namespace and domain: each one's goals change the robots'
+/// world under the other, and the first to hear of the other's goal (a reply of a
+/// robot's server to a goal it did not send) stops, naming the other client. The first
+/// run used to refuse 26 steps until its budget was spent, never naming it.
+#[test]
+fn a_second_client_of_the_robots_servers_stops_the_run_naming_it() {
+    let ns = Netns::new("two-clients");
+    let mut server = ns.spawn("serve", &["robots", "serve", &demo(), "--delay", "0.3"]);
+    let (first_runs, second_runs) = (ns.path("first"), ns.path("second"));
+    let demo = demo();
+    let mut first = ns.spawn(
+        "first",
+        &["run", &demo, "--robots", "ros2", "--out", &first_runs],
+    );
+    server.wait_for("step 3 ", LONG);
+    let mut second = ns.spawn(
+        "second",
+        &["run", &demo, "--robots", "ros2", "--out", &second_runs],
+    );
+    assert_eq!(first.wait(LONG), 5, "{}\n{}", first.show(), second.show());
+    let said = first.stdout();
+    assert!(
+        said.contains("another client, participant ")
+            && said.contains("sends goals to this robot's action server"),
+        "{said}\n{}",
+        second.show()
+    );
+    let t = transcript(&first_runs);
+    assert_eq!(t.summary["status"], "interrupted");
+    assert!(t.rounds.len() < 22, "{} rounds", t.rounds.len());
+    let _ = second.ended(LONG);
 }

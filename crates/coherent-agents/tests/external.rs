@@ -5,7 +5,7 @@
 //! `tests/bench_runs.rs`.)
 
 use std::collections::VecDeque;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
 use coherent_agents::episode::{
@@ -13,7 +13,7 @@ use coherent_agents::episode::{
 };
 use coherent_agents::llm::BoxFuture;
 use coherent_agents::transcript::{self, Reason, RoundOutcome, Status};
-use coherent_agents::{BuiltinBackend, Cancel, Replay};
+use coherent_agents::{BuiltinBackend, Cancel, Episode, Replay};
 use coherent_agents::{External, MethodSpec, Settings};
 use coherent_core::planner::Limits;
 use coherent_core::{NodeId, SymbolicEnv, Task};
@@ -66,6 +66,23 @@ fn scripted(
     External::new(name, make).expect("a valid name")
 }
 
+/// Runs `method` on `task` by the rules, within `budget` steps, its transcript in `out`:
+/// the episode and the transcript's path.
+async fn play(task: &Arc<Task>, method: External, budget: u32, out: &Path) -> (Episode, PathBuf) {
+    let mut env = SymbolicEnv::new(Arc::clone(task));
+    common::run(
+        task,
+        &mut env,
+        &BuiltinBackend::new(Limits::default()),
+        &Settings::new(MethodSpec::External(method)),
+        Budget::Given(budget),
+        out,
+        &Cancel::default(),
+    )
+    .await
+    .expect("the episode runs")
+}
+
 fn choice(robot: Option<i64>, action: &str) -> Result<Choice, MethodFailure> {
     Ok(Choice {
         robot: robot.map(NodeId),
@@ -91,18 +108,7 @@ async fn faults_are_steps_and_an_error_ends_the_episode() {
         Err("ValueError: no idea".into()),
     ];
     let method = scripted("scripted", script, &views);
-    let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, path) = common::run(
-        &task,
-        &mut env,
-        &BuiltinBackend::new(Limits::default()),
-        &Settings::new(MethodSpec::External(method)),
-        Budget::Given(10),
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the episode runs");
+    let (e, path) = play(&task, method, 10, &out).await;
     let outcomes: Vec<&RoundOutcome> = e.rounds.iter().map(|r| &r.outcome).collect();
     assert!(
         matches!(outcomes[0], RoundOutcome::Infeasible { reason, .. } if *reason != Reason::Error)
@@ -177,19 +183,7 @@ async fn faults_are_steps_and_an_error_ends_the_episode() {
     assert_eq!(recorded.summary.as_ref(), Some(&e.summary));
     let replay = Replay::prepare(&recorded, &path).expect("a replay");
     assert_eq!(replay.settings.method.name(), "scripted");
-    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let (replayed, _) = common::run(
-        &replay.task,
-        &mut env,
-        replay.backend.as_ref(),
-        &replay.settings,
-        replay.budget,
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the replay runs");
-    assert_eq!(replay.difference(&replayed), None);
+    assert_eq!(common::replay(&recorded, &path, &out).await, None);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -199,37 +193,13 @@ async fn a_replay_that_comes_out_differently_says_so() {
     let views = Arc::new(Mutex::new(Vec::new()));
     let script = vec![choice(Some(22), "[takeoff_from] <childroom floor>(3)")];
     let method = scripted("once", script, &views);
-    let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (_, path) = common::run(
-        &task,
-        &mut env,
-        &BuiltinBackend::new(Limits::default()),
-        &Settings::new(MethodSpec::External(method)),
-        Budget::Given(1),
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the episode runs");
+    let (_, path) = play(&task, method, 1, &out).await;
     // The recording says the action ran; make it say it was another.
     let mut recorded = transcript::read(&path).expect("reads back");
     let decision = recorded.rounds[0].external.as_mut().expect("a decision");
     decision.action = Some("[grab] <high kitchen table>(35)".into());
-    let replay = Replay::prepare(&recorded, &path).expect("a replay");
-    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let (replayed, _) = common::run(
-        &replay.task,
-        &mut env,
-        replay.backend.as_ref(),
-        &replay.settings,
-        replay.budget,
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the replay runs");
     assert_eq!(
-        replay.difference(&replayed).as_deref(),
+        common::replay(&recorded, &path, &out).await.as_deref(),
         Some("round 1 differs from the recording")
     );
 }
@@ -260,18 +230,7 @@ async fn a_methods_texts_of_any_length_are_cut_so_that_its_transcript_reads_back
     };
     let traceback = format!("{}\nValueError: at the end", "  frame\n".repeat(1 << 18));
     let method = scripted("long", vec![Ok(long_note), Err(traceback.into())], &views);
-    let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, path) = common::run(
-        &task,
-        &mut env,
-        &BuiltinBackend::new(Limits::default()),
-        &Settings::new(MethodSpec::External(method)),
-        Budget::Given(10),
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the episode runs");
+    let (e, path) = play(&task, method, 10, &out).await;
     // 64 KiB kept (docs/architecture.md), and the note of the whole length.
     let limit = (64 << 10) + 64;
     let chosen = e.rounds[0].external.as_ref().expect("the method's choice");
@@ -285,6 +244,53 @@ async fn a_methods_texts_of_any_length_are_cut_so_that_its_transcript_reads_back
     );
     let back = transcript::read(&path).expect("reads back");
     assert_eq!(back.rounds, e.rounds);
+}
+
+/// What a method says is cut to 64 KiB, the note of the whole length included, and the
+/// action as cut is the one carried out and recorded: the episode's own transcript
+/// replays. A 12 MiB action used to be cut to 64 KiB and a note, recorded so, and cut
+/// again when the replay gave it back (64 KiB of it and another note): "round 1 differs
+/// from the recording".
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_method_answering_a_12_mib_action_replays_from_its_own_transcript() {
+    let out = scratch("long-replay");
+    let task = common::task("env0", 0);
+    let views = Arc::new(Mutex::new(Vec::new()));
+    let takeoff = "[takeoff_from] <childroom floor>(3)";
+    let long = Choice {
+        robot: Some(NodeId(22)),
+        action: Some(format!("{takeoff}{}", " ".repeat(12 << 20))),
+        note: "n".repeat(3 << 20),
+        ..Choice::default()
+    };
+    let traceback = format!("{}\nValueError: at the end", "  frame\n".repeat(1 << 18));
+    let script = vec![Ok(long), choice(Some(22), takeoff), Err(traceback.into())];
+    let method = scripted("long-replay", script, &views);
+    let (e, path) = play(&task, method, 10, &out).await;
+    let recorded = transcript::read(&path).expect("reads back");
+    assert_eq!(common::replay(&recorded, &path, &out).await, None);
+    let chosen = e.rounds[0].external.as_ref().expect("the method's choice");
+    let action = chosen.action.as_deref().expect("an action");
+    assert!(action.len() <= 64 << 10 && chosen.note.len() <= 64 << 10);
+    assert!(
+        action.ends_with("… [cut: 12582947 bytes in all]"),
+        "{} bytes",
+        action.len()
+    );
+    assert_eq!(
+        e.rounds[0]
+            .decision
+            .as_ref()
+            .and_then(|d| d.action.as_deref()),
+        Some(action)
+    );
+    assert!(matches!(e.rounds[1].outcome, RoundOutcome::Executed));
+    assert!(
+        e.summary
+            .error
+            .as_ref()
+            .is_some_and(|why| why.len() <= 64 << 10)
+    );
 }
 
 /// Never answers: its step's future stays pending.
@@ -304,18 +310,7 @@ async fn a_step_over_the_time_limit_ends_the_episode_as_the_methods_error() {
     let method = External::new("silent", make)
         .expect("a valid name")
         .with_step_timeout(Some(std::time::Duration::from_millis(200)));
-    let mut env = SymbolicEnv::new(Arc::clone(&task));
-    let (e, _) = common::run(
-        &task,
-        &mut env,
-        &BuiltinBackend::new(Limits::default()),
-        &Settings::new(MethodSpec::External(method)),
-        Budget::Given(10),
-        &out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the episode runs");
+    let (e, _) = play(&task, method, 10, &out).await;
     assert_eq!(e.summary.status, Status::Error);
     assert_eq!(e.rounds.len(), 1);
     let error = e.summary.error.as_deref().expect("why");

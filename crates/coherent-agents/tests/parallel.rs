@@ -13,7 +13,7 @@ use coherent_agents::episode::{Budget, PlannedMakespan};
 use coherent_agents::llm::{Backend, Role};
 use coherent_agents::transcript::{self, RoundOutcome, Status};
 use coherent_agents::{Builtin, Settings};
-use coherent_agents::{BuiltinBackend, Cancel, ErrorRates, OpenAiClient, OpenAiConfig, Replay};
+use coherent_agents::{BuiltinBackend, Cancel, ErrorRates, OpenAiClient, OpenAiConfig};
 use coherent_core::Execution;
 use coherent_core::makespan;
 use coherent_core::planner::Limits;
@@ -68,20 +68,8 @@ async fn run(
 /// Replays the transcript at `path` and asserts it comes out as recorded.
 async fn replays(path: &Path, out: &Path) {
     let recorded = transcript::read(path).expect("the transcript reads back");
-    let replay = Replay::prepare(&recorded, path).expect("a replay");
-    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
-    let (e, _) = common::run(
-        &replay.task,
-        &mut env,
-        replay.backend.as_ref(),
-        &replay.settings,
-        replay.budget,
-        out,
-        &Cancel::default(),
-    )
-    .await
-    .expect("the replay runs");
-    assert_eq!(replay.difference(&e), None, "{}", path.display());
+    let difference = common::replay(&recorded, path, out).await;
+    assert_eq!(difference, None, "{}", path.display());
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -27,7 +27,7 @@
 use smallvec::SmallVec;
 
 use crate::action::{Action, Verb};
-use crate::graph::{Edge, Idx, NodeKind, RobotKind, State};
+use crate::graph::{Edge, Idx, NodeKind, NodeSet, RobotKind, State};
 use crate::rules::{Contents, View};
 use crate::task::{Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
@@ -97,7 +97,7 @@ fn bit(n: Idx) -> u64 {
 }
 
 /// A part of the state an action depends on.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Read {
     Atom(Atom),
     /// Every edge `(n, rel, _)`, present or not.
@@ -171,12 +171,29 @@ pub struct Conflict {
     pub swapped: bool,
 }
 
+/// Reads a footprint looks through for a repeat before it keeps one more. An action
+/// reads a few dozen atoms at most, except one that names a thing deep in containers,
+/// which reads every edge up to the room (thousands, and a look through them each time
+/// would make the footprint quadratic in the depth): past this many, reads are kept as
+/// they come and the list is sorted and rid of repeats once, when it is done.
+const LISTED_READS: usize = 32;
+
 impl Footprint {
     fn read(&mut self, r: Read) {
         self.read_mask |= r.mask();
-        if !self.reads.contains(&r) {
+        if self.reads.len() >= LISTED_READS || !self.reads.contains(&r) {
             self.reads.push(r);
         }
+    }
+
+    /// The footprint built: its reads a set again when they were too many to look
+    /// through (see [`LISTED_READS`]).
+    fn done(mut self) -> Footprint {
+        if self.reads.len() > LISTED_READS {
+            self.reads.sort_unstable();
+            self.reads.dedup();
+        }
+        self
     }
 
     /// Assigns `value` to `atom`, which had `before`; a later assignment of the same
@@ -192,6 +209,27 @@ impl Footprint {
             Some(old) => *old = w,
             None => self.writes.push(w),
         }
+    }
+
+    /// The bytes the footprint holds beyond its own size: its lists, once they outgrow
+    /// the room they have inline.
+    pub(crate) fn heap_bytes(&self) -> usize {
+        let spilled = |spilled: bool, capacity: usize, each: usize| {
+            if spilled { capacity * each } else { 0 }
+        };
+        spilled(
+            self.reads.spilled(),
+            self.reads.capacity(),
+            size_of::<Read>(),
+        ) + spilled(
+            self.writes.spilled(),
+            self.writes.capacity(),
+            size_of::<Write>(),
+        ) + spilled(
+            self.clears.spilled(),
+            self.clears.capacity(),
+            size_of::<Read>(),
+        )
     }
 
     /// The value this footprint leaves `atom` with, when it assigns it.
@@ -254,7 +292,7 @@ pub(crate) fn in_view(v: &View<'_>, a: Action) -> Footprint {
         RobotKind::RobotDog => t.dog(a),
         RobotKind::RobotArm => t.arm(a),
     }
-    t.f
+    t.f.done()
 }
 
 /// Builds one footprint, reading the state through the view.
@@ -403,9 +441,12 @@ impl Trace<'_, '_> {
     fn chain_to(&self, n: Idx, room: Idx) -> Option<SmallVec<[Edge; 8]>> {
         let s = self.s();
         // Breadth-first upwards; each node found with the edge that reached it and the
-        // index of that edge's source.
+        // index of that edge's source. What was found is also kept as a set: a thing
+        // thousands of containers deep would make a look through the list quadratic.
         type Found = (Idx, Option<(usize, Edge)>);
         let mut seen: SmallVec<[Found; 16]> = smallvec::smallvec![(n, None)];
+        let mut found = NodeSet::new(self.v.task.nodes.len());
+        found.insert(n);
         let mut i = 0;
         while i < seen.len() {
             let x = seen[i].0;
@@ -419,7 +460,7 @@ impl Trace<'_, '_> {
                     }
                     return Some(chain);
                 }
-                if !seen.iter().any(|(y, _)| *y == e.to()) {
+                if found.insert(e.to()) {
                     seen.push((e.to(), Some((i, e))));
                 }
             }

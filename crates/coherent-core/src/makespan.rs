@@ -107,6 +107,19 @@ pub fn schedule(
     sequential: &[Step],
     goal: &[GoalPredicate],
 ) -> Vec<JointStep> {
+    schedule_within(task, start, sequential, goal, &Limits::default())
+}
+
+/// [`schedule`], which replays the rest of the plan for every action it tries to move
+/// (its work grows with the cube of the plan's length): once `limits` is cancelled, the
+/// actions not yet scheduled follow one a step, which plays as well.
+fn schedule_within(
+    task: &Task,
+    start: &State,
+    sequential: &[Step],
+    goal: &[GoalPredicate],
+    limits: &Limits,
+) -> Vec<JointStep> {
     let mut s = start.clone();
     let mut rest: Vec<Step> = sequential.to_vec();
     let mut steps = Vec::new();
@@ -114,6 +127,10 @@ pub fn schedule(
         let mut chosen: Vec<usize> = Vec::new();
         let mut prints: Vec<Footprint> = Vec::new();
         for j in 0..rest.len() {
+            // What was chosen so far is a step that plays; with none, the rest follows.
+            if limits.cancelled() {
+                break;
+            }
             let Some(&robot) = task.robot(rest[j].robot) else {
                 continue;
             };
@@ -135,7 +152,8 @@ pub fn schedule(
             }
         }
         if chosen.is_empty() {
-            // The plan does not play from `s`: keep its order, one action a step.
+            // The plan does not play from `s`, or the search was cancelled: keep its
+            // order, one action a step.
             steps.extend(rest.drain(..).map(|st| vec![st]));
             break;
         }
@@ -291,7 +309,7 @@ impl<'a> Search<'a> {
         sequential: Option<&[Step]>,
         limits: &'a Limits,
     ) -> Search<'a> {
-        let best = sequential.map(|plan| schedule(task, start, plan, goal));
+        let best = sequential.map(|plan| schedule_within(task, start, plan, goal, limits));
         let best_cost = best.as_ref().map_or((usize::MAX, usize::MAX), |plan| {
             (plan.len(), plan.iter().map(Vec::len).sum())
         });
@@ -346,6 +364,10 @@ impl<'a> Search<'a> {
             self.best_cost = (0, 0);
             return ControlFlow::Continue(());
         }
+        // The schedule of the setup may have been cut short by it.
+        if self.limits.cancelled() {
+            return ControlFlow::Break(Stop::Cancelled);
+        }
         while let Some((i, f)) = self.open.pop() {
             if f >= self.best_cost {
                 break;
@@ -382,44 +404,42 @@ impl<'a> Search<'a> {
     fn expand(&mut self, i: usize, gc: u16, f: Cost) -> ControlFlow<Halt, Cost> {
         let s = self.t.states[i].clone();
         let contents = Contents::new(self.task, &s);
-        let lists: Vec<Vec<(Action, Footprint)>> = self
+        let views: Vec<View<'_>> = self
             .robots
             .iter()
-            .map(|&robot| {
-                let view = View::with(self.task, &s, robot, &contents);
-                view.actions()
-                    .into_iter()
-                    .filter(|a| self.useful.allows(self.task, a))
-                    .map(|a| (a, footprint::in_view(&view, a)))
-                    .collect()
-            })
+            .map(|&robot| View::with(self.task, &s, robot, &contents))
             .collect();
+        let choices = Choices::new(self.task, &views, &self.useful);
         let needs = planner::needs(self.task, &s, self.goal);
+        let levels = vec![(s.clone(), needs); self.robots.len() + 1];
+        let held = choices.bytes + levels.iter().map(|(l, _)| l.heap_bytes()).sum::<usize>();
         let mut walk = Walk {
             task: self.task,
             goal: self.goal,
             robots: self.robots,
-            lists: &lists,
-            levels: vec![(s, needs); self.robots.len() + 1],
+            choices,
+            levels,
             chosen: SmallVec::new(),
+            parent: (i, gc, f),
             cost: (usize::from(gc), usize::from(self.actions[i].0)),
             limit: self.best_cost,
+            held,
+            tried: 0,
         };
-        walk.level(0, &mut |state, needs, step| {
-            self.child(i, gc, f, (state, needs), step)
-        })
+        walk.level(0, self)
     }
 
     /// Records the state a joint step leads to (with its [`planner::needs`]), unless it
     /// cannot beat the best plan or is known at no greater cost; `f` is the parent's.
     /// Returns the cost a plan must now beat.
+    /// `held`: the bytes the expansion holds besides the tables (its states and
+    /// footprints), which count against the memory limit too.
     fn child(
         &mut self,
-        parent: usize,
-        gc: u16,
-        f: Cost,
+        (parent, gc, f): (usize, u16, Cost),
         (child, needs): (&State, (u16, u16)),
         step: &[Step],
+        held: usize,
     ) -> ControlFlow<Halt, Cost> {
         let h = bound(needs, self.robots.len() as u16, 0);
         let ga = usize::from(self.actions[parent].0) + step.len();
@@ -446,7 +466,7 @@ impl<'a> Search<'a> {
             }
             None => {
                 let kept = child.clone();
-                if self.bytes(Some(kept.heap_bytes()), step.len()) > self.limits.max_memory {
+                if self.bytes(Some(kept.heap_bytes()), step.len()) + held > self.limits.max_memory {
                     return ControlFlow::Break(Halt::Limit(Stop::Memory));
                 }
                 self.t.insert(kept, hash, parent as u32, span, gc, h);
@@ -512,9 +532,65 @@ impl<'a> Search<'a> {
     }
 }
 
-/// Takes a joint step and the state it leads to, with that state's [`planner::needs`];
-/// answers the cost to beat.
-type Emit<'e> = dyn FnMut(&State, (u16, u16), &[Step]) -> ControlFlow<Halt, Cost> + 'e;
+/// How often, in joint steps tried, an expansion looks whether the search was cancelled:
+/// one state of a large scene may have hundreds of thousands of them.
+const CANCEL_EVERY: usize = 1024;
+
+/// Each robot's actions worth trying in the state expanded, and their footprints. A
+/// footprint is taken when the walk first compares its action with another's: many
+/// steps are one robot's alone and need none, and a footprint can be as large as the
+/// scene (an action on a thing deep in containers reads every edge up to its room), so
+/// taking them all first would be work and memory that no limit sees before the first
+/// state is stored.
+struct Choices<'v> {
+    views: &'v [View<'v>],
+    actions: Vec<Vec<Action>>,
+    prints: Vec<Vec<Option<Footprint>>>,
+    /// What the lists and the footprints taken so far hold, in bytes.
+    bytes: usize,
+}
+
+impl<'v> Choices<'v> {
+    fn new(task: &Task, views: &'v [View<'v>], useful: &Useful) -> Choices<'v> {
+        let actions: Vec<Vec<Action>> = views
+            .iter()
+            .map(|view| {
+                view.actions()
+                    .into_iter()
+                    .filter(|a| useful.allows(task, a))
+                    .collect()
+            })
+            .collect();
+        let prints: Vec<Vec<Option<Footprint>>> =
+            actions.iter().map(|list| vec![None; list.len()]).collect();
+        let bytes = actions
+            .iter()
+            .map(|list| list.capacity() * (size_of::<Action>() + size_of::<Option<Footprint>>()))
+            .sum();
+        Choices {
+            views,
+            actions,
+            prints,
+            bytes,
+        }
+    }
+
+    /// Takes the footprint of robot `r`'s action `j`, unless it was taken already.
+    fn take(&mut self, r: usize, j: usize) {
+        if self.prints[r][j].is_none() {
+            let print = footprint::in_view(&self.views[r], self.actions[r][j]);
+            self.bytes += print.heap_bytes();
+            self.prints[r][j] = Some(print);
+        }
+    }
+
+    /// The footprint of robot `r`'s action `j`, once [`Choices::take`] has taken it.
+    fn print(&self, r: usize, j: usize) -> &Footprint {
+        self.prints[r][j]
+            .as_ref()
+            .expect("taken before it is compared")
+    }
+}
 
 /// The robot-by-robot enumeration of one state's joint steps.
 struct Walk<'w> {
@@ -522,16 +598,22 @@ struct Walk<'w> {
     goal: &'w [GoalPredicate],
     robots: &'w [Robot],
     /// Each robot's actions worth trying, with their footprints in the state expanded.
-    lists: &'w [Vec<(Action, Footprint)>],
+    choices: Choices<'w>,
     /// `levels[k]`: the state after the actions chosen for robots `0..k`, and its
     /// [`planner::needs`].
     levels: Vec<(State, (u16, u16))>,
     /// `(robot, action index)` of the actions chosen so far.
     chosen: SmallVec<[(usize, usize); 4]>,
+    /// The state expanded, the joint steps to its children and its `f`.
+    parent: (usize, u16, Cost),
     /// The joint steps of the states the steps lead to, and the actions before the step.
     cost: Cost,
     /// The cost a plan must beat.
     limit: Cost,
+    /// The bytes the walk holds besides [`Choices::bytes`]: its states.
+    held: usize,
+    /// Joint steps (whole or partial) tried so far.
+    tried: usize,
 }
 
 impl Walk<'_> {
@@ -549,9 +631,34 @@ impl Walk<'_> {
         f < self.limit
     }
 
-    /// Chooses for robot `k` and those after it; `emit` gets each complete, non-empty
-    /// joint step with the state it leads to, and answers the cost to beat.
-    fn level(&mut self, k: usize, emit: &mut Emit<'_>) -> ControlFlow<Halt, Cost> {
+    /// Whether robot `k`'s action `j` interferes with an action chosen so far; the
+    /// footprints it compares are taken within the search's memory limit.
+    fn interferes(&mut self, k: usize, j: usize, search: &Search<'_>) -> ControlFlow<Halt, bool> {
+        if self.chosen.is_empty() {
+            return ControlFlow::Continue(false);
+        }
+        self.choices.take(k, j);
+        for &(r, i) in &self.chosen {
+            self.choices.take(r, i);
+        }
+        if search.bytes(None, 0) + self.held + self.choices.bytes > search.limits.max_memory {
+            return ControlFlow::Break(Halt::Limit(Stop::Memory));
+        }
+        let print = self.choices.print(k, j);
+        ControlFlow::Continue(
+            self.chosen
+                .iter()
+                .any(|&(r, i)| self.choices.print(r, i).conflict(print).is_some()),
+        )
+    }
+
+    /// Chooses for robot `k` and those after it; each complete, non-empty joint step is
+    /// recorded with the state it leads to ([`Search::child`]). Answers the cost to beat.
+    fn level(&mut self, k: usize, search: &mut Search<'_>) -> ControlFlow<Halt, Cost> {
+        self.tried += 1;
+        if self.tried.is_multiple_of(CANCEL_EVERY) && search.limits.cancelled() {
+            return ControlFlow::Break(Halt::Limit(Stop::Cancelled));
+        }
         if k == self.robots.len() {
             if !self.chosen.is_empty() {
                 let step: SmallVec<[Step; 4]> = self
@@ -559,11 +666,12 @@ impl Walk<'_> {
                     .iter()
                     .map(|&(r, j)| Step {
                         robot: self.robots[r].node,
-                        action: self.lists[r][j].0,
+                        action: self.choices.actions[r][j],
                     })
                     .collect();
                 let (state, needs) = &self.levels[k];
-                self.limit = emit(state, *needs, &step)?;
+                let held = self.held + self.choices.bytes;
+                self.limit = search.child(self.parent, (state, *needs), &step, held)?;
             }
             return ControlFlow::Continue(self.limit);
         }
@@ -572,17 +680,13 @@ impl Walk<'_> {
         next[0].0.clone_from(&done[k].0);
         next[0].1 = done[k].1;
         if self.promising(k + 1, self.chosen.len()) {
-            self.level(k + 1, emit)?;
+            self.level(k + 1, search)?;
         }
-        for j in 0..self.lists[k].len() {
-            let (a, ref print) = self.lists[k][j];
-            if self
-                .chosen
-                .iter()
-                .any(|&(r, i)| self.lists[r][i].1.conflict(print).is_some())
-            {
+        for j in 0..self.choices.actions[k].len() {
+            if self.interferes(k, j, search)? {
                 continue;
             }
+            let a = self.choices.actions[k][j];
             let (done, next) = self.levels.split_at_mut(k + 1);
             next[0].0.clone_from(&done[k].0);
             rules::apply(self.task, &mut next[0].0, self.robots[k], a);
@@ -591,7 +695,7 @@ impl Walk<'_> {
                 continue;
             }
             self.chosen.push((k, j));
-            let flow = self.level(k + 1, emit);
+            let flow = self.level(k + 1, search);
             self.chosen.pop();
             flow?;
         }

@@ -5,7 +5,7 @@
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, Site, ensure, quoted};
+use crate::error::{Error, Result, Site, ensure, quoted};
 use crate::graph::{Edge, Idx, MAX_NODES, Node, NodeId, NodeKind, NodeSet, RobotKind, State};
 use crate::vocab::{PropSet, Relation, StateSet, Vocabulary};
 
@@ -276,6 +276,9 @@ impl Task {
             })?;
             init_edges.push(Edge::new(from, rel, to));
         }
+        if let Some(cycle) = location_cycle(nodes.len(), &init_edges) {
+            return Err(cycle_error(&nodes, &init_edges, &cycle, &edges_site));
+        }
         let init = State::new(states, high, init_edges.clone());
 
         let mut predicates = Vec::with_capacity(goal.len());
@@ -527,6 +530,87 @@ impl Task {
         let all: Vec<Idx> = self.indices().collect();
         self.raw_subgraph(&self.init, &all, &self.init_edges)
     }
+}
+
+/// The edges of a cycle of `ON` and `INSIDE` edges among `edges` (their indices, each
+/// edge's target the next one's source, the last one's the first one's), if there is
+/// one: a thing on or in itself, through others. Depth first, without recursion (a chain
+/// may be as deep as the nodes are many).
+fn location_cycle(nodes: usize, edges: &[Edge]) -> Option<Vec<usize>> {
+    let mut out: Vec<Vec<usize>> = vec![Vec::new(); nodes];
+    for (i, e) in edges.iter().enumerate() {
+        if e.rel().is_location() {
+            out[e.from().get()].push(i);
+        }
+    }
+    // Where each node on the current path was entered, in `path`'s edges; done ones.
+    let mut entered: Vec<Option<usize>> = vec![None; nodes];
+    let mut done = vec![false; nodes];
+    for root in 0..nodes {
+        if done[root] {
+            continue;
+        }
+        // The nodes being walked, each with the next of its edges to follow, and the
+        // edges that led to them.
+        let mut stack: Vec<(usize, usize)> = vec![(root, 0)];
+        let mut path: Vec<usize> = Vec::new();
+        entered[root] = Some(0);
+        while let Some(&mut (n, ref mut next)) = stack.last_mut() {
+            let Some(&i) = out[n].get(*next) else {
+                stack.pop();
+                path.pop();
+                entered[n] = None;
+                done[n] = true;
+                continue;
+            };
+            *next += 1;
+            let to = edges[i].to().get();
+            if let Some(at) = entered[to] {
+                let mut cycle = path[at..].to_vec();
+                cycle.push(i);
+                return Some(cycle);
+            }
+            if !done[to] {
+                path.push(i);
+                entered[to] = Some(path.len());
+                stack.push((to, 0));
+            }
+        }
+    }
+    None
+}
+
+/// The most edges of a cycle an error spells out.
+const CYCLE_SHOWN: usize = 16;
+
+/// The error for `cycle` ([`location_cycle`]), at the edge that closes it, with each of
+/// its edges and where the file has it.
+fn cycle_error(nodes: &[Node], edges: &[Edge], cycle: &[usize], at: &Site<'_>) -> Error {
+    let shown: Vec<String> = cycle
+        .iter()
+        .take(CYCLE_SHOWN)
+        .map(|&i| {
+            let e = edges[i];
+            format!(
+                "{} {} {} ({})",
+                nodes[e.from().get()].short_label(),
+                e.rel().name(),
+                nodes[e.to().get()].short_label(),
+                at.index(i).path
+            )
+        })
+        .collect();
+    let more = match cycle.len().checked_sub(CYCLE_SHOWN) {
+        Some(more) if more > 0 => format!(", and {more} more edges"),
+        _ => String::new(),
+    };
+    let last = *cycle.last().expect("a cycle has an edge");
+    at.index(last).error(format!(
+        "a cycle of ON and INSIDE edges, each thing on or in the next and the last on or \
+         in the first: {}{more}; nothing can be on or in itself (a robot would carry a \
+         thing along inside what it holds, and no layout can place it)",
+        shown.join(", ")
+    ))
 }
 
 /// The bit set of `names`, each interned by `intern`; `None` from it means more than

@@ -1,7 +1,8 @@
 //! Text from outside — a task file, a model's answer, a server's error — as it may be
 //! shown on a terminal or written to a log: nothing in it can move the cursor, clear
 //! the screen, start a new line or reorder what follows. Transcripts keep the raw text.
-//! The same text in a file name ([`file_name_part`]) is made of safe characters only.
+//! The same text in a file name ([`file_name_part`]) is made of safe characters only, and
+//! in markup (an SVG, a page: [`markup`]) it is shown the same way, then escaped.
 
 use std::borrow::Cow;
 use std::fmt::Write;
@@ -77,6 +78,35 @@ pub fn shown(text: &str) -> Cow<'_, str> {
     Cow::Owned(out)
 }
 
+/// `text` as the text of an XML or HTML element or of a quoted attribute (an SVG, a
+/// page): [`shown`] first, so that no control character reaches the file (XML 1.0
+/// allows none but tab and the line breaks, not even as a character reference, and a
+/// reader refuses the whole document for one), nor a direction override; then `&`, `<`,
+/// `>`, `"` and `'` as entities, and the two noncharacters XML 1.0 also forbids,
+/// U+FFFE and U+FFFF, as [`shown`] writes an escape. Borrowed when nothing needs either.
+pub fn markup(text: &str) -> Cow<'_, str> {
+    let special = ['&', '<', '>', '"', '\'', '\u{FFFE}', '\u{FFFF}'];
+    let safe = shown(text);
+    if !safe.contains(special) {
+        return safe;
+    }
+    let mut out = String::with_capacity(safe.len() + 16);
+    for c in safe.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            '\u{FFFE}' | '\u{FFFF}' => {
+                let _ = write!(out, "\\u{{{:x}}}", u32::from(c));
+            }
+            c => out.push(c),
+        }
+    }
+    Cow::Owned(out)
+}
+
 /// `text` with each of its lines [`shown`] and the line breaks between them kept: for a
 /// message of several lines, each of which may quote a task file or a server.
 pub fn shown_lines(text: &str) -> String {
@@ -86,36 +116,62 @@ pub fn shown_lines(text: &str) -> String {
 /// `text` cut to at most `max` bytes (at a character boundary), with a note of the
 /// whole length when it was longer: for what a long answer or value may keep.
 pub fn cut(text: &str, max: usize) -> Cow<'_, str> {
+    cut_end(text, max, false)
+}
+
+/// [`cut`], the note counted in the `max` bytes (`max` leaving room for it, some 40
+/// bytes): a text cut so is no longer than `max` and is left as it is when cut again.
+/// For text that is recorded as it was cut and is cut again when the recording is
+/// played back (a method's answer on replay).
+pub fn cut_within(text: &str, max: usize) -> Cow<'_, str> {
+    cut_end(text, max, true)
+}
+
+/// [`cut`] or [`cut_within`].
+fn cut_end(text: &str, max: usize, within: bool) -> Cow<'_, str> {
     if text.len() <= max {
         return Cow::Borrowed(text);
     }
-    let mut end = max;
+    let note = format!("… [cut: {} bytes in all]", text.len());
+    let mut end = if within {
+        max.saturating_sub(note.len())
+    } else {
+        max
+    };
     while !text.is_char_boundary(end) {
         end -= 1;
     }
-    Cow::Owned(format!(
-        "{}… [cut: {} bytes in all]",
-        &text[..end],
-        text.len()
-    ))
+    Cow::Owned(format!("{}{note}", &text[..end]))
 }
 
 /// `text` cut to its last `max` bytes or fewer (at a character boundary), after a note
 /// of the whole length when it was longer: for an error whose end says the most, such
 /// as a traceback.
 pub fn cut_front(text: &str, max: usize) -> Cow<'_, str> {
+    cut_start(text, max, false)
+}
+
+/// [`cut_front`], the note counted in the `max` bytes, as [`cut_within`] counts it.
+pub fn cut_front_within(text: &str, max: usize) -> Cow<'_, str> {
+    cut_start(text, max, true)
+}
+
+/// [`cut_front`] or [`cut_front_within`].
+fn cut_start(text: &str, max: usize, within: bool) -> Cow<'_, str> {
     if text.len() <= max {
         return Cow::Borrowed(text);
     }
-    let mut start = text.len() - max;
+    let note = format!("[cut: {} bytes in all] …", text.len());
+    let kept = if within {
+        max.saturating_sub(note.len())
+    } else {
+        max
+    };
+    let mut start = text.len() - kept;
     while !text.is_char_boundary(start) {
         start += 1;
     }
-    Cow::Owned(format!(
-        "[cut: {} bytes in all] …{}",
-        text.len(),
-        &text[start..]
-    ))
+    Cow::Owned(format!("{note}{}", &text[start..]))
 }
 
 #[cfg(test)]
@@ -131,6 +187,25 @@ mod tests {
         assert_eq!(cut_front("abcdef", 3), "[cut: 6 bytes in all] …def");
         assert_eq!(cut_front("éa", 2), "[cut: 3 bytes in all] …a");
         assert_eq!(cut_front("short", 10), "short");
+    }
+
+    #[test]
+    fn text_cut_within_its_limit_is_cut_again_to_itself() {
+        let long = format!("é{}", "x".repeat(10_000));
+        for max in [40, 41, 64, 1000] {
+            let once = cut_within(&long, max);
+            assert!(once.len() <= max, "{max}: {} bytes", once.len());
+            assert!(once.ends_with("[cut: 10002 bytes in all]"), "{once}");
+            assert_eq!(cut_within(&once, max), once);
+            let front = cut_front_within(&long, max);
+            assert!(front.len() <= max && front.starts_with("[cut: 10002 bytes in all] …x"));
+            assert_eq!(cut_front_within(&front, max), front);
+        }
+        // A cut inside "é" moves past it: the note and the text after.
+        let t = format!("{}é{}", "a".repeat(50), "b".repeat(50));
+        let kept = format!("[cut: 102 bytes in all] …{}", "b".repeat(50));
+        assert_eq!(cut_front_within(&t, 27 + 51), kept);
+        assert_eq!(cut_within("short", 5), "short");
     }
 
     #[test]
@@ -174,6 +249,17 @@ mod tests {
         );
         assert_eq!(shown("\u{9b}31m"), "\\u{9b}31m");
         assert_eq!(shown("\u{7f}"), "\\u{7f}");
+    }
+
+    #[test]
+    fn markup_holds_no_character_xml_forbids_and_no_markup_of_its_own() {
+        assert_eq!(markup("mug 7"), "mug 7");
+        assert!(matches!(markup("mug 7"), Cow::Borrowed(_)));
+        assert_eq!(
+            markup("a\u{1b}[2J<b>&\"'\n\u{0}\u{ffff}"),
+            "a\\u{1b}[2J&lt;b&gt;&amp;&quot;&#39;\\n\\u{0}\\u{ffff}"
+        );
+        assert_eq!(markup("\u{202E}x"), "\\u{202e}x");
     }
 
     #[test]

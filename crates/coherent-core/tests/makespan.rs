@@ -338,3 +338,66 @@ fn among_the_fewest_joint_steps_the_plan_has_the_fewest_actions() {
     );
     assert!(task.goal_satisfied(&play(&task, &plan)));
 }
+
+/// The demo task with a chain of `depth` open boxes, each inside the next and the last on
+/// the kitchen floor: the robot dog sees every box and may walk up to each, and a walk
+/// to the innermost depends on every edge up to the kitchen.
+fn chain(depth: i64) -> Task {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../examples/tasks/demo.json"
+    );
+    let text = std::fs::read_to_string(path).expect("the demo task");
+    let mut value: serde_json::Value = serde_json::from_str(&text).expect("JSON");
+    let graph = &mut value["graph"];
+    for i in 0..depth {
+        let id = 100 + i;
+        graph["nodes"].as_array_mut().expect("nodes").push(
+            serde_json::json!({"id": id, "category": "Containers", "class_name": "box",
+                "properties": ["CONTAINERS"], "states": ["OPEN"]}),
+        );
+        let (to, relation) = if i + 1 < depth {
+            (id + 1, "INSIDE")
+        } else {
+            (1, "ON")
+        };
+        graph["edges"]
+            .as_array_mut()
+            .expect("edges")
+            .push(serde_json::json!({"from_id": id, "to_id": to, "relation_type": relation}));
+    }
+    coherent_core::native::read("chain.json", &value).expect("the chain task")
+}
+
+/// A search's limits cover its whole work. 10,000 boxes deep, the dog's walk to a box
+/// reads the chain up to the room, so that the footprints of its 10,000 walks are 50
+/// million reads: taken all before the first state was stored, they took 325 s and 675
+/// MB that neither the state nor the memory limit saw. A footprint is now taken when an
+/// action is compared with another, in time linear in its reads: at 1,000 states, or
+/// 32 MiB, the search stops at once.
+#[test]
+fn a_scene_deep_in_containers_stops_at_its_limits_at_once() {
+    let task = chain(10_000);
+    let limited = [
+        (Limits::max_states(1000), Stop::States),
+        (
+            Limits {
+                max_memory: 32 << 20,
+                ..Limits::default()
+            },
+            Stop::Memory,
+        ),
+    ];
+    for (limits, stop) in limited {
+        let found =
+            makespan::search_with(&task, &task.init, &task.robots, &task.goal, None, &limits);
+        assert_eq!(found.stop, Some(stop));
+        assert!(found.plan.is_none() && !found.proven);
+        assert!(
+            found.elapsed < std::time::Duration::from_secs(10),
+            "{:?} to its limit",
+            found.elapsed
+        );
+        assert!(found.memory <= limits.max_memory, "{} bytes", found.memory);
+    }
+}

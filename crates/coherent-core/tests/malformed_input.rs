@@ -641,3 +641,83 @@ fn an_empty_list_is_no_tasks() {
     let err = load::load_tasks(&path).expect_err("no tasks");
     assert_malformed(&err, &path, "$", &["no tasks"]);
 }
+
+/// A cycle of `ON` and `INSIDE` edges (a thing on or in itself, through others) is
+/// refused where the file is read: the rules would carry it along inside what it holds,
+/// and no layout can place it. The error is at the edge that closes the cycle and spells
+/// the cycle out, each edge with its path; a long cycle is cut, a deep chain is no cycle.
+#[test]
+fn a_cycle_of_on_and_inside_edges_is_refused_with_each_edge_and_its_path() {
+    // The socks (29) are on the sofa (11); put the sofa on the socks.
+    let mut task = env0_task0();
+    let socks_on_sofa = edge_index(&task, |e| e["from_id"] == 29 && e["to_id"] == 11);
+    let edges = task["init_graph"]["edges"].as_array_mut().expect("a list");
+    edges.push(json!({"from_id": 11, "to_id": 29, "relation_type": "ON"}));
+    let sofa_on_socks = edges.len() - 1;
+    let (_dir, path) = write_json("cycle", "env0.json", &json!([task]));
+    let err = single_task_error(&path);
+    let at = |i: usize| format!("$[0].init_graph.edges[{i}]");
+    let message = assert_malformed(
+        &err,
+        &path,
+        &at(socks_on_sofa),
+        &[
+            "a cycle of ON and INSIDE edges",
+            "nothing can be on or in itself",
+        ],
+    );
+    assert!(
+        message.contains(&format!(
+            "<sofa>(11) ON <socks>(29) ({}), <socks>(29) ON <sofa>(11) ({})",
+            at(sofa_on_socks),
+            at(socks_on_sofa)
+        )),
+        "{message}"
+    );
+
+    // Native: a thing inside itself, and the same path notation.
+    let mut task = native_from_env0();
+    let edges = task["graph"]["edges"].as_array_mut().expect("a list");
+    edges.push(json!({"from_id": 29, "to_id": 29, "relation_type": "INSIDE"}));
+    let itself = edges.len() - 1;
+    let (_dir, path) = write_json("cycle-native", "task-000.json", &task);
+    let err = single_task_error(&path);
+    let message = assert_malformed(&err, &path, &format!("$.graph.edges[{itself}]"), &[]);
+    assert!(
+        message.contains(&format!(
+            "<socks>(29) INSIDE <socks>(29) ($.graph.edges[{itself}]);"
+        )),
+        "{message}"
+    );
+
+    // 2,000 boxes, each inside the next and the last inside the first: 16 edges shown.
+    // Without the last edge the chain is no cycle, however deep, and loads.
+    let mut task = native_from_env0();
+    let (nodes, edges) = (
+        task["graph"]["nodes"].clone(),
+        task["graph"]["edges"].clone(),
+    );
+    let (mut nodes, mut edges) = (
+        nodes.as_array().expect("nodes").clone(),
+        edges.as_array().expect("edges").clone(),
+    );
+    for i in 0..2000 {
+        nodes.push(json!({"id": 1000 + i, "category": "Containers", "class_name": "box"}));
+        let to = if i + 1 < 2000 { 1001 + i } else { 1000 };
+        edges.push(json!({"from_id": 1000 + i, "to_id": to, "relation_type": "INSIDE"}));
+    }
+    task["graph"]["nodes"] = json!(nodes);
+    task["graph"]["edges"] = json!(edges.clone());
+    let (_dir, path) = write_json("ring", "task-000.json", &task);
+    let message = assert_malformed(
+        &single_task_error(&path),
+        &path,
+        &format!("$.graph.edges[{}]", edges.len() - 1),
+        &["and 1984 more edges; "],
+    );
+    assert_eq!(message.matches(" INSIDE <box>").count(), 16, "{message}");
+    edges.pop();
+    task["graph"]["edges"] = json!(edges);
+    let (_dir, path) = write_json("chain", "task-000.json", &task);
+    assert!(load::load_tasks(&path).is_ok(), "a chain 2,000 deep loads");
+}

@@ -69,6 +69,7 @@ impl Ros2Env {
             &options.namespace,
             &names,
             options.server_wait,
+            options.robot_timeout,
         )?;
         Ok(Ros2Env {
             state: task.init.clone(),

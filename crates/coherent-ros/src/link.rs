@@ -9,10 +9,11 @@
 //! works inside an async runtime as well as outside one. It runs in the link process
 //! ([`crate::link_process`]), whose memory limit a flood of DDS samples reaches.
 //!
-//! A robot is one server. Two servers for one robot at the start is an error that names
-//! them; during an episode, only the server that accepted a goal is heard about it (its
-//! result, its feedback as a sign of life), and a second server accepting the same goal
-//! stops the bridge, since the robots' world and the rules' would part.
+//! A robot is one server, and its server has one client. Two servers for one robot at
+//! the start is an error that names them; during an episode, only the server that
+//! accepted a goal is heard about it (its result, its feedback as a sign of life), and a
+//! second server accepting the same goal stops the bridge, since the robots' world and
+//! the rules' would part; so does a reply of a robot's server to another client's goal.
 
 use std::collections::{HashMap, HashSet};
 use std::future::Future;
@@ -436,7 +437,12 @@ async fn follow_goal(
                 Some(Ok(r)) if r.related_sample_identity() == Some(request) => {
                     break (prefix_of(r.writer_guid()), r.sample.accepted);
                 }
-                Some(Ok(_)) => {}
+                Some(Ok(r)) => {
+                    if let Some(why) = other_client(r.related_sample_identity(), request) {
+                        let _ = send(&ends.cancel, cancel_request(goal_id));
+                        return Exchange::Failed(why);
+                    }
+                }
                 Some(Err(e)) => return Exchange::Failed(format!("cannot read the goal's answer: {e:?}")),
                 None => return Exchange::Failed("the goal's answers ended".into()),
             },
@@ -489,6 +495,12 @@ async fn follow_goal(
                 }
             }
             reply = goal_replies.next() => {
+                if let Some(Ok(r)) = &reply
+                    && let Some(why) = other_client(r.related_sample_identity(), request)
+                {
+                    let _ = send(&ends.cancel, cancel_request(goal_id));
+                    return Exchange::Failed(why);
+                }
                 if let Some(Ok(r)) = reply
                     && r.related_sample_identity() == Some(request)
                     && !same_participant(r.writer_guid(), &server)
@@ -511,6 +523,22 @@ async fn follow_goal(
             () = &mut cancelled => return cancel_goal(ends, goal_id, Some((server, asked))).await,
         }
     }
+}
+
+/// Why the robot cannot be followed when a reply of its server answers another client:
+/// a goal request (`answered`) not from this bridge's writer of them (whose request
+/// `ours` is), so that another participant sends this robot goals. Each client's goals
+/// change the robots' world, which the rules of the others then no longer follow: two
+/// runs of one task in one namespace and domain went on refusing steps until their
+/// budgets were spent, none naming the other.
+fn other_client(answered: Option<SampleIdentity>, ours: SampleIdentity) -> Option<String> {
+    let other = answered.filter(|id| id.writer_guid != ours.writer_guid)?;
+    Some(format!(
+        "another client, {}, sends goals to this robot's action server: the robots' world \
+         changes by its goals too, and this run's rules no longer follow it (one run per \
+         robots: another --namespace, or another ROS_DOMAIN_ID)",
+        participant_of(other.writer_guid)
+    ))
 }
 
 /// A participant's GUID prefix as a whole GUID (its entity id zero), to name it.

@@ -15,6 +15,12 @@
 //! answer from its stdout; every line either side reads is bounded ([`MAX_LINE_BYTES`]),
 //! and a longer one is the other side's failure. The child ([`serve`]) ignores Ctrl-C
 //! and SIGTERM (the parent decides, and forwards a cancel), and ends when its stdin does.
+//!
+//! The parent never waits on the child without a bound: the child says it is alive
+//! every [`HEARTBEAT`], and a child silent for as long as a robot may be (at least
+//! [`MIN_QUIET`]; 30 s before its first line) is unresponsive (stopped, or hung) and is
+//! killed; after a cancel it has 5 s to answer; and what the parent writes goes through
+//! a thread of its own, so that a child that no longer reads cannot block it.
 
 use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -22,7 +28,7 @@ use std::os::unix::process::{CommandExt, ExitStatusExt};
 use std::path::PathBuf;
 use std::process::{Child, ChildStdin, Command, ExitStatus, Stdio};
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc::{self, Receiver, RecvTimeoutError};
+use std::sync::mpsc::{self, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
@@ -54,10 +60,23 @@ const POLL: Duration = Duration::from_millis(20);
 /// How long the child's last words on stderr may take to arrive once it has ended.
 const LAST_WORDS: Duration = Duration::from_secs(1);
 /// How long a child whose stdin is closed has to end (cancelling the goals in flight,
-/// each waiting for its acknowledgement then its result) before it is killed.
+/// each waiting for its acknowledgement then its result) before it is killed; and how
+/// long, once a cancel is forwarded, it has to answer every goal in flight.
 const GRACE: Duration = CANCEL_WAIT
     .saturating_mul(2)
     .saturating_add(Duration::from_secs(1));
+/// How often the child says it is alive, whatever it is doing.
+pub const HEARTBEAT: Duration = Duration::from_millis(250);
+/// The least silence after which a child is unresponsive, however short the robots'
+/// timeout: eight heartbeats, room for a busy machine to schedule it.
+pub const MIN_QUIET: Duration = Duration::from_secs(2);
+/// How long a child may take to say anything at all: to start (a Python interpreter
+/// importing the package, on a busy machine), read its configuration and start its
+/// heartbeat.
+const START: Duration = Duration::from_secs(30);
+/// The stack of the child's heartbeat thread, which only writes a short line: every
+/// thread's stack counts against the child's memory limit.
+const HEARTBEAT_STACK: usize = 64 << 10;
 
 /// How to start a link process: a program and the arguments that make it one (the
 /// `coherent` binary with `robots link`, or Python with `-m coherent._cli robots link`),
@@ -95,13 +114,16 @@ enum Request {
     Cancel,
 }
 
-/// The child's lines: one for the connection, then one per goal of each exchange.
+/// The child's lines: one for the connection, then one per goal of each exchange; that
+/// it is alive, every [`HEARTBEAT`]; why it ends, when it ends on its own.
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 enum Answer {
     Connected,
     Refused(Refusal),
     Exchanged(Exchange),
+    Alive,
+    Ends(String),
 }
 
 /// Why [`Link::connect`] failed, by the kind the parent gives back as its [`Error`].
@@ -180,22 +202,39 @@ impl From<Refusal> for Error {
     }
 }
 
+/// Why a line could not be read: the input failed, or it held something that is no line
+/// of the protocol (too long, or not one of its values).
+#[derive(Debug, PartialEq, Eq)]
+enum Unread {
+    Failed(String),
+    Foreign(String),
+}
+
+impl std::fmt::Display for Unread {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Unread::Failed(why) => write!(f, "cannot read a line: {why}"),
+            Unread::Foreign(what) => f.write_str(what),
+        }
+    }
+}
+
 /// Reads one line of at most `max` bytes (its newline aside); `None` at the end of the
 /// input, an unfinished last line included (its writer ended while writing it). A
 /// longer line is an error, read no further than `max` bytes and one.
-fn read_line(input: &mut impl BufRead, max: usize) -> Result<Option<Vec<u8>>, String> {
+fn read_line(input: &mut impl BufRead, max: usize) -> Result<Option<Vec<u8>>, Unread> {
     let mut line = Vec::new();
     let limit = u64::try_from(max).unwrap_or(u64::MAX).saturating_add(1);
     input
         .by_ref()
         .take(limit)
         .read_until(b'\n', &mut line)
-        .map_err(|e| format!("cannot read a line: {e}"))?;
+        .map_err(|e| Unread::Failed(e.to_string()))?;
     if line.last() == Some(&b'\n') {
         line.pop();
         Ok(Some(line))
     } else if line.len() > max {
-        Err(format!("a line longer than {max} bytes"))
+        Err(Unread::Foreign(format!("a line longer than {max} bytes")))
     } else {
         Ok(None)
     }
@@ -211,29 +250,72 @@ fn write_line(output: &mut impl Write, value: &impl Serialize) -> std::io::Resul
 
 /// Reads the next line of `input` as a `T`: `None` at the end, an error for a line too
 /// long or not a `T`.
-fn read_json<T: for<'de> Deserialize<'de>>(input: &mut impl BufRead) -> Result<Option<T>, String> {
+fn read_json<T: for<'de> Deserialize<'de>>(input: &mut impl BufRead) -> Result<Option<T>, Unread> {
     let Some(line) = read_line(input, MAX_LINE_BYTES)? else {
         return Ok(None);
     };
     serde_json::from_slice(&line)
         .map(Some)
-        .map_err(|e| format!("a line that is not the protocol's: {e}"))
+        .map_err(|e| Unread::Foreign(format!("a line that is not the protocol's ({e})")))
 }
 
 /// The link process itself (`coherent robots link`): reads its configuration from
 /// `input`, limits its own memory, takes a runtime from `runtime` (built only then, so
 /// that it is within the limit), connects, then answers each request until `input`
-/// ends, on `output`. Ctrl-C and SIGTERM are ignored: the parent decides. Returns once
-/// the parent is gone.
+/// ends, on `output`, saying every [`HEARTBEAT`] that it is alive. Ctrl-C and SIGTERM
+/// are ignored: the parent decides. Returns once the parent is gone; an input that is
+/// not the parent's requests ends it with an error, which it tells the parent first.
 pub fn serve(
     mut input: impl BufRead + Send + 'static,
-    mut output: impl Write,
+    output: impl Write + Send,
     runtime: impl FnOnce() -> Result<Handle, String>,
 ) -> Result<(), String> {
-    let config: Config = read_json(&mut input)?.ok_or("no configuration on stdin")?;
+    let config: Config = read_json(&mut input)
+        .map_err(|e| e.to_string())?
+        .ok_or("no configuration on stdin")?;
     limit_memory(config.memory_limit)?;
     let runtime = runtime()?;
     ignore_signals(&runtime)?;
+    let output = Mutex::new(output);
+    let over = AtomicBool::new(false);
+    std::thread::scope(|scope| {
+        let beating = std::thread::Builder::new()
+            .name("heartbeat".into())
+            .stack_size(HEARTBEAT_STACK)
+            .spawn_scoped(scope, || heartbeat(&output, &over))
+            .map_err(|e| format!("cannot start its heartbeat: {e}"))?;
+        let served = work(input, &output, &config, runtime);
+        over.store(true, Ordering::SeqCst);
+        beating.thread().unpark();
+        served
+    })
+}
+
+/// Writes `answer` as one line of `output`, which the heartbeat shares.
+fn say(output: &Mutex<impl Write>, answer: &Answer) -> Result<(), String> {
+    let mut output = output.lock().unwrap_or_else(PoisonError::into_inner);
+    write_line(&mut *output, answer).map_err(|e| e.to_string())
+}
+
+/// Says the process is alive every [`HEARTBEAT`] until `over`, so that the parent can
+/// tell a link process at work (a robot may take minutes) from a stopped or hung one.
+fn heartbeat(output: &Mutex<impl Write>, over: &AtomicBool) {
+    while !over.load(Ordering::SeqCst) {
+        std::thread::park_timeout(HEARTBEAT);
+        if over.load(Ordering::SeqCst) || say(output, &Answer::Alive).is_err() {
+            break;
+        }
+    }
+}
+
+/// [`serve`] once configured: connects, then answers each request of `input`; a line
+/// that is not a request ends it, told to the parent as [`Answer::Ends`].
+fn work(
+    input: impl BufRead + Send + 'static,
+    output: &Mutex<impl Write>,
+    config: &Config,
+    runtime: Handle,
+) -> Result<(), String> {
     let link = match Link::connect(
         &config.namespace,
         &config.robots,
@@ -241,27 +323,53 @@ pub fn serve(
         runtime,
     ) {
         Ok(link) => link,
-        Err(e) => {
-            let refused = Answer::Refused(e.into());
-            return write_line(&mut output, &refused).map_err(|e| e.to_string());
-        }
+        Err(e) => return say(output, &Answer::Refused(e.into())),
     };
-    write_line(&mut output, &Answer::Connected).map_err(|e| e.to_string())?;
+    say(output, &Answer::Connected)?;
+    let ends = |why: String| {
+        // Its last word on the protocol; it may be unable to say it (the parent gone).
+        let _ = say(output, &Answer::Ends(why.clone()));
+        Err(why)
+    };
     let cancel = Arc::new(AtomicBool::new(false));
     let requests = read_requests(input, Arc::clone(&cancel));
-    for request in requests {
-        let (goals, silence) = request?;
+    // What came while an exchange was in flight, read to see whether it ended it.
+    let mut came = None;
+    loop {
+        let (goals, silence) = match came.take().map_or_else(|| requests.recv(), Ok) {
+            Ok(Ok(asked)) => asked,
+            Ok(Err(why)) => return ends(why),
+            // The input ended: the parent is gone.
+            Err(_) => return Ok(()),
+        };
         if let Some((n, _)) = goals.iter().find(|(n, _)| *n >= config.robots.len()) {
-            return Err(format!(
+            return ends(format!(
                 "from the bridge, a goal for robot number {n} of {}",
                 config.robots.len()
             ));
         }
-        for exchange in link.exchange(goals, silence, Some(&cancel)) {
-            write_line(&mut output, &Answer::Exchanged(exchange)).map_err(|e| e.to_string())?;
+        let exchanges = link.exchange(goals, silence, Some(&cancel));
+        // A line that is not a request cancels the goals in flight (nothing more can be
+        // asked); they fail with it rather than look cancelled by the run. A request
+        // that came meanwhile is answered next.
+        came = requests.try_recv().ok();
+        let foreign = match &came {
+            Some(Err(why)) => Some(why.clone()),
+            _ => None,
+        };
+        for exchange in exchanges {
+            let exchange = match (&foreign, exchange) {
+                (Some(why), Exchange::Cancelled { .. }) => {
+                    Exchange::Failed(format!("the ROS 2 link process ends: {why}"))
+                }
+                (_, exchange) => exchange,
+            };
+            say(output, &Answer::Exchanged(exchange))?;
+        }
+        if let Some(why) = foreign {
+            return ends(why);
         }
     }
-    Ok(())
 }
 
 /// Sets the soft limit of this process's data segment to `bytes` (no higher than the
@@ -313,8 +421,15 @@ fn read_requests(
                 }
                 Ok(Some(Request::Cancel)) => cancel.store(true, Ordering::SeqCst),
                 Ok(None) => break,
-                Err(why) => {
-                    let _ = sender.send(Err(format!("from the bridge, {why}")));
+                Err(Unread::Foreign(what)) => {
+                    let _ = sender.send(Err(format!(
+                        "its stdin held {what}, which the run never writes: something other \
+                         than the run wrote to the link process's stdin"
+                    )));
+                    break;
+                }
+                Err(Unread::Failed(why)) => {
+                    let _ = sender.send(Err(format!("cannot read its stdin: {why}")));
                     break;
                 }
             }
@@ -328,11 +443,17 @@ fn read_requests(
 #[derive(Debug)]
 pub(crate) struct LinkProcess {
     child: Child,
-    /// Closed to tell the child to end.
-    stdin: Option<ChildStdin>,
+    /// The lines for the child's stdin, written by a thread of their own; dropped to
+    /// close it, which tells the child to end.
+    stdin: Option<Sender<Vec<u8>>>,
     /// The answers read so far (in a mutex only so that the bridge may be shared
     /// between threads; it is read through `&mut self`).
-    answers: Mutex<Receiver<Result<Answer, String>>>,
+    answers: Mutex<Receiver<Result<Answer, Unread>>>,
+    /// When the child last wrote a line, its heartbeat included; `None` before its first.
+    heard: Arc<Mutex<Option<Instant>>>,
+    /// The silence after which the child is unresponsive: the robots' timeout, at least
+    /// [`MIN_QUIET`].
+    quiet: Duration,
     stderr: Arc<Mutex<Vec<u8>>>,
     /// The thread that reads the child's stderr, done once the child and its pipe are.
     stderr_read: Option<std::thread::JoinHandle<()>>,
@@ -341,15 +462,32 @@ pub(crate) struct LinkProcess {
     ended: Option<String>,
 }
 
+/// How the parent found the link process unusable.
+enum Gone<'a> {
+    /// Its stdout ended without a word of why: it ended, or was ended, from outside the
+    /// protocol (a flood reaching its memory limit, a kill).
+    Ended,
+    /// It said why it ends.
+    Said(&'a str),
+    /// It did what a link process never does (a line too long, an answer out of turn);
+    /// it is ended.
+    Misbehaved(&'a str),
+    /// Nothing from it, not even its heartbeat, for this long: stopped or hung; it is
+    /// ended.
+    Silent(Duration),
+}
+
 impl LinkProcess {
     /// Starts the link process with `command` and has it connect as [`Link::connect`]
-    /// does; its errors keep their kind, and a process that cannot start or ends
-    /// before it answers is [`Error::Link`].
+    /// does; its errors keep their kind, and a process that cannot start, ends before
+    /// it answers or falls silent for `quiet` (the robots' timeout; at least
+    /// [`MIN_QUIET`]) is [`Error::Link`].
     pub(crate) fn connect(
         command: &LinkCommand,
         namespace: &str,
         robots: &[String],
         server_wait: Duration,
+        quiet: Duration,
     ) -> Result<LinkProcess, Error> {
         let mut child = Command::new(&command.program)
             .args(&command.args)
@@ -378,9 +516,12 @@ impl LinkProcess {
             .stderr
             .take()
             .map(|err| drain(err, Arc::clone(&stderr)));
+        let heard = Arc::new(Mutex::new(None));
         let mut process = LinkProcess {
-            stdin: child.stdin.take(),
-            answers: Mutex::new(read_answers(stdout)),
+            stdin: child.stdin.take().map(write_requests),
+            answers: Mutex::new(read_answers(stdout, Arc::clone(&heard))),
+            heard,
+            quiet: quiet.max(MIN_QUIET),
             child,
             stderr,
             stderr_read,
@@ -397,16 +538,17 @@ impl LinkProcess {
         match process.answer(None) {
             Ok(Answer::Connected) => Ok(process),
             Ok(Answer::Refused(why)) => Err(why.into()),
-            Ok(Answer::Exchanged(_)) => {
-                Err(Error::Link(process.failed("answered before it connected")))
-            }
+            Ok(_) => Err(Error::Link(
+                process.failed(Gone::Misbehaved("answered before it connected")),
+            )),
             Err(why) => Err(Error::Link(why)),
         }
     }
 
     /// [`Link::exchange`] in the link process; `cancel` raised is forwarded to it. When
-    /// the process ends or fails, every goal it has not answered fails with a message
-    /// that names it (or is cancelled, once `cancel` is raised), and so do later ones.
+    /// the process ends, fails or falls silent, every goal it has not answered fails
+    /// with a message that names it (or is cancelled, once `cancel` is raised), and so
+    /// do later ones.
     pub(crate) fn exchange(
         &mut self,
         goals: Vec<(usize, Goal)>,
@@ -420,7 +562,7 @@ impl LinkProcess {
             match self.answer(cancel) {
                 Ok(Answer::Exchanged(exchange)) => out.push(exchange),
                 Ok(_) => {
-                    self.failed("answered an exchange out of turn");
+                    self.failed(Gone::Misbehaved("answered an exchange out of turn"));
                     break;
                 }
                 Err(_) => break,
@@ -440,36 +582,77 @@ impl LinkProcess {
         out
     }
 
-    /// Writes `value` to the child; a child that no longer reads has ended, which the
-    /// next answer tells.
+    /// Hands `value` to the thread that writes the child's stdin; a child that no
+    /// longer reads has ended, which the next answer tells.
     fn send(&mut self, value: &impl Serialize) {
-        if let Some(stdin) = &mut self.stdin
-            && write_line(stdin, value).is_err()
+        let mut line = Vec::new();
+        if write_line(&mut line, value).is_err() {
+            return;
+        }
+        if let Some(stdin) = &self.stdin
+            && stdin.send(line).is_err()
         {
             self.stdin = None;
         }
     }
 
-    /// The child's next answer, forwarding `cancel` once it rises; the reason it ended
-    /// or failed, as [`LinkProcess::ended`] keeps it, when no answer comes.
+    /// The child's next answer, forwarding `cancel` once it rises; the reason it ended,
+    /// failed or fell silent, as [`LinkProcess::ended`] keeps it, when no answer comes.
+    /// Silent for [`LinkProcess::quiet`], or still answering [`GRACE`] after a cancel,
+    /// it is unresponsive and is killed: the wait has a bound whatever the child does.
     fn answer(&mut self, cancel: Option<&AtomicBool>) -> Result<Answer, String> {
         if let Some(why) = &self.ended {
             return Err(why.clone());
         }
-        let mut forwarded = false;
+        let mut forwarded: Option<Instant> = None;
+        let mut heard = *self.heard.lock().unwrap_or_else(PoisonError::into_inner);
+        let (mut silent, mut looked) = (Duration::ZERO, Instant::now());
         loop {
             let answers = self
                 .answers
                 .get_mut()
                 .unwrap_or_else(PoisonError::into_inner);
             match answers.recv_timeout(POLL) {
+                Ok(Ok(Answer::Ends(why))) => return Err(self.failed(Gone::Said(&why))),
                 Ok(Ok(answer)) => return Ok(answer),
-                Ok(Err(why)) => return Err(self.failed(&why)),
-                Err(RecvTimeoutError::Disconnected) => return Err(self.failed("")),
+                Ok(Err(why)) => {
+                    return Err(self.failed(Gone::Misbehaved(&format!("wrote {why}"))));
+                }
+                Err(RecvTimeoutError::Disconnected) => return Err(self.failed(Gone::Ended)),
                 Err(RecvTimeoutError::Timeout) => {
-                    if !forwarded && cancel.is_some_and(|flag| flag.load(Ordering::SeqCst)) {
-                        forwarded = true;
+                    if forwarded.is_none() && cancel.is_some_and(|flag| flag.load(Ordering::SeqCst))
+                    {
+                        forwarded = Some(Instant::now());
                         self.send(&Request::Cancel);
+                    }
+                    // The silence counts the time this run waited and looked, each look
+                    // at most a few polls long: a run that was itself stopped (Ctrl-Z)
+                    // has not read what came meanwhile, and its own pause is not the
+                    // child's silence.
+                    let now = Instant::now();
+                    let last = *self.heard.lock().unwrap_or_else(PoisonError::into_inner);
+                    if last == heard {
+                        silent += (now - looked).min(POLL * 5);
+                    } else {
+                        (heard, silent) = (last, Duration::ZERO);
+                    }
+                    looked = now;
+                    // Once cancelled, the run is to end soon: a few heartbeats missed
+                    // are enough. Before its first line, it may still be starting.
+                    let quiet = match (forwarded, heard) {
+                        (_, None) => self.quiet.max(START),
+                        (Some(_), _) => self.quiet.min(MIN_QUIET),
+                        (None, _) => self.quiet,
+                    };
+                    if silent > quiet {
+                        return Err(self.failed(Gone::Silent(quiet)));
+                    }
+                    if forwarded.is_some_and(|at| at.elapsed() > GRACE) {
+                        let what = format!(
+                            "did not answer within {} s of a cancel",
+                            GRACE.as_secs_f64()
+                        );
+                        return Err(self.failed(Gone::Misbehaved(&what)));
                     }
                 }
             }
@@ -477,14 +660,11 @@ impl LinkProcess {
     }
 
     /// Ends the child, if it has not ended, and keeps (and returns) why it can no longer
-    /// be used: `what` it did wrong, if anything, how it ended, and its last words. A
-    /// child that did nothing wrong has closed its stdout to end: it is given time to.
-    fn failed(&mut self, what: &str) -> String {
-        let status = self.end(if what.is_empty() {
-            GRACE
-        } else {
-            Duration::ZERO
-        });
+    /// be used: how the parent found it unusable (`gone`), how it ended, and its last
+    /// words. A child that ended on its own has closed its stdout: it is given time to.
+    fn failed(&mut self, gone: Gone<'_>) -> String {
+        let on_its_own = matches!(gone, Gone::Ended | Gone::Said(_));
+        let status = self.end(if on_its_own { GRACE } else { Duration::ZERO });
         // Its last words may still be on their way from the pipe.
         let deadline = Instant::now() + LAST_WORDS;
         while self.stderr_read.as_ref().is_some_and(|t| !t.is_finished())
@@ -496,18 +676,28 @@ impl LinkProcess {
             Some(status) => ended_by(status),
             None => "could not be reaped".to_owned(),
         };
-        let mut why = if what.is_empty() {
-            format!("the ROS 2 link process ended ({how})")
-        } else {
-            format!("the ROS 2 link process {what} and was ended ({how})")
-        };
-        if what.is_empty() {
-            why.push_str(&format!(
-                "; it holds the bridge's DDS participant within a memory limit of {} MiB, \
-                 which a flood of large DDS samples makes it reach",
+        let mut why = match gone {
+            Gone::Ended => format!(
+                "the ROS 2 link process ended ({how}); it holds the bridge's DDS participant \
+                 within a memory limit of {} MiB, which a flood of large DDS samples makes it \
+                 reach",
                 self.memory_limit >> 20
-            ));
-        }
+            ),
+            // What it said is what its stderr says too.
+            Gone::Said(said) => {
+                let why = format!("the ROS 2 link process ended ({how}): {said}");
+                return self.ended.get_or_insert(why).clone();
+            }
+            Gone::Misbehaved(what) => {
+                format!("the ROS 2 link process {what} and was ended ({how})")
+            }
+            Gone::Silent(quiet) => format!(
+                "the ROS 2 link process is unresponsive: nothing from it for {} s, though it \
+                 says it is alive every {} s (stopped, or hung); it was ended ({how})",
+                quiet.as_secs_f64(),
+                HEARTBEAT.as_secs_f64()
+            ),
+        };
         let tail = self
             .stderr
             .lock()
@@ -573,14 +763,21 @@ fn ended_by(status: ExitStatus) -> String {
     }
 }
 
-/// Reads the child's answers on a thread of their own; a line too long or not an answer
-/// is sent as the child's failure, and nothing more is read.
-fn read_answers(stdout: Option<impl BufRead + Send + 'static>) -> Receiver<Result<Answer, String>> {
+/// Reads the child's answers on a thread of their own, noting in `heard` when each line
+/// came; its heartbeats go no further. A line too long or not an answer is sent as the
+/// child's failure, and nothing more is read.
+fn read_answers(
+    stdout: Option<impl BufRead + Send + 'static>,
+    heard: Arc<Mutex<Option<Instant>>>,
+) -> Receiver<Result<Answer, Unread>> {
     let (sender, answers) = mpsc::channel();
     if let Some(mut stdout) = stdout {
         std::thread::spawn(move || {
             loop {
-                match read_json::<Answer>(&mut stdout) {
+                let line = read_json::<Answer>(&mut stdout);
+                *heard.lock().unwrap_or_else(PoisonError::into_inner) = Some(Instant::now());
+                match line {
+                    Ok(Some(Answer::Alive)) => {}
                     Ok(Some(answer)) => {
                         if sender.send(Ok(answer)).is_err() {
                             break;
@@ -588,7 +785,7 @@ fn read_answers(stdout: Option<impl BufRead + Send + 'static>) -> Receiver<Resul
                     }
                     Ok(None) => break,
                     Err(why) => {
-                        let _ = sender.send(Err(format!("wrote {why}")));
+                        let _ = sender.send(Err(why));
                         break;
                     }
                 }
@@ -596,6 +793,21 @@ fn read_answers(stdout: Option<impl BufRead + Send + 'static>) -> Receiver<Resul
         });
     }
     answers
+}
+
+/// Writes the parent's lines to the child's stdin on a thread of its own, so that a
+/// child that no longer reads (stopped, hung) never blocks the run; the stdin closes
+/// once the sender is gone and every line sent is written, or the child has ended.
+fn write_requests(mut stdin: ChildStdin) -> Sender<Vec<u8>> {
+    let (sender, lines) = mpsc::channel::<Vec<u8>>();
+    std::thread::spawn(move || {
+        for line in lines {
+            if stdin.write_all(&line).and_then(|()| stdin.flush()).is_err() {
+                break;
+            }
+        }
+    });
+    sender
 }
 
 /// Reads the child's stderr to its end on a thread of its own, keeping its last
@@ -629,7 +841,7 @@ mod tests {
         assert_eq!(read_line(&mut input, 6), Ok(Some(b"123456".to_vec())));
         assert_eq!(
             read_line(&mut input, 6),
-            Err("a line longer than 6 bytes".to_owned())
+            Err(Unread::Foreign("a line longer than 6 bytes".to_owned()))
         );
         assert_eq!(input.position(), 13 + 7, "no more than the limit and one");
         // A line cut short by the end of the input: its writer ended.
@@ -674,7 +886,7 @@ mod tests {
                 .to_vec(),
             memory_limit: LINK_MEMORY_LIMIT,
         };
-        let error = LinkProcess::connect(&command, "/lab", &[], Duration::ZERO)
+        let error = LinkProcess::connect(&command, "/lab", &[], Duration::ZERO, MIN_QUIET)
             .expect_err("not a link process");
         let Error::Link(why) = error else {
             panic!("{error:?}");

@@ -16,7 +16,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use coherent_core::text::{cut, cut_front, number};
+use coherent_core::text::{cut_front_within, cut_within, number};
 use coherent_core::{Execution, NodeId, Task};
 
 use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
@@ -183,23 +183,31 @@ fn out_of_time(limit: Duration) -> MethodFailure {
     ))
 }
 
-/// The most of a method's note, action or error a round keeps: what a method says is
-/// text of any length, and the transcript must stay readable.
+/// The most of a method's note, action or error a round keeps, the note of the whole
+/// length included: what a method says is text of any length, and the transcript must
+/// stay readable.
 pub const MAX_TEXT_BYTES: usize = 64 << 10;
 
-/// `choices` with their texts cut at [`MAX_TEXT_BYTES`]: each note and action at its
-/// end, an error at its start (a traceback ends with the exception).
+/// `choices` with their texts cut to [`MAX_TEXT_BYTES`]: each note and action at its
+/// end, an error at its start (a traceback ends with the exception). The action as cut
+/// is the one carried out and recorded, and a replay, which gives the recorded texts
+/// back through here, cuts them to themselves ([`cut_within`]): what was carried out is
+/// what is recorded, and what is replayed.
 fn bounded(choices: Result<Vec<Choice>, MethodFailure>) -> Result<Vec<Choice>, MethodFailure> {
     match choices {
         Ok(choices) => Ok(choices
             .into_iter()
             .map(|mut c| {
-                c.note = cut(&c.note, MAX_TEXT_BYTES).into_owned();
-                c.action = c.action.map(|a| cut(&a, MAX_TEXT_BYTES).into_owned());
+                c.note = cut_within(&c.note, MAX_TEXT_BYTES).into_owned();
+                c.action = c
+                    .action
+                    .map(|a| cut_within(&a, MAX_TEXT_BYTES).into_owned());
                 c
             })
             .collect()),
-        Err(MethodFailure(why)) => Err(MethodFailure(cut_front(&why, MAX_TEXT_BYTES).into_owned())),
+        Err(MethodFailure(why)) => Err(MethodFailure(
+            cut_front_within(&why, MAX_TEXT_BYTES).into_owned(),
+        )),
     }
 }
 

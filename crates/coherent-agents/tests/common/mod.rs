@@ -12,8 +12,9 @@ use std::sync::Arc;
 use coherent_agents::episode::Budget;
 use coherent_agents::llm::Backend;
 use coherent_agents::run::new_transcript;
-use coherent_agents::{Cancel, Episode, Error, Settings};
-use coherent_core::{Environment, Task, read_tasks};
+use coherent_agents::transcript::Transcript;
+use coherent_agents::{Cancel, Episode, Error, Replay, Settings};
+use coherent_core::{Environment, SymbolicEnv, Task, read_tasks};
 
 pub fn data_dir() -> PathBuf {
     PathBuf::from(env!("COHERENT_ORIGINAL_ENV"))
@@ -80,4 +81,23 @@ pub async fn run(
         &mut progress,
     );
     Ok((run.await?.0, path))
+}
+
+/// Replays `recorded`, the transcript read from `file`, by the rules (its new transcript
+/// in `out`): where the replay first differs from the recording, if it does.
+pub async fn replay(recorded: &Transcript, file: &Path, out: &Path) -> Option<String> {
+    let replay = Replay::prepare(recorded, file).expect("a replay");
+    let mut env = SymbolicEnv::new(Arc::clone(&replay.task));
+    let (replayed, _) = run(
+        &replay.task,
+        &mut env,
+        replay.backend.as_ref(),
+        &replay.settings,
+        replay.budget,
+        out,
+        &Cancel::default(),
+    )
+    .await
+    .expect("the replay runs");
+    replay.difference(&replayed)
 }

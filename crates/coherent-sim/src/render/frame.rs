@@ -2,6 +2,7 @@
 //! is drawn (one panel per storey, side by side), and the names and styles every part
 //! of the picture shares.
 
+use coherent_core::text::shown;
 use coherent_core::{Idx, NodeId, RobotKind, Task};
 
 use crate::layout::{self, Layout};
@@ -31,17 +32,12 @@ pub(super) fn robot_style(kind: RobotKind) -> (&'static str, &'static str) {
     }
 }
 
-pub(super) fn esc(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
-/// `class id`, without the angle brackets of the action notation.
+/// `class id`, without the angle brackets of the action notation; a control character of
+/// the name shown as an escape ([`shown`]), so that a line break in it does not start a
+/// new line of the label that quotes it.
 pub(super) fn name(task: &Task, n: Idx) -> String {
     let node = task.node(n);
-    format!("{} {}", node.class_name, node.id.0)
+    format!("{} {}", shown(&node.class_name), node.id.0)
 }
 
 /// Where things are drawn: the house's extent on the floor plan (things set aside

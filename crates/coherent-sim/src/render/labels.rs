@@ -3,7 +3,7 @@
 
 use std::fmt::Write as _;
 
-use super::frame::esc;
+use coherent_core::text::markup;
 
 /// Estimated box of a text of `len` characters at `font` px, anchored at its left
 /// baseline: `[x0, y0, x1, y1]`.
@@ -96,12 +96,12 @@ impl Labels {
             .enumerate()
             .map(|(i, l)| {
                 if i == 0 {
-                    esc(l)
+                    markup(l).into_owned()
                 } else {
                     format!(
                         r#"<tspan x="{x:.1}" dy="{:.1}">{}</tspan>"#,
                         font * 1.15,
-                        esc(l)
+                        markup(l)
                     )
                 }
             })

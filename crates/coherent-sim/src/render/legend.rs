@@ -4,8 +4,9 @@
 use std::fmt::Write as _;
 
 use coherent_core::RobotKind;
+use coherent_core::text::markup;
 
-use super::frame::{Frame, LEGEND_W, MARGIN, SCALE, esc, robot_style};
+use super::frame::{Frame, LEGEND_W, MARGIN, SCALE, robot_style};
 
 /// The legend: a box with the task's name, a row per robot kind and per kind of thing,
 /// what the lines are when `with_paths`, and the scale bar.
@@ -24,7 +25,7 @@ pub(super) fn legend(out: &mut String, frame: &Frame, with_paths: bool) {
         out,
         r#"<text x="{lx:.1}" y="{:.1}" font-size="15" font-weight="bold">{} task {}</text>"#,
         ly + 12.0,
-        esc(&task.meta.scene),
+        markup(&task.meta.scene),
         task.meta.task_id
     );
     ly += 36.0;
@@ -34,7 +35,7 @@ pub(super) fn legend(out: &mut String, frame: &Frame, with_paths: bool) {
             r#"{symbol}<text x="{:.1}" y="{:.1}" font-size="13">{}</text>"#,
             lx + 34.0,
             y + 5.0,
-            esc(text)
+            markup(text)
         );
     };
     for kind in RobotKind::ALL {

@@ -5,8 +5,9 @@
 use std::fmt::Write as _;
 
 use coherent_core::State;
+use coherent_core::text::markup;
 
-use super::frame::{Frame, MARGIN, Paths, esc};
+use super::frame::{Frame, MARGIN, Paths};
 use super::labels::Labels;
 use super::{items, legend, plan, robots};
 
@@ -34,7 +35,7 @@ pub(super) fn draw(frame: &Frame, state: &State, movers: Movers<'_>) -> String {
     let _ = writeln!(
         out,
         r#"<title>{} task {}</title>"#,
-        esc(&task.meta.scene),
+        markup(&task.meta.scene),
         task.meta.task_id
     );
     let mut labels = Labels {

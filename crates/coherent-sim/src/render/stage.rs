@@ -4,9 +4,10 @@
 
 use std::fmt::Write as _;
 
+use coherent_core::text::markup;
 use coherent_core::{NodeId, RobotKind, State, Task};
 
-use super::frame::{Frame, esc, robot_style};
+use super::frame::{Frame, robot_style};
 use super::picture::{Movers, draw};
 use super::robots;
 use crate::layout::Layout;
@@ -48,7 +49,12 @@ impl<'a> Stage<'a> {
         let (task, layout) = (self.frame.task, self.frame.layout);
         let mut defs = String::from("<defs>\n");
         for r in &task.robots {
-            let _ = write!(defs, r#"<g id="{}robot-{}">"#, esc(ids), task.id(r.node).0);
+            let _ = write!(
+                defs,
+                r#"<g id="{}robot-{}">"#,
+                markup(ids),
+                task.id(r.node).0
+            );
             robots::symbol(&mut defs, layout, r.kind, 0.0, 0.0);
             defs.push_str("</g>\n");
         }
