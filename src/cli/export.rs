@@ -44,7 +44,7 @@ pub struct ExportArgs {
 /// `--plans`, has no plan).
 pub fn export(tasks: &[Task], args: &ExportArgs, limits: &Limits) -> Result<u8, Error> {
     match args.format {
-        Format::Pddl => pddl::export(tasks, args, limits),
+        Format::Pddl => pddl::export(tasks, &args.out, args.plans, limits),
         Format::Original if args.plans => Err(Error::Invalid(
             "--plans writes PDDL plans: it goes with --format pddl".into(),
         )),

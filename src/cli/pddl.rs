@@ -2,16 +2,15 @@
 //! and a PDDL plan checked against the rules (docs/pddl.md).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
-use super::export::ExportArgs;
 use crate::session::engine::{Limits, Task, shown};
 use crate::session::{Error, pddl};
 
 /// Writes the files of `--format pddl`; exit 1 when a task could not be written (the
 /// domain cannot express it) or, with `--plans`, has no plan.
-pub fn export(tasks: &[Task], args: &ExportArgs, limits: &Limits) -> Result<u8, Error> {
-    let written = pddl::export_files(tasks, &args.out, args.plans, limits)?;
+pub fn export(tasks: &[Task], out: &Path, plans: bool, limits: &Limits) -> Result<u8, Error> {
+    let written = pddl::export_files(tasks, out, plans, limits)?;
     for refused in &written.refused {
         eprintln!("refused: {}", shown(&refused.to_string()));
     }
@@ -21,7 +20,7 @@ pub fn export(tasks: &[Task], args: &ExportArgs, limits: &Limits) -> Result<u8, 
     println!(
         "wrote {} files to {} ({} tasks, {} refused)",
         written.files.len(),
-        shown(&args.out.display().to_string()),
+        shown(&out.display().to_string()),
         tasks.len() - written.refused.len(),
         written.refused.len()
     );

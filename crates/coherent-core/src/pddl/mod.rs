@@ -1,4 +1,4 @@
-//! The tasks in PDDL (docs/pddl.md): a domain per rule set ([`domain`]), a problem per
+//! The tasks in PDDL (docs/pddl.md): a domain per rule set ([`domain()`]), a problem per
 //! task ([`export`]), plans written as PDDL actions ([`plan_text`]) and PDDL plans read
 //! back and checked against the rules ([`check_plan`]).
 //!
