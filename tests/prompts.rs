@@ -134,7 +134,8 @@ fn export_writes_every_template_and_does_not_overwrite_unasked() {
             "executor_quadrotor.txt",
             "executor_robot_arm.txt",
             "executor_robot_dog.txt",
-            "executor_user.txt"
+            "executor_user.txt",
+            "goal.txt"
         ]
     );
     let again = coherent(&["prompts", "export", d]);
