@@ -30,7 +30,8 @@ PER_CALL = (600 * 2.0 + 400 * 0.5 + 50 * 8.0) / 1e6
 
 
 class _Stub(BaseHTTPRequestHandler):
-    """Chat completions: the first robot for the assigner, the first action otherwise."""
+    """Chat completions: the first robot for the assigner, an empty goal for llm-pddl, the
+    first action otherwise."""
 
     seen: list[dict[str, Any]]
 
@@ -41,6 +42,9 @@ class _Stub(BaseHTTPRequestHandler):
         props = schema["schema"]["properties"]
         if schema["name"] == "proposal":
             content = {"reasoning": "go", "robot": props["robot"]["enum"][0], "subtask": "the first thing"}
+        elif schema["name"] == "goal":
+            # llm-pddl's one question: a goal of no facts, read and refused as misread.
+            content = {"goal": []}
         else:
             # A dialogue's speaker may have no action of its own yet: an empty list.
             actions = props["action"]["enum"]
