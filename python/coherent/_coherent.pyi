@@ -301,6 +301,42 @@ def plan(task: Task, max_states: int = ..., parallel: bool = False, physics: boo
     moving at once (``makespan_physics_ok``, ``makespan_sim_seconds``...).
     Ctrl-C interrupts it and stops the search."""
 
+def generate(
+    tasks: int | None = None,
+    *,
+    seed: int | None = None,
+    scenes: int | None = None,
+    rooms: int | str | None = None,
+    upstairs: float | None = None,
+    closed: float | None = None,
+    team: str | Mapping[str, int | str] | None = None,
+    robots: int | str | None = None,
+    predicates: int | str | None = None,
+    type: str | Sequence[str] | None = None,
+    needed: int | str | None = None,
+    steps: int | str | None = None,
+    ratio: float | str | None = None,
+    proven: bool = False,
+    physics: bool = False,
+    max_states: int | None = None,
+    max_memory: int | None = None,
+    max_draws: int | None = None,
+    split: str | Sequence[float] | None = None,
+    jobs: int | None = None,
+    out: str | os.PathLike[str] | None = None,
+) -> list[tuple[Task, dict[str, Any]]]:
+    """A generated task set (docs/generate.md), the same tasks as ``coherent generate``
+    makes with the same knobs: a list of ``(task, manifest)``, ``manifest`` the task's
+    line of ``manifest.jsonl`` (``id``, ``scene``, ``team``, ``type``, ``optimal_steps``,
+    ``makespan``, its bounds, ``proven``, ``split``...). With ``out``, the folder is
+    written too, byte for byte what the command writes. A knob left as None has the
+    command's default (``tasks=100``, ``rooms="2-6"``, ``predicates="1-3"``,
+    ``upstairs=0.25``, ``closed=0.35``, ``split="0.8,0.1,0.1"``, one thread per core);
+    spans are an int or a str (``"2-6"``), ``team`` a str (``"quadrotor=2,legged=0-3"``)
+    or a dict by kind. A knob out of range, or a request the draws cannot meet, raises
+    ``ArgumentError`` naming the knob. Ctrl-C stops it; the folder then holds the tasks
+    made so far, whole."""
+
 def pddl(task: Task) -> tuple[str, str]:
     """The task in PDDL (docs/pddl.md): ``(domain, problem)``, its rule set's domain and
     its problem, each naming the task and coherent's version. A task the domain cannot

@@ -11,10 +11,8 @@ use clap::Args;
 
 use super::signals::Stop;
 use super::status;
-use crate::session::engine::{Cancel, Limits, clock, shown};
-use crate::session::generate::{
-    GenerateRequest, Made, Ratio, Span, TeamSpec, parse_split, parse_types,
-};
+use crate::session::engine::{Cancel, clock, shown};
+use crate::session::generate::{GenerateRequest, Knobs, Made};
 use crate::session::{self, Error};
 
 #[derive(Args)]
@@ -24,23 +22,23 @@ pub(crate) struct GenerateArgs {
     #[arg(short, long)]
     out: PathBuf,
     /// How many tasks.
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = Knobs::default().tasks)]
     tasks: usize,
     /// The seed: the same seed and knobs give the same files, byte for byte.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = Knobs::default().seed)]
     seed: u64,
     /// How many scenes the tasks are spread over (default: one per 25 tasks, at least
     /// 3, so that train, validation and test each have a scene of their own).
     #[arg(long)]
     scenes: Option<usize>,
     /// Rooms per scene, both storeys together: N or N-M (2 to 16).
-    #[arg(long, default_value = "2-6")]
+    #[arg(long, default_value_t = Knobs::default().rooms)]
     rooms: String,
     /// The chance that a scene of four rooms or more has a second storey with stairs.
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = Knobs::default().upstairs)]
     upstairs: f64,
     /// The chance that a door starts closed.
-    #[arg(long, default_value_t = 0.35)]
+    #[arg(long, default_value_t = Knobs::default().closed)]
     closed: f64,
     /// Robots per kind: `quadrotor=N,legged=N,arm=N`, each N or N-M (a kind left out:
     /// none; without --team, one of each, or 0 up to --robots of each).
@@ -50,7 +48,7 @@ pub(crate) struct GenerateArgs {
     #[arg(long)]
     robots: Option<String>,
     /// Goal predicates per task: N or N-M.
-    #[arg(long, default_value = "1-3")]
+    #[arg(long, default_value_t = Knobs::default().predicates)]
     predicates: String,
     /// Keep only tasks of these types (the fewest robot types that reach the goal):
     /// mono, dual, trio, comma-separated.
@@ -75,18 +73,18 @@ pub(crate) struct GenerateArgs {
     #[arg(long)]
     physics: bool,
     /// Most states one search may visit.
-    #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
+    #[arg(long, default_value_t = Knobs::default().max_states)]
     max_states: usize,
     /// Most memory one search's tables may take, in MiB (an estimate); the searches of
     /// --jobs threads run at once.
-    #[arg(long, value_name = "MIB", default_value_t = Limits::DEFAULT_MAX_MEMORY >> 20)]
+    #[arg(long, value_name = "MIB", default_value_t = Knobs::default().max_memory)]
     max_memory: usize,
     /// The most candidate tasks drawn before a request that cannot be met is given up
     /// (default: 50 per task asked, and 1,000 more).
     #[arg(long)]
     max_draws: Option<usize>,
     /// Shares of the scenes in train, validation and test.
-    #[arg(long, default_value = "0.8,0.1,0.1")]
+    #[arg(long, default_value_t = Knobs::default().split)]
     split: String,
     /// Threads that work out ground truths (default: one per core). They change the
     /// time, not the set.
@@ -95,66 +93,32 @@ pub(crate) struct GenerateArgs {
 }
 
 impl GenerateArgs {
-    /// The session's request, each knob parsed; an error names the flag.
+    /// The session's request; an error names the flag.
     fn request(&self) -> Result<GenerateRequest, Error> {
-        let knob = |e: crate::session::generate::KnobError| Error::Invalid(e.to_string());
-        let span = |name: &'static str, text: &str| Span::parse(name, text).map_err(knob);
-        let request = set_request(self, span, knob)?;
-        Ok(GenerateRequest {
-            command: request.command(),
-            request,
-            out: Some(self.out.clone()),
-        })
+        let knobs = Knobs {
+            tasks: self.tasks,
+            seed: self.seed,
+            scenes: self.scenes,
+            rooms: self.rooms.clone(),
+            upstairs: self.upstairs,
+            closed: self.closed,
+            team: self.team.clone(),
+            robots: self.robots.clone(),
+            predicates: self.predicates.clone(),
+            types: self.types.clone(),
+            needed: self.needed.clone(),
+            steps: self.steps.clone(),
+            ratio: self.ratio.clone(),
+            proven: self.proven,
+            physics: self.physics,
+            max_states: self.max_states,
+            max_memory: self.max_memory,
+            max_draws: self.max_draws,
+            split: self.split.clone(),
+            jobs: self.jobs,
+        };
+        knobs.request(Some(self.out.clone()))
     }
-}
-
-/// The set's request from the flags.
-fn set_request(
-    a: &GenerateArgs,
-    span: impl Fn(&'static str, &str) -> Result<Span, Error>,
-    knob: impl Fn(crate::session::generate::KnobError) -> Error,
-) -> Result<crate::session::generate::Request, Error> {
-    let jobs = a.jobs.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
-    });
-    Ok(crate::session::generate::Request {
-        tasks: a.tasks,
-        seed: a.seed,
-        scenes: a.scenes.unwrap_or_else(|| (a.tasks / 25).max(3)),
-        rooms: span("--rooms", &a.rooms)?,
-        upstairs: a.upstairs,
-        closed: a.closed,
-        team: TeamSpec::parse(a.team.as_deref(), a.robots.as_deref()).map_err(&knob)?,
-        predicates: span("--predicates", &a.predicates)?,
-        types: a
-            .types
-            .as_deref()
-            .map(parse_types)
-            .transpose()
-            .map_err(&knob)?
-            .unwrap_or_default(),
-        needed: a
-            .needed
-            .as_deref()
-            .map(|t| span("--needed", t))
-            .transpose()?,
-        steps: a.steps.as_deref().map(|t| span("--steps", t)).transpose()?,
-        ratio: a
-            .ratio
-            .as_deref()
-            .map(|t| Ratio::parse("--ratio", t))
-            .transpose()
-            .map_err(&knob)?,
-        proven_only: a.proven,
-        physics: a.physics,
-        limits: Limits {
-            max_memory: a.max_memory.saturating_mul(1 << 20),
-            ..Limits::max_states(a.max_states)
-        },
-        max_draws: a.max_draws,
-        split: parse_split(&a.split).map_err(&knob)?,
-        jobs,
-    })
 }
 
 pub(crate) fn generate(args: &GenerateArgs) -> Result<u8, Error> {

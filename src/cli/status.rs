@@ -44,6 +44,7 @@ pub(crate) fn of_error(error: &Error) -> u8 {
     match error {
         Error::Interrupted => INTERRUPTED,
         Error::Invalid(_)
+        | Error::Knob(_)
         | Error::Backend(_)
         | Error::Task(_)
         | Error::Prompt(_)

@@ -14,6 +14,9 @@ pub enum Error {
     /// An argument or setting that cannot be used: a method's name, error rates, a
     /// namespace, two tasks alike, a task with no step budget to size.
     Invalid(String),
+    /// A knob of a generated set that cannot be read, or a request its draws cannot
+    /// meet: the knob as the command line names it (`--rooms`; Python says `rooms`).
+    Knob(coherent_generate::KnobError),
     /// The backend's settings do not fit together (each front end words these in its
     /// own terms, flags or keyword arguments).
     Backend(BackendProblem),
@@ -57,6 +60,7 @@ impl fmt::Display for Error {
         match self {
             Error::Invalid(why) | Error::Endpoint(why) | Error::Internal(why) => f.write_str(why),
             Error::Backend(problem) => problem.fmt(f),
+            Error::Knob(e) => e.fmt(f),
             Error::Task(e) => e.fmt(f),
             Error::Prompt(e) => e.fmt(f),
             Error::File {

@@ -17,8 +17,12 @@ use coherent_generate::{About, Entry, Generated};
 
 use crate::session::Error;
 
-pub use coherent_generate::request::{parse_split, parse_types};
-pub use coherent_generate::{KnobError, Progress, Ratio, Request, Span, TeamSpec};
+use coherent_generate::request::{parse_split, parse_types};
+use coherent_generate::{KnobError, Ratio, Span, TeamSpec};
+
+use crate::session::engine::Limits;
+
+pub use coherent_generate::{Progress, Request};
 
 /// What a front end asks for: the set, where it goes (`None`: nowhere, the tasks are
 /// only handed back), and the command that asks, for the datasheet.
@@ -27,6 +31,113 @@ pub struct GenerateRequest {
     pub request: Request,
     pub out: Option<PathBuf>,
     pub command: String,
+}
+
+/// The knobs of a set as the command line and Python give them, the spans and lists as
+/// typed (`"2-6"`, `"quadrotor=2,legged=0-3"`, `"mono,trio"`); [`Knobs::request`] reads
+/// them, an error naming the knob as the command line does (`--rooms`). The defaults are
+/// the command line's.
+#[derive(Clone, Debug)]
+pub struct Knobs {
+    pub tasks: usize,
+    pub seed: u64,
+    /// `None`: one per 25 tasks, at least 3 (so that each split has a scene).
+    pub scenes: Option<usize>,
+    pub rooms: String,
+    pub upstairs: f64,
+    pub closed: f64,
+    pub team: Option<String>,
+    pub robots: Option<String>,
+    pub predicates: String,
+    pub types: Option<String>,
+    pub needed: Option<String>,
+    pub steps: Option<String>,
+    pub ratio: Option<String>,
+    pub proven: bool,
+    pub physics: bool,
+    pub max_states: usize,
+    /// MiB.
+    pub max_memory: usize,
+    pub max_draws: Option<usize>,
+    pub split: String,
+    /// `None`: one per core.
+    pub jobs: Option<usize>,
+}
+
+impl Default for Knobs {
+    fn default() -> Knobs {
+        Knobs {
+            tasks: 100,
+            seed: 0,
+            scenes: None,
+            rooms: "2-6".to_owned(),
+            upstairs: 0.25,
+            closed: 0.35,
+            team: None,
+            robots: None,
+            predicates: "1-3".to_owned(),
+            types: None,
+            needed: None,
+            steps: None,
+            ratio: None,
+            proven: false,
+            physics: false,
+            max_states: Limits::DEFAULT_MAX_STATES,
+            max_memory: Limits::DEFAULT_MAX_MEMORY >> 20,
+            max_draws: None,
+            split: "0.8,0.1,0.1".to_owned(),
+            jobs: None,
+        }
+    }
+}
+
+impl Knobs {
+    /// The request these knobs make, written to `out` (or nowhere).
+    pub fn request(&self, out: Option<PathBuf>) -> Result<GenerateRequest, Error> {
+        let span = |name: &'static str, text: &str| Span::parse(name, text).map_err(knob);
+        let optional_span = |name: &'static str, text: &Option<String>| {
+            text.as_deref().map(|t| span(name, t)).transpose()
+        };
+        let jobs = self.jobs.unwrap_or_else(|| {
+            std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+        });
+        let request = Request {
+            tasks: self.tasks,
+            seed: self.seed,
+            scenes: self.scenes.unwrap_or_else(|| (self.tasks / 25).max(3)),
+            rooms: span("--rooms", &self.rooms)?,
+            upstairs: self.upstairs,
+            closed: self.closed,
+            team: TeamSpec::parse(self.team.as_deref(), self.robots.as_deref()).map_err(knob)?,
+            predicates: span("--predicates", &self.predicates)?,
+            types: match self.types.as_deref() {
+                Some(t) => parse_types(t).map_err(knob)?,
+                None => Vec::new(),
+            },
+            needed: optional_span("--needed", &self.needed)?,
+            steps: optional_span("--steps", &self.steps)?,
+            ratio: self
+                .ratio
+                .as_deref()
+                .map(|t| Ratio::parse("--ratio", t))
+                .transpose()
+                .map_err(knob)?,
+            proven_only: self.proven,
+            physics: self.physics,
+            limits: Limits {
+                max_memory: self.max_memory.saturating_mul(1 << 20),
+                ..Limits::max_states(self.max_states)
+            },
+            max_draws: self.max_draws,
+            split: parse_split(&self.split).map_err(knob)?,
+            jobs,
+        };
+        Ok(GenerateRequest {
+            command: request.command(),
+            request,
+            out,
+        })
+    }
 }
 
 /// A task the set kept, as a front end sees it.
@@ -106,7 +217,7 @@ impl GenerateRequest {
 
 /// A request the knobs cannot meet, as the session's error.
 fn knob(e: KnobError) -> Error {
-    Error::Invalid(e.to_string())
+    Error::Knob(e)
 }
 
 /// The output folder being written.

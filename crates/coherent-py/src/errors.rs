@@ -213,6 +213,11 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
     let message = e.to_string();
     match e {
         Error::Invalid(_) | Error::Backend(_) => error(py, Kind::Argument, message, None),
+        // Python's words: the knob is the argument of `coherent.generate`.
+        Error::Knob(e) => {
+            let name = e.knob.trim_start_matches('-').replace('-', "_");
+            error(py, Kind::Argument, format!("{name}: {}", e.message), None)
+        }
         Error::Task(e) => core_err(py, e),
         Error::Prompt(e) => prompt(py, &e),
         Error::File { file, line, .. } => data_file(py, message, file, line),

@@ -12,6 +12,7 @@ mod bench;
 mod convert;
 mod distributed;
 mod errors;
+mod generate;
 mod llm;
 mod method;
 mod pddl;
@@ -270,6 +271,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
+    m.add_function(wrap_pyfunction!(generate::generate, m)?)?;
     m.add_function(wrap_pyfunction!(pddl::pddl_texts, m)?)?;
     m.add_function(wrap_pyfunction!(pddl::check_pddl_plan, m)?)?;
     m.add_function(wrap_pyfunction!(budget, m)?)?;
