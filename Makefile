@@ -20,14 +20,20 @@ lint:
 	RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps --document-private-items
 	$(PYTHON) scripts/check-layout
 
-# coherent-py links against libpython only when loaded by Python: its tests are pytest's.
+# The Rust tests, the benches and the wheel all build with the release profile into one
+# target folder (Cargo.toml, `[profile.release]`): each dependency is compiled once (and
+# checked once more for clippy and cargo doc, which share that), and after the README's
+# `pip install .` nothing of the wheel is compiled again. coherent-py links against
+# libpython only when loaded by Python: its tests are pytest's.
+CARGO_TEST := cargo test --release --workspace --exclude coherent-py
 rust-test:
-	cargo test --workspace --exclude coherent-py
+	$(CARGO_TEST)
 
 venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install --quiet --upgrade pip
-	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema
+	# pytest-xdist: pytest on every core (py-test).
+	$(BIN)/pip install --quiet "maturin>=1.5,<2" pytest jsonschema "pytest-xdist==3.8.0"
 	# The extras [analysis] (coherent.analysis, .plot), [gym] and [marl] (coherent.marl),
 	# pinned.
 	$(BIN)/pip install --quiet "pandas==3.1.1" "matplotlib==3.11.2" "gymnasium==1.4.0"
@@ -74,15 +80,19 @@ rsvg:
 		echo "rsvg-convert is missing and this is not root: the docs' test of docs/physics.md will fail (apt-get install librsvg2-bin)"; \
 	fi
 
-# The wheel (release), built once per make run, for both venvs below.
+# The wheel (release), built once per make run, for both venvs below. `--interpreter`:
+# the venv's Python, the one `pip install .` builds with (PYO3_PYTHON); with another,
+# pyo3 and the bindings are compiled again.
 wheel: venv
 	rm -rf $(WHEELS)
-	$(BIN)/maturin build --release --quiet --out $(WHEELS)
+	$(BIN)/maturin build --release --interpreter $(BIN)/python3 --quiet --out $(WHEELS)
 
-# Installs the wheel into the venv, runs pytest.
+# Installs the wheel into the venv, runs pytest: a worker per core (pytest-xdist), each
+# test in its own folder and each server on a free port, an idle worker taking tests from a
+# busy one (worksteal: the slowest tests take minutes); the slowest fifteen are listed.
 py-test: wheel browser rsvg
 	$(BIN)/pip install --quiet --force-reinstall --no-deps $(WHEELS)/coherent_robots-*.whl
-	COHERENT_BROWSER=$(BROWSER) $(BIN)/pytest -q
+	COHERENT_BROWSER=$(BROWSER) $(BIN)/pytest -q -n auto --dist worksteal --durations=15
 
 # The same wheel in a fresh venv without extras, from no index (it needs no other
 # package): loading a task and running an episode work.
@@ -96,9 +106,11 @@ demo: venv
 	$(BIN)/pip install --quiet .
 	$(BIN)/coherent run examples/tasks/demo.json
 
-# The benches build (release) on every test run, so that they never rot.
+# The benches, built on the tests' build and each run once (criterion's test mode) on
+# every test run, so that they never rot. `--bench '*'`: the bench targets alone
+# (`--benches` would run the libraries' unit tests a second time).
 bench-build:
-	cargo bench --no-run
+	$(CARGO_TEST) --bench '*'
 
 # Criterion benchmarks of the planning loop (release build; minutes).
 bench:
