@@ -37,9 +37,9 @@ from pathlib import Path
 
 # A* with h^max: admissible, so the first plan it finds is optimal. Fast Downward's LM-cut
 # refuses the domain's conditional effects ("This configuration does not support
-# conditional effects"); h^max supports them. On the largest tasks (three or four robots,
-# tens of thousands of ground operators) h^max costs tens of milliseconds a state, and blind
-# A* (`--search "astar(blind())"`, optimal too: every action costs 1) decides them sooner.
+# conditional effects"); h^max supports them. On the largest tasks (three robots, tens of
+# thousands of ground operators) h^max costs tens of milliseconds a state; `--search` runs
+# another optimal search that takes conditional effects (blind A*, merge-and-shrink).
 SEARCH = "astar(hmax())"
 # The driver's exit codes for "no plan exists" (translator or search proved it).
 UNSOLVABLE = {10, 11}
