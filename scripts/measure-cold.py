@@ -121,15 +121,14 @@ def main() -> int:
     if not link.exists():
         link.symlink_to(args.shared.resolve())
     commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", args.commit], capture_output=True, text=True, check=True).stdout.strip()
-    install, test = readme_commands(REPO / "README.md")
 
     results = []
-    for name, command in (("install", install), ("test", test)):
+    for i, name in enumerate(("install", "test")):
         if name in args.skip:
             continue
         # The command as the measured commit's README says it.
         here = clone(commit, args.work, f"clone-{name}")
-        command = readme_commands(here / "README.md")[0 if name == "install" else 1]
+        command = readme_commands(here / "README.md")[i]
         r = {"step": name, "commit": commit, **timed(command, here, args.work / f"{name}.log")}
         results.append(r)
         print(f"{name}: {minutes(r['wall_s'])} (exit {r['exit']})", file=sys.stderr, flush=True)

@@ -224,11 +224,11 @@ fn method_arg(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<MethodArg> {
     } else if obj.is_callable() {
         Ok(MethodArg::Python(obj.clone().unbind()))
     } else {
-        Err(pyo3::exceptions::PyTypeError::new_err(format!(
-            "{name}: expected a method's name, or a class (or any callable) of a method \
-             written in Python, not {}",
-            obj.get_type().name()?
-        )))
+        Err(convert::expected(
+            obj,
+            name,
+            "a method's name, or a class (or any callable) of a method written in Python",
+        ))
     }
 }
 

@@ -137,14 +137,20 @@ fn unencodable(s: &Bound<'_, PyAny>, e: &PyErr) -> String {
     }
 }
 
+/// The `TypeError` of an argument of another type than `what`, naming the argument:
+/// `rooms: expected an int or a str, not list`.
+pub(crate) fn expected(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyErr {
+    match obj.get_type().name() {
+        Ok(type_name) => PyTypeError::new_err(format!("{name}: expected {what}, not {type_name}")),
+        Err(e) => e,
+    }
+}
+
 /// A str argument's text: another type is a `TypeError`, a str with a lone surrogate an
 /// `ArgumentError` naming `name`.
 pub(crate) fn text<'a>(obj: &'a Bound<'_, PyAny>, name: &str) -> PyResult<&'a str> {
     let Ok(s) = obj.cast::<PyString>() else {
-        return Err(PyTypeError::new_err(format!(
-            "{name}: expected a str, not {}",
-            obj.get_type().name()?
-        )));
+        return Err(expected(obj, name, "a str"));
     };
     utf8(s).map_err(|why| errors::argument(name, obj, why))
 }

@@ -6,11 +6,10 @@ use std::path::PathBuf;
 
 use coherent::session::engine::Cancel;
 use coherent::session::generate::{Kept, Knobs};
-use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyInt, PyList, PyString, PyTuple};
 
-use crate::convert::{Unsigned, finite, interruptible, json_to_py, text, unsigned};
+use crate::convert::{Unsigned, expected, finite, interruptible, json_to_py, text, unsigned};
 use crate::errors::PyCoherentResult;
 use crate::task::PyTask;
 
@@ -76,7 +75,9 @@ pub(crate) fn generate<'py>(
     knobs.types = given(r#type).map(|t| listed(t, "type")).transpose()?;
     knobs.needed = given(needed).map(|n| span(n, "needed")).transpose()?;
     knobs.steps = given(steps).map(|s| span(s, "steps")).transpose()?;
-    knobs.ratio = given(ratio).map(ratio_text).transpose()?;
+    knobs.ratio = given(ratio)
+        .map(|r| text_or_number(r, "ratio"))
+        .transpose()?;
     knobs.proven = proven;
     knobs.physics = physics;
     if let Some(n) = size(max_states, "max_states")? {
@@ -136,10 +137,16 @@ fn whole<T: Unsigned>(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<T> {
     unsigned(obj, name)
 }
 
-/// A span knob: an int (`3`) or a str (`"2-6"`), as the command line reads it.
+/// A knob given as a str: its text, as the command line would take it.
+fn as_typed(obj: &Bound<'_, PyAny>, name: &str) -> Option<PyResult<String>> {
+    obj.is_instance_of::<PyString>()
+        .then(|| text(obj, name).map(str::to_owned))
+}
+
+/// A span knob: an int (`3`) or a str (`"2-6"`).
 fn span(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
-    if obj.cast::<PyString>().is_ok() {
-        return text(obj, name).map(str::to_owned);
+    if let Some(typed) = as_typed(obj, name) {
+        return typed;
     }
     if obj.is_instance_of::<PyBool>() || !obj.is_instance_of::<PyInt>() {
         return Err(expected(obj, name, "an int or a str"));
@@ -147,42 +154,30 @@ fn span(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
     unsigned::<u64>(obj, name).map(|n| n.to_string())
 }
 
-/// A `TypeError` naming the knob: `rooms: expected an int or a str, not list`.
-fn expected(obj: &Bound<'_, PyAny>, name: &str, what: &str) -> PyErr {
-    let type_name = obj
-        .get_type()
-        .name()
-        .map_or_else(|_| "?".to_owned(), |n| n.to_string());
-    PyTypeError::new_err(format!("{name}: expected {what}, not {type_name}"))
+/// `ratio`, and an item of `type` or `split`: a str or a finite number (`1.5`).
+fn text_or_number(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
+    as_typed(obj, name).unwrap_or_else(|| finite(obj, name).map(|x| x.to_string()))
 }
 
-/// `type` or `split`: a str as the command line takes it, or a list or tuple of names
-/// (`["mono", "trio"]`) or of shares (`[0.8, 0.1, 0.1]`).
+/// `type` or `split`: a str, or a list or tuple of names (`["mono", "trio"]`) or of
+/// shares (`[0.8, 0.1, 0.1]`), joined by commas.
 fn listed(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<String> {
-    if obj.cast::<PyString>().is_ok() {
-        return text(obj, name).map(str::to_owned);
+    if let Some(typed) = as_typed(obj, name) {
+        return typed;
     }
     if !(obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>()) {
         return Err(expected(obj, name, "a str, a list or a tuple"));
     }
-    let items: Vec<Bound<'_, PyAny>> = obj.try_iter()?.collect::<PyResult<_>>()?;
-    items
-        .iter()
-        .map(|item| {
-            if item.cast::<PyString>().is_ok() {
-                text(item, name).map(str::to_owned)
-            } else {
-                finite(item, name).map(|x| x.to_string())
-            }
-        })
+    obj.try_iter()?
+        .map(|item| text_or_number(&item?, name))
         .collect::<PyResult<Vec<_>>>()
         .map(|parts| parts.join(","))
 }
 
 /// `team`: a str (`"quadrotor=2,legged=0-3"`) or a dict of counts or spans by kind.
 fn team_text(obj: &Bound<'_, PyAny>) -> PyResult<String> {
-    if obj.cast::<PyString>().is_ok() {
-        return text(obj, "team").map(str::to_owned);
+    if let Some(typed) = as_typed(obj, "team") {
+        return typed;
     }
     let Ok(dict) = obj.cast::<PyDict>() else {
         return Err(expected(obj, "team", "a str or a dict"));
@@ -191,12 +186,4 @@ fn team_text(obj: &Bound<'_, PyAny>) -> PyResult<String> {
         .map(|(kind, n)| Ok(format!("{}={}", text(&kind, "team")?, span(&n, "team")?)))
         .collect::<PyResult<Vec<_>>>()
         .map(|parts| parts.join(","))
-}
-
-/// `ratio`: a number (`1.5`) or a str (`"1.2-2"`).
-fn ratio_text(obj: &Bound<'_, PyAny>) -> PyResult<String> {
-    if obj.cast::<PyString>().is_ok() {
-        return text(obj, "ratio").map(str::to_owned);
-    }
-    finite(obj, "ratio").map(|x| x.to_string())
 }
