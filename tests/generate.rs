@@ -73,21 +73,28 @@ fn set(which: (&str, &[&str])) -> &'static Path {
 
 /// Every file under `dir`, by its path relative to `dir`, with its bytes.
 fn files(dir: &Path) -> BTreeMap<PathBuf, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut todo = vec![dir.to_path_buf()];
-    while let Some(d) = todo.pop() {
-        for e in std::fs::read_dir(&d).expect("a folder of the set") {
-            let path = e.expect("an entry").path();
-            if path.is_dir() {
-                todo.push(path);
-            } else {
-                let bytes = std::fs::read(&path).expect("a file of the set");
-                let rel = path.strip_prefix(dir).expect("under the set").to_path_buf();
-                out.insert(rel, bytes);
-            }
+    walk(dir)
+        .into_iter()
+        .map(|path| {
+            let bytes = std::fs::read(&path).expect("a file of the set");
+            let rel = path.strip_prefix(dir).expect("under the set").to_path_buf();
+            (rel, bytes)
+        })
+        .collect()
+}
+
+/// Every file under `dir`.
+fn walk(dir: &Path) -> Vec<PathBuf> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).into_iter().flatten().flatten() {
+        let path = entry.path();
+        if path.is_dir() {
+            found.extend(walk(&path));
+        } else {
+            found.push(path);
         }
     }
-    out
+    found
 }
 
 /// The manifest's lines.
@@ -402,6 +409,90 @@ fn knobs_out_of_range_and_requests_that_cannot_be_met_exit_2_naming_the_knob() {
         }
         assert!(!stderr.contains("panicked"), "{name}: {stderr}");
     }
+}
+
+#[test]
+fn ctrl_c_leaves_the_tasks_written_so_far_whole_and_listed() {
+    let dir = scratch("generate-interrupted").join("set");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_coherent"))
+        .args([
+            "generate",
+            "--out",
+            utf8(&dir),
+            "--tasks",
+            "2000",
+            "--seed",
+            "3",
+            "--scenes",
+            "4",
+        ])
+        .args([
+            "--robots",
+            "3-4",
+            "--max-states",
+            "20000",
+            "--max-memory",
+            "128",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("coherent generate starts");
+    // Interrupted once some tasks are written, while threads are still searching.
+    let start = std::time::Instant::now();
+    while json_files(&dir).len() < 3 {
+        if let Some(status) = child.try_wait().expect("the child's status") {
+            panic!("coherent generate ended first: {status}");
+        }
+        assert!(
+            start.elapsed() < std::time::Duration::from_secs(300),
+            "no three tasks written in 5 min"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let sent = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .expect("kill runs");
+    assert!(sent.success());
+    let out = child.wait_with_output().expect("coherent generate ends");
+    assert_eq!(out.status.code(), Some(130), "{}", show(&out));
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("interrupted"),
+        "{}",
+        show(&out)
+    );
+    // Every task file is whole and in the manifest; nothing half written is left.
+    let listed: Vec<PathBuf> = manifest(&dir)
+        .iter()
+        .map(|e| dir.join(e["file"].as_str().expect("a file")))
+        .collect();
+    assert!(!listed.is_empty());
+    assert_eq!(json_files(&dir), listed.iter().cloned().collect());
+    for file in &listed {
+        assert_eq!(load_tasks(file).expect("a whole task").len(), 1);
+    }
+    let sheet = std::fs::read_to_string(dir.join("README.md")).expect("the datasheet");
+    assert!(
+        sheet.contains(&format!("{} tasks", listed.len())),
+        "{sheet}"
+    );
+    let hidden = walk(&dir)
+        .into_iter()
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+        })
+        .collect::<Vec<_>>();
+    assert!(hidden.is_empty(), "left behind: {hidden:?}");
+}
+
+/// The task files written under `dir` so far.
+fn json_files(dir: &Path) -> std::collections::BTreeSet<PathBuf> {
+    walk(dir)
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect()
 }
 
 #[test]

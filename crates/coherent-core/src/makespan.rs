@@ -546,9 +546,23 @@ struct Choices<'v> {
     views: &'v [View<'v>],
     actions: Vec<Vec<Action>>,
     prints: Vec<Vec<Option<Footprint>>>,
-    /// What the lists and the footprints taken so far hold, in bytes.
+    /// Where each robot's actions start in one numbering of all of them, and how many
+    /// they are.
+    first: Vec<usize>,
+    all: usize,
+    /// Whether two actions meet, by their numbers (`a * all + b`), once compared: 0 not
+    /// yet, 1 apart, 2 they meet. The walk compares one pair once per choice of the
+    /// robots between them, so a state with `n` robots asks each pair up to the product
+    /// of the choices in between; empty when the actions are more than
+    /// [`REMEMBERED_ACTIONS`].
+    met: Vec<u8>,
+    /// What the lists, the footprints taken so far and `met` hold, in bytes.
     bytes: usize,
 }
+
+/// The most actions (all robots' together) in one state whose comparisons the walk
+/// remembers: a megabyte at most. A state of a larger scene compares anew each time.
+const REMEMBERED_ACTIONS: usize = 1024;
 
 impl<'v> Choices<'v> {
     fn new(task: &Task, views: &'v [View<'v>], useful: &Useful) -> Choices<'v> {
@@ -563,15 +577,51 @@ impl<'v> Choices<'v> {
             .collect();
         let prints: Vec<Vec<Option<Footprint>>> =
             actions.iter().map(|list| vec![None; list.len()]).collect();
+        let first: Vec<usize> = actions
+            .iter()
+            .scan(0, |at, list| {
+                let start = *at;
+                *at += list.len();
+                Some(start)
+            })
+            .collect();
+        let all: usize = actions.iter().map(Vec::len).sum();
+        let met = if all <= REMEMBERED_ACTIONS {
+            vec![0; all * all]
+        } else {
+            Vec::new()
+        };
         let bytes = actions
             .iter()
             .map(|list| list.capacity() * (size_of::<Action>() + size_of::<Option<Footprint>>()))
-            .sum();
+            .sum::<usize>()
+            + met.capacity()
+            + first.capacity() * size_of::<usize>();
         Choices {
             views,
             actions,
             prints,
+            first,
+            all,
+            met,
             bytes,
+        }
+    }
+
+    /// Whether robot `r`'s action `i` and robot `k`'s action `j` meet; both footprints
+    /// taken.
+    fn meet(&mut self, (r, i): (usize, usize), (k, j): (usize, usize)) -> bool {
+        let (a, b) = (self.first[r] + i, self.first[k] + j);
+        match self.met.get(a * self.all + b) {
+            Some(1) => false,
+            Some(2) => true,
+            known => {
+                let meets = self.print(r, i).conflict(self.print(k, j)).is_some();
+                if known.is_some() {
+                    self.met[a * self.all + b] = 1 + u8::from(meets);
+                }
+                meets
+            }
         }
     }
 
@@ -644,12 +694,9 @@ impl Walk<'_> {
         if search.bytes(None, 0) + self.held + self.choices.bytes > search.limits.max_memory {
             return ControlFlow::Break(Halt::Limit(Stop::Memory));
         }
-        let print = self.choices.print(k, j);
-        ControlFlow::Continue(
-            self.chosen
-                .iter()
-                .any(|&(r, i)| self.choices.print(r, i).conflict(print).is_some()),
-        )
+        let chosen = &self.chosen;
+        let choices = &mut self.choices;
+        ControlFlow::Continue(chosen.iter().any(|&(r, i)| choices.meet((r, i), (k, j))))
     }
 
     /// Chooses for robot `k` and those after it; each complete, non-empty joint step is

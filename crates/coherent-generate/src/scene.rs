@@ -145,50 +145,50 @@ impl Grid {
     }
 }
 
+/// Draws of a scene's rooms before it gives up.
+const SCENE_DRAWS: usize = 16;
+
 /// Tries to lay a scene out this many times (each with a wider room where a counter
 /// did not fit) before it gives up.
 const LAYOUT_TRIES: usize = 6;
 
 impl Scene {
-    /// Scene `index` of a set seeded `seed`.
+    /// Scene `index` of a set seeded `seed`. A draw of rooms too few (or too small) for
+    /// the largest team is drawn again, up to [`SCENE_DRAWS`] times, from the scene's
+    /// own stream: a scene that fits at once is the same whatever the other scenes do.
     pub fn generate(index: usize, seed: u64, req: &SceneRequest) -> Result<Scene, KnobError> {
         let mut rng = Rng::new(seed_of(seed, "scene", index as u64));
-        let n = rng.between(req.rooms.lo, req.rooms.hi);
-        let upper = if n >= 4 && rng.chance(req.upstairs) {
-            rng.between(2, n / 2)
-        } else {
-            0
-        };
-        let lower = n - upper;
-        if req.counters > 2 * lower {
-            return knob(
-                "--rooms",
-                format!(
-                    "scene {index} has {lower} rooms downstairs, room for {} counters with an arm, and the teams have up to {} arms",
-                    2 * lower,
-                    req.counters
-                ),
-            );
-        }
-        let plan = Plan::draw(&mut rng, lower, upper, req);
-        let mut widen = vec![0.0f32; plan.columns];
-        for _ in 0..LAYOUT_TRIES {
-            let mut r = rng.clone();
-            match plan.lay_out(&mut r, index, &widen, req) {
-                Ok(scene) => return Ok(scene),
-                Err(Crowded::Column(c)) => widen[c] += crate::catalogue::COUNTER[0] + 0.5,
-                Err(Crowded::Spots) => {
-                    for w in &mut widen {
-                        *w += 1.5;
+        for _ in 0..SCENE_DRAWS {
+            let n = rng.between(req.rooms.lo, req.rooms.hi);
+            let upper = if n >= 4 && rng.chance(req.upstairs) {
+                rng.between(2, n / 2)
+            } else {
+                0
+            };
+            let lower = n - upper;
+            if req.counters > 2 * lower {
+                continue;
+            }
+            let plan = Plan::draw(&mut rng, lower, upper, req);
+            let mut widen = vec![0.0f32; plan.columns];
+            for _ in 0..LAYOUT_TRIES {
+                let mut r = rng.clone();
+                match plan.lay_out(&mut r, index, &widen, req) {
+                    Ok(scene) => return Ok(scene),
+                    Err(Crowded::Column(c)) => widen[c] += crate::catalogue::COUNTER[0] + 0.5,
+                    Err(Crowded::Spots) => {
+                        for w in &mut widen {
+                            *w += 1.5;
+                        }
                     }
                 }
             }
         }
         knob(
-            "--team",
+            "--rooms",
             format!(
-                "scene {index}: {n} rooms cannot hold {} counters with an arm and floor for {} robots",
-                req.counters, req.spots
+                "scene {index}: no layout in {SCENE_DRAWS} draws of {}-{} rooms holds {} counters with an arm (at most two a room downstairs) and floor for {} robots",
+                req.rooms.lo, req.rooms.hi, req.counters, req.spots
             ),
         )
     }

@@ -1,13 +1,14 @@
 //! The driver: draws candidate tasks (each from its own seeded stream, so a draw is the
 //! same whatever came before it and whichever thread works it out), works out their
-//! ground truths on several threads a batch at a time, and keeps them in draw order
+//! ground truths on several threads (each takes the next draw when it is free), and keeps
+//! them in draw order
 //! when they pass the request's filters, are new, and the physics builds their scene;
 //! until the set is complete, the draws run out (an error naming the knob that
 //! rejected most, with what it saw), or it is cancelled.
 
-use std::collections::HashSet;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::collections::{BTreeMap, HashSet};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard, PoisonError};
 
 use coherent_core::{Task, native};
 
@@ -68,7 +69,7 @@ enum Worked {
 }
 
 /// Makes the set `req` asks for, handing each kept task to `keep` (in order) and the
-/// progress to `progress` after each batch. `cancel` stops it between tasks (the
+/// progress to `progress` after each draw. `cancel` stops it between tasks (the
 /// searches in flight stop too): the tasks kept so far stand.
 pub fn generate(
     req: &Request,
@@ -95,69 +96,21 @@ pub fn generate(
     for s in &splits {
         tally.by_split.entry(*s).or_default().0 += 1;
     }
+    let pool = Pool::new(req, cancel);
     let mut limits = req.limits.clone();
-    limits.cancel = Some(Arc::clone(cancel));
-    let budget = req.draws();
-    let mut seen: HashSet<u64> = HashSet::new();
-    let mut ids = vec![0i64; scenes.len()];
-    let batch = (req.jobs * 4).max(4);
-    let mut next = 0usize;
-    while tally.kept < req.tasks && next < budget {
-        if cancel.load(Ordering::Relaxed) {
-            break;
+    limits.cancel = Some(Arc::clone(&pool.stop));
+    let made = std::thread::scope(|s| {
+        for _ in 0..req.jobs.min(pool.budget) {
+            s.spawn(|| pool.work(|d| work_one(req, &scenes, &teams, &limits, d)));
         }
-        let draws: Vec<u64> = (next..(next + batch).min(budget))
-            .map(|d| d as u64)
-            .collect();
-        next += draws.len();
-        let worked = work(req, &scenes, &teams, &limits, &draws);
-        for w in worked {
-            if tally.kept >= req.tasks {
-                break;
-            }
-            tally.drawn += 1;
-            let (draft, truth) = match w {
-                Worked::Cancelled => {
-                    tally.drawn -= 1;
-                    break;
-                }
-                Worked::Rejected(why) => {
-                    tally.reject(why);
-                    continue;
-                }
-                Worked::Solved(draft, truth, filtered) => {
-                    tally.saw(truth.task_type, truth.steps(), truth.ratio(), truth.needed);
-                    if let Some(why) = filtered {
-                        tally.reject(why);
-                        continue;
-                    }
-                    (draft, truth)
-                }
-            };
-            if !seen.insert(draft.key) {
-                tally.reject(Rejected::Duplicate);
-                continue;
-            }
-            let scene = &scenes[draft.scene];
-            let task_id = ids[draft.scene];
-            let Some(kept) = finish(req, scene, &draft, truth, task_id, splits[draft.scene]) else {
-                tally.reject(Rejected::Invalid);
-                continue;
-            };
-            ids[draft.scene] += 1;
-            tally.keep(&kept.entry);
-            if let Err(e) = keep(kept) {
-                return Ok(Err(e));
-            }
-        }
-        progress(Progress {
-            kept: tally.kept,
-            wanted: req.tasks,
-            drawn: tally.drawn,
-            budget,
-        });
+        let made = keep_in_order(req, &scenes, &splits, &pool, &mut tally, keep, progress);
+        pool.close();
+        made
+    });
+    if let Err(e) = made {
+        return Ok(Err(e));
     }
-    let interrupted = cancel.load(Ordering::Relaxed) && tally.kept < req.tasks;
+    let interrupted = pool.cancelled() && tally.kept < req.tasks;
     if !interrupted && tally.kept < req.tasks {
         return Err(unmet(req, &tally));
     }
@@ -168,35 +121,190 @@ pub fn generate(
     }))
 }
 
-/// The draws of one batch, worked out on `req.jobs` threads; in draw order.
-fn work(
+/// Takes the draws' results in draw order and keeps the tasks that pass, reporting the
+/// progress after each; until the set is made, the draws run out, or it is cancelled.
+fn keep_in_order(
     req: &Request,
     scenes: &[Scene],
-    teams: &[[usize; 3]],
-    limits: &coherent_core::planner::Limits,
-    draws: &[u64],
-) -> Vec<Worked> {
-    let slots: Vec<std::sync::Mutex<Option<Worked>>> =
-        draws.iter().map(|_| std::sync::Mutex::new(None)).collect();
-    let next = AtomicUsize::new(0);
-    std::thread::scope(|s| {
-        for _ in 0..req.jobs.min(draws.len()) {
-            s.spawn(|| {
-                loop {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(&d) = draws.get(i) else { break };
-                    let w = work_one(req, scenes, teams, limits, d);
-                    if let Ok(mut slot) = slots[i].lock() {
-                        *slot = Some(w);
+    splits: &[Split],
+    pool: &Pool,
+    tally: &mut Tally,
+    keep: &mut dyn FnMut(Generated) -> std::io::Result<()>,
+    progress: &mut dyn FnMut(Progress),
+) -> std::io::Result<()> {
+    let mut seen: HashSet<u64> = HashSet::new();
+    let mut ids = vec![0i64; scenes.len()];
+    for d in 0..pool.budget {
+        if tally.kept >= req.tasks || pool.cancelled() {
+            break;
+        }
+        let w = pool.take(d);
+        if matches!(w, Worked::Cancelled) {
+            break;
+        }
+        if let Some((draft, truth)) = solved(w, tally) {
+            if !seen.insert(draft.key) {
+                tally.reject(Rejected::Duplicate);
+            } else {
+                let scene = &scenes[draft.scene];
+                let task_id = ids[draft.scene];
+                match finish(req, scene, &draft, truth, task_id, splits[draft.scene]) {
+                    None => tally.reject(Rejected::Invalid),
+                    Some(kept) => {
+                        ids[draft.scene] += 1;
+                        tally.keep(&kept.entry);
+                        keep(kept)?;
                     }
                 }
-            });
+            }
         }
-    });
-    slots
-        .into_iter()
-        .map(|m| m.into_inner().ok().flatten().unwrap_or(Worked::Cancelled))
-        .collect()
+        progress(Progress {
+            kept: tally.kept,
+            wanted: req.tasks,
+            drawn: tally.drawn,
+            budget: pool.budget,
+        });
+    }
+    Ok(())
+}
+
+/// A draw's result counted in `tally`: its draft and truth when it was solved and passed
+/// the filters (a cancelled draw counts for nothing).
+fn solved(w: Worked, tally: &mut Tally) -> Option<(Box<Draft>, Box<Truth>)> {
+    match w {
+        Worked::Cancelled => None,
+        Worked::Rejected(why) => {
+            tally.drawn += 1;
+            tally.reject(why);
+            None
+        }
+        Worked::Solved(draft, truth, filtered) => {
+            tally.drawn += 1;
+            tally.saw(truth.task_type, truth.steps(), truth.ratio(), truth.needed);
+            match filtered {
+                Some(why) => {
+                    tally.reject(why);
+                    None
+                }
+                None => Some((draft, truth)),
+            }
+        }
+    }
+}
+
+/// The draws worked out on several threads, taken in draw order. A thread takes the
+/// next draw as soon as it is free, up to `ahead` draws past the one awaited, so that
+/// one slow search holds up no other thread (and the results waiting stay few).
+struct Pool {
+    ahead: usize,
+    budget: usize,
+    state: Mutex<Queue>,
+    changed: Condvar,
+    /// Ctrl-C.
+    cancel: Arc<AtomicBool>,
+    /// The searches' own flag: set on Ctrl-C and as soon as the set is made, when the
+    /// draws still in flight are not needed.
+    stop: Arc<AtomicBool>,
+}
+
+#[derive(Default)]
+struct Queue {
+    /// The next draw to hand out, and the draw awaited in order.
+    next: usize,
+    awaited: usize,
+    done: BTreeMap<usize, Worked>,
+    /// No more draws are handed out.
+    closed: bool,
+    /// Threads that ended without their draw's result (a panic in a search).
+    lost: usize,
+}
+
+impl Pool {
+    fn new(req: &Request, cancel: &Arc<AtomicBool>) -> Pool {
+        Pool {
+            ahead: (req.jobs * 4).max(4),
+            budget: req.draws(),
+            state: Mutex::new(Queue::default()),
+            changed: Condvar::new(),
+            cancel: Arc::clone(cancel),
+            stop: Arc::new(AtomicBool::new(false)),
+        }
+    }
+
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+
+    fn lock(&self) -> MutexGuard<'_, Queue> {
+        self.state.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// One thread's loop: draws in turn, until the pool closes or they run out.
+    fn work(&self, one: impl Fn(u64) -> Worked) {
+        loop {
+            let d = {
+                let mut q = self.lock();
+                loop {
+                    if q.closed || q.next >= self.budget {
+                        return;
+                    }
+                    if q.next < q.awaited + self.ahead {
+                        break;
+                    }
+                    q = self.changed.wait(q).unwrap_or_else(PoisonError::into_inner);
+                }
+                q.next += 1;
+                q.next - 1
+            };
+            let lost = Lost(self);
+            let w = one(d as u64);
+            std::mem::forget(lost);
+            self.lock().done.insert(d, w);
+            self.changed.notify_all();
+        }
+    }
+
+    /// Draw `d`'s result, once a thread has it (passing Ctrl-C on to the searches while
+    /// it waits); `Cancelled` if no thread can give it any more (one panicked).
+    fn take(&self, d: usize) -> Worked {
+        let mut q = self.lock();
+        q.awaited = d;
+        self.changed.notify_all();
+        loop {
+            if let Some(w) = q.done.remove(&d) {
+                return w;
+            }
+            if q.lost > 0 {
+                return Worked::Cancelled;
+            }
+            q = self
+                .changed
+                .wait_timeout(q, std::time::Duration::from_millis(50))
+                .unwrap_or_else(PoisonError::into_inner)
+                .0;
+            if self.cancelled() {
+                self.stop.store(true, Ordering::Relaxed);
+            }
+        }
+    }
+
+    /// No more draws; the searches in flight stop.
+    fn close(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+        self.lock().closed = true;
+        self.changed.notify_all();
+    }
+}
+
+/// Marks a thread that unwinds out of a draw, so that the draw awaited is not waited
+/// for in vain (the panic itself surfaces when the threads are joined).
+struct Lost<'p>(&'p Pool);
+
+impl Drop for Lost<'_> {
+    fn drop(&mut self) {
+        self.0.lock().lost += 1;
+        self.0.changed.notify_all();
+    }
 }
 
 /// One draw: its team, start, goal and instruction, its ground truth, the filters, and
