@@ -74,7 +74,13 @@ def test_a_knob_that_cannot_be_used_is_named(knobs: dict, named: str, tmp_path: 
     with pytest.raises(coherent.ArgumentError) as e:
         coherent.generate(**{"tasks": 1, "jobs": 1, "out": out, **knobs})
     assert str(e.value).startswith(named), str(e.value)
-    assert "--" not in str(e.value).split(":")[0]
+    assert "--" not in str(e.value), "every knob in the message named as Python's argument"
+
+
+def test_a_request_the_draws_cannot_meet_names_the_arguments_to_change(tmp_path: Path) -> None:
+    with pytest.raises(coherent.ArgumentError) as e:
+        coherent.generate(2, seed=0, steps="200", max_draws=8, jobs=1, out=tmp_path / "set")
+    assert str(e.value).startswith("steps: after 8 draws (max_draws 8)"), str(e.value)
 
 
 @pytest.mark.parametrize(

@@ -213,11 +213,8 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
     let message = e.to_string();
     match e {
         Error::Invalid(_) | Error::Backend(_) => error(py, Kind::Argument, message, None),
-        // Python's words: the knob is the argument of `coherent.generate`.
-        Error::Knob(e) => {
-            let name = e.knob.trim_start_matches('-').replace('-', "_");
-            error(py, Kind::Argument, format!("{name}: {}", e.message), None)
-        }
+        // Python's words: each knob is an argument of `coherent.generate`.
+        Error::Knob(e) => error(py, Kind::Argument, argument_names(&e.to_string()), None),
         Error::Task(e) => core_err(py, e),
         Error::Prompt(e) => prompt(py, &e),
         Error::File { file, line, .. } => data_file(py, message, file, line),
@@ -233,6 +230,36 @@ pub(crate) fn session_err(py: Python<'_>, e: Error) -> PyErr {
         Error::Interrupted => PyKeyboardInterrupt::new_err(message),
         Error::Internal(_) => error(py, Kind::Coherent, message, None),
     }
+}
+
+/// `text` with each command-line knob in it (`--max-draws`, at the start of a word: a
+/// value quoted in the message is left as it is) named as the argument of
+/// `coherent.generate` is (`max_draws`).
+fn argument_names(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(at) = rest.find("--") {
+        let word_start = out.is_empty() && at == 0
+            || rest[..at]
+                .chars()
+                .next_back()
+                .or_else(|| out.chars().next_back())
+                .is_some_and(|c| matches!(c, ' ' | '(' | '/'));
+        out.push_str(&rest[..at]);
+        let after = &rest[at + 2..];
+        let name = after
+            .find(|c: char| !(c.is_ascii_lowercase() || c == '-'))
+            .map_or(after, |end| &after[..end]);
+        if word_start && name.starts_with(|c: char| c.is_ascii_lowercase()) {
+            out.push_str(&name.replace('-', "_"));
+        } else {
+            out.push_str("--");
+            out.push_str(name);
+        }
+        rest = &after[name.len()..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// A `DataFileError` with the file and the line (None when the fault is not on one line)
