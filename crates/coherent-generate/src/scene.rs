@@ -154,8 +154,8 @@ const LAYOUT_TRIES: usize = 6;
 
 impl Scene {
     /// Scene `index` of a set seeded `seed`. A draw of rooms too few (or too small) for
-    /// the largest team is drawn again, up to [`SCENE_DRAWS`] times, from the scene's
-    /// own stream: a scene that fits at once is the same whatever the other scenes do.
+    /// the largest team is drawn again, up to 16 times (`SCENE_DRAWS`), from the scene's
+    /// own stream, so a scene that fits at the first draw is the one it always was.
     pub fn generate(index: usize, seed: u64, req: &SceneRequest) -> Result<Scene, KnobError> {
         let mut rng = Rng::new(seed_of(seed, "scene", index as u64));
         for _ in 0..SCENE_DRAWS {

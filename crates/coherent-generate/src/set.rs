@@ -1,10 +1,9 @@
 //! The driver: draws candidate tasks (each from its own seeded stream, so a draw is the
 //! same whatever came before it and whichever thread works it out), works out their
-//! ground truths on several threads (each takes the next draw when it is free), and keeps
-//! them in draw order
-//! when they pass the request's filters, are new, and the physics builds their scene;
-//! until the set is complete, the draws run out (an error naming the knob that
-//! rejected most, with what it saw), or it is cancelled.
+//! ground truths on several threads (each takes the next draw when it is free), and
+//! keeps them in draw order when they pass the request's filters, are new, and the
+//! physics builds their scene; until the set is complete, the draws run out (an error
+//! naming the knob that rejected most, with what it saw), or it is cancelled.
 
 use std::collections::{BTreeMap, HashSet};
 use std::sync::atomic::{AtomicBool, Ordering};
