@@ -553,8 +553,9 @@ struct Choices<'v> {
     /// Whether two actions meet, by their numbers (`a * all + b`), once compared: 0 not
     /// yet, 1 apart, 2 they meet. The walk compares one pair once per choice of the
     /// robots between them, so a state with `n` robots asks each pair up to the product
-    /// of the choices in between; empty when the actions are more than
-    /// [`REMEMBERED_ACTIONS`].
+    /// of the choices in between. Made at the state's first comparison
+    /// ([`Choices::remember`]): many states are expanded by steps of one robot alone and
+    /// compare nothing; never made when the actions are more than [`REMEMBERED_ACTIONS`].
     met: Vec<u8>,
     /// What the lists, the footprints taken so far and `met` hold, in bytes.
     bytes: usize,
@@ -586,16 +587,10 @@ impl<'v> Choices<'v> {
             })
             .collect();
         let all: usize = actions.iter().map(Vec::len).sum();
-        let met = if all <= REMEMBERED_ACTIONS {
-            vec![0; all * all]
-        } else {
-            Vec::new()
-        };
         let bytes = actions
             .iter()
             .map(|list| list.capacity() * (size_of::<Action>() + size_of::<Option<Footprint>>()))
             .sum::<usize>()
-            + met.capacity()
             + first.capacity() * size_of::<usize>();
         Choices {
             views,
@@ -603,13 +598,22 @@ impl<'v> Choices<'v> {
             prints,
             first,
             all,
-            met,
+            met: Vec::new(),
             bytes,
         }
     }
 
+    /// Makes the table of remembered comparisons, unless it is made or the state has more
+    /// than [`REMEMBERED_ACTIONS`] actions; counted in [`Choices::bytes`].
+    fn remember(&mut self) {
+        if self.met.is_empty() && self.all <= REMEMBERED_ACTIONS {
+            self.met = vec![0; self.all * self.all];
+            self.bytes += self.met.capacity();
+        }
+    }
+
     /// Whether robot `r`'s action `i` and robot `k`'s action `j` meet; both footprints
-    /// taken.
+    /// taken. Remembered once [`Choices::remember`] has made its table.
     fn meet(&mut self, (r, i): (usize, usize), (k, j): (usize, usize)) -> bool {
         let (a, b) = (self.first[r] + i, self.first[k] + j);
         match self.met.get(a * self.all + b) {
@@ -691,6 +695,7 @@ impl Walk<'_> {
         for &(r, i) in &self.chosen {
             self.choices.take(r, i);
         }
+        self.choices.remember();
         if search.bytes(None, 0) + self.held + self.choices.bytes > search.limits.max_memory {
             return ControlFlow::Break(Halt::Limit(Stop::Memory));
         }
