@@ -9,6 +9,7 @@
 
 pub mod action;
 pub mod benchmark;
+mod chain;
 pub mod describe;
 pub mod env;
 pub mod error;

@@ -29,6 +29,7 @@ use std::time::{Duration, Instant};
 use smallvec::SmallVec;
 
 use crate::action::Action;
+use crate::chain::Chains;
 use crate::footprint::{self, Footprint};
 use crate::graph::State;
 use crate::planner::{self, Limits, Step, Stop, Useful};
@@ -195,17 +196,55 @@ fn plays(task: &Task, s: &State, rest: &[Step], chosen: &[usize], goal: &[GoalPr
     goal.iter().all(|p| predicate_holds(&t, p))
 }
 
-/// A lower bound on the joint steps from `s` to `goal` with a team of `robots`,
-/// admissible and consistent (one joint step lowers it by at most one).
-pub fn lower_bound(task: &Task, s: &State, goal: &[GoalPredicate], robots: usize) -> u16 {
-    bound(planner::needs(task, s, goal), robots as u16, 0)
+/// A lower bound on the joint steps to `goal` with a team of `robots` acting from a start
+/// state, admissible and consistent (one joint step lowers it by at most one): the
+/// search's heuristic.
+#[derive(Debug)]
+pub struct LowerBound<'a> {
+    task: &'a Task,
+    goal: &'a [GoalPredicate],
+    robots: u16,
+    chains: Chains,
 }
 
-/// A lower bound on the joint steps from a state with [`planner::needs`] `needs`, with
-/// `robots` robots, when `left` of them may still act in the current step: the actions of
+impl<'a> LowerBound<'a> {
+    /// The bound for states reachable from `start` when `robots` act.
+    pub fn new(
+        task: &'a Task,
+        start: &State,
+        robots: &[Robot],
+        goal: &'a [GoalPredicate],
+    ) -> LowerBound<'a> {
+        LowerBound {
+            task,
+            goal,
+            robots: robots.len() as u16,
+            chains: Chains::new(task, start, robots, goal),
+        }
+    }
+
+    /// The bound at `s`, a state reachable from the start.
+    pub fn of(&self, s: &State) -> u16 {
+        bound(self.needs(s), self.robots, 0)
+    }
+
+    /// What `s` still needs: [`planner::needs`], and the longest chain of actions one
+    /// goal thing needs ([`Chains`]).
+    fn needs(&self, s: &State) -> Needs {
+        let (sum, most) = planner::needs(self.task, s, self.goal);
+        (sum, most.max(self.chains.bound(self.task, s)))
+    }
+}
+
+/// The actions [`planner::lower_bound`] counts, and the longest chain of actions that
+/// follow one another.
+type Needs = (u16, u16);
+
+/// A lower bound on the joint steps from a state that needs `needs`, with `robots`
+/// robots, when `left` of them may still act in the current step: the actions of
 /// [`planner::lower_bound`] less the `left` these robots can do, `robots` a step; and the
-/// longest chain of actions one subject needs, less one when someone may still act.
-fn bound(needs: (u16, u16), robots: u16, left: u16) -> u16 {
+/// longest chain, less one when someone may still act.
+fn bound(needs: Needs, robots: u16, left: u16) -> u16 {
     let (sum, most) = needs;
     let chain = if left > 0 {
         most.saturating_sub(1)
@@ -284,6 +323,7 @@ struct Search<'a> {
     goal: &'a [GoalPredicate],
     limits: &'a Limits,
     useful: Useful,
+    bound: LowerBound<'a>,
     /// The states; `g` and `h` of their info count joint steps.
     t: Tables<Span>,
     /// Per state as in `t`: the actions of the best path known to it, and the fewest
@@ -313,7 +353,8 @@ impl<'a> Search<'a> {
         let best_cost = best.as_ref().map_or((usize::MAX, usize::MAX), |plan| {
             (plan.len(), plan.iter().map(Vec::len).sum())
         });
-        let needs = planner::needs(task, start, goal);
+        let lower = LowerBound::new(task, start, robots, goal);
+        let needs = lower.needs(start);
         let h = bound(needs, robots.len() as u16, 0);
         let mut open = Open::default();
         open.push((usize::from(h), usize::from(needs.0)), 0);
@@ -323,6 +364,7 @@ impl<'a> Search<'a> {
             goal,
             limits,
             useful: Useful::new(task, start, goal),
+            bound: lower,
             t: Tables::new(start, h, Span { at: 0, len: 0 }),
             actions: vec![(0, needs.0)],
             open,
@@ -410,12 +452,11 @@ impl<'a> Search<'a> {
             .map(|&robot| View::with(self.task, &s, robot, &contents))
             .collect();
         let choices = Choices::new(self.task, &views, &self.useful);
-        let needs = planner::needs(self.task, &s, self.goal);
+        let needs = self.bound.needs(&s);
         let levels = vec![(s.clone(), needs); self.robots.len() + 1];
         let held = choices.bytes + levels.iter().map(|(l, _)| l.heap_bytes()).sum::<usize>();
         let mut walk = Walk {
             task: self.task,
-            goal: self.goal,
             robots: self.robots,
             choices,
             levels,
@@ -429,7 +470,7 @@ impl<'a> Search<'a> {
         walk.level(0, self)
     }
 
-    /// Records the state a joint step leads to (with its [`planner::needs`]), unless it
+    /// Records the state a joint step leads to (with its [`LowerBound::needs`]), unless it
     /// cannot beat the best plan or is known at no greater cost; `f` is the parent's.
     /// Returns the cost a plan must now beat.
     /// `held`: the bytes the expansion holds besides the tables (its states and
@@ -437,7 +478,7 @@ impl<'a> Search<'a> {
     fn child(
         &mut self,
         (parent, gc, f): (usize, u16, Cost),
-        (child, needs): (&State, (u16, u16)),
+        (child, needs): (&State, Needs),
         step: &[Step],
         held: usize,
     ) -> ControlFlow<Halt, Cost> {
@@ -649,13 +690,12 @@ impl<'v> Choices<'v> {
 /// The robot-by-robot enumeration of one state's joint steps.
 struct Walk<'w> {
     task: &'w Task,
-    goal: &'w [GoalPredicate],
     robots: &'w [Robot],
     /// Each robot's actions worth trying, with their footprints in the state expanded.
     choices: Choices<'w>,
     /// `levels[k]`: the state after the actions chosen for robots `0..k`, and its
-    /// [`planner::needs`].
-    levels: Vec<(State, (u16, u16))>,
+    /// [`LowerBound::needs`].
+    levels: Vec<(State, Needs)>,
     /// `(robot, action index)` of the actions chosen so far.
     chosen: SmallVec<[(usize, usize); 4]>,
     /// The state expanded, the joint steps to its children and its `f`.
@@ -742,7 +782,7 @@ impl Walk<'_> {
             let (done, next) = self.levels.split_at_mut(k + 1);
             next[0].0.clone_from(&done[k].0);
             rules::apply(self.task, &mut next[0].0, self.robots[k], a);
-            next[0].1 = planner::needs(self.task, &next[0].0, self.goal);
+            next[0].1 = search.bound.needs(&next[0].0);
             if !self.promising(k + 1, self.chosen.len() + 1) {
                 continue;
             }

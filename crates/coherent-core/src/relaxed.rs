@@ -6,7 +6,7 @@
 //! robot kinds (`may_reach`: the task types) or any set of the task's robots
 //! (`may_reach_with`: how many robots a task needs).
 
-use crate::graph::{Idx, NodeKind, RobotKind};
+use crate::graph::{Idx, NodeKind, RobotKind, State};
 use crate::task::{GoalPredicate, Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation, StateSet};
 
@@ -26,12 +26,14 @@ pub fn may_reach(task: &Task, kinds: &[RobotKind], goal: &[GoalPredicate]) -> bo
 /// acting (the others stay where they are). `false` is a proof that this team cannot
 /// reach the goal; `true` proves nothing.
 pub fn may_reach_with(task: &Task, team: &[Robot], goal: &[GoalPredicate]) -> bool {
-    let facts = Facts::derive(task, team);
+    let facts = Facts::derive(task, &task.init, team);
     goal.iter()
         .all(|p| p.count != 1 || facts.at(p.subject, p.relation, p.target))
 }
 
-struct Facts {
+/// What may ever hold from a start state when a team acts: every fact of every state
+/// reachable from it is among these.
+pub(crate) struct Facts {
     n: usize,
     /// `at[x][p]`: bit 0 = x may be ON p, bit 1 = x may be INSIDE p.
     at: Vec<u8>,
@@ -52,9 +54,9 @@ struct Facts {
 }
 
 impl Facts {
-    fn derive(task: &Task, team: &[Robot]) -> Facts {
+    pub(crate) fn derive(task: &Task, start: &State, team: &[Robot]) -> Facts {
         let n = task.nodes.len();
-        let s = &task.init;
+        let s = start;
         let mut f = Facts {
             n,
             at: vec![0; n * n],
@@ -177,17 +179,38 @@ impl Facts {
                 changed |= f.fly(task, team);
             }
             if dog {
-                changed |= f.dog(task, &has, &kind);
+                changed |= f.dog(s, &has, &kind);
             }
             for a in robots_of(RobotKind::RobotArm).filter(|_| arm) {
-                changed |= f.arm(task, a, &has);
+                changed |= f.arm(task, s, a, &has);
             }
         }
         f
     }
 
-    fn at(&self, x: Idx, rel: Relation, p: Idx) -> bool {
+    /// Whether `x` may be `rel` (`ON` or `INSIDE`) `p`.
+    pub(crate) fn at(&self, x: Idx, rel: Relation, p: Idx) -> bool {
         self.at[x.get() * self.n + p.get()] & bit(rel) != 0
+    }
+
+    /// Whether `x` may be on or in `p`.
+    pub(crate) fn somewhere_at(&self, x: Idx, p: Idx) -> bool {
+        self.at[x.get() * self.n + p.get()] != 0
+    }
+
+    /// Whether `x` may be without `ON_HIGH_SURFACE`.
+    pub(crate) fn low(&self, x: Idx) -> bool {
+        self.low[x.get()]
+    }
+
+    /// Whether `x` may be in a room a robot dog of the team may enter.
+    pub(crate) fn dog_may_be_at(&self, x: Idx) -> bool {
+        self.may_be_in(x.get(), &self.dog_room)
+    }
+
+    /// Whether `x` may be in a room a quadrotor of the team may fly to.
+    pub(crate) fn quadrotor_may_be_at(&self, x: Idx) -> bool {
+        self.may_be_in(x.get(), &self.quad_room)
     }
 
     fn add_at(&mut self, x: Idx, rel: Relation, p: Idx) -> bool {
@@ -235,7 +258,7 @@ impl Facts {
 
     fn dog(
         &mut self,
-        task: &Task,
+        start: &State,
         has: &dyn Fn(usize, PropSet) -> bool,
         kind: &dyn Fn(usize) -> NodeKind,
     ) -> bool {
@@ -276,7 +299,7 @@ impl Facts {
                 changed |= set(&mut self.dog_holds, x);
             }
             let openable = has(x, PropSet::CONTAINERS) || kind(x) == NodeKind::Door;
-            if openable && task.init.states(Idx(x as u16)).contains(StateSet::CLOSED) {
+            if openable && start.states(Idx(x as u16)).contains(StateSet::CLOSED) {
                 changed |= set(&mut self.open, x);
             }
         }
@@ -299,7 +322,13 @@ impl Facts {
         changed
     }
 
-    fn arm(&mut self, task: &Task, arm: Idx, has: &dyn Fn(usize, PropSet) -> bool) -> bool {
+    fn arm(
+        &mut self,
+        task: &Task,
+        start: &State,
+        arm: Idx,
+        has: &dyn Fn(usize, PropSet) -> bool,
+    ) -> bool {
         let n = self.n;
         let mut changed = false;
         let surfaces: Vec<usize> = (0..n)
@@ -326,8 +355,7 @@ impl Facts {
             if has(x, PropSet::GRABABLE) {
                 changed |= set(&mut self.arm_holds, arm.get() * n + x);
             }
-            if has(x, PropSet::CONTAINERS)
-                && task.init.states(Idx(x as u16)).contains(StateSet::CLOSED)
+            if has(x, PropSet::CONTAINERS) && start.states(Idx(x as u16)).contains(StateSet::CLOSED)
             {
                 changed |= set(&mut self.open, x);
             }

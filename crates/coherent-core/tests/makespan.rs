@@ -234,14 +234,14 @@ fn the_makespan_heuristic_is_admissible_and_consistent_along_parallel_plans() {
     let mut checked = 0;
     for task in tasks(false).into_iter().filter(|t| t.meta.task_id % 4 == 0) {
         let name = common::name(&task);
-        let n = task.robots.len();
         let Some(plan) = makespan::search(&task, &task.robots, &task.goal, &Limits::default()).plan
         else {
             continue;
         };
+        let bound = makespan::LowerBound::new(&task, &task.init, &task.robots, &task.goal);
         let mut s = task.init.clone();
         for (k, step) in plan.iter().enumerate() {
-            let h = makespan::lower_bound(&task, &s, &task.goal, n);
+            let h = bound.of(&s);
             assert!(
                 usize::from(h) <= plan.len() - k,
                 "{name}: h = {h}, {} steps left",
@@ -257,7 +257,7 @@ fn the_makespan_heuristic_is_admissible_and_consistent_along_parallel_plans() {
                             if joint::check(&task, &s, &pair).is_ok() {
                                 let mut next = s.clone();
                                 joint::apply(&task, &mut next, &pair);
-                                let h2 = makespan::lower_bound(&task, &next, &task.goal, n);
+                                let h2 = bound.of(&next);
                                 assert!(
                                     h <= h2 + 1,
                                     "{name}: a joint step drops h from {h} to {h2}"
@@ -270,7 +270,7 @@ fn the_makespan_heuristic_is_admissible_and_consistent_along_parallel_plans() {
             }
             joint::apply(&task, &mut s, &parts(&task, step));
         }
-        assert_eq!(makespan::lower_bound(&task, &s, &task.goal, n), 0, "{name}");
+        assert_eq!(bound.of(&s), 0, "{name}");
     }
     assert!(checked > 10_000, "only {checked} joint steps checked");
 }
