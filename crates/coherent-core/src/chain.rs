@@ -264,13 +264,35 @@ impl<'t> World<'t> {
             grabbers: self.arms.len() + self.dogs.len(),
             baskets: self.baskets.len(),
         };
-        let dog = |d: usize| self.arms.len() + d;
         let mut g = Graph::new(at.len());
+        let dogs_put = self.places(&mut g, &at, p);
+        self.flights(&mut g, &at, p.subject);
+        self.carriers(&mut g, &at);
+        let x = p.subject;
+        let dist = g.distances(&[(at.goal(), 0), (at.moved(), 2)]);
+        Chain {
+            x,
+            rel: p.relation,
+            target: p.target,
+            dist,
+            at,
+            arms: self.arms.len(),
+            baskets: self.baskets.clone(),
+            fixed: self.fixed.clone(),
+            dogs_put,
+            carried: !self.never(x),
+        }
+    }
+
+    /// Puts on or into every place and grabs from it; per dog and flag, its puts (the
+    /// place and the situation after).
+    fn places(&self, g: &mut Graph, at: &Layout, p: &GoalPredicate) -> Vec<[Vec<(Idx, usize)>; 2]> {
+        let n = self.task.nodes.len();
+        let dog = |d: usize| self.arms.len() + d;
         let mut dogs_put = vec![[Vec::new(), Vec::new()]; self.dogs.len()];
         let x = p.subject;
         let bits = [false, true];
         let compatible = self.task.meta.rules != RuleSet::Geometric;
-        // Puts on or into `q`, and grabs from it.
         for q in (0..n).map(|q| Idx(q as u16)) {
             for (r, rel) in [(0, Relation::On), (1, Relation::Inside)] {
                 let takes = match rel {
@@ -364,7 +386,13 @@ impl<'t> World<'t> {
                 }
             }
         }
-        // Baskets: grabs where they rest, take-offs, moves and landings.
+        dogs_put
+    }
+
+    /// Baskets: grabs where they rest, take-offs, moves and landings.
+    fn flights(&self, g: &mut Graph, at: &Layout, x: Idx) {
+        let dog = |d: usize| self.arms.len() + d;
+        let bits = [false, true];
         for (k, &(b, _)) in self.baskets.iter().enumerate() {
             for hi in bits {
                 let in_air = self.dog_grabs_at(x, hi, None);
@@ -405,9 +433,13 @@ impl<'t> World<'t> {
                 }
             }
         }
-        // What a carrier brings `x` to: after a put into something that moves, the
-        // thing stands for `x` (the carrier's moves are the same grabs, puts and flights),
-        // wherever the robot that put it there may have found the carrier.
+    }
+
+    /// What a carrier brings the thing to: after a put into something that moves, the
+    /// carrier stands for the thing (its moves are the same grabs, puts and flights),
+    /// wherever the robot that put it there may have found the carrier.
+    fn carriers(&self, g: &mut Graph, at: &Layout) {
+        let n = self.task.nodes.len();
         for c in 0..=self.arms.len() {
             let near = |q: Idx| match self.reach.get(c) {
                 Some(reach) => reach[q.get()],
@@ -429,19 +461,6 @@ impl<'t> World<'t> {
                     g.edge(at.carry(c), at.basket_at(k, s.get(), hi, false), 0);
                 }
             }
-        }
-        let dist = g.distances(&[(at.goal(), 0), (at.moved(), 2)]);
-        Chain {
-            x,
-            rel: p.relation,
-            target: p.target,
-            dist,
-            at,
-            arms: self.arms.len(),
-            baskets: self.baskets.clone(),
-            fixed: self.fixed.clone(),
-            dogs_put,
-            carried: !self.never(x),
         }
     }
 

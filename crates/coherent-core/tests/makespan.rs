@@ -134,6 +134,14 @@ fn parallel_plans_are_valid_in_every_order_and_never_longer_than_the_sequential_
             task.goal_satisfied(&end),
             "{name}: the plan does not reach the goal"
         );
+        // The heuristic never overestimates along the optimal plan.
+        let bound = makespan::LowerBound::new(&task, &task.init, &task.robots, &task.goal);
+        let mut s = task.init.clone();
+        for (k, step) in plan.iter().enumerate() {
+            let h = usize::from(bound.of(&s));
+            assert!(h <= plan.len() - k, "{name}: h = {h} at joint step {k}");
+            joint::apply(&task, &mut s, &parts(&task, step));
+        }
         let scheduled = makespan::schedule(&task, &task.init, &seq, &task.goal);
         assert!(
             task.goal_satisfied(&play(&task, &scheduled)),
