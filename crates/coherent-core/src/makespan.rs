@@ -10,7 +10,7 @@
 //! known. The heuristic is admissible and consistent: one joint step of `n` robots does
 //! at most `n` of the actions [`crate::planner::lower_bound`] counts, at most one of the
 //! actions one goal subject still needs (they follow one another), and at most one link
-//! of a goal thing's chain across robots ([`crate::chain`]: grabs, puts, flights, walks).
+//! of a goal thing's chain across robots (`chain.rs`: grabs, puts, flights, walks).
 //!
 //! Among the plans of the fewest joint steps it finds one of the fewest actions: costs
 //! and `f` are compared joint steps first, then actions (lexicographic A*), the actions'
