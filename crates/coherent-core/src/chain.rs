@@ -270,6 +270,10 @@ impl<'t> World<'t> {
         self.carriers(&mut g, &at);
         let x = p.subject;
         let dist = g.distances(&[(at.goal(), 0), (at.moved(), 2)]);
+        let dog_puts = dogs_put
+            .iter()
+            .map(|[low, high]| [walks(&dist, n, low), walks(&dist, n, high)])
+            .collect();
         Chain {
             x,
             rel: p.relation,
@@ -279,7 +283,7 @@ impl<'t> World<'t> {
             arms: self.arms.len(),
             baskets: self.baskets.clone(),
             fixed: self.fixed.clone(),
-            dogs_put,
+            dog_puts,
             carried: !self.never(x),
         }
     }
@@ -490,6 +494,19 @@ impl<'t> World<'t> {
     }
 }
 
+/// A dog's puts (place, situation after) as the chain after a walk to the nearest, and
+/// by place the chain when it is close to that place already.
+fn walks(dist: &[u16], n: usize, puts: &[(Idx, usize)]) -> (u16, Vec<u16>) {
+    let mut near = vec![FAR; n];
+    let mut walk = FAR;
+    for &(q, to) in puts {
+        let d = dist[to].saturating_add(1);
+        near[q.get()] = near[q.get()].min(d);
+        walk = walk.min(d.saturating_add(1));
+    }
+    (walk, near)
+}
+
 /// Whether `x` never moves; memoised in `fixed`.
 fn settle(task: &Task, s: &State, x: Idx, fixed: &mut [Option<bool>]) -> bool {
     if let Some(f) = fixed[x.get()] {
@@ -629,8 +646,9 @@ struct Chain {
     arms: usize,
     baskets: Vec<(Idx, Idx)>,
     fixed: Vec<bool>,
-    /// Per dog and flag, its puts: the place put on or into, and the situation after.
-    dogs_put: Vec<[Vec<(Idx, usize)>; 2]>,
+    /// Per dog and flag, the chain from the thing in its hand: after a walk (one action
+    /// more than the table), and, by place, without one when the dog is close to it.
+    dog_puts: Vec<[(u16, Vec<u16>); 2]>,
     /// Whether a carrier stands for the thing (a dog may walk up to it).
     carried: bool,
 }
@@ -654,11 +672,15 @@ impl Chain {
             (true, None, _) => self.held(s, hi, grabbers),
             (false, Some(e), None) => {
                 let q = e.to();
-                let dogs = &grabbers[self.arms..];
-                let close: Vec<usize> = (0..dogs.len())
-                    .filter(|&d| s.has(Edge::new(dogs[d], Relation::Close, x)))
-                    .collect();
-                let fresh = close.is_empty();
+                // A dog close to it now may grab it, whatever brought it close.
+                let mut by_close = FAR;
+                for (d, &dog) in grabbers[self.arms..].iter().enumerate() {
+                    if s.has(Edge::new(dog, Relation::Close, x)) {
+                        let held = self.dist[self.at.held(self.arms + d, hi)];
+                        by_close = by_close.min(held.saturating_add(1));
+                    }
+                }
+                let fresh = by_close == FAR;
                 let table = match self.baskets.iter().position(|&(b, _)| b == q) {
                     Some(k) if e.rel() == Relation::Inside => {
                         let (b, quad) = self.baskets[k];
@@ -677,11 +699,7 @@ impl Chain {
                     // A grab and a put at least, wherever its carrier goes.
                     _ => self.carrier(task, s, q, grabbers).clamp(2, FAR - 1),
                 };
-                // A dog close to it now may grab it, whatever brought it close.
-                close
-                    .iter()
-                    .map(|&d| self.dist[self.at.held(self.arms + d, hi)].saturating_add(1))
-                    .fold(table, u16::min)
+                table.min(by_close)
             }
             // Held and resting somewhere at once, or resting in two places: a state
             // the rules reach only from odd task files.
@@ -745,14 +763,9 @@ impl Chain {
         let Some(d) = g.checked_sub(self.arms) else {
             return self.dist[self.at.held(g, hi)];
         };
-        let dog = grabbers[g];
-        self.dogs_put[d][usize::from(hi)]
-            .iter()
-            .map(|&(q, to)| {
-                let walk = u16::from(!s.has(Edge::new(dog, Relation::Close, q)));
-                self.dist[to].saturating_add(1 + walk)
-            })
-            .min()
-            .unwrap_or(FAR)
+        let (walk, near) = &self.dog_puts[d][usize::from(hi)];
+        s.targets(grabbers[g], Relation::Close)
+            .map(|q| near[q.get()])
+            .fold(*walk, u16::min)
     }
 }
