@@ -683,14 +683,7 @@ impl Chain {
                 let fresh = by_close == FAR;
                 let table = match self.baskets.iter().position(|&(b, _)| b == q) {
                     Some(k) if e.rel() == Relation::Inside => {
-                        let (b, quad) = self.baskets[k];
-                        match s.targets(b, Relation::On).next() {
-                            Some(spot) => self.dist[self.at.basket_at(k, spot.get(), hi, fresh)],
-                            None => s
-                                .targets(quad, Relation::Above)
-                                .map(|a| self.dist[self.at.above(k, a.get(), hi)])
-                                .fold(self.dist[self.at.air(k, hi)].saturating_add(1), u16::min),
-                        }
+                        self.in_basket(task, s, k, hi, fresh, grabbers)
                     }
                     _ if self.fixed[q.get()] => {
                         let r = usize::from(e.rel() == Relation::Inside);
@@ -732,14 +725,7 @@ impl Chain {
             };
             let q = e.to();
             if let Some(k) = self.baskets.iter().position(|&(b, _)| b == q) {
-                let (b, quad) = self.baskets[k];
-                return match s.targets(b, Relation::On).next() {
-                    Some(spot) => self.dist[self.at.basket_at(k, spot.get(), hi, false)],
-                    None => s
-                        .targets(quad, Relation::Above)
-                        .map(|a| self.dist[self.at.above(k, a.get(), hi)])
-                        .fold(self.dist[self.at.air(k, hi)].saturating_add(1), u16::min),
-                };
+                return self.in_basket(task, s, k, hi, false, grabbers);
             }
             if self.fixed[q.get()] {
                 let r = usize::from(e.rel() == Relation::Inside);
@@ -748,6 +734,36 @@ impl Chain {
             c = q;
         }
         FAR
+    }
+
+    /// The chain from basket `k` (the thing or its carrier in it, `hi` and `fresh` its
+    /// flag and whether no dog is close to it): where the basket rests, or from the air.
+    /// A basket in the air is high once it has taken off; one that starts in the air
+    /// without the flag may be walked up to by a dog, which is then close to what is in it.
+    fn in_basket(
+        &self,
+        task: &Task,
+        s: &State,
+        k: usize,
+        hi: bool,
+        fresh: bool,
+        grabbers: &[Idx],
+    ) -> u16 {
+        let (b, quad) = self.baskets[k];
+        if let Some(spot) = s.targets(b, Relation::On).next() {
+            return self.dist[self.at.basket_at(k, spot.get(), hi, fresh)];
+        }
+        let mut best = s
+            .targets(quad, Relation::Above)
+            .map(|a| self.dist[self.at.above(k, a.get(), hi)])
+            .fold(self.dist[self.at.air(k, hi)].saturating_add(1), u16::min);
+        if !s.on_high_surface(b) && !task.never_approached().contains(b) {
+            for d in self.arms..grabbers.len() {
+                let held = self.dist[self.at.held(d, hi)];
+                best = best.min(held.saturating_add(1 + u16::from(fresh)));
+            }
+        }
+        best
     }
 
     /// The chain from the thing held: by an arm, its table; by a dog, one action more
