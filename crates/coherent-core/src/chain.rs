@@ -105,6 +105,9 @@ struct World<'t> {
     stale: Vec<bool>,
     /// Places something without `ON_HIGH_SURFACE` rests on or in at the start.
     low_there: Vec<bool>,
+    /// Per place, whether a robot dog may be close to it ([`World::dog_reaches_place`]),
+    /// found once for every chain.
+    dog_places: Vec<bool>,
 }
 
 impl<'t> World<'t> {
@@ -187,7 +190,7 @@ impl<'t> World<'t> {
                 low_there[e.to().get()] = true;
             }
         }
-        World {
+        let mut world = World {
             task,
             low_there,
             facts,
@@ -199,7 +202,12 @@ impl<'t> World<'t> {
             fixed: fixed.into_iter().map(|f| f == Some(true)).collect(),
             landings,
             stale,
-        }
+            dog_places: Vec::new(),
+        };
+        world.dog_places = (0..n)
+            .map(|q| world.dog_reaches_place(Idx(q as u16)))
+            .collect();
+        world
     }
 
     fn has(&self, x: Idx, p: PropSet) -> bool {
@@ -367,7 +375,7 @@ impl<'t> World<'t> {
                                     put(rest(hi, Some(s), dog(d)));
                                 }
                             }
-                            None if self.dog_reaches_place(q) => put(rest(hi, None, dog(d))),
+                            None if self.dog_places[q.get()] => put(rest(hi, None, dog(d))),
                             None => {}
                         }
                     }
@@ -473,7 +481,7 @@ impl<'t> World<'t> {
     /// low rests there at the start. Otherwise what rests there was put by an arm or
     /// landed in a basket, and both set the flag on a high place.
     fn low_at(&self, q: Idx) -> bool {
-        !self.has(q, PropSet::HIGH_HEIGHT) || self.dog_reaches_place(q) || self.low_there[q.get()]
+        !self.has(q, PropSet::HIGH_HEIGHT) || self.dog_places[q.get()] || self.low_there[q.get()]
     }
 
     /// A robot dog may be close to basket `b` resting on `s`.
