@@ -6,6 +6,10 @@
 //!   offered at its turn, all orders ending in one state, the last reaching the goal;
 //! - at least 5% of each set (every tenth task) has its optimal plan carried out in
 //!   Rapier with `physics_ok`;
+//! - on every task of the sets (one of them of many rooms and closed doors), the makespan
+//!   search's bound never overestimates along the plan and no joint step lowers it by
+//!   more than one; on the short ones, the makespan and its fewest actions are a
+//!   breadth-first search's;
 //! - `coherent export --format original` reads back through `coherent import` to the
 //!   same tasks;
 //! - a knob out of range, or a request the draws cannot meet, exits 2 with a message
@@ -15,10 +19,14 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
+use coherent_core::makespan;
+use coherent_core::planner::Limits;
 use coherent_core::{Robot, State, Task, feasibility, load_tasks, rules};
 use serde_json::Value;
 
 mod common;
+#[path = "../crates/coherent-core/tests/common/oracle.rs"]
+mod oracle;
 
 use common::{coherent, scratch, show, utf8};
 
@@ -47,6 +55,35 @@ const LARGE: (&str, &[&str]) = (
     ],
 );
 
+/// Scenes of many rooms and closed doors, teams with several robot dogs: the chain
+/// bound's walks across rooms are the longest here. Short tasks, for the breadth-first
+/// search that checks their makespans.
+const ROOMS: (&str, &[&str]) = (
+    "rooms",
+    &[
+        "--tasks",
+        "20",
+        "--seed",
+        "5",
+        "--rooms",
+        "3-8",
+        "--closed",
+        "0.5",
+        "--team",
+        "quadrotor=0-1,legged=1-3,arm=0-1",
+        "--robots",
+        "2-3",
+        "--predicates",
+        "1-2",
+        "--steps",
+        "2-4",
+        "--max-states",
+        "50000",
+        "--max-memory",
+        "128",
+    ],
+);
+
 /// Writes the set `knobs` describes to `dir` with `coherent generate`.
 fn generate(dir: &Path, knobs: &[&str]) {
     let mut args = vec!["generate", "--out", utf8(dir)];
@@ -59,10 +96,11 @@ fn generate(dir: &Path, knobs: &[&str]) {
 fn set(which: (&str, &[&str])) -> &'static Path {
     static MIXED_SET: OnceLock<PathBuf> = OnceLock::new();
     static LARGE_SET: OnceLock<PathBuf> = OnceLock::new();
-    let cell = if which.0 == MIXED.0 {
-        &MIXED_SET
-    } else {
-        &LARGE_SET
+    static ROOMS_SET: OnceLock<PathBuf> = OnceLock::new();
+    let cell = match which.0 {
+        "mixed" => &MIXED_SET,
+        "large" => &LARGE_SET,
+        _ => &ROOMS_SET,
     };
     cell.get_or_init(|| {
         let dir = scratch(&format!("generate-{}", which.0)).join("set");
@@ -317,6 +355,37 @@ fn every_task_of_a_set_of_large_teams_is_clean_planned_to_its_optimum_and_runs_i
         let size = m["team_size"].as_u64().expect("a team size");
         assert!((4..=5).contains(&size), "{m}");
     }
+}
+
+#[test]
+fn on_generated_tasks_the_makespan_bound_never_overestimates_and_breadth_first_agrees() {
+    let (mut checked, mut compared) = (0, 0);
+    for which in [MIXED, LARGE, ROOMS] {
+        let dir = set(which);
+        for m in manifest(dir) {
+            let id = m["id"].as_str().expect("an id");
+            let file = dir.join(m["file"].as_str().expect("a file"));
+            let task = load_tasks(&file).expect("the task reads").remove(0);
+            let found = makespan::search(&task, &task.robots, &task.goal, &Limits::default());
+            let plan = found.plan.expect("a generated task has a plan");
+            checked += oracle::bound_along(&task, &plan, id);
+            // Breadth-first over every joint step stays small for short tasks of small
+            // teams only.
+            if !found.proven || m["optimal_steps"].as_u64() > Some(5) || task.robots.len() > 3 {
+                continue;
+            }
+            if let Some(bfs) = oracle::breadth_first(&task, 30_000) {
+                assert_eq!(
+                    (plan.len(), oracle::actions(&plan)),
+                    bfs,
+                    "{id}: (joint steps, actions)"
+                );
+                compared += 1;
+            }
+        }
+    }
+    assert!(checked > 5_000, "only {checked} joint steps checked");
+    assert!(compared >= 10, "only {compared} tasks small enough");
 }
 
 #[test]

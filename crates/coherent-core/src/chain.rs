@@ -20,6 +20,14 @@
 //! to the thing, whether the dog holding it is close to where it may put it, what the
 //! flying quadrotor is above. One joint step changes the situation by at most one edge
 //! and each of these by at most one, so the bound drops by at most one a joint step.
+//!
+//! A robot dog's walks count as well. A dog walks up only to what is in its own room, and
+//! goes to another room only through a door of its room, one action a room, so a state
+//! adds to a dog's grab the rooms the nearest dog must cross to the thing's room; after
+//! the grab, the dog puts the thing on a place it may be close to already (one it may be
+//! close to once it has walked up to the thing there), or it walks: the rooms to the
+//! place's room and the step up to it. Doors count as open (a dog may open one on the
+//! way): the rooms between two rooms are the fewest doors between them.
 
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -29,8 +37,9 @@ use crate::relaxed::Facts;
 use crate::task::{GoalPredicate, Robot, RuleSet, Task};
 use crate::vocab::{PropSet, Relation};
 
-/// No chain reaches the goal from there.
-const FAR: u16 = u16::MAX;
+mod rooms;
+
+use rooms::{FAR, Put, Puts, Rooms, Team};
 
 /// The most nodes of a scene whose chains are followed: the analysis behind them takes
 /// time and memory in the square of the nodes (a few megabytes here). A larger scene
@@ -43,6 +52,8 @@ pub(crate) struct Chains {
     chains: Vec<Chain>,
     /// The team's arms, then its robot dogs.
     grabbers: Vec<Idx>,
+    arms: usize,
+    rooms: Rooms,
 }
 
 impl Chains {
@@ -58,6 +69,8 @@ impl Chains {
             return Chains {
                 chains: Vec::new(),
                 grabbers: Vec::new(),
+                arms: 0,
+                rooms: Rooms::default(),
             };
         }
         let world = World::new(task, start, team);
@@ -68,14 +81,23 @@ impl Chains {
             .chain(world.dogs.iter().copied())
             .collect();
         let chains = subjects.into_iter().map(|p| world.chain(p)).collect();
-        Chains { chains, grabbers }
+        Chains {
+            chains,
+            grabbers,
+            arms: world.arms.len(),
+            rooms: world.rooms,
+        }
     }
 
     /// The longest chain still needed in `s`: no plan from `s` has fewer joint steps.
     pub fn bound(&self, task: &Task, s: &State) -> u16 {
+        if self.chains.is_empty() {
+            return 0;
+        }
+        let team = Team::new(task, s, &self.grabbers, self.arms, &self.rooms);
         self.chains
             .iter()
-            .map(|c| c.left(task, s, &self.grabbers))
+            .map(|c| c.left(task, s, &team))
             .max()
             .unwrap_or(0)
     }
@@ -108,6 +130,7 @@ struct World<'t> {
     /// Per place, whether a robot dog may be close to it ([`World::dog_reaches_place`]),
     /// found once for every chain.
     dog_places: Vec<bool>,
+    rooms: Rooms,
 }
 
 impl<'t> World<'t> {
@@ -190,8 +213,11 @@ impl<'t> World<'t> {
                 low_there[e.to().get()] = true;
             }
         }
+        let fixed: Vec<bool> = fixed.into_iter().map(|f| f == Some(true)).collect();
+        let rooms = Rooms::new(task, start, &fixed);
         let mut world = World {
             task,
+            rooms,
             low_there,
             facts,
             arms,
@@ -199,7 +225,7 @@ impl<'t> World<'t> {
             baskets,
             spots,
             reach,
-            fixed: fixed.into_iter().map(|f| f == Some(true)).collect(),
+            fixed,
             landings,
             stale,
             dog_places: Vec::new(),
@@ -278,15 +304,34 @@ impl<'t> World<'t> {
         self.carriers(&mut g, &at);
         let x = p.subject;
         let dist = g.distances(&[(at.goal(), 0), (at.moved(), 2)]);
-        let dog_puts = dogs_put
+        let dog_puts: Vec<[Puts; 2]> = dogs_put
             .iter()
-            .map(|[low, high]| [walks(&dist, n, low), walks(&dist, n, high)])
+            .map(|[low, high]| {
+                [
+                    Puts::new(&dist, n, &self.rooms, low),
+                    Puts::new(&dist, n, &self.rooms, high),
+                ]
+            })
             .collect();
+        let around = match dog_puts.first() {
+            Some([low, high]) => [self.around(x, &low.near), self.around(x, &high.near)],
+            None => [Vec::new(), Vec::new()],
+        };
+        // A place's grabs, by arms and by dogs apart: a dog may have rooms to cross.
+        let mut grabs = vec![[FAR; 2]; 8 * n];
+        for (i, grab) in grabs.iter_mut().enumerate() {
+            for &(to, cost) in &g.out[i] {
+                let by = usize::from(at.holder(to).is_some_and(|h| h >= self.arms.len()));
+                grab[by] = grab[by].min(dist[to].saturating_add(cost));
+            }
+        }
         Chain {
             x,
             rel: p.relation,
             target: p.target,
             dist,
+            grabs,
+            around,
             at,
             arms: self.arms.len(),
             baskets: self.baskets.clone(),
@@ -298,7 +343,7 @@ impl<'t> World<'t> {
 
     /// Puts on or into every place and grabs from it; per dog and flag, its puts (the
     /// place and the situation after).
-    fn places(&self, g: &mut Graph, at: &Layout, p: &GoalPredicate) -> Vec<[Vec<(Idx, usize)>; 2]> {
+    fn places(&self, g: &mut Graph, at: &Layout, p: &GoalPredicate) -> Vec<[Vec<Put>; 2]> {
         let n = self.task.nodes.len();
         let dog = |d: usize| self.arms.len() + d;
         let mut dogs_put = vec![[Vec::new(), Vec::new()]; self.dogs.len()];
@@ -362,9 +407,9 @@ impl<'t> World<'t> {
                     }
                     for (d, puts) in dogs_put.iter_mut().enumerate() {
                         let held = at.held(dog(d), hi);
-                        let mut put = |to: usize| {
+                        let mut put = |to: usize, room: Option<u16>| {
                             g.edge(held, to, 1);
-                            puts[usize::from(hi)].push((q, to));
+                            puts[usize::from(hi)].push(Put { q, to, room });
                         };
                         match basket {
                             Some(k) => {
@@ -372,10 +417,13 @@ impl<'t> World<'t> {
                                     .iter()
                                     .filter(|&&s| self.dog_reaches_basket(q, s))
                                 {
-                                    put(rest(hi, Some(s), dog(d)));
+                                    put(rest(hi, Some(s), dog(d)), self.rooms.of(s));
                                 }
                             }
-                            None if self.dog_places[q.get()] => put(rest(hi, None, dog(d))),
+                            None if self.dog_places[q.get()] => {
+                                let room = self.rooms.of(q).filter(|_| fixed);
+                                put(rest(hi, None, dog(d)), room);
+                            }
                             None => {}
                         }
                     }
@@ -399,6 +447,31 @@ impl<'t> World<'t> {
             }
         }
         dogs_put
+    }
+
+    /// Per fixed place `q`, the fewest of `near` (the chains after a dog's put where it
+    /// stands) over the places a dog may be close to once it has walked up to `x` resting
+    /// on or in `q`, or to what `x` rests on or in, or to what rests on `x`: `q`, what may
+    /// rest on or in `q` or on what stands on `x`, and what `q` stands on.
+    fn around(&self, x: Idx, near: &[u16]) -> Vec<u16> {
+        let n = self.task.nodes.len();
+        let nodes = || (0..n).map(|y| Idx(y as u16));
+        let on_x: Vec<Idx> = nodes().filter(|&z| self.facts.somewhere_at(z, x)).collect();
+        let by_x = nodes()
+            .filter(|&p| on_x.contains(&p) || on_x.iter().any(|&z| self.facts.somewhere_at(p, z)))
+            .map(|p| near[p.get()])
+            .fold(FAR, u16::min);
+        nodes()
+            .map(|q| {
+                if !self.fixed[q.get()] {
+                    return FAR;
+                }
+                nodes()
+                    .filter(|&p| self.facts.somewhere_at(p, q) || self.facts.somewhere_at(q, p))
+                    .map(|p| near[p.get()])
+                    .fold(near[q.get()].min(by_x), u16::min)
+            })
+            .collect()
     }
 
     /// Baskets: grabs where they rest, take-offs, moves and landings.
@@ -502,19 +575,6 @@ impl<'t> World<'t> {
     }
 }
 
-/// A dog's puts (place, situation after) as the chain after a walk to the nearest, and
-/// by place the chain when it is close to that place already.
-fn walks(dist: &[u16], n: usize, puts: &[(Idx, usize)]) -> (u16, Vec<u16>) {
-    let mut near = vec![FAR; n];
-    let mut walk = FAR;
-    for &(q, to) in puts {
-        let d = dist[to].saturating_add(1);
-        near[q.get()] = near[q.get()].min(d);
-        walk = walk.min(d.saturating_add(1));
-    }
-    (walk, near)
-}
-
 /// Whether `x` never moves; memoised in `fixed`.
 fn settle(task: &Task, s: &State, x: Idx, fixed: &mut [Option<bool>]) -> bool {
     if let Some(f) = fixed[x.get()] {
@@ -551,6 +611,12 @@ impl Layout {
 
     fn held(&self, g: usize, hi: bool) -> usize {
         8 * self.n + g * 2 + usize::from(hi)
+    }
+
+    /// The grabber holding the thing in situation `i`, if `i` is one of [`Layout::held`].
+    fn holder(&self, i: usize) -> Option<usize> {
+        let g = i.checked_sub(8 * self.n)? / 2;
+        (g < self.grabbers).then_some(g)
     }
 
     fn basket_at(&self, k: usize, s: usize, hi: bool, fresh: bool) -> usize {
@@ -649,14 +715,19 @@ struct Chain {
     rel: Relation,
     target: Idx,
     dist: Vec<u16>,
+    /// Per place situation, the chain after its best grab by an arm (0) and by a dog
+    /// (1), the grab counted; a dog's walk from another room is not.
+    grabs: Vec<[u16; 2]>,
+    /// Per flag and fixed place, the chain after a dog's put on a place it may be close
+    /// to when it grabs the thing there ([`World::around`]).
+    around: [Vec<u16>; 2],
     at: Layout,
     /// How many arms come first among the grabbers (the dogs follow).
     arms: usize,
     baskets: Vec<(Idx, Idx)>,
     fixed: Vec<bool>,
-    /// Per dog and flag, the chain from the thing in its hand: after a walk (one action
-    /// more than the table), and, by place, without one when the dog is close to it.
-    dog_puts: Vec<[(u16, Vec<u16>); 2]>,
+    /// Per dog and flag, the chain from the thing in its hand.
+    dog_puts: Vec<[Puts; 2]>,
     /// Whether a carrier stands for the thing (a dog may walk up to it).
     carried: bool,
 }
@@ -664,7 +735,8 @@ struct Chain {
 impl Chain {
     /// The fewest actions of this chain from `s` (0 when the goal holds, or when the
     /// thing is somewhere the chain does not follow).
-    fn left(&self, task: &Task, s: &State, grabbers: &[Idx]) -> u16 {
+    fn left(&self, task: &Task, s: &State, team: &Team<'_>) -> u16 {
+        let grabbers = team.grabbers;
         let x = self.x;
         if s.has(Edge::new(x, self.rel, self.target)) {
             return 0;
@@ -677,14 +749,14 @@ impl Chain {
             .iter()
             .any(|r| s.has(Edge::new(r.node, Relation::Hold, x)));
         let left = match (held, rest, more) {
-            (true, None, _) => self.held(s, hi, grabbers),
+            (true, None, _) => self.held(s, hi, team),
             (false, Some(e), None) => {
                 let q = e.to();
                 // A dog close to it now may grab it, whatever brought it close.
                 let mut by_close = FAR;
                 for (d, &dog) in grabbers[self.arms..].iter().enumerate() {
                     if s.has(Edge::new(dog, Relation::Close, x)) {
-                        let held = self.dist[self.at.held(self.arms + d, hi)];
+                        let held = self.dog_holding(s, hi, team, d);
                         by_close = by_close.min(held.saturating_add(1));
                     }
                 }
@@ -695,7 +767,20 @@ impl Chain {
                     }
                     _ if self.fixed[q.get()] => {
                         let r = usize::from(e.rel() == Relation::Inside);
-                        self.dist[self.at.place(q.get(), r, hi, fresh)]
+                        let [arm, dog] = self.grabs[self.at.place(q.get(), r, hi, fresh)];
+                        match self.dog_puts.first() {
+                            // A dog walks to its room and up to it, grabs it, and puts it
+                            // where it stands or walks on from there.
+                            Some(puts) if dog < FAR => {
+                                let puts = &puts[usize::from(hi)];
+                                let room = team.rooms.of(q);
+                                let around = self.around[usize::from(hi)][q.get()];
+                                let after = around.min(puts.walked(team.rooms, room));
+                                let walk = team.nearest_dog(room);
+                                arm.min(walk.saturating_add(2).saturating_add(after))
+                            }
+                            _ => arm,
+                        }
                     }
                     // A grab and a put at least, wherever its carrier goes.
                     _ => self.carrier(task, s, q, grabbers).clamp(2, FAR - 1),
@@ -777,7 +862,8 @@ impl Chain {
     /// The chain from the thing held: by an arm, its table; by a dog, one action more
     /// unless the dog is already close to where it puts it. No other robot sees what a
     /// robot holds, so none takes it from its hand.
-    fn held(&self, s: &State, hi: bool, grabbers: &[Idx]) -> u16 {
+    fn held(&self, s: &State, hi: bool, team: &Team<'_>) -> u16 {
+        let grabbers = team.grabbers;
         let Some(g) = grabbers
             .iter()
             .position(|&g| s.has(Edge::new(g, Relation::Hold, self.x)))
@@ -787,9 +873,16 @@ impl Chain {
         let Some(d) = g.checked_sub(self.arms) else {
             return self.dist[self.at.held(g, hi)];
         };
-        let (walk, near) = &self.dog_puts[d][usize::from(hi)];
-        s.targets(grabbers[g], Relation::Close)
-            .map(|q| near[q.get()])
-            .fold(*walk, u16::min)
+        self.dog_holding(s, hi, team, d)
+    }
+
+    /// The chain from the thing in the hand of robot dog `d` (as in the team's dogs):
+    /// a put where it stands, or a walk first.
+    fn dog_holding(&self, s: &State, hi: bool, team: &Team<'_>, d: usize) -> u16 {
+        let puts = &self.dog_puts[d][usize::from(hi)];
+        let walk = puts.walked(team.rooms, team.dog_rooms[d]);
+        s.targets(team.grabbers[self.arms + d], Relation::Close)
+            .map(|q| puts.near[q.get()])
+            .fold(walk, u16::min)
     }
 }

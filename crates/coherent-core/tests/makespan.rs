@@ -11,15 +11,14 @@
 //! - a search stopped at a limit says so, keeps the scheduled sequential optimum and a
 //!   lower bound below it.
 
-use std::collections::{HashMap, VecDeque};
-
-use coherent_core::footprint::Footprint;
 use coherent_core::joint::{self, Part};
 use coherent_core::makespan::{self, JointStep};
 use coherent_core::planner::{self, Limits, Step, Stop};
 use coherent_core::{State, Task, benchmark, feasibility, rules};
 
 mod common;
+#[path = "common/oracle.rs"]
+mod oracle;
 
 /// The released tasks, and tasks 0 to 4 of each scene of our benchmark (`every`: all of
 /// its tasks).
@@ -154,64 +153,6 @@ fn parallel_plans_are_valid_in_every_order_and_never_longer_than_the_sequential_
     assert!(shorter > 20, "only {shorter} tasks are faster in parallel");
 }
 
-/// Breadth-first over every joint step (every offered action, each set of robots whose
-/// actions pairwise do not interfere): the fewest joint steps and, among the plans of
-/// that many, the fewest actions; or none within `max` states. A state's fewest actions
-/// at its depth are final once the depth before it is expanded, as the queue takes the
-/// depths in turn.
-fn breadth_first(task: &Task, max: usize) -> Option<(usize, usize)> {
-    let mut cost: HashMap<State, (usize, usize)> = HashMap::from([(task.init.clone(), (0, 0))]);
-    let mut queue = VecDeque::from([task.init.clone()]);
-    while let Some(s) = queue.pop_front() {
-        let (d, acts) = cost[&s];
-        if task.goal_satisfied(&s) {
-            return cost
-                .iter()
-                .filter(|(t, c)| c.0 == d && task.goal_satisfied(t))
-                .map(|(_, &c)| c)
-                .min();
-        }
-        let lists = rules::team_actions(task, &s, &task.robots);
-        // Every choice of at most one action per robot, as (part, footprint) lists.
-        let mut steps: Vec<Vec<(Part, Footprint)>> = vec![Vec::new()];
-        for (&robot, actions) in task.robots.iter().zip(&lists) {
-            let mut more = Vec::new();
-            for &a in actions {
-                let print = Footprint::of(task, &s, robot, a);
-                for step in &steps {
-                    if step.iter().all(|(_, p)| p.conflict(&print).is_none()) {
-                        let mut bigger = step.clone();
-                        bigger.push(((robot, a), print.clone()));
-                        more.push(bigger);
-                    }
-                }
-            }
-            steps.extend(more);
-        }
-        for step in steps.iter().filter(|st| !st.is_empty()) {
-            let parts: Vec<Part> = step.iter().map(|(p, _)| *p).collect();
-            let mut next = s.clone();
-            joint::apply(task, &mut next, &parts);
-            let here = (d + 1, acts + parts.len());
-            match cost.get_mut(&next) {
-                Some(known) => *known = (*known).min(here),
-                None => {
-                    if cost.len() >= max {
-                        return None;
-                    }
-                    cost.insert(next.clone(), here);
-                    queue.push_back(next);
-                }
-            }
-        }
-    }
-    None
-}
-
-fn actions(plan: &[JointStep]) -> usize {
-    plan.iter().map(Vec::len).sum()
-}
-
 #[test]
 fn proven_makespans_and_their_fewest_actions_agree_with_a_breadth_first_search() {
     let mut compared = 0;
@@ -221,13 +162,13 @@ fn proven_makespans_and_their_fewest_actions_agree_with_a_breadth_first_search()
         if sequential.plan.is_none_or(|p| p.len() > 5) {
             continue;
         }
-        let Some(bfs) = breadth_first(&task, 20_000) else {
+        let Some(bfs) = oracle::breadth_first(&task, 20_000) else {
             continue;
         };
         let found = makespan::search(&task, &task.robots, &task.goal, &Limits::default());
         let plan = found.plan.expect("a plan where breadth-first finds one");
         assert_eq!(
-            (plan.len(), actions(&plan)),
+            (plan.len(), oracle::actions(&plan)),
             bfs,
             "{}: (joint steps, actions)",
             common::name(&task)
@@ -246,39 +187,7 @@ fn the_makespan_heuristic_is_admissible_and_consistent_along_parallel_plans() {
         else {
             continue;
         };
-        let bound = makespan::LowerBound::new(&task, &task.init, &task.robots, &task.goal);
-        let mut s = task.init.clone();
-        for (k, step) in plan.iter().enumerate() {
-            let h = bound.of(&s);
-            assert!(
-                usize::from(h) <= plan.len() - k,
-                "{name}: h = {h}, {} steps left",
-                plan.len() - k
-            );
-            // One joint step lowers it by at most one: every pair of robots' actions here.
-            let lists = rules::team_actions(&task, &s, &task.robots);
-            for (i, (&r1, l1)) in task.robots.iter().zip(&lists).enumerate() {
-                for (&r2, l2) in task.robots.iter().zip(&lists).skip(i + 1) {
-                    for &a in l1 {
-                        for &b in l2 {
-                            let pair = [(r1, a), (r2, b)];
-                            if joint::check(&task, &s, &pair).is_ok() {
-                                let mut next = s.clone();
-                                joint::apply(&task, &mut next, &pair);
-                                let h2 = bound.of(&next);
-                                assert!(
-                                    h <= h2 + 1,
-                                    "{name}: a joint step drops h from {h} to {h2}"
-                                );
-                                checked += 1;
-                            }
-                        }
-                    }
-                }
-            }
-            joint::apply(&task, &mut s, &parts(&task, step));
-        }
-        assert_eq!(bound.of(&s), 0, "{name}");
+        checked += oracle::bound_along(&task, &plan, &name);
     }
     assert!(checked > 10_000, "only {checked} joint steps checked");
 }
@@ -340,7 +249,7 @@ fn among_the_fewest_joint_steps_the_plan_has_the_fewest_actions() {
     let plan = found.plan.expect("a plan");
     assert_eq!((plan.len(), found.lower), (14, 14));
     assert_eq!(
-        actions(&plan),
+        oracle::actions(&plan),
         16,
         "no more actions than the sequential optimum"
     );
