@@ -421,8 +421,7 @@ impl<'t> World<'t> {
                                 }
                             }
                             None if self.dog_places[q.get()] => {
-                                let room = self.rooms.of(q).filter(|_| fixed);
-                                put(rest(hi, None, dog(d)), room);
+                                put(rest(hi, None, dog(d)), self.rooms.of(q));
                             }
                             None => {}
                         }
