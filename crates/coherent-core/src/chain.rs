@@ -299,30 +299,30 @@ impl<'t> World<'t> {
             baskets: self.baskets.len(),
         };
         let mut g = Graph::new(at.len());
-        let dogs_put = self.places(&mut g, &at, p);
+        let [low, high] = self.places(&mut g, &at, p);
         self.flights(&mut g, &at, p.subject);
         self.carriers(&mut g, &at);
         let x = p.subject;
         let dist = g.distances(&[(at.goal(), 0), (at.moved(), 2)]);
-        let dog_puts: Vec<[Puts; 2]> = dogs_put
-            .iter()
-            .map(|[low, high]| {
-                [
-                    Puts::new(&dist, n, &self.rooms, low),
-                    Puts::new(&dist, n, &self.rooms, high),
-                ]
-            })
-            .collect();
-        let around = match dog_puts.first() {
+        let dog_puts = (!self.dogs.is_empty()).then(|| {
+            [
+                Puts::new(&dist, n, &self.rooms, &low),
+                Puts::new(&dist, n, &self.rooms, &high),
+            ]
+        });
+        let around = match &dog_puts {
             Some([low, high]) => [self.around(x, &low.near), self.around(x, &high.near)],
             None => [Vec::new(), Vec::new()],
         };
-        // A place's grabs, by arms and by dogs apart: a dog may have rooms to cross.
-        let mut grabs = vec![[FAR; 2]; 8 * n];
-        for (i, grab) in grabs.iter_mut().enumerate() {
+        // A place's grabs: by an arm, the chain after it; by a dog, only whether there is
+        // one (its walks depend on where the dogs are).
+        let mut grabs = vec![(FAR, false); 8 * n];
+        for (i, (arm, dog)) in grabs.iter_mut().enumerate() {
             for &(to, cost) in &g.out[i] {
-                let by = usize::from(at.holder(to).is_some_and(|h| h >= self.arms.len()));
-                grab[by] = grab[by].min(dist[to].saturating_add(cost));
+                match at.holder(to) {
+                    Some(h) if h >= self.arms.len() => *dog = true,
+                    _ => *arm = (*arm).min(dist[to].saturating_add(cost)),
+                }
             }
         }
         Chain {
@@ -341,12 +341,12 @@ impl<'t> World<'t> {
         }
     }
 
-    /// Puts on or into every place and grabs from it; per dog and flag, its puts (the
-    /// place and the situation after).
-    fn places(&self, g: &mut Graph, at: &Layout, p: &GoalPredicate) -> Vec<[Vec<Put>; 2]> {
+    /// Puts on or into every place and grabs from it; per flag, the dogs' puts (the
+    /// place, the situation after and its room).
+    fn places(&self, g: &mut Graph, at: &Layout, p: &GoalPredicate) -> [Vec<Put>; 2] {
         let n = self.task.nodes.len();
         let dog = |d: usize| self.arms.len() + d;
-        let mut dogs_put = vec![[Vec::new(), Vec::new()]; self.dogs.len()];
+        let mut dogs_put = [Vec::new(), Vec::new()];
         let x = p.subject;
         let bits = [false, true];
         let compatible = self.task.meta.rules != RuleSet::Geometric;
@@ -405,27 +405,34 @@ impl<'t> World<'t> {
                             }
                         }
                     }
-                    for (d, puts) in dogs_put.iter_mut().enumerate() {
-                        let held = at.held(dog(d), hi);
-                        let mut put = |to: usize, room: Option<u16>| {
-                            g.edge(held, to, 1);
-                            puts[usize::from(hi)].push(Put { q, to, room });
-                        };
-                        match basket {
-                            Some(k) => {
-                                for &s in self.spots[k]
-                                    .iter()
-                                    .filter(|&&s| self.dog_reaches_basket(q, s))
-                                {
-                                    put(rest(hi, Some(s), dog(d)), self.rooms.of(s));
-                                }
+                    // Any dog may put it where one may (no place is one dog's alone, and
+                    // the situation after is the same): the puts once, an edge a dog.
+                    let put = |on: Option<Idx>, room| Put {
+                        q,
+                        to: rest(hi, on, dog(0)),
+                        room,
+                    };
+                    let mut here = Vec::new();
+                    match basket {
+                        Some(k) if !self.dogs.is_empty() => {
+                            for &s in self.spots[k]
+                                .iter()
+                                .filter(|&&s| self.dog_reaches_basket(q, s))
+                            {
+                                here.push(put(Some(s), self.rooms.of(s)));
                             }
-                            None if self.dog_places[q.get()] => {
-                                put(rest(hi, None, dog(d)), self.rooms.of(q));
-                            }
-                            None => {}
+                        }
+                        None if !self.dogs.is_empty() && self.dog_places[q.get()] => {
+                            here.push(put(None, self.rooms.of(q)));
+                        }
+                        _ => {}
+                    }
+                    for d in 0..self.dogs.len() {
+                        for put in &here {
+                            g.edge(at.held(dog(d), hi), put.to, 1);
                         }
                     }
+                    dogs_put[usize::from(hi)].extend(here);
                     if goal || !fixed {
                         continue;
                     }
@@ -714,9 +721,9 @@ struct Chain {
     rel: Relation,
     target: Idx,
     dist: Vec<u16>,
-    /// Per place situation, the chain after its best grab by an arm (0) and by a dog
-    /// (1), the grab counted; a dog's walk from another room is not.
-    grabs: Vec<[u16; 2]>,
+    /// Per place situation, the chain after its best grab by an arm (the grab counted),
+    /// and whether a dog may grab the thing there.
+    grabs: Vec<(u16, bool)>,
     /// Per flag and fixed place, the chain after a dog's put on a place it may be close
     /// to when it grabs the thing there ([`World::around`]).
     around: [Vec<u16>; 2],
@@ -725,8 +732,9 @@ struct Chain {
     arms: usize,
     baskets: Vec<(Idx, Idx)>,
     fixed: Vec<bool>,
-    /// Per dog and flag, the chain from the thing in its hand.
-    dog_puts: Vec<[Puts; 2]>,
+    /// Per flag, the chain from the thing in a dog's hand (the same for every dog); none
+    /// when the team has no dog.
+    dog_puts: Option<[Puts; 2]>,
     /// Whether a carrier stands for the thing (a dog may walk up to it).
     carried: bool,
 }
@@ -766,11 +774,11 @@ impl Chain {
                     }
                     _ if self.fixed[q.get()] => {
                         let r = usize::from(e.rel() == Relation::Inside);
-                        let [arm, dog] = self.grabs[self.at.place(q.get(), r, hi, fresh)];
-                        match self.dog_puts.first() {
+                        let (arm, dog) = self.grabs[self.at.place(q.get(), r, hi, fresh)];
+                        match &self.dog_puts {
                             // A dog walks to its room and up to it, grabs it, and puts it
                             // where it stands or walks on from there.
-                            Some(puts) if dog < FAR => {
+                            Some(puts) if dog => {
                                 let puts = &puts[usize::from(hi)];
                                 let room = team.rooms.of(q);
                                 let around = self.around[usize::from(hi)][q.get()];
@@ -878,7 +886,10 @@ impl Chain {
     /// The chain from the thing in the hand of robot dog `d` (as in the team's dogs):
     /// a put where it stands, or a walk first.
     fn dog_holding(&self, s: &State, hi: bool, team: &Team<'_>, d: usize) -> u16 {
-        let puts = &self.dog_puts[d][usize::from(hi)];
+        let Some(puts) = &self.dog_puts else {
+            return FAR;
+        };
+        let puts = &puts[usize::from(hi)];
         let walk = puts.walked(team.rooms, team.dog_rooms[d]);
         s.targets(team.grabbers[self.arms + d], Relation::Close)
             .map(|q| puts.near[q.get()])

@@ -191,12 +191,8 @@ impl Rooms {
         }
     }
 
-    /// The room robot `r` is in, in `s`.
+    /// The room robot `r` is in, in `s` (a room never moves: its own index).
     pub fn robot(&self, task: &Task, s: &State, r: Idx) -> Option<u16> {
-        let room = crate::rules::room_of(task, s, r)?;
-        task.rooms()
-            .iter()
-            .position(|&x| x == room)
-            .map(|i| i as u16)
+        self.of(crate::rules::room_of(task, s, r)?)
     }
 }
