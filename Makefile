@@ -53,6 +53,11 @@ venv:
 	# Fast Downward, its planner binary inside the wheel, and unified-planning's plan
 	# validator (it brings ConfigSpace, SciPy and NetworkX).
 	$(BIN)/pip install --quiet "up-fast-downward==1.0.0" "unified-planning==1.3.0"
+	# The training extra (python/tests/test_training.py runs examples/finetune.py on a tiny
+	# model): PyTorch (PyPI's Linux wheel brings its CUDA libraries, about 4 GB, unused on
+	# a CPU), TRL, PEFT, transformers, datasets, accelerate and gguf, pinned.
+	$(BIN)/pip install --quiet "torch==2.15.0" "transformers==5.24.0" "trl==1.16.0" "peft==0.21.2" \
+		"datasets==5.2.0" "accelerate==1.15.0" "gguf==0.19.0"
 
 # The browser the tests of `coherent view` drive (python/tests/test_view.py): Debian's
 # chromium-headless-shell, installed with apt when it is missing and this runs as root;

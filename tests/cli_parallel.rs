@@ -9,7 +9,7 @@ mod common;
 
 use std::path::Path;
 
-use common::{coherent, demo, scratch, show, utf8};
+use common::{coherent, demo, json_lines, scratch, show, utf8};
 use serde_json::{Value, json};
 
 fn code(out: &std::process::Output) -> i32 {
@@ -18,14 +18,6 @@ fn code(out: &std::process::Output) -> i32 {
 
 fn stdout(out: &std::process::Output) -> String {
     String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-fn lines(path: &Path) -> Vec<Value> {
-    std::fs::read_to_string(path)
-        .expect("the file is written")
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("a JSON line"))
-        .collect()
 }
 
 #[test]
@@ -88,7 +80,7 @@ fn run_parallel_prints_each_robots_part_reports_the_makespan_and_replays() {
     assert_eq!(summary["llm_calls"], json!(13), "one central call a step");
     assert_eq!(summary["sim_seconds"], Value::Null);
     let transcript = summary["transcript"].as_str().expect("a path");
-    let records = lines(Path::new(transcript));
+    let records = json_lines(Path::new(transcript));
     assert!(
         records.iter().all(|r| r.get("sim_seconds").is_none()),
         "no simulated time without physics"
@@ -182,7 +174,7 @@ fn bench_runs_each_method_both_ways_as_one_run_resumes_by_execution_and_compares
         "no parallel episode, no makespan table"
     );
     assert!(
-        lines(&results)
+        json_lines(&results)
             .iter()
             .all(|l| l["settings"].get("executions").is_none()),
         "a sequential run records its settings as before parallel episodes"
@@ -199,7 +191,7 @@ fn bench_runs_each_method_both_ways_as_one_run_resumes_by_execution_and_compares
     std::fs::remove_file(&results).expect("removed");
     let out = bench("sequential,parallel");
     assert_eq!(code(&out), 0, "{}", show(&out));
-    let written = lines(&results);
+    let written = json_lines(&results);
     assert_eq!(written.len(), 4);
     for l in &written {
         let parallel = l["execution"] == json!("parallel");
@@ -234,7 +226,7 @@ fn bench_runs_each_method_both_ways_as_one_run_resumes_by_execution_and_compares
         "{}",
         show(&out)
     );
-    assert_eq!(lines(&results).len(), 4);
+    assert_eq!(json_lines(&results).len(), 4);
     // Its tables: a row per method and execution, and the makespan table.
     let report = coherent(&["bench", "--report", utf8(&results)]);
     let text = stdout(&report);
@@ -312,7 +304,7 @@ fn a_parallel_episode_in_physics_reports_its_simulated_seconds() {
     // Each joint step's own, which add up to the episode's but for the world settling
     // before the first step.
     let transcript = summary["transcript"].as_str().expect("a path");
-    let steps: Vec<f64> = lines(Path::new(transcript))
+    let steps: Vec<f64> = json_lines(Path::new(transcript))
         .iter()
         .filter(|r| r["type"] == "round")
         .map(|r| {

@@ -18,7 +18,9 @@ Everything the ``coherent`` command line does, from Python::
 
 ``coherent.plot`` draws the paper's tables, episode timelines, tokens per step, success
 against cost (``pareto``) and the scene map (matplotlib); ``coherent.gym`` is a Gymnasium
-environment, ``coherent.marl`` a PettingZoo one with the robots as agents. The engine is Rust (``coherent._coherent``); errors derive from
+environment, ``coherent.marl`` a PettingZoo one with the robots as agents;
+``coherent.training`` writes training data for the methods' models from the optimal
+planner. The engine is Rust (``coherent._coherent``); errors derive from
 :class:`CoherentError`.
 
 Planning, stepping and running need no other package. The DataFrames (``bench``,
@@ -130,7 +132,7 @@ __all__ = [
 # first use: `coherent.plot` imports matplotlib (slow to import; the extra
 # `analysis`), `coherent.gym` gymnasium (the extra `gym`), `coherent.marl` pettingzoo (the
 # extra `marl`).
-_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "marl", "plot")
+_SUBMODULES = ("analysis", "benchmark", "executors", "gym", "marl", "plot", "training")
 
 
 def __getattr__(name: str) -> _Any:

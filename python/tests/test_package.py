@@ -24,7 +24,10 @@ TREE = ast.parse(STUB.read_text())
 # `coherent.results`, `coherent.report` return DataFrames built from them;
 # `coherent.benchmark.tasks` is the project's benchmark).
 # `coherent.view` wraps the pages of `coherent view`.
-WRAPPED = {"run_bench", "read_results", "report_tables", "report_text", "price_lines", "benchmark_tasks", "view_page", "results_page", "framed_page"}
+WRAPPED = {
+    "run_bench", "read_results", "report_tables", "report_text", "price_lines", "benchmark_tasks", "view_page",
+    "results_page", "framed_page", "export_sft",
+}  # fmt: skip
 
 
 def _public(name: str) -> bool:
@@ -140,7 +143,7 @@ def test_py_typed_is_installed() -> None:
 
 # The names `coherent` defines in Python (the rest of `__all__` is the native module's).
 PYTHON_API = {"Page", "RayExecutor", "Report", "bench", "report", "results", "view"}
-SUBMODULES = {"analysis", "benchmark", "executors", "gym", "marl", "plot"}
+SUBMODULES = {"analysis", "benchmark", "executors", "gym", "marl", "plot", "training"}
 DOCS = REPO / "docs" / "python.md"
 
 

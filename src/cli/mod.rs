@@ -84,7 +84,7 @@ enum Command {
     /// problem per task (docs/pddl.md); `--format original`, the paper's env lists (one
     /// file per scene, `<out>/<scene>.json`), which `coherent import` reads back. Exit 1
     /// when a task cannot be written, 2 on malformed input.
-    Export(export::ExportArgs),
+    Export(Box<export::ExportCommand>),
     /// Convert original env files into native task files, one per task.
     Import {
         #[arg(required = true)]
@@ -174,12 +174,18 @@ where
             max_memory,
         } => validate_files(&files, &limits(max_states, max_memory)),
         Command::Import { files, out } => import(&files, &out),
-        Command::Export(args) => {
-            let limits = limits(Limits::DEFAULT_MAX_STATES, Limits::DEFAULT_MAX_MEMORY >> 20);
-            chosen(&args.files, &args.tasks).and_then(|(tasks, malformed)| {
-                Ok(export::export(&tasks, &args, &limits)?.max(malformed))
-            })
-        }
+        Command::Export(command) => match (command.data, command.tasks) {
+            (Some(export::ExportData::Sft(args)), _) => export::sft(&args),
+            (None, Some(args)) => {
+                let limits = limits(Limits::DEFAULT_MAX_STATES, Limits::DEFAULT_MAX_MEMORY >> 20);
+                chosen(&args.files, &args.tasks).and_then(|(tasks, malformed)| {
+                    Ok(export::export(&tasks, &args, &limits)?.max(malformed))
+                })
+            }
+            (None, None) => Err(Error::Invalid(
+                "coherent export: give task files and --format, or `sft`".into(),
+            )),
+        },
         Command::Plan {
             files,
             tasks,

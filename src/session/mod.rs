@@ -19,6 +19,7 @@
 //! - [`pddl`](mod@pddl): the tasks in PDDL, our plans as PDDL plans, PDDL plans checked
 //!   against the rules;
 //! - [`render`]: the scene from above and the robots' paths;
+//! - [`training`]: training data for the methods' models, from the optimal planner;
 //! - [`lines`]: the line `coherent run` prints for each step;
 //! - [`view`]: episodes and results as pages in the browser;
 //! - [`error`]: what goes wrong, by kind;
@@ -40,6 +41,7 @@ pub mod prompts;
 pub mod render;
 pub mod robots;
 pub mod tasks;
+pub mod training;
 pub mod view;
 pub mod waiting;
 

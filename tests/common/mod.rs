@@ -26,6 +26,15 @@ pub fn coherent(args: &[&str]) -> Output {
         .expect("the coherent binary runs")
 }
 
+/// Every line of the JSON-lines file at `path`.
+pub fn json_lines(path: &Path) -> Vec<Value> {
+    std::fs::read_to_string(path)
+        .expect("the file is written")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("a JSON line"))
+        .collect()
+}
+
 /// A run's status, the last 40 lines of its stdout and its stderr, for a failure message.
 pub fn show(out: &Output) -> String {
     let stdout = String::from_utf8_lossy(&out.stdout);

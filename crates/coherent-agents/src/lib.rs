@@ -33,6 +33,9 @@
 //!     results file and the [`Ledger`](bench::Ledger) that resumes it, the subsets, what an
 //!     episode costs ([`prices`]: a [`PriceTable`] and [`ModelUse`]), and [`report`], the
 //!     paper's tables. Running the episodes is the session's (the root package).
+//! 11. [`training`]: training data from the optimal planner: each question a method's
+//!     roles ask in an episode, with the planner's answer at that state in the method's
+//!     own format ([`training::Teacher`]), read back with the method's parser.
 //!
 //! The modules are also reachable at the crate root by their short names
 //! (`coherent_agents::pefa`, `coherent_agents::bench`, ...).
@@ -63,6 +66,8 @@ pub mod methods;
 pub mod run;
 // The benchmark's bookkeeping.
 pub mod harness;
+// Training data from the optimal planner.
+pub mod training;
 
 pub use backends::{builtin, openai, replay, retry};
 pub use harness as bench;

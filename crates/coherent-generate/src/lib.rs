@@ -36,5 +36,5 @@ pub mod truth;
 pub mod set;
 
 pub use request::{KnobError, Ratio, Request, Span, TeamSpec};
-pub use set::{Generated, Outcome, Progress, generate};
+pub use set::{Generated, Outcome, Progress, generate, splits};
 pub use sheet::{About, Entry, Split, Tally};

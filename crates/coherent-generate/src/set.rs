@@ -479,8 +479,9 @@ fn finish(
 
 /// Which split each scene is in: the scenes in a seeded order, the first shares of them
 /// in test and validation (at least one each when there are three scenes or more and
-/// the share is not zero), the rest in train.
-fn splits(scenes: usize, shares: [f64; 3], seed: u64) -> Vec<Split> {
+/// the share is not zero), the rest in train. Also the split of the scenes of tasks
+/// that come with none (the training data's, `coherent export sft`).
+pub fn splits(scenes: usize, shares: [f64; 3], seed: u64) -> Vec<Split> {
     let mut order: Vec<usize> = (0..scenes).collect();
     Rng::new(seed_of(seed, "split", 0)).shuffle(&mut order);
     let total: f64 = shares.iter().sum();

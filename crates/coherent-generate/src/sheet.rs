@@ -12,7 +12,7 @@ use serde_json::{Value, json};
 use crate::request::{KINDS, kind_name};
 
 /// Train, validation or test: a whole scene is in one.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Split {
     Train,
     Validation,

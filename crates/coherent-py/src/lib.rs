@@ -21,6 +21,7 @@ mod run;
 mod scene;
 mod stepper;
 mod task;
+mod training;
 mod view;
 
 use std::ffi::OsString;
@@ -272,6 +273,7 @@ fn _coherent(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(benchmark_tasks, m)?)?;
     m.add_function(wrap_pyfunction!(plan, m)?)?;
     m.add_function(wrap_pyfunction!(generate::generate, m)?)?;
+    m.add_function(wrap_pyfunction!(training::export_sft, m)?)?;
     m.add_function(wrap_pyfunction!(pddl::pddl_texts, m)?)?;
     m.add_function(wrap_pyfunction!(pddl::check_pddl_plan, m)?)?;
     m.add_function(wrap_pyfunction!(budget, m)?)?;

@@ -139,6 +139,17 @@ impl BuiltinBackend {
             ..BuiltinBackend::new(limits)
         }
     }
+
+    /// The simulated backend with mistakes at `rates` drawn from `seed`, planning with
+    /// this backend's planner: the plans either finds are known to both (the training
+    /// data's episodes, `crate::training`, label every call with the plans their
+    /// mistakes are made from).
+    pub fn with_errors(&self, rates: ErrorRates, seed: u64) -> BuiltinBackend {
+        BuiltinBackend {
+            inner: Arc::clone(&self.inner),
+            errors: Some((rates, Arc::new(Draws::new(seed)))),
+        }
+    }
 }
 
 /// What a search from a state gave, for [`Planner::first_of`]: a plan (empty when the

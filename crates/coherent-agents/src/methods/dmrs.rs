@@ -239,13 +239,18 @@ impl Dmrs {
 }
 
 /// A speaker's word in a parallel dialogue: its own action (or none), and its message.
-type Word = (Option<String>, String);
+pub(crate) type Word = (Option<String>, String);
 
 /// A speaker's own action in its answer (matched to the spelling of its list `own` when
 /// it is one of them, else as written for the feasibility check to judge; `none` for
 /// none, its own label in front allowed), and its message; an error when the answer
 /// names no action.
-fn own_action(task: &Task, speaker: NodeId, own: &[String], text: &str) -> Result<Word, String> {
+pub(crate) fn own_action(
+    task: &Task,
+    speaker: NodeId,
+    own: &[String],
+    text: &str,
+) -> Result<Word, String> {
     let message = message_in(text);
     let said = read_line(text);
     let label = robot_label(task, speaker);
