@@ -39,6 +39,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--tiny", action="store_true", help="a randomly initialised 2-layer model with the base's tokenizer")
     p.add_argument("--max-steps", type=int, default=-1, help="optimizer steps (default: --epochs over the data)")
     p.add_argument("--epochs", type=float, default=1.0)
+    p.add_argument("--max-minutes", type=float, default=0, help="stop training after this many minutes (0: no limit)")
     p.add_argument("--max-examples", type=int, default=0, help="train on the first N examples only (0: all)")
     p.add_argument("--batch-size", type=int, default=4)
     p.add_argument("--grad-accum", type=int, default=4)
@@ -82,17 +83,23 @@ def load_base(args: argparse.Namespace):
         model = LlamaForCausalLM(config)
     else:
         model = AutoModelForCausalLM.from_pretrained(**where, dtype=torch.float32)
+        if gguf:
+            # transformers dequantises a GGUF file's weights into float32 as it loads
+            # them, yet marks the model as quantized, which its trainer refuses: the
+            # weights trained are those float32 ones.
+            model.hf_quantizer = None
+            model.is_quantized = False
+            model.config.__dict__.pop("quantization_config", None)
     return model, tokenizer
 
 
 def load_data(args: argparse.Namespace):
-    """The train split, as TRL reads it: a conversational prompt and its completion (the
-    other columns, which say where each example comes from, are dropped)."""
+    """The train split as it is: TRL reads its conversational prompt and completion (the
+    other columns say where each example comes from)."""
     from datasets import load_dataset
 
     data = load_dataset("json", data_files={"train": str(args.data / "train.jsonl")})
-    keep = ["prompt", "completion"]
-    data = data.remove_columns([c for c in data["train"].column_names if c not in keep])
+    data["train"] = data["train"].shuffle(seed=args.seed)
     if args.max_examples:
         data["train"] = data["train"].select(range(min(args.max_examples, len(data["train"]))))
     return data
@@ -141,6 +148,7 @@ def train(args: argparse.Namespace) -> dict:
         train_dataset=data["train"],
         processing_class=tokenizer,
         peft_config=lora,
+        callbacks=[deadline(args.max_minutes)] if args.max_minutes else None,
     )
     trainer.train()
     losses = [e["loss"] for e in trainer.state.log_history if "loss" in e]
@@ -156,6 +164,7 @@ def train(args: argparse.Namespace) -> dict:
         "tiny": args.tiny,
         "examples": len(data["train"]),
         "steps": trainer.state.global_step,
+        "examples_seen": trainer.state.global_step * args.batch_size * args.grad_accum,
         "first_loss": losses[0] if losses else None,
         "last_loss": losses[-1] if losses else None,
         "losses": losses,
@@ -165,6 +174,21 @@ def train(args: argparse.Namespace) -> dict:
     }
     (args.out / "train_report.json").write_text(json.dumps(report, indent=2) + "\n")
     return report
+
+
+def deadline(minutes: float):
+    """A callback that ends training at the first step after `minutes` of it."""
+    from transformers import TrainerCallback
+
+    class Deadline(TrainerCallback):
+        def on_train_begin(self, args, state, control, **kwargs):
+            self.start = time.time()
+
+        def on_step_end(self, args, state, control, **kwargs):
+            if time.time() - self.start > minutes * 60:
+                control.should_training_stop = True
+
+    return Deadline()
 
 
 # The tensors of a llama-architecture model as Hugging Face names them, and as GGUF does

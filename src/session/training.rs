@@ -370,7 +370,7 @@ pub fn export(
                         .flat_map(|r| r.calls.iter().map(move |_| r.step))
                         .collect();
                     for (i, lesson) in lessons.iter().enumerate() {
-                        let Some(line) = book.example(
+                        let Some(mut line) = book.example(
                             req,
                             &prompts,
                             &settings,
@@ -381,7 +381,6 @@ pub fn export(
                         ) else {
                             continue;
                         };
-                        let mut line = line;
                         line["step"] = json!(steps.get(i));
                         files.write(*split, &line)?;
                     }

@@ -225,7 +225,7 @@ pub fn read_back(
             .parse(answer)
             .map(|p| Taken::Actions(vec![(p.robot, p.subtask)])),
         ("proposals", _) => TaskAssigner::new(task, prompts, 0)
-            .parse_parallel(answer, &lesson.situation.robots.clone())
+            .parse_parallel(answer, &lesson.situation.robots)
             .map(|a| {
                 Taken::Actions(
                     a.proposals
