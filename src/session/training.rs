@@ -11,14 +11,14 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use coherent_agents::bench::PAPER40;
+use coherent_agents::bench::{Subset, select};
 use coherent_agents::digest::fnv128;
 use coherent_agents::prompts::fill::robot_label;
 use coherent_agents::training::{self, Lesson, Teacher};
 use coherent_agents::{Builtin, BuiltinBackend, Cancel, ErrorRates, Settings};
 use coherent_core::files::{self, Limit, MIB};
 use coherent_core::planner::Limits;
-use coherent_core::{Execution, Task, benchmark};
+use coherent_core::{Execution, Task};
 use coherent_generate::Split;
 use serde_json::{Value, json};
 
@@ -165,24 +165,19 @@ fn tasks_with_splits(
             }
         }
     }
-    let mut eval: HashSet<(String, i64)> = benchmark::subset40().into_iter().collect();
-    for (scene, ids) in PAPER40 {
-        eval.extend(ids.iter().map(|&id| (scene.to_owned(), id)));
-    }
+    let eval: HashSet<(String, i64)> = ["paper40", "native40"]
+        .iter()
+        .filter_map(|name| Subset::named(name).and_then(|s| s.pairs()))
+        .flatten()
+        .collect();
     let key = |t: &Task| (t.meta.scene.clone(), t.meta.task_id);
     let before = all.len();
     if !req.include_eval {
         all.retain(|t| !eval.contains(&key(t)));
     }
     written.left_out_eval = before - all.len();
-    let mut seen = HashSet::new();
-    for t in &all {
-        if !seen.insert(key(t)) {
-            return Err(Error::Invalid(coherent_agents::bench::same_key_twice(
-                &key(t),
-            )));
-        }
-    }
+    // Two tasks of one scene and id are refused, as a benchmark refuses them.
+    let all = select(all, &Subset::All)?.tasks;
     let mut scenes: Vec<String> = all
         .iter()
         .filter(|t| !given.contains_key(&key(t)))
@@ -202,7 +197,7 @@ fn tasks_with_splits(
                 .get(&key(&t))
                 .copied()
                 .unwrap_or_else(|| of_scene[&t.meta.scene]);
-            (Arc::new(t), split)
+            (t, split)
         })
         .collect();
     Ok(tasks)

@@ -119,13 +119,6 @@ impl Backend for Teacher {
         // Numbered when asked, before the first await: the order the loop asks in.
         let number = self.asked.fetch_add(1, Ordering::SeqCst);
         Box::pin(async move {
-            let lesson = Lesson {
-                schema: query.schema_name,
-                robot: query.robot,
-                messages: query.messages.clone(),
-                answer: Err(String::new()),
-                situation: query.situation.clone(),
-            };
             let taught = self.planner.ask(query.clone()).await;
             let answer = match &taught {
                 Ok(a) if a.finish == Finish::Stop => Ok(a.text.clone()),
@@ -135,10 +128,17 @@ impl Backend for Teacher {
                 }),
                 Err(e) => Err(e.to_string()),
             };
+            let lesson = Lesson {
+                schema: query.schema_name,
+                robot: query.robot,
+                messages: query.messages.clone(),
+                answer,
+                situation: query.situation.clone(),
+            };
             self.lessons
                 .lock()
                 .unwrap_or_else(PoisonError::into_inner)
-                .push((number, Lesson { answer, ..lesson }));
+                .push((number, lesson));
             match &self.acting {
                 Some(acting) => acting.ask(query).await,
                 None => taught,
@@ -210,12 +210,7 @@ pub fn read_back(
     };
     let own = |robot: NodeId| -> Vec<String> {
         task.robot_by_id(robot)
-            .map(|r| {
-                rules::actions(task, state, r)
-                    .iter()
-                    .map(|a| a.render(task))
-                    .collect()
-            })
+            .map(|r| rules::action_texts(task, state, r))
             .unwrap_or_default()
     };
     let robot = || lesson.robot.ok_or("the question names no robot".to_owned());

@@ -122,10 +122,7 @@ pub trait Environment {
     /// The action strings `robot` may use now.
     fn actions(&self, robot: NodeId) -> Result<Vec<String>> {
         let r = self.task().robot_by_id(robot)?;
-        Ok(rules::actions(self.task(), self.state(), r)
-            .iter()
-            .map(|a| a.render(self.task()))
-            .collect())
+        Ok(rules::action_texts(self.task(), self.state(), r))
     }
 
     fn goal_satisfied(&self) -> bool {

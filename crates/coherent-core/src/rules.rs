@@ -341,6 +341,15 @@ pub fn actions(task: &Task, s: &State, robot: Robot) -> Vec<Action> {
     View::with(task, s, robot, &Contents::new(task, s)).actions()
 }
 
+/// Every action `robot` may take in state `s`, each written as the prompts and the
+/// environments list it (`[grab] <mug>(7)`).
+pub fn action_texts(task: &Task, s: &State, robot: Robot) -> Vec<String> {
+    actions(task, s, robot)
+        .iter()
+        .map(|a| a.render(task))
+        .collect()
+}
+
 /// The action lists of several robots in state `s`, in the order of `robots`: what one
 /// planning round asks of the rules. The state's `Contents` is built once for all, and
 /// the lists share one block.

@@ -274,12 +274,7 @@ impl Planner {
         };
         let listed = |robot: Idx| -> Vec<String> {
             task.robot(robot)
-                .map(|r| {
-                    rules::actions(task, state, *r)
-                        .iter()
-                        .map(|a| a.render(task))
-                        .collect()
-                })
+                .map(|r| rules::action_texts(task, state, *r))
                 .unwrap_or_default()
         };
         let free = |robot: Idx| {
@@ -353,12 +348,7 @@ impl Planner {
                 let actions: Vec<String> = q
                     .robot
                     .and_then(|id| task.robot_by_id(id).ok())
-                    .map(|r| {
-                        rules::actions(task, state, r)
-                            .iter()
-                            .map(|a| a.render(task))
-                            .collect()
-                    })
+                    .map(|r| rules::action_texts(task, state, r))
                     .unwrap_or_default();
                 let offered = actions.iter().any(|a| a == subtask);
                 let chosen = match mistake {
@@ -400,12 +390,7 @@ impl Planner {
                     Some((Mistake::Hallucinate, rng)) => {
                         let listed: Vec<String> = task
                             .robot(robot)
-                            .map(|r| {
-                                rules::actions(task, state, *r)
-                                    .iter()
-                                    .map(|a| a.render(task))
-                                    .collect()
-                            })
+                            .map(|r| rules::action_texts(task, state, *r))
                             .unwrap_or_default();
                         action = hallucinated(task, &listed, rng);
                     }

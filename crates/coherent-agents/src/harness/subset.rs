@@ -81,7 +81,8 @@ impl Subset {
         Ok(Subset::Listed(pairs))
     }
 
-    fn wanted(&self) -> Option<Vec<(String, i64)>> {
+    /// The `(scene, task_id)` pairs the subset names; `None` for every task.
+    pub fn pairs(&self) -> Option<Vec<(String, i64)>> {
         match self {
             Subset::All => None,
             Subset::Paper40 => Some(
@@ -115,7 +116,7 @@ pub fn select(tasks: Vec<Task>, subset: &Subset) -> Result<Selection, Error> {
         order.push(key.clone());
         by_key.insert(key, Arc::new(t));
     }
-    let Some(wanted) = subset.wanted() else {
+    let Some(wanted) = subset.pairs() else {
         let tasks = order.iter().map(|k| Arc::clone(&by_key[k])).collect();
         return Ok(Selection {
             tasks,
