@@ -82,6 +82,8 @@ fn pefa_round(c: &mut Criterion) {
         execution: Execution::Sequential,
         max_steps: 1,
         history: HISTORY_WINDOW,
+        max_states: Limits::DEFAULT_MAX_STATES,
+        seed: 0,
     };
     let cancel = Cancel::default();
     let runtime = tokio::runtime::Builder::new_current_thread()

@@ -125,6 +125,7 @@ fn hand_line(
         error: None,
         transcript: String::new(),
         settings: config.episodes.record(config.seeds).remove("pefa"),
+        reference: None,
     }
 }
 

@@ -21,7 +21,9 @@ given (the command line's ``--max-states`` default)."""
 
 _RobotType: TypeAlias = Literal["quadrotor", "robot dog", "robot arm"]
 _TaskType: TypeAlias = Literal["mono", "dual", "trio"]
-_Status: TypeAlias = Literal["success", "failure", "backend_error", "interrupted", "error"]
+_Status: TypeAlias = Literal[
+    "success", "failure", "backend_error", "interrupted", "error", "conceded"
+]
 _PathLike: TypeAlias = str | os.PathLike[str]
 _Prompts: TypeAlias = _PathLike | Mapping[str, str]
 """A folder of prompt templates, ``"paper-layout"`` (the built-in templates in the paper's
@@ -409,6 +411,9 @@ class _Summary(TypedDict):
     wall_ms: float
     error: str | None
     sim_seconds: NotRequired[float]
+    # With events (docs/dynamic.md): the oracle's steps, why the goal is out of reach
+    # for good, the optimum at the start and the recoveries.
+    reference: NotRequired[dict[str, Any]]
 
 class _BenchOutcome(TypedDict):
     # total = skipped + finished + unfinished
@@ -538,6 +543,10 @@ class View:
     @property
     def max_steps(self) -> int:
         """The step budget (2 x GT unless set; 2 x the fewest joint steps in parallel)."""
+    @property
+    def news(self) -> list[str]:
+        """What happened since the last step that the team did not do (the task's events,
+        docs/dynamic.md), a sentence each; empty without events."""
     @property
     def execution(self) -> Literal["sequential", "parallel"]:
         """``"parallel"``: ``act`` answers a list, one decision per robot that acts, all
@@ -679,6 +688,7 @@ def run(
     robot_timeout: float = 10.0,
     server_wait: float = 10.0,
     step_timeout: float | None = None,
+    events: Sequence[dict[str, Any]] | dict[str, Any] | _PathLike | None = None,
 ) -> Episode:
     """Runs ``method`` on ``task`` as ``coherent run`` does; the transcript goes to
     ``out``. ``method`` is one of :data:`METHODS`, or a method written in Python: a class
@@ -696,7 +706,10 @@ def run(
     fails for good, :class:`MethodError` when the method raises or one of its steps
     (``M(task)`` and ``act``) takes longer than ``step_timeout`` seconds,
     :class:`RobotError` when a robot stops answering; Ctrl-C stops the episode, whatever
-    ``act`` is doing, and raises ``KeyboardInterrupt``."""
+    ``act`` is doing, and raises ``KeyboardInterrupt``. ``events`` (a list of events, or
+    the path of a JSON file of them) replaces the task's own: what happens mid-task that
+    the team does not do (docs/dynamic.md); a bad one raises :class:`TaskFormatError`
+    naming ``events=`` (or the file), the JSON path and the value."""
 
 def replay(transcript: _PathLike, *, out: _PathLike = "runs", prices: _Prices | None = None) -> Episode:
     """Re-runs a transcript's episode answering from it (no network) with the prompt set

@@ -11,8 +11,9 @@ use clap::Args;
 
 use super::signals::Stop;
 use super::status;
+use crate::session::engine::Limits;
 use crate::session::engine::{Cancel, clock, shown};
-use crate::session::generate::{GenerateRequest, Knobs, Made};
+use crate::session::generate::{GenerateRequest, Knobs, Made, write_variants};
 use crate::session::{self, Error};
 
 #[derive(Args)]
@@ -21,6 +22,11 @@ pub(crate) struct GenerateArgs {
     /// `manifest.jsonl` and the datasheet `README.md`. It must be new or empty.
     #[arg(short, long)]
     out: PathBuf,
+    /// Instead of drawing a set: the dynamic variants of these tasks (a file, a folder or
+    /// `native`), one event each, one per kind where it makes sense (docs/dynamic.md),
+    /// with `manifest.jsonl`; only --max-states applies
+    #[arg(long, value_name = "TASKS")]
+    variants_of: Option<PathBuf>,
     /// How many tasks.
     #[arg(long, default_value_t = Knobs::default().tasks)]
     tasks: usize,
@@ -122,6 +128,9 @@ impl GenerateArgs {
 }
 
 pub(crate) fn generate(args: &GenerateArgs) -> Result<u8, Error> {
+    if let Some(tasks) = &args.variants_of {
+        return variants(args, tasks);
+    }
     let request = args.request()?;
     let cancel = Cancel::default();
     let terminal = std::io::stderr().is_terminal();
@@ -166,4 +175,29 @@ pub(crate) fn generate(args: &GenerateArgs) -> Result<u8, Error> {
     } else {
         status::OK
     })
+}
+
+/// `--variants-of`: the dynamic variants of the tasks, written to `--out`.
+fn variants(args: &GenerateArgs, tasks: &std::path::Path) -> Result<u8, Error> {
+    let limits = Limits::max_states(args.max_states);
+    let written = write_variants(tasks, &args.out, &limits)?;
+    let kinds: Vec<String> = written
+        .by_kind
+        .iter()
+        .map(|(k, n)| format!("{n} {k}"))
+        .collect();
+    println!(
+        "wrote {} variants of {} tasks to {}: {}",
+        written.by_kind.iter().map(|(_, n)| n).sum::<usize>(),
+        written.tasks,
+        shown(&args.out.display().to_string()),
+        kinds.join(", ")
+    );
+    for name in &written.skipped {
+        println!(
+            "no variant of {}: no optimal plan of two steps or more",
+            shown(name)
+        );
+    }
+    Ok(status::OK)
 }

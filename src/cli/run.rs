@@ -23,6 +23,7 @@ use crate::session::engine::{
     MethodSpec, Round, Status, Summary, executed_actions, shown, worth_a_line,
 };
 use crate::session::episode::{Ending, Prepared, ReplayRequest, RunRequest};
+use crate::session::events::EventsSource;
 use crate::session::tasks::TaskSource;
 use crate::session::waiting::{SLOW, Waiting, waiting_text};
 use crate::session::{self, Error, prompts};
@@ -92,6 +93,11 @@ pub(crate) struct RunArgs {
     /// Most states one search of the built-in planner may visit.
     #[arg(long, default_value_t = Limits::DEFAULT_MAX_STATES)]
     max_states: usize,
+    /// Events that happen mid-task (a robot down, a thing moved, the goal changed, a door
+    /// locked, failing actions), in place of the task file's: a JSON list, or an object
+    /// with an `events` list (docs/dynamic.md)
+    #[arg(long, value_name = "FILE")]
+    events: Option<PathBuf>,
 }
 
 /// Where human-readable lines go: stdout, or stderr when stdout carries JSON.
@@ -133,6 +139,13 @@ fn prepare(
     });
     if let Some(transcript) = &args.replay {
         args.inputs.no_prompts_for_a_replay("--replay")?;
+        if args.events.is_some() {
+            return Err(Error::Invalid(
+                "--replay runs the episode as recorded, events included: --events does not go \
+                 with it"
+                    .into(),
+            ));
+        }
         if args.execution != ExecutionFlag::Sequential {
             return Err(Error::Invalid(
                 "--replay runs the episode as recorded: --execution does not go with it".into(),
@@ -165,6 +178,7 @@ fn prepare(
         max_states: args.max_states,
         out: args.out.clone(),
         execution: args.execution.into(),
+        events: args.events.clone().map(EventsSource::File),
         ..RunRequest::new(
             task,
             method_spec(&args.method, load, args.step_timeout, None)?,
@@ -368,6 +382,9 @@ fn summary_line(
         (Status::Interrupted, Some(why)) => format!("stopped: {}", shown(why)),
         (Status::Interrupted, None) => "interrupted".to_owned(),
         (Status::Error, _) => "stopped: the method raised an error".to_owned(),
+        (Status::Conceded, _) => {
+            "right: an event put the goal out of reach, and the team stopped".to_owned()
+        }
     };
     let gt = s.gt_steps.map_or("-".to_owned(), |g| g.to_string());
     let goal = if goal_satisfied {
@@ -389,6 +406,15 @@ fn summary_line(
     let sim = s
         .sim_seconds
         .map_or(String::new(), |t| format!(" | simulated {t:.2} s"));
+    // With events: what the episode is measured against (docs/dynamic.md).
+    let steps = match s.reference.as_deref() {
+        None => steps,
+        Some(r) => match (r.steps, &r.unreachable) {
+            (Some(n), _) => format!("{steps} | reference {n}"),
+            (None, Some(why)) => format!("{steps} | reference: out of reach ({})", shown(why)),
+            (None, None) => format!("{steps} | reference unknown"),
+        },
+    };
     // The cached part, which the cost prices apart, so that it can be checked by hand.
     let cached = if s.cached_tokens > 0 {
         format!(" ({} cached)", s.cached_tokens)

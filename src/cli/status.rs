@@ -30,7 +30,7 @@ pub(crate) const TERMINATED: u8 = 143;
 /// The exit status of an episode that ended as `ending`.
 pub(crate) fn of_ending(ending: &Ending) -> u8 {
     match ending {
-        Ending::GoalReached => OK,
+        Ending::GoalReached | Ending::Conceded => OK,
         Ending::BudgetSpent => FAILED,
         Ending::BackendFailed(_) | Ending::ReplayDiffers(_) => BACKEND_FAILED,
         Ending::MethodFailed(_) => METHOD_FAILED,

@@ -23,6 +23,7 @@ use coherent_core::{Environment, Execution, SymbolicEnv, Task, native};
 
 use crate::session::backend::{BackendChoice, BackendRequest};
 use crate::session::error::Error;
+use crate::session::events::{self, EventsSource};
 use crate::session::prompts::{PriceSource, PromptSource};
 use crate::session::robots::{Robots, ros_error};
 use crate::session::tasks::TaskSource;
@@ -55,6 +56,8 @@ pub struct RunRequest {
     pub max_states: usize,
     /// The folder the transcript goes to.
     pub out: PathBuf,
+    /// Events in place of the task's own (docs/dynamic.md).
+    pub events: Option<EventsSource>,
 }
 
 impl RunRequest {
@@ -76,6 +79,7 @@ impl RunRequest {
             seed: None,
             max_states: Limits::DEFAULT_MAX_STATES,
             out: PathBuf::from("runs"),
+            events: None,
         }
     }
 
@@ -85,7 +89,8 @@ impl RunRequest {
     pub fn prepare(self, cancel: &Cancel) -> Result<Prepared, Error> {
         let prompts = self.prompts.read()?;
         let prices = self.prices.read()?;
-        let task = self.task.task()?;
+        let task_file = self.task.file_name();
+        let (task, events_origin) = events::attach(self.task.task()?, self.events, &task_file)?;
         let choice = self.backend.choose()?;
         let limits = Limits {
             cancel: Some(cancel.flag()),
@@ -100,11 +105,19 @@ impl RunRequest {
             physics: self.physics,
             robots: self.robots.record(),
             prompts,
+            max_states: self.max_states,
         };
         // Built before the budget is searched for: a method that cannot run the
         // execution costs no search.
         let method = settings.build(&task, cancel)?;
         let budget = Budget::searched(&task, self.execution, self.max_steps, &limits)?;
+        events::check(
+            &task,
+            &events_origin,
+            budget.steps(),
+            self.physics,
+            &self.robots,
+        )?;
         let backend = choice.for_episode(&limits, self.seed.unwrap_or(0))?;
         let spec = EpisodeSpec {
             task,
@@ -345,6 +358,9 @@ pub struct Ran {
 pub enum Ending {
     /// The goal holds.
     GoalReached,
+    /// An event put the goal out of reach and the team stopped acting: right
+    /// (docs/dynamic.md).
+    Conceded,
     /// The step budget is spent.
     BudgetSpent,
     /// The model's server failed for good.
@@ -377,6 +393,7 @@ impl Ran {
         let error = || s.error.clone().unwrap_or_default();
         match s.status {
             Status::Success => Ending::GoalReached,
+            Status::Conceded => Ending::Conceded,
             Status::Failure => Ending::BudgetSpent,
             Status::BackendError => Ending::BackendFailed(error()),
             Status::Error => Ending::MethodFailed(error()),

@@ -307,3 +307,61 @@ fn file_error(path: &Path, message: &str) -> Error {
         message: message.to_owned(),
     }
 }
+
+/// What [`write_variants`] wrote: the variants by kind, and the tasks without any.
+#[derive(Clone, Debug, Default)]
+pub struct VariantsWritten {
+    pub tasks: usize,
+    /// `(kind, variants)`, in the order of the kinds.
+    pub by_kind: Vec<(&'static str, usize)>,
+    /// Tasks with no variant (no optimal plan of two steps within the limit, or events
+    /// of their own), by name.
+    pub skipped: Vec<String>,
+}
+
+/// The dynamic variants of every well-formed task at `tasks` (a file, a folder or
+/// `native`; docs/dynamic.md), one native task file per variant in `out`, named
+/// `<scene>-task<id>-<kind>.json`, its scene `<scene>-<kind>` so that a benchmark tells
+/// the variants apart, and a `manifest.jsonl` line each (file, scene, task, kind). Each
+/// file is renamed into place when whole. Malformed tasks are left out, as in a
+/// benchmark.
+pub fn write_variants(tasks: &Path, out: &Path, limits: &Limits) -> Result<VariantsWritten, Error> {
+    let read = crate::session::tasks::read_tasks(tasks)?;
+    let mut written = VariantsWritten::default();
+    let mut manifest = String::new();
+    for task in read.into_iter().flatten() {
+        written.tasks += 1;
+        let variants = coherent_generate::variants::variants(&task, limits);
+        if variants.is_empty() {
+            written
+                .skipped
+                .push(format!("{} task {}", task.meta.scene, task.meta.task_id));
+        }
+        for v in variants {
+            let mut t = v.task;
+            let scene = format!("{}-{}", t.meta.scene, v.kind);
+            let name = format!(
+                "{}-task{}-{}.json",
+                coherent_core::text::file_name_part(&t.meta.scene, 64),
+                t.meta.task_id,
+                v.kind
+            );
+            t.meta.scene.clone_from(&scene);
+            let mut bytes = serde_json::to_vec_pretty(&coherent_core::native::to_value(&t))
+                .map_err(|e| Error::Internal(e.to_string()))?;
+            bytes.push(b'\n');
+            write_whole(&out.join(&name), &bytes)?;
+            let line = serde_json::json!({
+                "file": name, "scene": scene, "task_id": t.meta.task_id, "kind": v.kind,
+            });
+            manifest.push_str(&line.to_string());
+            manifest.push('\n');
+            match written.by_kind.iter_mut().find(|(k, _)| *k == v.kind) {
+                Some((_, n)) => *n += 1,
+                None => written.by_kind.push((v.kind, 1)),
+            }
+        }
+    }
+    write_whole(&out.join("manifest.jsonl"), manifest.as_bytes())?;
+    Ok(written)
+}

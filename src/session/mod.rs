@@ -34,6 +34,7 @@ pub mod check;
 pub mod engine;
 pub mod episode;
 pub mod error;
+pub mod events;
 pub mod generate;
 pub mod lines;
 pub mod pddl;

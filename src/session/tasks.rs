@@ -18,6 +18,15 @@ pub enum TaskSource {
 }
 
 impl TaskSource {
+    /// The file the task comes from, as errors name it (`the task given` for one read
+    /// already).
+    pub fn file_name(&self) -> String {
+        match self {
+            TaskSource::File { path, .. } => path.display().to_string(),
+            TaskSource::Given(_) => "the task given".to_owned(),
+        }
+    }
+
     /// The task.
     pub fn task(self) -> Result<Arc<Task>, Error> {
         match self {

@@ -164,6 +164,8 @@ pub async fn episode(
         execution: settings.execution,
         max_steps: budget.steps(),
         history: settings.history_window(),
+        max_states: limits.max_states,
+        seed: settings.seed.unwrap_or(0),
     };
     let episode = play(
         &mut env,

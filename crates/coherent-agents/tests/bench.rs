@@ -131,6 +131,7 @@ impl Hand {
             error: None,
             transcript: "t.jsonl".into(),
             settings: None,
+            reference: None,
         }
     }
 
@@ -338,6 +339,7 @@ fn a_transcript_being_written_elsewhere_is_never_renamed_and_one_run_holds_a_res
         prompts: None,
         started_ms: 0,
         external: false,
+        max_states: None,
     };
     std::fs::create_dir_all(&seed0).expect("a folder");
     let file = std::fs::File::create(&live).expect("created");

@@ -29,6 +29,8 @@ fn sequential(max_steps: u32) -> Course {
         execution: Execution::Sequential,
         max_steps,
         history: HISTORY_WINDOW,
+        max_states: Limits::DEFAULT_MAX_STATES,
+        seed: 0,
     }
 }
 

@@ -136,6 +136,17 @@ pub trait Environment {
         None
     }
 
+    /// Puts the world where an event left it (docs/dynamic.md): `task` is the task as
+    /// the event left it (its team, goal and doors), `state` the state. The rules take
+    /// any; a world that cannot follow (physics, robots over ROS 2, for now) says why,
+    /// and an episode with events is refused there before it starts.
+    fn befall(&mut self, task: Arc<Task>, state: State) -> Result<()> {
+        let _ = (task, state);
+        Err(crate::Error::Unsupported(
+            "this world does not take events (only the rules do, for now)".into(),
+        ))
+    }
+
     /// Why no further step can be trusted, once the environment has stopped (a robot
     /// that no longer answers, a world that disagrees with the rules); an episode ends
     /// with the round in which it stops. The rules and physics never stop.
@@ -186,14 +197,21 @@ pub fn refused_outcome(done: bool, actions: &[(NodeId, &str)], refused: Refusal)
 /// The rules of docs/semantics.md, nothing else.
 #[derive(Clone, Debug)]
 pub struct SymbolicEnv {
+    /// The task as events have left it (the task itself without events).
     task: Arc<Task>,
+    /// The task as given, which a reset goes back to.
+    base: Arc<Task>,
     state: State,
 }
 
 impl SymbolicEnv {
     pub fn new(task: Arc<Task>) -> SymbolicEnv {
         let state = task.init.clone();
-        SymbolicEnv { task, state }
+        SymbolicEnv {
+            base: Arc::clone(&task),
+            task,
+            state,
+        }
     }
 }
 
@@ -243,6 +261,13 @@ impl Environment for SymbolicEnv {
     }
 
     fn reset(&mut self) {
+        self.task = Arc::clone(&self.base);
         self.state = self.task.init.clone();
+    }
+
+    fn befall(&mut self, task: Arc<Task>, state: State) -> Result<()> {
+        self.task = task;
+        self.state = state;
+        Ok(())
     }
 }

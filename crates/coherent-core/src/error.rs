@@ -22,6 +22,9 @@ pub enum Error {
     /// An action string that does not follow the grammar `[verb] <name>(id)`.
     #[error("cannot parse action {}: {reason}", quoted(action))]
     BadAction { action: String, reason: String },
+    /// Something this world cannot do (an event in physics, say).
+    #[error("{0}")]
+    Unsupported(String),
     /// A task the PDDL domain cannot express exactly (docs/pddl.md, "What is refused").
     #[error("{task} cannot be written in PDDL: {reason}")]
     Inexpressible { task: String, reason: String },

@@ -13,6 +13,7 @@ mod chain;
 pub mod describe;
 pub mod env;
 pub mod error;
+pub mod events;
 pub mod execution;
 pub mod feasibility;
 pub mod files;
@@ -31,6 +32,7 @@ pub mod planner;
 pub mod reach;
 pub mod relaxed;
 pub mod rules;
+pub mod schedule;
 mod tables;
 pub mod task;
 pub mod text;
@@ -47,5 +49,9 @@ pub use graph::{Edge, Idx, Node, NodeId, NodeKind, RobotKind, State};
 pub use load::{load_tasks, read_tasks};
 pub use planner::{Analysis, Limits, Step, Stop, TaskType};
 pub use rules::Observation;
-pub use task::{GoalPredicate, MAX_GROUND_TRUTH, RawGraph, Robot, RuleSet, Task, TaskMeta};
+pub use schedule::Schedule;
+pub use task::{
+    Event, GoalPredicate, Happening, MAX_GROUND_TRUTH, RawGraph, Robot, RuleSet, Task, TaskMeta,
+    Trigger,
+};
 pub use vocab::{PropSet, Relation, StateSet};

@@ -39,6 +39,9 @@ struct NativeTask {
     geometry: Option<Layout>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     source: Option<Source>,
+    /// Read once the graph is built (its ids are checked against it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    events: Option<Value>,
 }
 
 #[derive(Debug, Deserialize, Serialize)]
@@ -120,6 +123,9 @@ pub fn read(file: &str, value: &Value) -> Result<Task> {
     };
     let mut task = Task::build(meta, &raw.graph, &goal, &root.key("graph"))?;
     check_robots(&task, &raw.robots, &root.key("robots"))?;
+    if let Some(events) = &raw.events {
+        task.events = crate::events::read(&task, events, file, root.key("events").path)?;
+    }
     if let Some(layout) = task.meta.geometry.clone() {
         if let Some(missing) = layout.missing_entry(&task) {
             return Err(root.key("geometry").error(missing));
@@ -212,6 +218,7 @@ pub fn to_value(task: &Task) -> Value {
         graph: written_graph(task),
         geometry: task.meta.geometry.clone(),
         source: task.meta.source.clone(),
+        events: (!task.events.is_empty()).then(|| crate::events::to_value(task)),
     };
     let mut value = serde_json::to_value(out).expect("plain data always serializes");
     if let Some(g) = value.get_mut("geometry") {

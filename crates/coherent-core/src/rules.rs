@@ -660,7 +660,7 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
     }
 }
 
-fn move_to_room(task: &Task, s: &mut State, me: Idx, room: Idx) {
+pub(crate) fn move_to_room(task: &Task, s: &mut State, me: Idx, room: Idx) {
     s.remove_out_if(me, Relation::Inside, |t| {
         task.node(t).kind == NodeKind::Room
     });

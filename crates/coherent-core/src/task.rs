@@ -149,6 +149,9 @@ pub struct Task {
     /// Initial edges in file order. The order matters to one rule: grabbing removes the
     /// object's *first* ON/INSIDE edge.
     pub init_edges: Vec<Edge>,
+    /// What happens mid-task that the team does not do (docs/dynamic.md); none in the
+    /// paper's tasks.
+    pub events: Vec<Event>,
     index: FxHashMap<NodeId, Idx>,
     /// `(door, room)` for every `LEADING TO` edge of the initial graph.
     doors: Vec<(Idx, Idx)>,
@@ -169,6 +172,77 @@ pub struct Task {
     /// What a robot dog never walks up to whatever the state: rooms, robots, floors and
     /// `HIGH_HEIGHT` things (`unreached` of docs/semantics.md, "Actions").
     never_approached: NodeSet,
+}
+
+// Events (docs/dynamic.md): the types a task holds; reading them is `crate::events`, running
+// them `crate::schedule`.
+
+/// When an event happens.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Trigger {
+    /// Before step `n` (from 1) is taken.
+    Step(u32),
+    /// Before the first step at which some robot holds the thing.
+    Held(Idx),
+    /// Before the first step at which the predicate holds.
+    Holds(GoalPredicate),
+}
+
+/// What an event does.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Happening {
+    /// The robot stops for good where it stands, holding what it holds.
+    RobotDown { robot: Idx },
+    /// The robot, out of the team until now, joins it: where the task placed it, or
+    /// (a dog or a quadrotor) in `room`.
+    RobotUp { robot: Idx, room: Option<Idx> },
+    /// Someone outside the team puts `thing` on or into `target`.
+    ObjectMoved {
+        thing: Idx,
+        relation: Relation,
+        target: Idx,
+    },
+    /// Goal predicates removed and added, with the instruction's new wording.
+    GoalChanged {
+        add: Vec<GoalPredicate>,
+        remove: Vec<GoalPredicate>,
+        instruction: String,
+    },
+    /// A door (or every door of a room) is locked: no robot passes it, for `steps`
+    /// steps or for good.
+    Blocked {
+        what: Idx,
+        doors: Vec<Idx>,
+        steps: Option<u32>,
+    },
+    /// Each action chosen (of `robot`, or of anyone) fails with `probability`, for
+    /// `steps` steps or for good: nothing changes and the robot is told.
+    ActionFails {
+        probability: f64,
+        robot: Option<Idx>,
+        steps: Option<u32>,
+    },
+}
+
+impl Happening {
+    /// The kind's name, as task files write it.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Happening::RobotDown { .. } => "robot_down",
+            Happening::RobotUp { .. } => "robot_up",
+            Happening::ObjectMoved { .. } => "object_moved",
+            Happening::GoalChanged { .. } => "goal_changed",
+            Happening::Blocked { .. } => "blocked",
+            Happening::ActionFails { .. } => "action_fails",
+        }
+    }
+}
+
+/// One event of a task.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Event {
+    pub trigger: Trigger,
+    pub happening: Happening,
 }
 
 /// What the rules look up from the initial edges: the doors (`LEADING_TO`), each room's
@@ -322,6 +396,7 @@ impl Task {
             robots,
             init,
             init_edges,
+            events: Vec::new(),
             index,
             doors,
             floors,
@@ -344,11 +419,11 @@ impl Task {
         let (mut rooms, mut landable, mut never) =
             (NodeSet::new(n), NodeSet::new(n), NodeSet::new(n));
         let mut robots = NodeSet::new(n);
-        for r in &self.robots {
-            robots.insert(r.node);
-        }
         for (i, node) in self.nodes.iter().enumerate() {
             let i = Idx(i as u16);
+            if matches!(node.kind, NodeKind::Robot(_)) {
+                robots.insert(i);
+            }
             if node.kind == NodeKind::Room {
                 rooms.insert(i);
             }
@@ -411,7 +486,26 @@ impl Task {
             })
     }
 
-    /// `(door, room)` pairs of the initial graph's `LEADING TO` edges.
+    /// The task as events have left it (docs/dynamic.md): `team` acts (the other robots
+    /// stay where they are, as things), `goal` is the goal with `instruction` its wording,
+    /// and the doors `locked` join nothing.
+    pub(crate) fn vary(
+        &self,
+        team: Vec<Robot>,
+        goal: Vec<GoalPredicate>,
+        instruction: &str,
+        locked: &[Idx],
+    ) -> Task {
+        let mut task = self.clone();
+        task.robots = team;
+        task.goal = goal;
+        instruction.clone_into(&mut task.meta.instruction);
+        task.doors.retain(|(d, _)| !locked.contains(d));
+        task
+    }
+
+    /// `(door, room)` pairs of the initial graph's `LEADING TO` edges (a door locked by
+    /// an event has none).
     pub fn doors(&self) -> &[(Idx, Idx)] {
         &self.doors
     }
@@ -425,7 +519,7 @@ impl Task {
         &self.room_set
     }
 
-    /// The robots, as a set.
+    /// The robots of the graph, as a set (in the team or not).
     pub(crate) fn robot_set(&self) -> &NodeSet {
         &self.robot_set
     }

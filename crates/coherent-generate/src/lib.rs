@@ -34,6 +34,8 @@ pub mod compose;
 pub mod truth;
 // The driver: draws, threads, filters, order.
 pub mod set;
+// A task's dynamic variants: one event each, along its optimal plan.
+pub mod variants;
 
 pub use request::{KnobError, Ratio, Request, Span, TeamSpec};
 pub use set::{Generated, Outcome, Progress, generate, splits};

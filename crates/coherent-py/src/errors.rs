@@ -300,7 +300,9 @@ pub(crate) fn argument_of(setting: Setting) -> &'static str {
 /// `None` when it ended as episodes do (the goal reached, the budget spent, Ctrl-C).
 pub(crate) fn ending_err(py: Python<'_>, ending: &Ending, episode: Py<PyAny>) -> Option<PyErr> {
     let (kind, why) = match ending {
-        Ending::GoalReached | Ending::BudgetSpent | Ending::Interrupted => return None,
+        Ending::GoalReached | Ending::Conceded | Ending::BudgetSpent | Ending::Interrupted => {
+            return None;
+        }
         Ending::BackendFailed(why) => (Kind::Backend, why),
         Ending::MethodFailed(why) => (Kind::Method, why),
         Ending::ReplayDiffers(why) => (Kind::ReplayMismatch, why),
@@ -342,6 +344,8 @@ pub(crate) fn core_err(py: Python<'_>, e: TaskError) -> PyErr {
                 v.setattr("reason", reason)?;
                 v
             }
+            // Something a world cannot do (events in physics): the arguments, together.
+            TaskError::Unsupported(_) => exc.argument.bind(py).call1((message.clone(),))?,
             // A task the PDDL domain cannot express: no file or path is at fault.
             TaskError::Inexpressible { .. } => {
                 let v = exc.task_format.bind(py).call1((message.clone(),))?;

@@ -97,6 +97,13 @@ impl PyView {
         self.view.max_steps
     }
 
+    /// What happened since the last step that the team did not do (the task's events,
+    /// docs/dynamic.md), a sentence each; empty without events.
+    #[getter]
+    fn news(&self) -> Vec<String> {
+        self.view.news.clone()
+    }
+
     /// `"sequential"` (`act` answers one decision a step) or `"parallel"` (a list: one
     /// decision per robot that acts, all carried out at once).
     #[getter]

@@ -12,15 +12,16 @@ use coherent::session::engine::{
     Summary, Transcript, executed_actions,
 };
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
+use coherent::session::events::EventsSource;
 use coherent::session::tasks::TaskSource;
 use coherent::session::view::{Given, Source, ViewRequest, page};
 use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString};
+use pyo3::types::{PyDict, PyList, PyString, PyTuple};
 
 use crate::args;
-use crate::convert::{finite, interruptible, py_repr, text, to_py};
+use crate::convert::{self, finite, interruptible, py_repr, text, to_py};
 use crate::errors::{self, PyCoherentResult, short_repr};
 use crate::llm::PyLlm;
 use crate::method::{MethodArg, Methods};
@@ -337,7 +338,7 @@ fn finished(
     history = coherent::session::engine::HISTORY_WINDOW, max_steps = None, physics = false,
     seed = None, out = PathBuf::from("runs"), max_states = Limits::DEFAULT_MAX_STATES,
     prompts = None, prices = None, robots = "local", namespace = None, robot_timeout = 10.0,
-    server_wait = 10.0, step_timeout = None
+    server_wait = 10.0, step_timeout = None, events = None
 ))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn run(
@@ -360,7 +361,9 @@ pub(crate) fn run(
     robot_timeout: f64,
     server_wait: f64,
     #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
+    events: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
+    let events = events.map(events_source).transpose()?;
     let prompts = prompt_source(prompts)?;
     let prices = price_source(prices)?;
     let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
@@ -384,12 +387,29 @@ pub(crate) fn run(
         max_states,
         out,
         execution,
+        events,
         ..RunRequest::new(TaskSource::Given(Arc::clone(&task.get().task)), method)
     };
     let ran = episode_off_the_gil(py, move |cancel| request.prepare(cancel));
     methods.close(py)?;
     let cause = methods.methods.first().and_then(|m| m.take_error());
     finished(py, ran?, task.clone().unbind(), cause)
+}
+
+/// `events=`: a list of events (or a dict with an `events` list), or the path of a JSON
+/// file of them (docs/dynamic.md).
+fn events_source(obj: &Bound<'_, PyAny>) -> PyResult<EventsSource> {
+    if obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>()
+        || obj.is_instance_of::<PyDict>()
+    {
+        Ok(EventsSource::Given {
+            name: "events=".to_owned(),
+            value: convert::json_at(obj, "events")?,
+        })
+    } else {
+        Ok(EventsSource::File(convert::path(obj, "events")?))
+    }
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network) with the prompt

@@ -192,6 +192,7 @@ pub async fn run_one(
                 physics: settings.physics,
                 robots: settings.robots.record(),
                 prompts: settings.prompts.clone(),
+                max_states: limits.max_states,
             },
             budget,
             backend: match waiting {
@@ -337,6 +338,7 @@ fn line(
         transcript: ran.path.display().to_string(),
         // The run's settings are the driver's to record (`Ledger::record`).
         settings: None,
+        reference: s.reference.as_deref().cloned(),
     }
 }
 
@@ -394,6 +396,7 @@ impl NotRun {
             error: Some(cut(&self.why, bench::ERROR_BYTES).into_owned()),
             transcript: self.transcript,
             settings: None,
+            reference: None,
         }
     }
 }

@@ -260,6 +260,7 @@ fn status_name(s: Status) -> &'static str {
         Status::BackendError => "backend_error",
         Status::Interrupted => "interrupted",
         Status::Error => "error",
+        Status::Conceded => "conceded",
     }
 }
 

@@ -32,10 +32,16 @@ pub(crate) fn execute(
     }
 }
 
-/// What the whole team sees: every robot's observation.
-pub(crate) fn team_sight<'a>(env: &'a dyn Environment, task: &'a Task) -> Sight<'a> {
+/// What the whole team sees: every robot's observation, after `news` (what happened
+/// since the last round that the team did not do).
+pub(crate) fn team_sight<'a>(
+    env: &'a dyn Environment,
+    task: &'a Task,
+    news: &'a [String],
+) -> Sight<'a> {
     Sight {
         task,
+        news,
         state: env.state(),
         observations: task
             .robots

@@ -15,25 +15,46 @@ use crate::records::transcript::{Reason, RobotPart, RoundOutcome};
 /// `declined` when no part had an action. A part of a robot that is not in the team
 /// refuses the step as the rules refuse any step with an action that cannot be
 /// (`unknown_robot`, every other part `step_refused`), the parts left in the order given.
+/// A part whose action `fails` (a failing-actions event of the task, with why) does not
+/// act: `action_failed`; the others' step runs without it.
 pub(crate) fn carry_out(
     env: &mut dyn Environment,
     task: &Task,
     parts: &mut [RobotPart],
+    fails: &dyn Fn(NodeId) -> Option<String>,
 ) -> RoundOutcome {
     if let Some(refused) = unknown_robots(task, parts) {
         return refused;
     }
     parts.sort_by_key(|p| task.robots.iter().position(|r| task.id(r.node) == p.robot));
-    let acting: Vec<usize> = (0..parts.len())
-        .filter(|&i| parts[i].action().is_some())
-        .collect();
-    for part in parts.iter_mut() {
+    let mut failed = 0;
+    let mut acting = Vec::new();
+    for (i, part) in parts.iter_mut().enumerate() {
         if part.decision.is_some() && part.action().is_none() {
             part.outcome = RoundOutcome::Declined;
+        } else if part.action().is_some() {
+            match fails(part.robot) {
+                Some(message) => {
+                    part.outcome = RoundOutcome::Infeasible {
+                        reason: Reason::ActionFailed,
+                        message,
+                    };
+                    failed += 1;
+                }
+                None => acting.push(i),
+            }
         }
     }
     if acting.is_empty() {
-        return RoundOutcome::Declined;
+        return match failed {
+            0 => RoundOutcome::Declined,
+            n => RoundOutcome::Infeasible {
+                reason: Reason::ActionFailed,
+                message: format!(
+                    "every action of the step failed ({n}, by an event); nothing changed"
+                ),
+            },
+        };
     }
     let step: Vec<(NodeId, String)> = acting
         .iter()

@@ -16,6 +16,8 @@ use crate::records::transcript::{Round, RoundOutcome};
 /// Where an episode stands when its method is asked for a round.
 #[derive(Clone, Copy)]
 pub struct Turn<'a> {
+    /// The task as events have left it (its team, goal and instruction; the task itself
+    /// without events).
     pub task: &'a Arc<Task>,
     /// The world as it is before the round; a method only looks at it (the loop carries
     /// the actions out).
@@ -33,6 +35,10 @@ pub struct Turn<'a> {
     pub history: &'a [String],
     /// Every earlier round, oldest first.
     pub rounds: &'a [Round],
+    /// What happened to the world since the last round that the team did not do (the
+    /// task's events, docs/dynamic.md), a sentence each: what every role's next prompt
+    /// says first. Empty without events.
+    pub news: &'a [String],
 }
 
 impl std::fmt::Debug for Turn<'_> {

@@ -14,11 +14,15 @@
 //! - [`prefix`]: how much of each prompt is the same as the previous one of its role and
 //!   robot ([`prefix::shared_prefix`]), recorded in every call.
 //! - [`cancel`]: stopping an episode from outside.
+//! - `events`: the task's events along an episode (docs/dynamic.md): carried
+//!   out before the rounds they are due, the optimum proven again at each, failing
+//!   actions, the recovery measured, the episode's reference.
 
 pub(crate) mod ask;
 pub mod budget;
 pub mod cancel;
 pub(crate) mod environment;
+pub(crate) mod events;
 pub(crate) mod joint;
 pub mod method;
 pub mod play;
@@ -27,6 +31,7 @@ pub mod prefix;
 
 pub use budget::{Budget, NoPlan, PlannedMakespan};
 pub use cancel::Cancel;
+pub use events::prove;
 pub use method::{Closing, Decided, Deciding, Method, Turn};
 pub use play::{Course, Episode, HISTORY_WINDOW, History, play};
 pub use policy::{Act, Choice, MakePolicy, MethodFailure, PastStep, Policy, RobotView, StepView};

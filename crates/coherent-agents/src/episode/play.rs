@@ -16,6 +16,7 @@ use coherent_core::{Environment, Execution, Task};
 
 use crate::episode::cancel::Cancel;
 use crate::episode::environment::execute;
+use crate::episode::events::{self, Dynamics};
 use crate::episode::joint;
 use crate::episode::method::{Closing, Decided, Method, Turn};
 use crate::episode::prefix::LastPrompts;
@@ -37,6 +38,11 @@ pub struct Course {
     pub max_steps: u32,
     /// The history window ([`HISTORY_WINDOW`]; 0 is the paper's "w/o history").
     pub history: usize,
+    /// The most states one search of the loop's own may visit: the optimum proven
+    /// again at each event of the task (docs/dynamic.md).
+    pub max_states: usize,
+    /// The seed of the task's failing actions (the episode's seed, 0 when unset).
+    pub seed: u64,
 }
 
 /// Runs `method` on `env` round by round until the goal holds, the budget is spent, a
@@ -59,6 +65,12 @@ pub async fn play(
     let mut rounds: Vec<Round> = Vec::new();
     let mut history = History::new(course.history);
     let mut prompts = LastPrompts::default();
+    let mut dynamics = Dynamics::new(task, course.execution, course.max_states, course.seed);
+    let mut world = Arc::clone(task);
+    if let Some(d) = &mut dynamics {
+        world = d.start(env).await?;
+    }
+    let mut closing = Vec::new();
     let mut status = if env.goal_satisfied() {
         Status::Success
     } else {
@@ -72,9 +84,19 @@ pub async fn play(
         }
         let began = Instant::now();
         let mut round = Round::new(rounds.len() as u32 + 1);
+        if let Some(d) = &mut dynamics {
+            round.events = d.before(round.step, env, &mut world).await?;
+            if env.goal_satisfied() {
+                // The events themselves left the goal holding: nothing is left to do.
+                closing = std::mem::take(&mut round.events);
+                status = Status::Success;
+                break;
+            }
+        }
+        let news = events::news(&round.events);
         let recalled = history.entries();
         let turn = Turn {
-            task,
+            task: &world,
             env: &*env,
             backend,
             cancel,
@@ -83,6 +105,7 @@ pub async fn play(
             execution: course.execution,
             history: &recalled,
             rounds: &rounds,
+            news: &news,
         };
         let Some(decided) = method.decide(turn, &mut round).await? else {
             status = Status::Interrupted;
@@ -90,23 +113,30 @@ pub async fn play(
         };
         let sim_before = env.sim_seconds();
         round.outcome = match decided {
-            Decided::CarryOut => carry_out(env, task, course.execution, &mut round),
+            Decided::CarryOut => {
+                carry_out(env, &world, course.execution, dynamics.as_ref(), &mut round)
+            }
             Decided::Ends(outcome) => outcome,
         };
         round.sim_seconds = env.sim_seconds().zip(sim_before).map(|(t, t0)| t - t0);
-        let closing = Closing {
-            task,
+        let closed = Closing {
+            task: &world,
             state: env.state(),
             execution: course.execution,
         };
-        method.conclude(closing, &mut round);
+        method.conclude(closed, &mut round);
         round.done = env.goal_satisfied();
         round.wall_ms = began.elapsed().as_secs_f64() * 1e3;
         prompts.mark(&mut round.calls);
         on_round(&round)?;
-        if let Some(line) = method.recall(task, &round) {
+        if let Some(line) = method.recall(&world, &round) {
             history.push(line);
         }
+        if let Some(d) = &mut dynamics {
+            d.after(&round, &*env, &world).await?;
+        }
+        let conceded = dynamics.as_ref().and_then(Dynamics::unreachable).is_some()
+            && round.actions_executed() == 0;
         match &round.outcome {
             RoundOutcome::BackendError { message } => {
                 status = Status::BackendError;
@@ -117,6 +147,8 @@ pub async fn play(
                 error = Some(message.clone());
             }
             _ if round.done => status = Status::Success,
+            // The goal is out of reach, and the team stopped acting: right.
+            _ if conceded => status = Status::Conceded,
             _ => {
                 // An environment that can go on no longer (a robot that stopped
                 // answering) ends the episode, saying why.
@@ -150,9 +182,10 @@ pub async fn play(
         .fold((prompt_tokens, completion_tokens, 0), |(p, c, n), e| {
             (p + e.prompt_tokens, c + e.completion_tokens, n + e.calls)
         });
+    let reference = dynamics.as_ref().map(|d| Box::new(d.reference(closing)));
     let summary = Summary {
         status,
-        success: status == Status::Success,
+        success: matches!(status, Status::Success | Status::Conceded),
         steps: rounds.len() as u32,
         gt_steps: task.meta.gt_steps,
         max_steps: course.max_steps,
@@ -163,22 +196,26 @@ pub async fn play(
         wall_ms: start.elapsed().as_secs_f64() * 1e3,
         error,
         sim_seconds: env.sim_seconds(),
+        reference,
     };
     Ok(Episode { rounds, summary })
 }
 
 /// Carries out what a round decided: a sequential round's decision (its robot's action,
 /// when it can do and names one; a robot that is not in the team is refused as such), or
-/// a parallel round's parts as one joint step ([`joint::carry_out`]). Returns the round's
-/// outcome.
+/// a parallel round's parts as one joint step ([`joint::carry_out`]); an action that a
+/// failing-actions event makes fail does not run. Returns the round's outcome.
 fn carry_out(
     env: &mut (dyn Environment + Send + Sync),
     task: &Task,
     execution: Execution,
+    dynamics: Option<&Dynamics>,
     round: &mut Round,
 ) -> RoundOutcome {
+    let step = round.step;
+    let fails = |robot| dynamics.and_then(|d| d.fails(task, step, robot));
     if execution == Execution::Parallel {
-        return joint::carry_out(env, task, &mut round.parts);
+        return joint::carry_out(env, task, &mut round.parts, &fails);
     }
     let act = round
         .decision
@@ -188,7 +225,13 @@ fn carry_out(
     match act {
         None => RoundOutcome::Declined,
         Some((robot, action)) => match task.robot_by_id(robot) {
-            Ok(_) => execute(env, round, robot, &action),
+            Ok(_) => match fails(robot) {
+                Some(message) => RoundOutcome::Infeasible {
+                    reason: Reason::ActionFailed,
+                    message,
+                },
+                None => execute(env, round, robot, &action),
+            },
             Err(e) => RoundOutcome::Infeasible {
                 reason: Reason::UnknownRobot,
                 message: e.to_string(),

@@ -51,6 +51,9 @@ pub struct StepView {
     pub history: Vec<PastStep>,
     /// The symbolic state, for the observations' text.
     pub state: State,
+    /// What happened since the last step that the team did not do (the task's events,
+    /// docs/dynamic.md), a sentence each; empty without events.
+    pub news: Vec<String>,
 }
 
 impl StepView {
@@ -88,6 +91,7 @@ impl StepView {
             robots,
             history: history.to_vec(),
             state: env.state().clone(),
+            news: Vec::new(),
         }
     }
 

@@ -7,6 +7,7 @@
 //! table of runs with parallel episodes ([`speedup`]).
 //! The crate root names this module `bench` too, with its main types at hand.
 
+pub mod dynamic;
 pub mod ledger;
 pub mod prices;
 pub mod progress;

@@ -194,6 +194,7 @@ fn status_word(s: Status) -> &'static str {
         Status::BackendError => "backend error",
         Status::Interrupted => "interrupted",
         Status::Error => "error",
+        Status::Conceded => "conceded",
     }
 }
 

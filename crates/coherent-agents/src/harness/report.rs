@@ -16,6 +16,7 @@ use coherent_core::Execution;
 use coherent_core::text::shown;
 use serde::Serialize;
 
+use crate::harness::dynamic::{self, EventRow};
 use crate::harness::results::{EpisodeKey, ResultLine};
 use crate::harness::run_settings::{RunSettings, method_text};
 use crate::harness::speedup::{self, SpeedRow, row_name, row_order};
@@ -134,6 +135,9 @@ pub struct Report {
     /// The makespan table, when some episode ran in parallel ([`speedup::build`]).
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub makespan: Vec<SpeedRow>,
+    /// The events table, when some task had events ([`dynamic::build`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<EventRow>,
     /// The settings every line was run with (none for lines that record none).
     pub settings: Option<RunSettings>,
     /// The settings methods written outside the crate declared, by method.
@@ -386,6 +390,7 @@ fn build_one(lines: &[ResultLine], settings: Option<RunSettings>) -> Report {
         errors: errors.len(),
         untyped_tasks,
         makespan: speedup::build(&finals),
+        events: dynamic::build(&finals),
         settings,
         method_settings,
         failures: failures(&errors),
@@ -644,6 +649,10 @@ pub fn markdown(r: &Report) -> String {
     if !r.makespan.is_empty() {
         out.push('\n');
         out.push_str(&speedup::markdown(&r.makespan, md));
+    }
+    if !r.events.is_empty() {
+        out.push('\n');
+        out.push_str(&dynamic::markdown(&r.events, md));
     }
     out
 }

@@ -17,7 +17,7 @@ use crate::harness::prices::PriceTable;
 use crate::harness::run_settings::RunSettings;
 use crate::llm::{BackendInfo, Usage};
 use crate::records::lock;
-use crate::records::transcript::Status;
+use crate::records::transcript::{Reference, Status};
 
 /// One finished episode: a line of the results file.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -82,6 +82,10 @@ pub struct ResultLine {
     /// from lines written before they were kept).
     #[serde(default)]
     pub settings: Option<RunSettings>,
+    /// What an episode with events is measured against, and how the team recovered
+    /// (docs/dynamic.md); absent without events.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Reference>,
 }
 
 fn yes() -> bool {
@@ -89,9 +93,13 @@ fn yes() -> bool {
 }
 
 impl ResultLine {
-    /// Whether the episode ended in a way that counts: success or budget spent.
+    /// Whether the episode ended in a way that counts: success, budget spent, or a goal
+    /// an event put out of reach, conceded.
     pub fn is_final(&self) -> bool {
-        matches!(self.status, Status::Success | Status::Failure)
+        matches!(
+            self.status,
+            Status::Success | Status::Failure | Status::Conceded
+        )
     }
 
     /// Whether the episode failed with an error its line names and has no final result:
@@ -103,7 +111,7 @@ impl ResultLine {
         match self.status {
             Status::Error => true,
             Status::Interrupted => self.error.is_some(),
-            Status::Success | Status::Failure | Status::BackendError => false,
+            Status::Success | Status::Failure | Status::BackendError | Status::Conceded => false,
         }
     }
 

@@ -42,6 +42,8 @@ pub struct TaskAssigner {
     prompts: Prompts,
     /// Most tokens of one answer.
     max_tokens: u32,
+    /// What happened since the last round that the team did not do ([`TaskAssigner::told`]).
+    news: Vec<String>,
 }
 
 impl TaskAssigner {
@@ -51,14 +53,22 @@ impl TaskAssigner {
             task: Arc::clone(task),
             prompts: prompts.clone(),
             max_tokens,
+            news: Vec::new(),
         }
+    }
+
+    /// The assigner told `news` (what happened since the last round that the team did
+    /// not do: the task's events), which its next question says first.
+    pub fn told(mut self, news: &[String]) -> TaskAssigner {
+        self.news = news.to_vec();
+        self
     }
 
     /// The round's question where `env` stands, with `history`: the last rounds, oldest
     /// first.
     pub fn query(&self, env: &(dyn Environment + Send), history: &[String]) -> Query {
         let task = &self.task;
-        let sight = team_sight(env, task);
+        let sight = team_sight(env, task, &self.news);
         Query {
             role: Role::Assigner,
             robot: None,
@@ -214,7 +224,7 @@ impl TaskAssigner {
                 .map(|r| format!("- {}", robot_label(task, *r)))
                 .collect(),
         );
-        let sight = team_sight(env, task);
+        let sight = team_sight(env, task, &self.news);
         let view = AssignerView {
             robots: &robot_lines(env, task),
             seen: &sight.values(self.prompts.text(Template::AssignerParallelUser)),

@@ -187,6 +187,7 @@ mod tests {
             task: &task,
             state: &task.init,
             observations: Vec::new(),
+            news: &[],
         };
         let messages = messages(&prompts, &sight, &["a: b".into()], &[]);
         for m in &messages {

@@ -47,7 +47,7 @@ impl Method for Cmrs {
                 .map(|a| a.line(task))
                 .collect();
             round.actions = lines.clone();
-            let sight = team_sight(env, task);
+            let sight = team_sight(env, task, turn.news);
             let parallel = turn.execution == Execution::Parallel;
             let query = Query {
                 role: Role::Assigner,

@@ -128,8 +128,7 @@ impl Dmrs {
                     robot: Some(speaker),
                     messages: speaker_messages(
                         self.prompts.text(Template::DmrsSpeaker),
-                        env,
-                        task,
+                        &speaker_sight(env, task, speaker, turn.news),
                         speaker,
                         turn.history,
                         &dialogue,
@@ -185,8 +184,7 @@ impl Dmrs {
                     robot: Some(speaker),
                     messages: speaker_messages(
                         self.prompts.text(Template::DmrsSpeakerParallel),
-                        env,
-                        task,
+                        &speaker_sight(env, task, speaker, turn.news),
                         speaker,
                         turn.history,
                         &dialogue,
@@ -287,23 +285,34 @@ fn own_schema(own: &[String]) -> Value {
     })
 }
 
+/// What `speaker` is shown: its own observation, after `news` (what happened since the
+/// last round that the team did not do).
+fn speaker_sight<'a>(
+    env: &'a dyn Environment,
+    task: &'a Task,
+    speaker: NodeId,
+    news: &'a [String],
+) -> Sight<'a> {
+    Sight {
+        task,
+        state: env.state(),
+        observations: env.observe(speaker).into_iter().collect(),
+        news,
+    }
+}
+
 fn speaker_messages(
     template: &str,
-    env: &dyn Environment,
-    task: &Task,
+    sight: &Sight<'_>,
     speaker: NodeId,
     history: &[String],
     dialogue: &[String],
     lines: &[String],
 ) -> Vec<Message> {
+    let task = sight.task;
     let kind = task
         .robot_by_id(speaker)
         .map_or(String::new(), |r| r.kind.to_string());
-    let sight = Sight {
-        task,
-        state: env.state(),
-        observations: env.observe(speaker).into_iter().collect(),
-    };
     let or_none = |items: &[String]| {
         if items.is_empty() {
             "(none yet)".to_owned()
@@ -375,7 +384,14 @@ mod tests {
         let speaker = task.id(task.robots[0].node);
         let lines = ["a: b".to_owned()];
         let template = prompts.text(Template::DmrsSpeaker);
-        for m in &speaker_messages(template, &env, &task, speaker, &[], &[], &lines) {
+        for m in &speaker_messages(
+            template,
+            &speaker_sight(&env, &task, speaker, &[]),
+            speaker,
+            &[],
+            &[],
+            &lines,
+        ) {
             assert!(!m.content.contains("{{"), "{}", m.content);
         }
     }

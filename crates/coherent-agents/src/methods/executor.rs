@@ -44,6 +44,8 @@ pub struct RobotExecutor {
     prompts: Prompts,
     /// Most tokens of one answer.
     max_tokens: u32,
+    /// What happened since the last round that the team did not do ([`RobotExecutor::told`]).
+    news: Vec<String>,
 }
 
 impl RobotExecutor {
@@ -64,7 +66,15 @@ impl RobotExecutor {
             kind: r.kind,
             prompts: prompts.clone(),
             max_tokens,
+            news: Vec::new(),
         })
+    }
+
+    /// The executor told `news` (what happened since the last round that the team did
+    /// not do: the task's events), which its next question says first.
+    pub fn told(mut self, news: &[String]) -> RobotExecutor {
+        self.news = news.to_vec();
+        self
     }
 
     /// Its action list where `env` stands (empty when it has none).
@@ -85,6 +95,7 @@ impl RobotExecutor {
             task,
             state: env.state(),
             observations: env.observe(self.robot).into_iter().collect(),
+            news: &self.news,
         };
         Query {
             role: Role::Executor,

@@ -58,7 +58,10 @@ impl ExternalMethod {
         };
         let past: Vec<PastStep> = turn.rounds.iter().flat_map(past_steps).collect();
         let at = (turn.step, turn.max_steps);
-        let view = StepView::now(turn.env, turn.task, at, turn.execution, &past);
+        let view = StepView {
+            news: turn.news.to_vec(),
+            ..StepView::now(turn.env, turn.task, at, turn.execution, &past)
+        };
         let act = policy.act(Arc::new(view));
         let step_timeout = self.step_timeout;
         // Without a limit, a step may take as long as it takes (a sleep of

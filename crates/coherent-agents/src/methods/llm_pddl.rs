@@ -76,7 +76,7 @@ impl LlmPddl {
 fn messages(prompts: &Prompts, turn: &Turn<'_>) -> Vec<Message> {
     let task = turn.task;
     let text = prompts.text(Template::Goal);
-    let sight = team_sight(turn.env, task);
+    let sight = team_sight(turn.env, task, turn.news);
     let team = fill::team(task);
     let seen = sight.values(text);
     let mut values = vec![
@@ -277,6 +277,12 @@ impl Method for LlmPddl {
     fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let task = Arc::clone(turn.task);
+            if !turn.news.is_empty() {
+                // The world changed under the plan (the task's events): the goal is read
+                // again from the instruction as it stands, and planned afresh.
+                self.goal = None;
+                self.replan = true;
+            }
             let goal = match self.goal(&turn, round).await {
                 None => return Ok(None),
                 Some(Err(outcome)) => return Ok(Some(Decided::Ends(outcome))),

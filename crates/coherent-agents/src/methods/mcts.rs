@@ -424,8 +424,12 @@ impl Mcts {
     ) -> Option<Result<Vec<f64>, RoundOutcome>> {
         let Turn { task, env, .. } = *turn;
         let config = &self.config;
-        let messages =
-            central::messages(&config.prompts, &team_sight(env, task), lines, turn.history);
+        let messages = central::messages(
+            &config.prompts,
+            &team_sight(env, task, turn.news),
+            lines,
+            turn.history,
+        );
         let mut counts = vec![0u32; lines.len()];
         for _ in 0..config.samples {
             let query = Query {

@@ -12,7 +12,7 @@ use coherent_core::{Execution, State, Task};
 
 use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::methods::decision;
-use crate::records::transcript::{Round, RoundOutcome};
+use crate::records::transcript::{Reason, Round, RoundOutcome};
 
 /// The plan an episode follows: a step per round, or a joint step per round.
 #[derive(Debug)]
@@ -21,18 +21,27 @@ enum Plan {
     JointSteps(Vec<JointStep>),
 }
 
-/// The optimal plan for one episode, found at its first round (within `limits`).
+/// The optimal plan for one episode, found at its first round (within `limits`), and
+/// found again from where the world stands after each event of the task
+/// (docs/dynamic.md) or an action an event made fail: the oracle that knows nothing of
+/// events to come.
 #[derive(Debug)]
 pub struct Optimal {
     limits: Limits,
     /// The plan once found, or why there is none.
     plan: Option<Result<Plan, &'static str>>,
+    /// The round whose step is the plan's first.
+    first: u32,
 }
 
 impl Optimal {
-    /// The method; `limits` bound its one search (its cancel flag stops it).
+    /// The method; `limits` bound its searches (its cancel flag stops them).
     pub fn new(limits: Limits) -> Optimal {
-        Optimal { limits, plan: None }
+        Optimal {
+            limits,
+            plan: None,
+            first: 1,
+        }
     }
 }
 
@@ -68,6 +77,12 @@ impl Method for Optimal {
     fn decide<'a>(&'a mut self, turn: Turn<'a>, round: &'a mut Round) -> Deciding<'a> {
         Box::pin(async move {
             let task = turn.task;
+            if !turn.news.is_empty() {
+                self.plan = None;
+            }
+            if self.plan.is_none() {
+                self.first = round.step;
+            }
             let plan = match &mut self.plan {
                 Some(plan) => plan,
                 unsearched @ None => {
@@ -79,7 +94,7 @@ impl Method for Optimal {
                     unsearched.insert(found)
                 }
             };
-            let at = round.step as usize - 1;
+            let at = (round.step - self.first) as usize;
             let why = match plan {
                 Ok(Plan::Steps(steps)) => match steps.get(at) {
                     Some(s) => {
@@ -114,6 +129,18 @@ impl Method for Optimal {
     fn conclude(&mut self, closing: Closing<'_>, round: &mut Round) {
         if round.decision.is_some() || !round.parts.is_empty() {
             decision::team_feedback(closing.task, round, None);
+        }
+        let failed = |o: &RoundOutcome| {
+            matches!(
+                o,
+                RoundOutcome::Infeasible {
+                    reason: Reason::ActionFailed,
+                    ..
+                }
+            )
+        };
+        if failed(&round.outcome) || round.parts.iter().any(|p| failed(&p.outcome)) {
+            self.plan = None;
         }
     }
 

@@ -70,7 +70,7 @@ impl Pefa {
     async fn propose_and_execute(&self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
         let Turn { task, env, .. } = turn;
         // Proposal.
-        let assigner = TaskAssigner::new(task, &self.prompts, ASSIGNER_MAX_TOKENS);
+        let assigner = TaskAssigner::new(task, &self.prompts, ASSIGNER_MAX_TOKENS).told(turn.news);
         let query = assigner.query(env, turn.history);
         let reply = ask(turn.backend, query, turn.cancel, &mut round.calls).await?;
         let proposal = match reply.and_then(|r| r.read(|text| assigner.parse(text))) {
@@ -81,7 +81,9 @@ impl Pefa {
 
         // Execution: the executor's decision, which the loop checks and runs.
         let executor =
-            match RobotExecutor::of(task, proposal.robot, &self.prompts, EXECUTOR_MAX_TOKENS) {
+            match RobotExecutor::of(task, proposal.robot, &self.prompts, EXECUTOR_MAX_TOKENS)
+                .map(|e| e.told(turn.news))
+            {
                 Ok(executor) => executor,
                 Err(e) => {
                     let why = e.to_string();
@@ -105,6 +107,8 @@ impl Pefa {
     async fn assign_and_execute(&mut self, turn: Turn<'_>, round: &mut Round) -> Option<Decided> {
         let Turn { task, env, .. } = turn;
         let team: Vec<NodeId> = task.robots.iter().map(|r| task.id(r.node)).collect();
+        // A robot out of the team (an event took it down) keeps no subtask.
+        self.busy.retain(|r, _| team.contains(r));
         let idle: Vec<NodeId> = team
             .iter()
             .copied()
@@ -115,7 +119,8 @@ impl Pefa {
 
         // Proposal, when a robot is idle.
         if !idle.is_empty() {
-            let assigner = TaskAssigner::new(task, &self.prompts, ASSIGNER_MAX_TOKENS);
+            let assigner =
+                TaskAssigner::new(task, &self.prompts, ASSIGNER_MAX_TOKENS).told(turn.news);
             let kept: Vec<(NodeId, String, u32)> = self
                 .busy
                 .iter()
@@ -155,7 +160,9 @@ impl Pefa {
             let mut part = RobotPart::new(robot);
             part.proposal = Some(proposal.clone());
             part.kept = *since < round.step;
-            match RobotExecutor::of(task, robot, &self.prompts, EXECUTOR_MAX_TOKENS) {
+            match RobotExecutor::of(task, robot, &self.prompts, EXECUTOR_MAX_TOKENS)
+                .map(|e| e.told(turn.news))
+            {
                 Ok(executor) => {
                     part.actions = executor.actions(env);
                     queries.push(executor.query(env, &proposal.subtask, &part.actions));

@@ -45,22 +45,43 @@ pub(crate) struct Sight<'a> {
     pub task: &'a Task,
     pub state: &'a State,
     pub observations: Vec<Observation>,
+    /// What happened since the last round that the team did not do (the task's
+    /// events), a sentence each; said first, before the facts that change.
+    pub news: &'a [String],
 }
 
 impl Sight<'_> {
     /// The observation placeholders `text` uses, with their values (each layout written
-    /// only when used).
+    /// only when used). News comes first in the observation, or in the state: the part
+    /// of a prompt that changes.
     pub(crate) fn values(&self, text: &str) -> Vec<(&'static str, String)> {
         let seen: Vec<&Observation> = self.observations.iter().collect();
         let mut out = Vec::new();
         if uses(text, "observation") {
-            out.push(("observation", describe::facts(self.task, self.state, &seen)));
+            let facts = describe::facts(self.task, self.state, &seen);
+            out.push(("observation", self.told(facts)));
         }
         if uses(text, "scene") || uses(text, "state") {
             let layers = describe::layered(self.task, self.state, &seen);
             out.push(("scene", layers.scene));
-            out.push(("state", layers.state));
+            out.push(("state", self.told(layers.state)));
         }
+        out
+    }
+
+    /// `facts` after the news, if there is any.
+    fn told(&self, facts: String) -> String {
+        if self.news.is_empty() {
+            return facts;
+        }
+        let mut out = String::from("What just happened, that the team did not do:\n");
+        for line in self.news {
+            out.push_str("- ");
+            out.push_str(line);
+            out.push('\n');
+        }
+        out.push('\n');
+        out.push_str(&facts);
         out
     }
 }

@@ -60,6 +60,10 @@ pub struct Header {
     /// rounds hold its decisions ([`Round::external`]), and a replay re-feeds them.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub external: bool,
+    /// The most states the loop's own searches visited (the optimum proven again at each
+    /// event of the task); absent for a task without events.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_states: Option<usize>,
 }
 
 /// One call to a role: what was sent and what came back (or why nothing did).
@@ -158,6 +162,8 @@ pub enum Reason {
     Error,
     /// The decision names a robot that is not in the team.
     UnknownRobot,
+    /// The action failed by an event of the task (`action_fails`): nothing changed.
+    ActionFailed,
 }
 
 impl Reason {
@@ -167,6 +173,7 @@ impl Reason {
             Reason::Engine(r) => r.name(),
             Reason::Error => "error",
             Reason::UnknownRobot => "unknown_robot",
+            Reason::ActionFailed => "action_failed",
         }
     }
 }
@@ -190,6 +197,7 @@ impl TryFrom<String> for Reason {
         match name.as_str() {
             "error" => Ok(Reason::Error),
             "unknown_robot" => Ok(Reason::UnknownRobot),
+            "action_failed" => Ok(Reason::ActionFailed),
             other => coherent_core::Reason::from_name(other)
                 .map(Reason::Engine)
                 .ok_or_else(|| format!("unknown reason {:?}", coherent_core::text::shown(other))),
@@ -353,6 +361,91 @@ pub struct Round {
     /// (physics); absent otherwise, and in transcripts written before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sim_seconds: Option<f64>,
+    /// What happened to the world before the round's decision that the team did not do
+    /// (the task's events, docs/dynamic.md), each with the optimum proven from there;
+    /// absent without events.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<Happened>,
+}
+
+/// An event of the task as it happened in an episode (or the end of its span: a door
+/// unlocked, failures over), and the optimum from the state it left.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Happened {
+    /// The event's index in the task's `events`.
+    pub event: usize,
+    pub kind: String,
+    /// Whether this is the end of the event's span.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub ended: bool,
+    /// What the team was told (empty: nothing; failing actions are noticed as they fail).
+    pub told: String,
+    /// Why the event changed nothing, when it could not happen as written.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub void: Option<String>,
+    /// The optimum from the state the event left.
+    pub optimum: Proof,
+}
+
+/// The optimum from a state, as the planner proved it: the fewest steps (and, in a
+/// parallel episode, joint steps), or that the goal cannot be reached and why, or that
+/// the search stopped before it could say.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Proof {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u32>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub makespan: Option<u32>,
+    /// Why no plan reaches the goal from there (proven).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unreachable: Option<String>,
+    /// Why the optimum is not known (a search stopped at its limit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unknown: Option<String>,
+}
+
+/// What an episode with events is measured against (docs/dynamic.md): an oracle that
+/// knows nothing of events to come and replans at each one. Its steps are the steps
+/// taken until the last event plus the optimum from there, plus one for each action
+/// that failed after it (a failure costs anyone a step).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Reference {
+    /// The kinds of the task's events, in its order.
+    #[serde(default)]
+    pub kinds: Vec<String>,
+    /// The oracle's steps (joint steps in a parallel episode); absent when the goal
+    /// cannot be reached, or its optimum is unknown.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub steps: Option<u32>,
+    /// Why the goal cannot be reached anymore, when an event made it so.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub unreachable: Option<String>,
+    /// The optimum at the start, before any event (robots that join later out of the
+    /// team).
+    pub start: Proof,
+    /// How the team recovered from each event that changed the world.
+    pub recoveries: Vec<Recovery>,
+    /// Events that left the goal holding before the next step (the episode ended
+    /// there, with no round to record them in).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub closing: Vec<Happened>,
+}
+
+/// How the team recovered from one event.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Recovery {
+    /// The event's index in the task's `events`.
+    pub event: usize,
+    /// The step before which it happened.
+    pub step: u32,
+    /// Rounds from the event until the team first carried out an action that brought the
+    /// goal nearer (the optimum from the state fell), that round included; absent when
+    /// it never did (or the goal was out of reach).
+    pub rounds: Option<u32>,
+    /// Actions carried out meanwhile that did not bring the goal nearer.
+    pub wasted: u32,
+    /// Model calls of those rounds.
+    pub calls: u32,
 }
 
 impl Round {
@@ -407,6 +500,7 @@ impl Round {
             robot: None,
             parts: Vec::new(),
             sim_seconds: None,
+            events: Vec::new(),
         }
     }
 
@@ -440,6 +534,9 @@ pub enum Status {
     Interrupted,
     /// The method raised an error (see the last round and the summary's `error`).
     Error,
+    /// An event put the goal out of reach, and the team stopped acting: right, as the
+    /// task cannot be done anymore (docs/dynamic.md).
+    Conceded,
 }
 
 /// The last line.
@@ -462,6 +559,10 @@ pub struct Summary {
     /// absent otherwise, and in transcripts written before it was kept.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sim_seconds: Option<f64>,
+    /// What an episode with events is measured against, and how the team recovered;
+    /// absent without events.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<Box<Reference>>,
 }
 
 /// The actions carried out in `rounds` ([`Round::actions_executed`]).

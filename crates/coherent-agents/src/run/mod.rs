@@ -155,6 +155,7 @@ pub async fn run(
             .duration_since(UNIX_EPOCH)
             .map_or(0, |d| d.as_millis() as u64),
         external: settings.method.builtin().is_none(),
+        max_states: (!task.events.is_empty()).then_some(settings.max_states),
     };
     let TranscriptFile { path, file } = transcript;
     let io = |e: io::Error| Error::io(&path, &e);
@@ -170,6 +171,8 @@ pub async fn run(
         execution: settings.execution,
         max_steps: budget.steps(),
         history: header.history,
+        max_states: settings.max_states,
+        seed: settings.seed.unwrap_or(0),
     };
     let episode = play(env, task, method, backend, course, cancel, &mut on_round)
         .await

@@ -9,6 +9,7 @@ use std::collections::VecDeque;
 use std::path::Path;
 use std::sync::Arc;
 
+use coherent_core::planner::Limits;
 use coherent_core::{Execution, Task, native};
 
 use crate::backends::replay::ReplayBackend;
@@ -92,6 +93,7 @@ pub fn recorded_settings(t: &Transcript) -> Result<(Settings, Budget), Error> {
         physics: t.header.physics,
         robots: t.header.robots.clone(),
         prompts,
+        max_states: t.header.max_states.unwrap_or(Limits::DEFAULT_MAX_STATES),
     };
     Ok((settings, Budget::Given(t.header.max_steps)))
 }

@@ -322,6 +322,9 @@ pub struct Settings {
     pub robots: RobotsRecord,
     /// The templates the method's prompts are rendered from (checked when made).
     pub prompts: Prompts,
+    /// The most states one search of the loop's own may visit (the optimum proven again
+    /// at each event of the task).
+    pub max_states: usize,
 }
 
 impl Settings {
@@ -350,6 +353,7 @@ impl Settings {
             physics: false,
             robots: RobotsRecord::Local,
             prompts: Prompts::builtin(),
+            max_states: Limits::DEFAULT_MAX_STATES,
         }
     }
 }
