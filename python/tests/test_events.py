@@ -97,3 +97,15 @@ def test_a_small_model_hears_of_an_event_end_to_end(
     for call in second["calls"]:
         user = call["messages"][-1]["content"]
         assert "What just happened, that the team did not do:\n- " + happened["told"] in user
+
+
+def test_stepping_by_hand_refuses_a_task_with_events(tmp_path: Path) -> None:
+    """`Env` (and Gymnasium and PettingZoo on it) would never make the events happen:
+    a task with events is refused, not run without them."""
+    data = json.loads(DEMO.read_text())
+    data["events"] = MOVED
+    path = tmp_path / "demo-moved.json"
+    path.write_text(json.dumps(data))
+    (task,) = coherent.load_tasks(path)
+    with pytest.raises(coherent.ArgumentError, match="Env does not run events yet"):
+        coherent.Env(task)

@@ -265,6 +265,15 @@ impl PyEnv {
         server_wait: f64,
     ) -> PyCoherentResult<PyEnv> {
         let t = Arc::clone(&task.get().task);
+        if !t.events.is_empty() {
+            // Stepped by hand, nothing would make them happen: refused, not ignored.
+            return Err(coherent::session::Error::Invalid(format!(
+                "the task has {} events (docs/dynamic.md), and Env does not run events yet: \
+                 coherent.run(task, ...) does",
+                t.events.len()
+            ))
+            .into());
+        }
         let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
         let namespace = match &robots {
             Robots::Ros2(options) => Some(options.namespace.clone()),
