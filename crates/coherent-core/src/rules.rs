@@ -592,11 +592,7 @@ pub fn apply(task: &Task, s: &mut State, robot: Robot, a: Action) {
             s.add(Edge::new(me, Relation::Above, x));
             if let Some(b) = task.basket_of(me) {
                 s.remove(Edge::new(b, Relation::On, x));
-                let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, b).collect();
-                s.retain(|e| {
-                    !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
-                });
-                mark_high(s, b, &inside, true);
+                lift_basket(s, b);
             }
         }
         (RobotKind::Quadrotor, Verb::MoveTowards) => {
@@ -687,6 +683,15 @@ fn dog_approach(task: &Task, s: &mut State, me: Idx, x: Idx) {
     for t in close {
         s.add(Edge::new(me, Relation::Close, t));
     }
+}
+
+/// A basket taken up into the air (its quadrotor takes off, or joins the team flying):
+/// no robot is next to it or to what is in it any more, and both are marked
+/// `ON_HIGH_SURFACE`.
+pub(crate) fn lift_basket(s: &mut State, basket: Idx) {
+    let inside: SmallVec<[Idx; 8]> = s.sources(Relation::Inside, basket).collect();
+    s.retain(|e| !(e.rel() == Relation::Close && (e.to() == basket || inside.contains(&e.to()))));
+    mark_high(s, basket, &inside, true);
 }
 
 fn set_basket_high(s: &mut State, basket: Idx, on: bool) {

@@ -125,7 +125,7 @@ impl Schedule {
             changes.push(Change {
                 event: i,
                 ended: true,
-                told: format!("{} can be passed again.", unlocked(&task, what)),
+                told: format!("{} can be passed again.", task.node(what).label()),
                 void: None,
             });
         }
@@ -269,16 +269,6 @@ impl Schedule {
     pub fn task(&self) -> &std::sync::Arc<Task> {
         &self.base
     }
-
-    /// Whether a robot is out of the team (not joined yet, or down).
-    pub fn is_out(&self, robot: Idx) -> bool {
-        self.out.contains(robot)
-    }
-}
-
-/// What a lock's end says: the door, or the room.
-fn unlocked(task: &Task, what: Idx) -> String {
-    task.node(what).label()
 }
 
 /// Puts `robot` (a dog or a quadrotor) in `room`: a dog on its floor, a quadrotor flying
@@ -304,14 +294,7 @@ fn join_in(task: &Task, s: &mut State, robot: Idx, room: Idx) {
             }
             if let Some(b) = task.basket_of(robot) {
                 s.remove_out(b, Relation::On);
-                let inside: Vec<Idx> = s.sources(Relation::Inside, b).collect();
-                s.retain(|e| {
-                    !(e.rel() == Relation::Close && (e.to() == b || inside.contains(&e.to())))
-                });
-                s.set_on_high_surface(b, true);
-                for y in inside {
-                    s.set_on_high_surface(y, true);
-                }
+                crate::rules::lift_basket(s, b);
             }
         }
         RobotKind::RobotArm => return,

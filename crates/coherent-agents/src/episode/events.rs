@@ -146,7 +146,7 @@ impl Dynamics {
         env: &(dyn Environment + Send + Sync),
         world: &Arc<Task>,
     ) -> io::Result<()> {
-        self.failed += failures(round);
+        self.failed += round.failed_actions();
         if self.open.0.is_empty() {
             return Ok(());
         }
@@ -248,25 +248,6 @@ fn changes_world(task: &Task, change: &Change) -> bool {
         Happening::ActionFails { .. }
     );
     !fails && change.void.is_none()
-}
-
-/// Actions of `round` that failed by an event.
-fn failures(round: &Round) -> u32 {
-    use crate::records::transcript::{Reason, RoundOutcome};
-    let failed = |o: &RoundOutcome| {
-        matches!(
-            o,
-            RoundOutcome::Infeasible {
-                reason: Reason::ActionFailed,
-                ..
-            }
-        )
-    };
-    if round.parts.is_empty() {
-        u32::from(failed(&round.outcome))
-    } else {
-        round.parts.iter().filter(|p| failed(&p.outcome)).count() as u32
-    }
 }
 
 /// The optimum from `s` in `task` (its team and goal as events left them): the fewest

@@ -12,7 +12,7 @@ use coherent_core::{Execution, State, Task};
 
 use crate::episode::method::{Closing, Decided, Deciding, Method, Turn};
 use crate::methods::decision;
-use crate::records::transcript::{Reason, Round, RoundOutcome};
+use crate::records::transcript::{Round, RoundOutcome};
 
 /// The plan an episode follows: a step per round, or a joint step per round.
 #[derive(Debug)]
@@ -130,16 +130,7 @@ impl Method for Optimal {
         if round.decision.is_some() || !round.parts.is_empty() {
             decision::team_feedback(closing.task, round, None);
         }
-        let failed = |o: &RoundOutcome| {
-            matches!(
-                o,
-                RoundOutcome::Infeasible {
-                    reason: Reason::ActionFailed,
-                    ..
-                }
-            )
-        };
-        if failed(&round.outcome) || round.parts.iter().any(|p| failed(&p.outcome)) {
+        if round.failed_actions() > 0 {
             self.plan = None;
         }
     }

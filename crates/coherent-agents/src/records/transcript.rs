@@ -517,6 +517,26 @@ impl Round {
             executed.count() as u32
         }
     }
+
+    /// The actions of this round that an event of the task made fail
+    /// (`action_failed`, docs/dynamic.md): 0 or 1 in a sequential round, one per such part
+    /// in a parallel one.
+    pub fn failed_actions(&self) -> u32 {
+        let failed = |o: &RoundOutcome| {
+            matches!(
+                o,
+                RoundOutcome::Infeasible {
+                    reason: Reason::ActionFailed,
+                    ..
+                }
+            )
+        };
+        if self.parts.is_empty() {
+            u32::from(failed(&self.outcome))
+        } else {
+            self.parts.iter().filter(|p| failed(&p.outcome)).count() as u32
+        }
+    }
 }
 
 /// How an episode ended.
