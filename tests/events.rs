@@ -4,13 +4,55 @@
 //! --variants-of` writing the dynamic variants that `coherent bench` runs, its lines and
 //! report carrying the reference.
 
+use std::collections::{HashSet, VecDeque};
 use std::path::Path;
+use std::sync::Arc;
+
+use coherent_agents::episode::prove;
+use coherent_core::planner::Limits;
+use coherent_core::{Execution, JsonPath, Schedule, State, Task, events, rules};
+use coherent_generate::variants::variants;
 
 mod common;
 
 use common::{coherent, json_lines, scratch, show, utf8};
 
 const DEMO: &str = "examples/tasks/demo.json";
+
+/// One event of each kind on the demo task (an arm on the kitchen counter, a quadrotor in
+/// the living room, a legged robot in the kitchen; the mug and the apple to the coffee
+/// table): the robot that joins where the task placed it, a thing moved from a table and
+/// one taken out of a hand, a door locked for a span.
+const DEMO_KINDS: [(&str, &str); 7] = [
+    (
+        "robot_down",
+        r#"[{"when": {"relation": "INSIDE", "subject": 7, "target": 12}, "kind": "robot_down", "robot": 6}]"#,
+    ),
+    (
+        "robot_up",
+        r#"[{"step": 4, "kind": "robot_up", "robot": 13}]"#,
+    ),
+    (
+        "object_moved",
+        r#"[{"when": {"held": 7}, "kind": "object_moved", "thing": 9, "relation": "ON", "target": 14}]"#,
+    ),
+    (
+        "object_moved",
+        r#"[{"when": {"held": 7}, "kind": "object_moved", "thing": 7, "relation": "ON", "target": 14}]"#,
+    ),
+    (
+        "goal_changed",
+        r#"[{"step": 5, "kind": "goal_changed", "remove": [{"relation": "ON", "subject": 9, "target": 10}], "add": [{"relation": "ON", "subject": 9, "target": 14}], "instruction": "The mug to the coffee table, the apple to the sofa."}]"#,
+    ),
+    (
+        "blocked",
+        r#"[{"step": 2, "kind": "blocked", "door": 4, "steps": 3}]"#,
+    ),
+    (
+        "action_fails",
+        r#"[{"step": 2, "kind": "action_fails", "probability": 0.3}]"#,
+    ),
+];
 
 fn events_file(dir: &Path, text: &str) -> String {
     let path = dir.join("events.json");
@@ -28,11 +70,7 @@ fn a_run_with_events_ends_in_the_reference_steps_and_its_transcript_says_what_ha
     let runs = dir.join("runs");
     let out = coherent(&["run", DEMO, "--events", &events, "--out", utf8(&runs)]);
     assert_eq!(out.status.code(), Some(0), "{}", show(&out));
-    let file = std::fs::read_dir(&runs)
-        .expect("runs")
-        .next()
-        .expect("a transcript");
-    let lines = json_lines(&file.expect("an entry").path());
+    let lines = transcript_in(&runs);
     let summary = lines.last().expect("a summary");
     let reference = &summary["reference"];
     assert_eq!(summary["steps"], reference["steps"], "{summary}");
@@ -84,18 +122,76 @@ fn bad_events_are_refused_before_the_episode_naming_the_file_the_path_and_the_va
         assert!(err.contains(&events), "{text}: {err}");
         assert!(err.contains(expected), "{text}: {err}");
     }
-    let events = events_file(&dir, r#"[{"step": 2, "kind": "robot_down", "robot": 13}]"#);
-    let out = coherent(&[
+    // Physics does not carry a robot to where it joins: it joins where the task has it.
+    let events = events_file(
+        &dir,
+        r#"[{"step": 2, "kind": "robot_up", "robot": 13, "room": 0}]"#,
+    );
+    let out = in_physics(&events, &dir);
+    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains(&format!(
+            "{events}: $[0].room: physics does not carry a robot"
+        )),
+        "{err}"
+    );
+}
+
+/// The lines of the one transcript a run wrote into `runs`.
+fn transcript_in(runs: &Path) -> Vec<serde_json::Value> {
+    let file = std::fs::read_dir(runs)
+        .expect("runs")
+        .next()
+        .expect("a transcript");
+    json_lines(&file.expect("an entry").path())
+}
+
+/// `coherent run` of the demo with the events in file `events`, in Rapier.
+fn in_physics(events: &str, out: &Path) -> std::process::Output {
+    coherent(&[
         "run",
         DEMO,
         "--events",
-        &events,
+        events,
         "--physics",
         "--out",
-        utf8(&dir),
-    ]);
-    assert_eq!(out.status.code(), Some(2), "{}", show(&out));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("physics does not carry events out"));
+        utf8(out),
+    ])
+}
+
+/// One event of each kind on the demo task in Rapier ([`DEMO_KINDS`]): the built-in
+/// backend ends in the reference steps, the bodies agreeing with the rules after every
+/// step and every event (a disagreement is a failed step).
+#[test]
+fn every_kind_of_event_runs_in_physics_in_the_reference_steps() {
+    let dir = scratch("events-physics");
+    for (i, (kind, text)) in DEMO_KINDS.into_iter().enumerate() {
+        let events = events_file(&dir, text);
+        let runs = dir.join(format!("{i}-{kind}"));
+        let out = in_physics(&events, &runs);
+        assert_eq!(out.status.code(), Some(0), "{kind}: {}", show(&out));
+        let lines = transcript_in(&runs);
+        let summary = lines.last().expect("a summary");
+        assert_eq!(summary["status"], "success", "{kind}: {summary}");
+        assert_eq!(
+            summary["steps"], summary["reference"]["steps"],
+            "{kind}: {summary}"
+        );
+        let happened = lines
+            .iter()
+            .filter_map(|l| l["events"].as_array())
+            .flatten()
+            .count();
+        assert!(happened >= 1, "{kind}: no event happened");
+        // Every step was carried out in Rapier: none failed but by an event.
+        for l in &lines[1..lines.len() - 1] {
+            assert!(
+                !l.to_string().contains("physics:"),
+                "{kind}: a physical failure: {l}"
+            );
+        }
+    }
 }
 
 #[test]
@@ -148,4 +244,154 @@ fn dynamic_variants_are_written_and_benchmarked_against_their_reference() {
             assert!(reference["unreachable"].is_string(), "{line}");
         }
     }
+}
+
+/// The fewest steps from `s` to `task`'s goal by breadth-first search over every action
+/// of every robot of its team (`None`: no state reached holds it), or `Err` once the
+/// search has seen `max` states.
+fn bfs(task: &Task, s: &State, max: usize) -> Result<Option<u32>, usize> {
+    let mut seen: HashSet<State> = HashSet::from([s.clone()]);
+    let mut queue = VecDeque::from([(s.clone(), 0u32)]);
+    while let Some((state, d)) = queue.pop_front() {
+        if task.goal_satisfied(&state) {
+            return Ok(Some(d));
+        }
+        for r in &task.robots {
+            for a in rules::actions(task, &state, *r) {
+                let mut next = state.clone();
+                rules::apply(task, &mut next, *r, a);
+                if seen.insert(next.clone()) {
+                    queue.push_back((next, d + 1));
+                }
+            }
+        }
+        if seen.len() >= max {
+            return Err(seen.len());
+        }
+    }
+    Ok(None)
+}
+
+/// What comparing the optimum with a breadth-first search found: states compared, and
+/// states where the search stopped at its limit first.
+#[derive(Default)]
+struct Compared {
+    equal: usize,
+    beyond: usize,
+}
+
+/// Follows an optimal plan of `task`'s world as it is at each step; at the start and
+/// after each event, the optimum the episode reports (`prove`) must equal a breadth-first
+/// search from that state (up to `max` states).
+fn compare_with_bfs(task: &Arc<Task>, max: usize, what: &str) -> Compared {
+    let limits = Limits::default();
+    let mut schedule = Schedule::new(Arc::clone(task));
+    let mut state = task.init.clone();
+    let mut out = Compared::default();
+    let budget = 2 * task.meta.gt_steps.unwrap_or(20).max(10);
+    for step in 1..=budget {
+        let changes = schedule.before_step(step, &mut state);
+        let world = schedule.world();
+        if !changes.is_empty() || step == 1 {
+            let proof = prove(&world, &state, &limits, Execution::Sequential);
+            match bfs(&world, &state, max) {
+                Ok(steps) => {
+                    assert_eq!(proof.steps, steps, "{what} at step {step}: {proof:?}");
+                    out.equal += 1;
+                }
+                Err(_) => out.beyond += 1,
+            }
+        }
+        if world.goal_satisfied(&state) {
+            break;
+        }
+        let plan = coherent_core::planner::search_from(
+            &world,
+            &state,
+            &world.robots,
+            &world.goal,
+            &limits,
+        )
+        .plan;
+        match plan.as_deref() {
+            Some([first, ..]) => {
+                let robot = world.robot(first.robot).copied().expect("a team robot");
+                rules::apply(&world, &mut state, robot, first.action);
+            }
+            _ if schedule.may_help_later() => {}
+            _ => break,
+        }
+    }
+    out
+}
+
+/// The dynamic variants of the released tasks, every `every`-th task of each scene.
+fn released_variants(every: usize) -> Vec<(String, Arc<Task>)> {
+    let mut out = Vec::new();
+    for scene in ["env0", "env1", "env2", "env3"] {
+        let path = common::released().join(format!("{scene}.json"));
+        let tasks = coherent_core::read_tasks(&path).expect("the released tasks");
+        // The file's one malformed task (a node id twice) is not a task.
+        for task in tasks.iter().flatten().step_by(every) {
+            for v in variants(task, &Limits::default()) {
+                let what = format!("{scene} task {} {}", task.meta.task_id, v.kind);
+                out.push((what, Arc::new(v.task)));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn the_optimum_after_each_event_is_what_a_breadth_first_search_finds() {
+    for (kind, text) in DEMO_KINDS {
+        let list: serde_json::Value = serde_json::from_str(text).expect("JSON");
+        let mut task = coherent_core::load_tasks(Path::new(DEMO))
+            .expect("the demo")
+            .remove(0);
+        task.events = events::read(&task, &list, kind, JsonPath::root()).expect("events");
+        let c = compare_with_bfs(&Arc::new(task), 3_000_000, kind);
+        assert!(
+            c.equal >= 2 && c.beyond == 0,
+            "{kind}: at the start and after the event"
+        );
+    }
+
+    // A sample of the released tasks' variants: every twelfth task of each scene.
+    let mut total = Compared::default();
+    for (what, task) in released_variants(12) {
+        let c = compare_with_bfs(&task, 200_000, &what);
+        total.equal += c.equal;
+        total.beyond += c.beyond;
+    }
+    println!(
+        "{} compared, {} beyond the search's limit",
+        total.equal, total.beyond
+    );
+    assert!(
+        total.equal >= 30,
+        "{} compared, {} beyond",
+        total.equal,
+        total.beyond
+    );
+}
+
+/// Every variant of every released task (minutes): the counts for the notes, with
+/// `cargo test --release --test events -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn every_released_variant_against_a_breadth_first_search() {
+    let variants = released_variants(1);
+    let mut total = Compared::default();
+    for (what, task) in &variants {
+        let c = compare_with_bfs(task, 5_000_000, what);
+        total.equal += c.equal;
+        total.beyond += c.beyond;
+    }
+    println!(
+        "{} variants: {} optima equal to a breadth-first search, {} beyond its 5,000,000 states, none differ",
+        variants.len(),
+        total.equal,
+        total.beyond
+    );
 }

@@ -2,7 +2,9 @@
 and its model calls (``pip install '.[analysis]'`` from a checkout brings pandas).
 
 The numbers come from Rust (``coherent_agents::bench`` and ``::report``, the same code
-as ``coherent bench``); this module only shapes them into DataFrames.
+as ``coherent bench``); this module only shapes them into DataFrames, but for
+:func:`events_table`, which works the report's events table out from a results frame
+in pandas (by the report's definitions, for frames the report does not take).
 """
 
 from __future__ import annotations
@@ -51,6 +53,29 @@ _SETTINGS_FIELDS = (
 # The settings columns that hold ints, none negative, kept ints (pandas's nullable
 # UInt64, which holds a u64 seed whole) where some lines record no settings.
 _SETTINGS_INTS = ("model_seed", "seeds", "history", "max_steps", "max_states")
+# The columns a line's `reference` (an episode with events, docs/dynamic.md) adds, in
+# their order; a frame none of whose lines has one has none of them.
+_REFERENCE_COLUMNS = (
+    "event_kinds",
+    "reference_steps",
+    "over_reference",
+    "unreachable",
+    "recoveries",
+    "recovered",
+    "recovery_rounds",
+    "recovery_wasted",
+    "recovery_calls",
+)
+# Those that hold ints, kept ints (nullable Int64) where some lines have no reference.
+_REFERENCE_INTS = (
+    "reference_steps",
+    "over_reference",
+    "recoveries",
+    "recovered",
+    "recovery_rounds",
+    "recovery_wasted",
+    "recovery_calls",
+)
 
 
 def _pandas(what: str) -> ModuleType:
@@ -67,7 +92,22 @@ def results(path: PathLike, *, prices: Prices | None = None) -> pd.DataFrame:
     ``backend_model`` and ``backend_base_url``, the ``settings`` object over
     ``settings_backend``, ``settings_sim_errors``, ``settings_seeds``, ... (NA on lines
     that record none). With ``prices`` (a price file or a dict, as :func:`bench` takes),
-    each ``cost_usd`` is the line's recorded tokens at those prices."""
+    each ``cost_usd`` is the line's recorded tokens at those prices.
+
+    Where some line has a ``reference`` (an episode of a task with events,
+    ``docs/dynamic.md``), the frame keeps it (a dict) and adds, NA on the lines without
+    one: ``event_kinds`` (the kinds of the task's events in its order, joined by ``+``,
+    as the events table groups them), ``reference_steps`` (the oracle's steps, joint
+    steps in a parallel episode; NA when the goal went out of reach or its optimum is
+    unknown), ``over_reference`` (``steps - reference_steps``, whatever the status),
+    ``unreachable`` (why the goal is out of reach for good, else None), ``recoveries``
+    (the events that changed the world), ``recovered`` (those after which the team
+    carried out an action that brought the goal nearer), and, summed over the episode's
+    events, ``recovery_rounds`` (the rounds until then, of the events recovered from),
+    ``recovery_wasted`` (actions meanwhile that did not) and ``recovery_calls`` (model
+    calls of those rounds): divide by ``recovered`` or ``recoveries`` for the means per
+    event (:func:`events_table` does). The counts are nullable ints (``Int64``). A file
+    without events gives the frame it gave before events existed."""
     pandas = _pandas("coherent.results's DataFrame")
     frame = _frame(pandas, _coherent.read_results(path, prices=prices))
     frame.attrs["path"] = os.fspath(path)
@@ -84,12 +124,41 @@ def _frame(pandas: ModuleType, lines: list[dict[str, Any]]) -> pd.DataFrame:
         for name in _SETTINGS_FIELDS:
             row[f"settings_{name}"] = settings.get(name)
         rows.append(row)
+    # Only where some line has a reference, so that a file without events is as before.
+    referenced = any(line.get("reference") is not None for line in lines)
+    if referenced:
+        for row, line in zip(rows, lines):
+            row.update(_reference_columns(line))
     # `df.coherent` shows the results page in Jupyter (coherent.view).
     _view.register(pandas)
     frame = pandas.DataFrame(rows)
     if not frame.empty:
         frame = frame.astype({f"settings_{name}": "UInt64" for name in _SETTINGS_INTS})
+    if referenced:
+        frame = frame.astype({name: "Int64" for name in _REFERENCE_INTS})
     return frame
+
+
+def _reference_columns(line: Mapping[str, Any]) -> dict[str, Any]:
+    """The ``reference`` columns of one results line (see :func:`results`); None each
+    for a line without one."""
+    reference = line.get("reference")
+    if reference is None:
+        return dict.fromkeys(_REFERENCE_COLUMNS)
+    recoveries = reference.get("recoveries") or []
+    rounds = [r["rounds"] for r in recoveries if r.get("rounds") is not None]
+    steps = reference.get("steps")
+    return {
+        "event_kinds": "+".join(reference.get("kinds") or []),
+        "reference_steps": steps,
+        "over_reference": None if steps is None else line["steps"] - steps,
+        "unreachable": reference.get("unreachable"),
+        "recoveries": len(recoveries),
+        "recovered": len(rounds),
+        "recovery_rounds": sum(rounds),
+        "recovery_wasted": sum(r["wasted"] for r in recoveries),
+        "recovery_calls": sum(r["calls"] for r in recoveries),
+    }
 
 
 def _lines(data: Results) -> list[dict[str, Any]]:
@@ -99,7 +168,8 @@ def _lines(data: Results) -> list[dict[str, Any]]:
     records = data.to_dict("records") if hasattr(data, "to_dict") else list(data)
     lines = []
     for record in records:
-        line = {k: _missing_to_none(v) for k, v in record.items()}
+        # The reference's columns are the frame's reading of `reference`, which stays.
+        line = {k: _missing_to_none(v) for k, v in record.items() if k not in _REFERENCE_COLUMNS}
         if "backend" not in line:
             line["backend"] = {name: line.pop(f"backend_{name}", None) for name in _BACKEND_FIELDS}
         if "settings" not in line:
@@ -311,7 +381,8 @@ class Report:
     the optimal makespan of their tasks, actions per episode, LLM calls per action,
     simulated seconds (physics), and the speed-up over the same method run sequentially
     (its steps over the parallel ones', on the (task, seed) pairs both solved; ``pairs``
-    says how many).
+    says how many). ``events`` (empty without tasks with events) is the events table,
+    "Events: success and recovery", as :func:`events_table` describes it.
     """
 
     table1: pd.DataFrame
@@ -319,6 +390,7 @@ class Report:
     table3: pd.DataFrame | None
     costs: pd.DataFrame
     makespan: pd.DataFrame
+    events: pd.DataFrame
     backends: list[str]
     seeds: list[int]
     unfinished: int
@@ -386,6 +458,7 @@ def report(data: Results, *, prices: Prices | None = None) -> Report:
         table3=_table(pandas, r["table3"]) if r.get("table3") else None,
         costs=costs,
         makespan=makespan,
+        events=_events_frame(pandas, r.get("events", []), ()),
         backends=r["backends"],
         seeds=r["seeds"],
         unfinished=r["unfinished"],
@@ -408,6 +481,104 @@ _COST_COLUMNS = ("cost_usd", "cost_per_task", "cost_per_success")
 
 # The makespan table's columns that may be None (NaN in the DataFrame).
 _MAKESPAN_COLUMNS = ("makespan", "optimal_makespan", "actions", "calls_per_action", "sim_seconds", "speedup")
+
+
+# The events table's columns (the Rust report's `EventRow`), after its index.
+_EVENT_INDEX = ("method", "execution", "kind")
+_EVENT_COLUMNS = (
+    "episodes",
+    "sr",
+    "conceded",
+    "over_reference",
+    "recovered",
+    "recoveries",
+    "recovery_rounds",
+    "wasted",
+    "recovery_calls",
+)
+# Those that are means, None (NaN) where there is nothing to average.
+_EVENT_MEANS = ("sr", "over_reference", "recovery_rounds", "wasted", "recovery_calls")
+# The statuses of a final results line, as the report counts them.
+_FINAL = ("success", "failure", "conceded")
+
+
+def _events_frame(pandas: ModuleType, rows: list[dict[str, Any]], by: Sequence[str]) -> pd.DataFrame:
+    index = [*_EVENT_INDEX, *by]
+    frame = pandas.DataFrame(rows, columns=[*index, *_EVENT_COLUMNS]).set_index(index)
+    return frame.astype({name: float for name in _EVENT_MEANS})
+
+
+def events_table(data: Results, *, by: Sequence[str] = ()) -> pd.DataFrame:
+    """The events table of benchmark results on tasks with events ("Events: success and
+    recovery" in ``coherent bench``'s report, ``docs/dynamic.md``), from a DataFrame of
+    :func:`bench` or :func:`results` (filtered as you like), a results file, or its
+    lines.
+
+    One row per method, execution and kind of event (the index ``method``,
+    ``execution``, ``kind``: the task's event kinds joined by ``+``), and per value of
+    the columns ``by`` (e.g. ``["scene"]``) added to the index, in the report's order.
+    Of each episode (method, scene, task, seed, execution and the ``by`` columns) it
+    counts the last final line (success, failure or conceded) if that has a
+    ``reference``; so ``by=["settings_backend"]`` keeps apart the lines of two runs that
+    :func:`report` refuses to mix. The columns:
+
+    - ``episodes``; ``sr``, the success rate (conceding a goal put out of reach for good
+      counts as right); ``conceded``, the episodes that did;
+    - ``over_reference``: the mean steps over the reference of the episodes that ended
+      in ``success`` with a reference's steps;
+    - ``recovered`` of ``recoveries``: the events after which the team carried out an
+      action that brought the goal nearer, of those that changed the world;
+    - ``recovery_rounds``: the mean rounds until then, of the events recovered from;
+      ``wasted`` and ``recovery_calls``: the mean actions that did not bring the goal
+      nearer and the mean model calls, per event that changed the world.
+
+    Means are NaN where there is nothing to average; the table is empty (with its
+    columns) when no line has a reference. Without ``by`` it is :func:`report`'s
+    ``events``, which the Rust report computes: the same definitions, worked out here
+    from the columns of :func:`results` (the tests check the two equal)."""
+    pandas = _pandas("coherent.analysis.events_table")
+    frame = _frame(pandas, _lines(data))
+    if frame.empty or "reference" not in frame.columns:
+        return _events_frame(pandas, [], by)
+    final = frame[frame["status"].isin(_FINAL)]
+    final = final.drop_duplicates(["method", "scene", "task_id", "seed", "execution", *by], keep="last")
+    final = final[final["reference"].notna()]
+    keys = ["method", "execution", "event_kinds", *by]
+    rows = []
+    for key, group in final.groupby(keys, sort=False, dropna=False):
+        successes = group.loc[group["status"] == "success", "over_reference"].dropna()
+        recovered, recoveries = int(group["recovered"].sum()), int(group["recoveries"].sum())
+        rows.append(
+            {
+                **{name: _missing_to_none(v) for name, v in zip([*_EVENT_INDEX, *by], key)},
+                "episodes": len(group),
+                "sr": int(group["success"].astype(bool).sum()) / len(group),
+                "conceded": int((group["status"] == "conceded").sum()),
+                "over_reference": _mean(int(successes.sum()), len(successes)),
+                "recovered": recovered,
+                "recoveries": recoveries,
+                "recovery_rounds": _mean(int(group["recovery_rounds"].sum()), recovered),
+                "wasted": _mean(int(group["recovery_wasted"].sum()), recoveries),
+                "recovery_calls": _mean(int(group["recovery_calls"].sum()), recoveries),
+            }
+        )
+    rows.sort(key=_event_order)
+    return _events_frame(pandas, rows, by)
+
+
+def _mean(total: int, count: int) -> float | None:
+    """A mean of ints as the Rust report takes it: their sum over their count."""
+    return total / count if count else None
+
+
+def _event_order(row: Mapping[str, Any]) -> tuple[Any, ...]:
+    """The report's order: the paper's methods in :data:`METHODS`'s order, then the
+    others by name, each sequential before parallel; then the kind, then the ``by``
+    columns (None first)."""
+    method = row["method"]
+    at = _coherent.METHODS.index(method) if method in _coherent.METHODS else len(_coherent.METHODS)
+    rest = [(v is not None, v) for k, v in row.items() if k not in (*_EVENT_INDEX, *_EVENT_COLUMNS)]
+    return (at, method, row["execution"] != "sequential", row["kind"], *rest)
 
 
 def _table(pandas: ModuleType, t: dict[str, Any]) -> pd.DataFrame:

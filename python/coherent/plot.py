@@ -5,15 +5,17 @@
   figure: success rate and average steps per method, with 95% intervals over seeds and
   the ground truth;
 - :func:`timeline`: which robot acted at each step of an episode, failed steps marked,
-  subtask boundaries;
+  subtask boundaries, events (docs/dynamic.md) where they happened;
 - :func:`tokens`: prompt and completion tokens (and model calls) per step;
 - :func:`pareto`: success rate against cost per task, a point per method and model, the
   Pareto front drawn through the points no other beats on both;
-- :func:`scene`: the scene from above, a panel per storey, with the robots' paths.
+- :func:`scene`: the scene from above, a panel per storey, with the robots' paths;
+- :func:`recovery`: per kind of event and method, the success rate, the steps over the
+  reference and how quickly the team recovered (the events table as a figure).
 
-Each returns the matplotlib ``Figure`` (:func:`table`), ``Axes`` (:func:`timeline`,
-:func:`tokens`, :func:`pareto`) or list of ``Axes``, one per storey (:func:`scene`), drawn
-into ``ax`` when given, to save with ``savefig`` or adjust further.
+Each returns the matplotlib ``Figure`` (:func:`table`, :func:`recovery`), ``Axes``
+(:func:`timeline`, :func:`tokens`, :func:`pareto`) or list of ``Axes``, one per storey
+(:func:`scene`), drawn into ``ax`` when given, to save with ``savefig`` or adjust further.
 """
 
 from __future__ import annotations
@@ -26,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 from . import _coherent
 from ._coherent import METHODS, ArgumentError, Episode, Task
 from ._extras import needs
-from .analysis import Report, Results, _frame, _lines, report
+from .analysis import Report, Results, _frame, _lines, events_table, report
 
 with needs("coherent.plot", "analysis"):
     import matplotlib.pyplot as plt
@@ -47,6 +49,7 @@ ReportLike = Union[Report, Results]
 _COLUMN_NAMES = {"mono": "Mono", "dual": "Dual", "trio": "Trio", "Avg": "Average"}
 _ROBOT_MARKERS = {"quadrotor": "^", "robot dog": "s", "robot arm": "o"}
 _FAILED = "#d62728"
+_EVENT = "#9467bd"
 # A white box behind a label that crosses lines and boxes.
 _HALO = {"boxstyle": "round,pad=0.1", "facecolor": "white", "edgecolor": "none", "alpha": 0.7}
 
@@ -130,7 +133,9 @@ def timeline(episode: Episode, ax: Axes | None = None) -> Axes:
     """Which robot the assigner chose at each step: a dot where its action ran, a red
     cross where it did not (infeasible, declined, or no usable answer; a step without
     a usable proposal sits on its own row), a star where the goal was reached, and
-    thin lines between subtasks."""
+    thin lines between subtasks. In an episode with events (docs/dynamic.md), a dashed
+    line before the step each happened before, with its kind (``ends`` at the end of
+    its span)."""
     frame = episode.to_dataframe()
     task = episode.task
     robots = task.robots
@@ -168,6 +173,8 @@ def timeline(episode: Episode, ax: Axes | None = None) -> Axes:
         Line2D([], [], marker="*", color="0.35", markersize=12, linestyle="", label="goal reached"),
         Line2D([], [], color="0.8", label="new subtask"),
     ]
+    if _mark_events(ax, episode):
+        legend.append(Line2D([], [], color=_EVENT, linestyle="--", label="event"))
     ax.legend(handles=legend, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False, fontsize=8)
     gt = "-" if episode.gt_steps is None else episode.gt_steps
     ax.set_title(
@@ -175,6 +182,32 @@ def timeline(episode: Episode, ax: Axes | None = None) -> Axes:
         fontsize=10,
     )
     return ax
+
+
+def _event_name(happened: dict[str, Any]) -> str:
+    if happened.get("ended"):
+        return f"{happened['kind']} ends"
+    return f"{happened['kind']} (void)" if happened.get("void") else happened["kind"]
+
+
+def _mark_events(ax: Axes, episode: Episode) -> int:
+    """A dashed line before each step some event happened before (after the last one
+    for those that left the goal holding, the summary's ``reference.closing``), named
+    along it; returns how many lines."""
+    at: dict[int, list[str]] = {}
+    for r in episode.transcript:
+        for happened in r.get("events", []):
+            at.setdefault(r["step"], []).append(_event_name(happened))
+    closing = (episode.summary.get("reference") or {}).get("closing", [])
+    if closing:
+        at.setdefault(episode.steps + 1, []).extend(_event_name(h) for h in closing)
+    for step, names in at.items():
+        ax.axvline(step - 0.5, color=_EVENT, linestyle="--", linewidth=1.2, zorder=1, gid=f"event {step}")
+        ax.text(
+            step - 0.45, 0.98, ", ".join(names), transform=ax.get_xaxis_transform(), rotation=90,
+            ha="left", va="top", fontsize=7, color=_EVENT, zorder=4, bbox=_HALO,
+        )  # fmt: skip
+    return len(at)
 
 
 def tokens(episode: Episode, ax: Axes | None = None) -> Axes:
@@ -286,6 +319,89 @@ def pareto(results: Results, ax: Axes | None = None) -> Axes:
             color="0.4",
         )
     return ax
+
+
+# The events table's columns `recovery` draws: the axis label and the panel's title.
+_RECOVERY_STATS = {
+    "sr": ("success rate", "Success rate (conceding counts; higher is better)"),
+    "over_reference": ("steps over the reference", "Steps over the reference, successful episodes"),
+    "recovery_rounds": ("rounds", "Rounds to recover, per event recovered from"),
+    "wasted": ("wasted actions", "Actions wasted per event before recovering"),
+    "recovery_calls": ("model calls", "Model calls per event spent recovering"),
+}
+
+
+def _bar_style(method: str, execution: str) -> dict[str, Any]:
+    """A method's bars: its colour, hatched for its parallel episodes, and its row's name."""
+    if execution == "parallel":
+        return {"facecolor": _method_color(method), "hatch": "//", "edgecolor": "white", "label": f"{method} (parallel)"}
+    return {"facecolor": _method_color(method), "label": method}
+
+
+def recovery(
+    results: ReportLike,
+    stats: Sequence[str] = ("sr", "over_reference", "recovery_rounds", "wasted"),
+    *,
+    title: str | None = None,
+) -> Figure:
+    """The events table (:func:`coherent.analysis.events_table`, or a report's
+    ``events``) as a figure: a panel per column of ``stats`` (of ``sr``,
+    ``over_reference``, ``recovery_rounds``, ``wasted``, ``recovery_calls``), grouped
+    bars by kind of event, a bar per method (a method's parallel episodes hatched); no
+    bar where there is nothing to average (steps over the reference where every episode
+    conceded). Raises ``ValueError`` when no results line has a reference (no task with
+    events)."""
+    unknown = [s for s in stats if s not in _RECOVERY_STATS]
+    if unknown or not stats:
+        raise ArgumentError(f"stats={list(stats)!r}: expected some of {', '.join(_RECOVERY_STATS)}")
+    t = results.events if isinstance(results, Report) else events_table(results)
+    if t.empty:
+        raise ValueError("no results line with a reference to plot: run tasks with events (docs/dynamic.md)")
+    rows = list(dict.fromkeys((method, execution) for method, execution, _ in t.index))
+    kinds = sorted({kind for _, _, kind in t.index})
+    x = np.arange(len(kinds), dtype=float)
+    width = 0.8 / len(rows)
+    labels = []
+    for kind in kinds:
+        # The episodes of the kind, when every method ran as many.
+        counts = set(t.xs(kind, level="kind")["episodes"])
+        labels.append(f"{kind}\n(n={counts.pop()})" if len(counts) == 1 else kind)
+    across = len(stats) if len(stats) <= 2 else 2
+    down = -(-len(stats) // across)
+    wide = min(max(4.5, 0.16 * len(kinds) * len(rows) + 1.5), 9.0)
+    size = (wide * across + 1.8, 3.3 * down + 0.9)
+    fig, grid = plt.subplots(down, across, figsize=size, layout="constrained", squeeze=False)
+    axes = list(grid.flat)
+    for ax, stat in zip(axes, stats):
+        for i, (method, execution) in enumerate(rows):
+            values = np.array(
+                [t.loc[(method, execution, k), stat] if (method, execution, k) in t.index else np.nan for k in kinds],
+                dtype=float,
+            )
+            shown = ~np.isnan(values)
+            at = x - 0.4 + width * (i + 0.5)
+            ax.bar(at[shown], values[shown], width * 0.92, **_bar_style(method, execution))
+            # A bar of 0 (the oracle's steps over the reference) is a line, not nothing.
+            zero = values == 0
+            left, right = (at - width * 0.46)[zero], (at + width * 0.46)[zero]
+            ax.hlines(np.zeros(zero.sum()), left, right, colors=[_method_color(method)], linewidth=2.5)
+        ylabel, heading = _RECOVERY_STATS[stat]
+        ax.set_xticks(x, labels, fontsize=8)
+        ax.set_ylabel(ylabel)
+        ax.set_title(heading, fontsize=10)
+        ax.grid(axis="y", alpha=0.3)
+        ax.set_axisbelow(True)
+        ax.axhline(0, color="0.3", linewidth=0.8, zorder=0)
+        if stat == "sr":
+            ax.set_ylim(0, 1.05)
+    for ax in axes[len(stats) :]:
+        ax.set_visible(False)
+    # Drawn apart: a method may have no bar in the first panel.
+    handles = [Rectangle((0, 0), 1, 1, **_bar_style(method, execution)) for method, execution in rows]
+    fig.legend(handles=handles, loc="outside right center", frameon=False)
+    note = "recovering: until the team's first action that brings the goal nearer (docs/dynamic.md)"
+    fig.suptitle(f"{title or 'Events: success and recovery'}\n{note}", fontsize=10)
+    return fig
 
 
 def _level_at(rooms: list[dict[str, Any]], point: Sequence[float]) -> float | None:

@@ -108,3 +108,19 @@ def model_episode(
     into the microwave; GT 5), run once for every test that needs a model's episode."""
     llm = coherent.LLM(base_url=f"{local_model}/v1", model="smollm2-135m", api_key=MODEL_KEY)
     return coherent.run(env0_tasks[2], llm=llm, max_steps=1, out=tmp_path_factory.mktemp("model"))
+
+
+@pytest.fixture(scope="session")
+def events_results(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The results file of a benchmark on tasks with events: the demo's six dynamic
+    variants (one event of each kind, `coherent generate --variants-of`), PEFA, CMRS and
+    the optimal method, sequential and parallel, the simulated backend at 0.2, 3 seeds
+    (108 episodes, a few seconds)."""
+    folder = tmp_path_factory.mktemp("events")
+    assert coherent.cli_main(["coherent", "generate", "--variants-of", str(DEMO), "--out", str(folder / "variants")]) == 0
+    out = folder / "results.jsonl"
+    coherent.bench(
+        folder / "variants", ["pefa", "cmrs", "optimal"], execution=["sequential", "parallel"],
+        backend="simulated", sim_errors="all=0.2", seeds=3, out=out,
+    )  # fmt: skip
+    return out

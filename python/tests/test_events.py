@@ -1,17 +1,22 @@
 """Events from Python (docs/dynamic.md): `coherent.run(events=...)` with a list or a file,
 the episode against its reference, a method written in Python told what happened in its
 view's `news`, bad events raised as `TaskFormatError` naming `events=`, the JSON path
-and the value, before anything runs, and a real small model told of an event end to
-end."""
+and the value, before anything runs, a real small model told of an event end to end;
+and the reference in `coherent.analysis`: the results frame's columns, and the events
+table worked out in pandas equal to the Rust report's, number for number."""
 
 from __future__ import annotations
 
 import json
+import subprocess
 from pathlib import Path
+from typing import Any
 
+import pandas as pd
 import pytest
 
 import coherent
+from coherent import analysis
 from conftest import DEMO
 
 MOVED = [{"step": 3, "kind": "object_moved", "thing": 9, "relation": "ON", "target": 14}]
@@ -109,3 +114,111 @@ def test_stepping_by_hand_refuses_a_task_with_events(tmp_path: Path) -> None:
     (task,) = coherent.load_tasks(path)
     with pytest.raises(coherent.ArgumentError, match="Env does not run events yet"):
         coherent.Env(task)
+
+
+def test_the_results_frame_spreads_the_reference(events_results: Path, demo: coherent.Task, tmp_path: Path) -> None:
+    frame = coherent.results(events_results)
+    lines = coherent._coherent.read_results(events_results)
+    assert len(frame) == len(lines) == 108
+    for (_, row), line in zip(frame.iterrows(), lines):
+        reference = line["reference"]
+        recoveries = reference["recoveries"]
+        assert row["reference"] == reference
+        assert row["event_kinds"] == "+".join(reference["kinds"])
+        assert _na_or(row["reference_steps"]) == reference.get("steps")
+        steps = reference.get("steps")
+        assert _na_or(row["over_reference"]) == (None if steps is None else line["steps"] - steps)
+        assert _na_or(row["unreachable"]) == reference.get("unreachable")
+        assert row["recoveries"] == len(recoveries)
+        assert row["recovered"] == sum(r.get("rounds") is not None for r in recoveries)
+        assert row["recovery_rounds"] == sum(r.get("rounds") or 0 for r in recoveries)
+        assert row["recovery_wasted"] == sum(r["wasted"] for r in recoveries)
+        assert row["recovery_calls"] == sum(r["calls"] for r in recoveries)
+    assert set(frame["event_kinds"]) == {"robot_down", "robot_up", "object_moved", "goal_changed", "blocked", "action_fails"}
+    assert all(str(frame[c].dtype) == "Int64" for c in analysis._REFERENCE_INTS)
+    # Every sequential robot_down episode conceded a goal out of reach for good.
+    down = frame[(frame["event_kinds"] == "robot_down") & (frame["execution"] == "sequential")]
+    assert (down["status"] == "conceded").all() and down["unreachable"].notna().all()
+    assert down["reference_steps"].isna().all()
+    # A file without events: the frame it was before events existed, not one column more.
+    plain = tmp_path / "plain.jsonl"
+    coherent.bench([demo], ["optimal"], out=plain)
+    (line,) = coherent._coherent.read_results(plain)
+    spread = [f"backend_{n}" for n in analysis._BACKEND_FIELDS] + [f"settings_{n}" for n in analysis._SETTINGS_FIELDS]
+    expected = [k for k in line if k not in ("backend", "settings")] + spread
+    assert list(coherent.results(plain).columns) == expected
+    # Lines with and without: NA where there is none.
+    both = tmp_path / "both.jsonl"
+    both.write_text(plain.read_text() + events_results.read_text())
+    mixed = coherent.results(both)
+    assert mixed.loc[0, list(analysis._REFERENCE_COLUMNS)].isna().all() and pd.isna(mixed.loc[0, "reference"])
+    columns = list(analysis._REFERENCE_COLUMNS)
+    pd.testing.assert_frame_equal(mixed[columns].iloc[1:].reset_index(drop=True), frame[columns])
+    # A frame with them reports as its file does (the columns are read from `reference`).
+    assert coherent.report(frame).markdown() == coherent.report(events_results).markdown()
+
+
+def _na_or(value: Any) -> Any:
+    return None if pd.isna(value) else value
+
+
+def _markdown_row(key: tuple[str, str, str], row: dict[str, Any]) -> str:
+    """A row of the Rust report's events table in Markdown (`harness/dynamic.rs`)."""
+    method, execution, kind = key
+
+    def opt(x: float) -> str:
+        return "-" if pd.isna(x) else f"{x:.2f}"
+
+    name = method if execution == "sequential" else f"{method} (parallel)"
+    cells = [
+        name, kind, str(row["episodes"]), f"{row['sr']:.3f}", str(row["conceded"]), opt(row["over_reference"]),
+        f"{row['recovered']}/{row['recoveries']}", opt(row["recovery_rounds"]), opt(row["wasted"]), opt(row["recovery_calls"]),
+    ]  # fmt: skip
+    return "| " + " | ".join(cells) + " |"
+
+
+def test_the_events_table_is_the_reports(events_results: Path, coherent_exe: str) -> None:
+    """Worked out in pandas, the table is the one the Rust report computes (its frame
+    and its text), row for row and number for number."""
+    table = analysis.events_table(events_results)
+    report = coherent.report(events_results)
+    pd.testing.assert_frame_equal(table, report.events, check_exact=True)
+    methods = ["pefa", "cmrs", "optimal"]
+    kinds = sorted({"robot_down", "robot_up", "object_moved", "goal_changed", "blocked", "action_fails"})
+    assert list(table.index) == [(m, e, k) for m in methods for e in ("sequential", "parallel") for k in kinds]
+    assert list(table.columns) == list(analysis._EVENT_COLUMNS)
+    assert (table["episodes"] == 3).all()
+    # A lock is two changes, the lock and the door opening again.
+    assert (table.xs("blocked", level="kind")["recoveries"] == 6).all()
+    assert table.loc[("optimal", "sequential", "robot_down"), "conceded"] == 3
+    assert table.xs("sequential", level="execution").loc["optimal", "over_reference"].dropna().eq(0).all()
+    assert table["recovery_rounds"].notna().any() and table["over_reference"].isna().any()
+    cli = subprocess.run([coherent_exe, "bench", "--report", str(events_results)], capture_output=True, text=True, check=True)
+    part = cli.stdout.split("### Events: success and recovery")[1]
+    rows = [line for line in part.splitlines() if line.startswith("| ") and not line.startswith("| Method")]
+    assert rows == [_markdown_row(key, row) for key, row in zip(table.index, table.to_dict("records"))]
+
+
+def test_the_events_table_of_a_frame_filtered_grouped_or_of_several_runs(events_results: Path, tmp_path: Path) -> None:
+    frame = coherent.results(events_results)
+    whole = analysis.events_table(frame)
+    by_seed = analysis.events_table(frame, by=["seed"])
+    assert by_seed.index.names == ["method", "execution", "kind", "seed"]
+    assert len(by_seed) == 3 * len(whole)
+    counts = ["episodes", "conceded", "recovered", "recoveries"]
+    pd.testing.assert_frame_equal(by_seed[counts].groupby(level=[0, 1, 2], sort=False).sum(), whole[counts])
+    only = analysis.events_table(frame[frame["method"] == "cmrs"])
+    pd.testing.assert_frame_equal(only, whole.loc[["cmrs"]])
+    # Another run's lines in the same frame: the report refuses them, the table takes them.
+    other = tmp_path / "other.jsonl"
+    coherent.bench(events_results.parent / "variants", ["optimal"], out=other)
+    both = pd.concat([frame, coherent.results(other)], ignore_index=True)
+    with pytest.raises(coherent.ArgumentError, match="report one run at a time"):
+        coherent.report(both)
+    table = analysis.events_table(both, by=["settings_backend"])
+    assert table.loc[("optimal", "sequential", "object_moved", "builtin"), "episodes"] == 1
+    pd.testing.assert_frame_equal(table.xs("simulated", level="settings_backend"), whole)
+    # Results without events have an empty table, with its columns.
+    empty = analysis.events_table(coherent.results(other).drop(columns=["reference", *analysis._REFERENCE_COLUMNS]))
+    assert empty.empty and list(empty.columns) == list(analysis._EVENT_COLUMNS)
+    assert list(empty.index.names) == ["method", "execution", "kind"]

@@ -13,8 +13,8 @@ from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.container import BarContainer  # noqa: E402
 
 import coherent  # noqa: E402
-from coherent import plot  # noqa: E402
-from conftest import DEMO  # noqa: E402
+from coherent import analysis, plot  # noqa: E402
+from conftest import DEMO, REPO  # noqa: E402
 
 
 @pytest.fixture(scope="module")
@@ -74,6 +74,50 @@ def test_timeline_marks_each_step_and_failed_ones_and_the_success(episode: coher
     assert len(failed) == (frame["outcome"] != "executed").sum() > 0
     assert [line.get_marker() for line in markers].count("*") == int(episode.success)
     assert f"demo-apartment task 0, pefa: {episode.status} in {episode.steps} steps (GT 22)" == ax.get_title()
+
+
+def test_timeline_marks_each_event_before_its_step(episode: coherent.Episode, tmp_path: Path) -> None:
+    demo = coherent.load_tasks(DEMO)[0]
+    events = coherent.run(demo, events=REPO / "examples" / "events" / "demo.json", out=tmp_path)
+    ax = plot.timeline(events)
+    at = {r["step"]: [h["kind"] + (" ends" if h.get("ended") else "") for h in r["events"]] for r in events.transcript if r.get("events")}
+    assert sorted(at.values()) == [["blocked"], ["blocked ends"], ["robot_down"]]
+    marks = [line for line in ax.get_lines() if (line.get_gid() or "").startswith("event")]
+    assert sorted(line.get_xdata()[0] for line in marks) == sorted(step - 0.5 for step in at)
+    assert {", ".join(names) for names in at.values()} <= {t.get_text() for t in ax.texts}
+    assert "event" in [t.get_text() for t in ax.get_legend().get_texts()]
+    # Without events, none.
+    ax = plot.timeline(episode)
+    assert not [line for line in ax.get_lines() if line.get_gid()] and not ax.texts
+    assert "event" not in [t.get_text() for t in ax.get_legend().get_texts()]
+
+
+def test_recovery_draws_a_bar_per_method_and_kind_in_a_panel_per_column(events_results: Path, tmp_path: Path) -> None:
+    fig = plot.recovery(events_results)
+    table = analysis.events_table(events_results)
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    assert [ax.get_ylabel() for ax in axes] == ["success rate", "steps over the reference", "rounds", "wasted actions"]
+    kinds = sorted(set(table.index.get_level_values("kind")))
+    for ax, column in zip(axes, ["sr", "over_reference", "recovery_rounds", "wasted"]):
+        assert [t.get_text().split("\n")[0] for t in ax.get_xticklabels()] == kinds
+        # A bar per row with a number; none where there is nothing to average.
+        assert sorted(p.get_height() for p in ax.patches) == pytest.approx(sorted(table[column].dropna()))
+    assert [t.get_text() for t in axes[0].get_xticklabels()][0] == "action_fails\n(n=3)"
+    names = [t.get_text() for t in fig.legends[0].get_texts()]
+    assert names == ["pefa", "pefa (parallel)", "cmrs", "cmrs (parallel)", "optimal", "optimal (parallel)"]
+    assert fig.get_suptitle().startswith("Events: success and recovery")
+    fig.savefig(tmp_path / "recovery.png")
+    assert (tmp_path / "recovery.png").stat().st_size > 10_000
+
+
+def test_recovery_from_a_report_and_its_errors(events_results: Path, results: coherent.Report) -> None:
+    fig = plot.recovery(coherent.report(events_results), stats=["recovery_calls"], title="mine")
+    (ax,) = fig.axes
+    assert ax.get_ylabel() == "model calls" and fig.get_suptitle().startswith("mine")
+    with pytest.raises(ValueError, match="no results line with a reference"):
+        plot.recovery(results)
+    with pytest.raises(ValueError, match=r"stats=\['speed'\]: expected some of sr, over_reference"):
+        plot.recovery(events_results, stats=["speed"])
 
 
 def test_tokens_of_a_backend_without_tokens(episode: coherent.Episode) -> None:

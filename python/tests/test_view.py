@@ -17,9 +17,13 @@ from typing import Any
 
 import pytest
 from browser import Watched, chromium, watch
-from conftest import DEMO
+from conftest import DEMO, REPO
 
 import coherent
+
+# The demo's events (docs/dynamic.md): the arm goes down once the mug is in the basket,
+# and a door is locked for two steps before step 9.
+EVENTS = REPO / "examples" / "events" / "demo.json"
 
 # Where the tests leave the screenshots of the pages (docs/figures when refreshing the
 # documentation's pictures); a scratch folder by default.
@@ -98,6 +102,8 @@ def test_the_demo_page_shows_each_step_as_run_printed_it_and_moves_the_robots_by
     rects = room_rects(page, task)
     recorded = rounds(transcript)
     assert len(printed) == len(recorded) > 0
+    # Without events, no event is marked and no reference is shown.
+    assert page.query_selector_all(".steps li.event, .happened, .card.reference, .badge.event") == []
 
     def check_rooms() -> None:
         expected = rooms_by_the_rules(env)
@@ -338,6 +344,152 @@ def test_a_hostile_transcript_runs_nothing_and_shows_its_text_as_written(coheren
     for text in texts:
         assert as_shown(text) in answers
     assert page.evaluate("window.__pwned") is None
+    w.assert_quiet()
+
+
+def records(transcript: Path) -> list[dict[str, Any]]:
+    return [json.loads(line) for line in transcript.read_text(encoding="utf-8").splitlines() if line.strip()]
+
+
+def optimum_shown(p: dict[str, Any]) -> str:
+    """The optimum as the page words it."""
+    if "unreachable" in p:
+        return "unreachable: " + p["unreachable"]
+    if "steps" in p:
+        joint = f", {p['makespan']} joint" if "makespan" in p else ""
+        return f"{p['steps']} step{'' if p['steps'] == 1 else 's'}{joint}"
+    return "unknown: " + p["unknown"] if "unknown" in p else "unknown"
+
+
+EVENT_ROWS = """ls => ls.map(l => ({
+  event: Number(l.dataset.event), before: Number(l.dataset.before), kind: l.dataset.kind,
+  ended: l.classList.contains('ended'), told: l.querySelector('.told')?.textContent ?? '',
+  optimum: l.querySelector('.optimum').textContent }))"""
+
+
+def test_events_are_marked_where_they_happened_with_what_was_told_and_the_reference(
+    coherent_exe: str, tmp_path: Path, browser: Any
+) -> None:
+    printed, transcript = run_episode(coherent_exe, tmp_path / "runs", "--events", str(EVENTS))
+    recorded = rounds(transcript)
+    summary = records(transcript)[-1]
+    reference = summary["reference"]
+    happened = [(r["step"], e) for r in recorded for e in r.get("events", [])]
+    assert sorted((e["kind"], e.get("ended", False)) for _, e in happened) == [
+        ("blocked", False), ("blocked", True), ("robot_down", False)
+    ]
+    page_file = tmp_path / "events.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    page = w.page
+    # A row per event in the step list, just before the line of the step it came before.
+    rows = page.eval_on_selector_all(".steps li.event", EVENT_ROWS)
+    assert rows == [
+        {
+            "event": e["event"], "before": step, "kind": e["kind"], "ended": e.get("ended", False),
+            "told": "told: " + e["told"] if e["told"] else "",
+            "optimum": "optimum after it: " + optimum_shown(e["optimum"]),
+        }
+        for step, e in happened
+    ]
+    order = page.eval_on_selector_all(".steps li", "ls => ls.map(l => l.dataset.step ?? 'before ' + l.dataset.before)")
+    for i, item in enumerate(order):
+        if item.startswith("before "):
+            after = next((x for x in order[i + 1 :] if not x.startswith("before ")), None)
+            assert after == item.removeprefix("before "), order
+    assert page.get_attribute(".steps li.event.ended", "data-kind") == "blocked"
+    # The chosen step shows what happened before it, in full, above its line.
+    for step, e in happened:
+        page.goto(f"{page_file.as_uri()}#step={step}")
+        page.wait_for_selector(f".steps li.current[data-step='{step}']")
+        shown = page.query_selector(f".detail .happened[data-event='{e['event']}']{'.ended' if e.get('ended') else ':not(.ended)'}")
+        assert shown is not None, (step, e)
+        assert shown.query_selector("[data-field=told]").text_content() == as_shown(e["told"])
+        assert shown.query_selector("[data-field=optimum]").text_content() == optimum_shown(e["optimum"])
+        assert page.text_content(".detail pre.line") == printed[step - 1]
+    # The reference beside the episode: its steps against those taken, the optimum at
+    # the start, and the recovery from each event that changed the world.
+    steps = page.query_selector(".reference [data-field=reference] span")
+    assert steps.get_attribute("data-reference") == str(reference["steps"])
+    assert steps.get_attribute("data-taken") == str(summary["steps"])
+    assert summary["steps"] == reference["steps"], "the built-in backend ends in the reference's steps"
+    assert page.text_content(".reference [data-field=start]") == "optimum " + optimum_shown(reference["start"])
+    recoveries = page.eval_on_selector_all(
+        ".reference table.recoveries tbody tr",
+        "rs => rs.map(r => [Number(r.dataset.event), ...['rounds', 'wasted', 'calls'].map(k => r.querySelector(`[data-key=${k}]`).textContent)])",
+    )
+    assert recoveries == [
+        [c["event"], "none" if c.get("rounds") is None else str(c["rounds"]), str(c["wasted"]), str(c["calls"])]
+        for c in reference["recoveries"]
+    ]
+    assert recoveries, "the arm going down changes the world"
+    assert page.query_selector(".reference [data-field=unreachable]") is None
+    if SCREENSHOTS:
+        # At the step before which the door is locked, tall enough for its detail.
+        locked = next(step for step, e in happened if e["kind"] == "blocked" and not e.get("ended"))
+        page.set_viewport_size({"width": 1500, "height": 1160})
+        page.goto(f"{page_file.as_uri()}#step={locked}")
+        page.wait_for_selector(".steps li.current")
+        page.screenshot(path=str(Path(SCREENSHOTS) / "view-events.png"), full_page=False)
+    w.assert_quiet()
+
+    # Text about events is data: hostile words where the engine's would be are shown as
+    # written and run nothing.
+    lines = records(transcript)
+    first = next(r for r in lines if r.get("type") == "round" and r.get("events"))
+    first["events"][0]["told"] = HOSTILE[0]
+    first["events"][0]["void"] = HOSTILE[1]
+    first["events"][0]["optimum"] = {"unreachable": HOSTILE[2]}
+    lines[-1]["reference"]["unreachable"] = HOSTILE[0]
+    hostile = tmp_path / "hostile-events.jsonl"
+    hostile.write_text("".join(json.dumps(r) + "\n" for r in lines), encoding="utf-8")
+    page_file = tmp_path / "hostile-events.html"
+    view(coherent_exe, str(hostile), "-o", str(page_file))
+    w = watch(browser)
+    w.open(f"{page_file.as_uri()}#step={first['step']}")
+    page = w.page
+    detail = page.query_selector(".detail .happened")
+    assert detail.query_selector("[data-field=told]").text_content() == HOSTILE[0]
+    assert detail.query_selector("[data-field=void]").text_content() == HOSTILE[1]
+    assert detail.query_selector("[data-field=optimum]").text_content() == "unreachable: " + as_shown(HOSTILE[2])
+    assert page.text_content(".reference [data-field=unreachable]") == "for good: " + HOSTILE[0]
+    assert page.evaluate("window.__pwned") is None
+    assert page.query_selector_all("img") == []
+    w.assert_quiet()
+
+
+def test_where_the_robots_are_by_the_rules_follows_an_event_that_moves_a_thing(
+    coherent_exe: str, tmp_path: Path, browser: Any
+) -> None:
+    # The demo's variant where the mug is moved mid-task: the team fetches it from where
+    # the event put it, which the rules allow only with the event carried out.
+    subprocess.run(
+        [coherent_exe, "generate", "--variants-of", str(DEMO), "--out", str(tmp_path / "variants")],
+        capture_output=True, text=True, check=True,
+    )
+    task = tmp_path / "variants" / "demo-apartment-task0-object_moved.json"
+    done = subprocess.run(
+        [coherent_exe, "run", str(task), "--out", str(tmp_path / "runs")], capture_output=True, text=True, check=True
+    )
+    transcript = Path(next(line for line in done.stdout.splitlines() if line.startswith("transcript: ")).split(": ", 1)[1])
+    recorded = rounds(transcript)
+    moved = next(r["step"] for r in recorded if r.get("events"))
+    grabs = [
+        (r["step"], r["decision"]["robot"], r["decision"]["action"].removeprefix("[grab] "))
+        for r in recorded
+        if r["step"] > moved and r["outcome"]["kind"] == "executed" and r["decision"]["action"].startswith("[grab]")
+    ]
+    assert grabs, "the team picks the moved thing up again"
+    page_file = tmp_path / "moved.html"
+    view(coherent_exe, str(transcript), "-o", str(page_file))
+    w = watch(browser)
+    w.open(page_file.as_uri())
+    for step, robot, thing in grabs:
+        w.page.goto(f"{page_file.as_uri()}#step={step}")
+        w.page.wait_for_selector(f".steps li.current[data-step='{step}']")
+        held = w.page.text_content(f".scene li[data-robot='{robot}'] .holds") or ""
+        assert thing in held, (step, robot, thing, held)
     w.assert_quiet()
 
 

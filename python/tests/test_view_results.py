@@ -109,6 +109,35 @@ def test_the_results_page_has_the_analysis_numbers_and_links_each_episode(
         page.wait_for_selector("#episodes")
     # The figures are drawn by the page: a point per method.
     assert sorted(page.eval_on_selector_all("#sr-steps circle", "cs => cs.map(c => c.dataset.method)")) == sorted(METHODS)
+    # Without events, no reference column.
+    assert "reference" not in page.eval_on_selector_all("#episodes thead th", "ts => ts.map(t => t.textContent)")
+    w.assert_quiet()
+
+
+def test_results_with_events_have_each_episodes_reference(coherent_exe: str, tmp_path: Path, browser: Any) -> None:
+    demo = Path(__file__).resolve().parents[2] / "examples" / "tasks" / "demo.json"
+    variants = tmp_path / "variants"
+    subprocess.run([coherent_exe, "generate", "--variants-of", str(demo), "--out", str(variants)], capture_output=True, check=True)
+    results = tmp_path / "results.jsonl"
+    subprocess.run(
+        [coherent_exe, "bench", "--tasks", str(variants), "--methods", "optimal", "--out", str(results)],
+        capture_output=True, check=True,
+    )
+    subprocess.run([coherent_exe, "view", str(results), "-o", str(tmp_path / "site")], capture_output=True, check=True)
+    lines = [json.loads(line) for line in results.read_text(encoding="utf-8").splitlines()]
+    w = watch(browser)
+    w.open((tmp_path / "site" / "index.html").as_uri())
+    heads = w.page.eval_on_selector_all("#episodes thead th", "ts => ts.map(t => t.textContent)")
+    assert heads.index("reference") == heads.index("GT") + 1
+    shown = w.page.eval_on_selector_all(
+        "#episodes tbody tr", "rs => rs.map(r => [Number(r.dataset.line), r.querySelector('td.reference').textContent])"
+    )
+    expected = {
+        i: str(line["reference"]["steps"]) if "steps" in line["reference"] else "out of reach"
+        for i, line in enumerate(lines)
+    }
+    assert dict(shown) == expected
+    assert "out of reach" in expected.values(), "a robot that goes down for good puts the goal out of reach"
     w.assert_quiet()
 
 

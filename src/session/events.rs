@@ -1,14 +1,14 @@
 //! A task's events (docs/dynamic.md) as a front end gives them: in the task file, in a
 //! file of their own (`coherent run --events FILE`), or as Python values (`events=`);
 //! read against the task, and checked against the episode before it starts: within the
-//! step budget, and in a world that carries them out (the rules; not yet physics or
-//! robots over ROS 2).
+//! step budget, and in a world that carries them out (the rules, and physics but for a
+//! robot joining elsewhere than the task placed it; not yet robots over ROS 2).
 
 use std::path::PathBuf;
 use std::sync::Arc;
 
 use coherent_core::files::{self, Limit, MIB};
-use coherent_core::{JsonPath, Task, events, json};
+use coherent_core::{Happening, JsonPath, Task, events, json};
 use serde_json::Value;
 
 use crate::session::error::Error;
@@ -94,18 +94,27 @@ pub fn check(
             ),
         }));
     }
-    let world = match (physics, robots) {
-        (_, Robots::Ros2(_)) => Some("robots over ROS 2"),
-        (true, _) => Some("physics"),
-        _ => None,
-    };
-    if let Some(world) = world {
+    if let Robots::Ros2(_) = robots {
         return Err(Error::Invalid(format!(
-            "{}: the task has {} events, and {world} does not carry events out yet (the rules \
-             do: leave out --physics and --robots ros2)",
+            "{}: the task has {} events, and robots over ROS 2 do not carry events out yet \
+             (the rules and physics do: leave out --robots ros2)",
             origin.file,
             task.events.len()
         )));
+    }
+    if physics
+        && let Some(i) = task
+            .events
+            .iter()
+            .position(|e| matches!(e.happening, Happening::RobotUp { room: Some(_), .. }))
+    {
+        return Err(Error::Task(coherent_core::Error::Malformed {
+            file: origin.file.clone(),
+            path: origin.path.index(i).key("room"),
+            message: "physics does not carry a robot anywhere at an event: in physics a robot \
+                      joins where the task placed it (leave out `room`, or --physics)"
+                .into(),
+        }));
     }
     Ok(())
 }

@@ -138,12 +138,13 @@ pub trait Environment {
 
     /// Puts the world where an event left it (docs/dynamic.md): `task` is the task as
     /// the event left it (its team, goal and doors), `state` the state. The rules take
-    /// any; a world that cannot follow (physics, robots over ROS 2, for now) says why,
-    /// and an episode with events is refused there before it starts.
+    /// any, physics what it can carry out; a world that cannot follow (robots over ROS
+    /// 2, for now) says why, and an episode with events is refused there before it
+    /// starts.
     fn befall(&mut self, task: Arc<Task>, state: State) -> Result<()> {
         let _ = (task, state);
         Err(crate::Error::Unsupported(
-            "this world does not take events (only the rules do, for now)".into(),
+            "this world does not take events (the rules and physics do)".into(),
         ))
     }
 

@@ -20,6 +20,8 @@ use crate::world::{FailureKind, PhysicsError, Placement, World, fail};
 /// A symbolic environment whose every action is also carried out in Rapier.
 #[derive(Debug)]
 pub struct PhysicalEnv {
+    /// The task as given; `task` is the task as events have left it (docs/dynamic.md).
+    base: Arc<Task>,
     task: Arc<Task>,
     layout: Layout,
     state: State,
@@ -61,6 +63,7 @@ impl PhysicalEnv {
         let world = World::new(task.clone(), layout.clone())?;
         let env = PhysicalEnv {
             state: task.init.clone(),
+            base: Arc::clone(&task),
             task,
             layout,
             world,
@@ -215,6 +218,45 @@ impl PhysicalEnv {
         })?;
         rules::apply(&self.task, &mut self.state, robot, a);
         self.compare()
+    }
+
+    /// Sets down each movable thing whose place differs between the current state and
+    /// `next` (a state an event left) where `next` has it.
+    fn move_things(&mut self, task: &Task, next: &State) -> Result<(), PhysicsError> {
+        for x in task.indices() {
+            let node = task.node(x);
+            if !(node.properties.contains(PropSet::GRABABLE) || node.kind == NodeKind::Tool) {
+                continue;
+            }
+            let place = |s: &State| {
+                s.out(x)
+                    .iter()
+                    .filter(|e| e.rel().is_location())
+                    .map(|e| (e.rel(), e.to()))
+                    .collect::<Vec<_>>()
+            };
+            let now = place(next);
+            let held = |s: &State| {
+                task.indices()
+                    .any(|r| s.has(Edge::new(r, Relation::Hold, x)))
+            };
+            if place(&self.state) == now && held(&self.state) == held(next) {
+                continue;
+            }
+            let [(relation, holder)] = now[..] else {
+                return fail(
+                    FailureKind::Disagreement,
+                    format!("{} was moved to no single place", node.label()),
+                );
+            };
+            let near: Vec<Idx> = next
+                .sources(Relation::Close, x)
+                .filter(|&r| task.robot(r).is_some_and(|r| r.kind == RobotKind::RobotDog))
+                .collect();
+            self.world
+                .move_thing(x, holder, relation == Relation::Inside, &near)?;
+        }
+        Ok(())
     }
 
     /// Relations read back from the bodies against the symbolic state; every difference
@@ -416,6 +458,39 @@ impl Environment for PhysicalEnv {
         })
     }
 
+    /// Things an event moved are set down where the rules now have them
+    /// ([`World::move_thing`]), and the bodies must then agree with the new state. A
+    /// robot that goes down stays as an obstacle; a robot joins only where the task
+    /// placed it (physics does not carry a robot elsewhere: `coherent run` refuses such
+    /// an event first). A physical failure is an error, and the world stays
+    /// inconsistent.
+    fn befall(&mut self, task: Arc<Task>, state: State) -> coherent_core::Result<()> {
+        let physics = |e: PhysicsError| coherent_core::Error::Unsupported(format!("physics: {e}"));
+        self.consistent().map_err(physics)?;
+        let stance = |t: &Task, s: &State, r: Idx| {
+            let on = [Relation::On, Relation::Above].map(|rel| s.target(r, rel));
+            (rules::room_of(t, s, r), s.states(r), on)
+        };
+        for r in &self.base.robots {
+            if stance(&self.base, &self.state, r.node) != stance(&task, &state, r.node) {
+                return Err(coherent_core::Error::Unsupported(format!(
+                    "physics does not carry {} anywhere at an event: a robot joins where the \
+                     task placed it",
+                    task.node(r.node).label()
+                )));
+            }
+        }
+        let out = self.move_things(&task, &state).and_then(|()| {
+            self.task = task;
+            self.state = state;
+            self.compare()
+        });
+        out.map_err(|e| {
+            self.last_error = Some(e.clone());
+            physics(e)
+        })
+    }
+
     /// From the world's building on: it settles for up to a second before the first
     /// action.
     fn sim_seconds(&self) -> Option<f64> {
@@ -424,6 +499,7 @@ impl Environment for PhysicalEnv {
 
     /// Rebuilds the world from the layout (deterministic: the same bodies in the same order).
     fn reset(&mut self) {
+        self.task = Arc::clone(&self.base);
         self.state = self.task.init.clone();
         self.last_error = None;
         match World::new(self.task.clone(), self.layout.clone()) {

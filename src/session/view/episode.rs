@@ -21,6 +21,7 @@ use coherent_core::text::{shown, shown_lines};
 use coherent_core::{NodeId, RobotReport, Task};
 use serde::Serialize;
 
+use super::events::{self, EventView, ReferenceView};
 use super::scene::{self, Scene};
 use crate::session::lines;
 
@@ -44,6 +45,10 @@ pub struct EpisodeView {
     pub result: Ending,
     pub scene: Scene,
     pub steps: Vec<Step>,
+    /// What an episode with events is measured against (docs/dynamic.md); absent
+    /// without events, so that such a page's data is what it was before them.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference: Option<ReferenceView>,
 }
 
 /// The episode's settings.
@@ -106,6 +111,10 @@ pub struct Step {
     pub calls: Vec<CallView>,
     pub done: bool,
     pub wall_ms: f64,
+    /// What happened before the step that the team did not do (the task's events);
+    /// absent without.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub events: Vec<EventView>,
 }
 
 /// One robot's part in a step.
@@ -230,6 +239,11 @@ pub fn view(e: &Given, ids: &str, progress: &mut dyn FnMut(usize, usize)) -> Epi
         result,
         scene: scene::follow(task, t, ids, progress),
         steps,
+        reference: t
+            .summary
+            .as_ref()
+            .and_then(|s| s.reference.as_deref())
+            .map(|r| events::reference(task, r, &t.rounds)),
     }
 }
 
@@ -296,6 +310,7 @@ fn step(task: &Task, r: &Round, max_steps: u32, execution: Execution) -> Step {
         calls: r.calls.iter().map(|c| call(task, c)).collect(),
         done: r.done,
         wall_ms: r.wall_ms,
+        events: r.events.iter().map(|h| events::happened(task, h)).collect(),
     }
 }
 

@@ -11,6 +11,7 @@
 //! - [`read`]: what a file holds (a transcript or results), an episode read to show;
 //! - [`pages`]: the pages, data in and HTML out, and how far a long one is;
 //! - [`episode`]: what an episode's page shows, as data;
+//! - [`events`]: the task's events where they happened, and the reference;
 //! - [`scene`]: the scene at each step (pictures, positions, what robots hold);
 //! - [`compare`]: two episodes together, and the first round they differ in;
 //! - [`results`]: a results file's tables, figures and episodes;
@@ -21,6 +22,7 @@
 
 pub mod compare;
 pub mod episode;
+pub mod events;
 pub mod page;
 pub mod pages;
 pub mod read;

@@ -43,6 +43,19 @@ pub struct Row {
     pub error: Option<String>,
     /// Its page, relative to the index; none when its transcript is not at hand.
     pub link: Option<String>,
+    /// What an episode with events is measured against (docs/dynamic.md); absent
+    /// without events.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub reference: Option<RowReference>,
+}
+
+/// An episode's reference, as its row shows it.
+#[derive(Debug, Serialize)]
+pub struct RowReference {
+    /// The reference's steps; none when the goal is out of reach or its optimum unknown.
+    pub steps: Option<u32>,
+    /// Why the goal is out of reach for good, when it is.
+    pub unreachable: Option<String>,
 }
 
 /// The lines with every name from the file shown as on a terminal, so that the tables
@@ -91,6 +104,10 @@ pub fn view(
             wall_ms: l.wall_ms,
             error: l.error.as_deref().map(|e| shown(e).into_owned()),
             link: links.get(i).cloned().flatten(),
+            reference: l.reference.as_ref().map(|r| RowReference {
+                steps: r.steps,
+                unreachable: r.unreachable.as_deref().map(|u| shown(u).into_owned()),
+            }),
         })
         .collect();
     // The tables of one run: a file that holds several (written by an earlier version,

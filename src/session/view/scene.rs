@@ -3,15 +3,16 @@
 //! robot is, the path it has come so far, and by the rules which room it is in, what
 //! it is next to and what it holds or carries.
 //!
-//! The rules go first, through every round: they give each round's state, and so what
-//! the page says of rooms, holds and doors. Positions come from carrying the executed
-//! actions out in Rapier, as `coherent render --transcript` does, but a round is carried
-//! out only once: a round that does again what an earlier one did (the same actions from
-//! the same state, as an episode going round in circles does) is drawn as physics drew
-//! it the first time, so that a long episode costs the rounds that are new, not all of
-//! them. When physics cannot follow the episode (a layout that cannot be built, an
-//! action that fails physically), the robots stay drawn where physics left them and the
-//! page says why; the rules still say where they are.
+//! The rules go first, through every round (and the task's events before the rounds
+//! they came before): they give each round's state, and so what the page says of rooms,
+//! holds and doors. Positions come from carrying the executed actions out in Rapier, as
+//! `coherent render --transcript` does, but a round is carried out only once: a round
+//! that does again what an earlier one did (the same actions from the same state, as an
+//! episode going round in circles does) is drawn as physics drew it the first time, so
+//! that a long episode costs the rounds that are new, not all of them. When physics
+//! cannot follow the episode (a layout that cannot be built, an action that fails
+//! physically), the robots stay drawn where physics left them and the page says why;
+//! the rules still say where they are.
 
 use std::collections::{HashMap, VecDeque};
 use std::sync::Arc;
@@ -20,7 +21,7 @@ use coherent_agents::transcript::Transcript;
 use coherent_core::rules;
 use coherent_core::text::shown;
 use coherent_core::{
-    Environment, Idx, NodeId, NodeKind, Relation, State, StateSet, SymbolicEnv, Task,
+    Environment, Idx, NodeId, NodeKind, Relation, Schedule, State, StateSet, SymbolicEnv, Task,
 };
 use coherent_sim::render::{Stage, robot_colour};
 use coherent_sim::{PhysicalEnv, layout};
@@ -110,8 +111,20 @@ impl<'t> ByRules<'t> {
             at: Vec::with_capacity(t.rounds.len() + 1),
             rounds: Vec::with_capacity(t.rounds.len()),
         };
+        // The task's events, carried out before the rounds they came before, as the
+        // episode did: a thing moved, a robot joined in a room, is where the rules say.
+        let mut schedule = (!task.events.is_empty()).then(|| Schedule::new(Arc::clone(task)));
+        if let Some(schedule) = &schedule {
+            let _ = rules.befall(schedule.world(), rules.state().clone());
+        }
         by.note(&mut numbers, rules.state());
         for round in &t.rounds {
+            if let Some(schedule) = schedule.as_mut() {
+                let mut state = rules.state().clone();
+                if !schedule.before_step(round.step, &mut state).is_empty() {
+                    let _ = rules.befall(schedule.world(), state);
+                }
+            }
             let actions = round.carried_out();
             for &(robot, action) in &actions {
                 let _ = rules.step(robot, action);

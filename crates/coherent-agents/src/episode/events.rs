@@ -26,8 +26,11 @@ pub(crate) struct Dynamics {
     start: Proof,
     /// The step before which the world last changed, and the optimum from there.
     last: (u32, Proof),
-    /// Actions that failed since then.
+    /// The steps (joint steps) that failed actions have cost since then.
     failed: u32,
+    /// In a parallel episode, the state before the round under way (after its events):
+    /// what a joint step's failed actions cost is measured from it.
+    pre: Option<State>,
     recoveries: Vec<Recovery>,
     /// The recoveries still measured, and the sequential optimum before the next round.
     open: (Vec<usize>, Option<u32>),
@@ -49,6 +52,7 @@ impl Dynamics {
             start: Proof::default(),
             last: (1, Proof::default()),
             failed: 0,
+            pre: None,
             recoveries: Vec::new(),
             open: (Vec::new(), None),
         })
@@ -79,11 +83,13 @@ impl Dynamics {
         let mut state = env.state().clone();
         let changes = self.schedule.before_step(step, &mut state);
         if changes.is_empty() {
+            self.keep_pre(state);
             return Ok(Vec::new());
         }
         *world = self.schedule.world();
         env.befall(Arc::clone(world), state)
             .map_err(io::Error::other)?;
+        self.keep_pre(env.state().clone());
         let proof = self.prove(world, env.state()).await?;
         self.last = (step, proof.clone());
         self.failed = 0;
@@ -139,14 +145,17 @@ impl Dynamics {
         })
     }
 
-    /// After a round: counts its failed actions, and measures the open recoveries.
+    /// After a round: counts what its failed actions cost, and measures the open
+    /// recoveries.
     pub(crate) async fn after(
         &mut self,
         round: &Round,
         env: &(dyn Environment + Send + Sync),
         world: &Arc<Task>,
     ) -> io::Result<()> {
-        self.failed += round.failed_actions();
+        if round.failed_actions() > 0 {
+            self.failed += self.failure_cost(env, world).await?;
+        }
         if self.open.0.is_empty() {
             return Ok(());
         }
@@ -172,6 +181,33 @@ impl Dynamics {
         }
         self.open.1 = now;
         Ok(())
+    }
+
+    fn keep_pre(&mut self, state: State) {
+        if self.execution == Execution::Parallel {
+            self.pre = Some(state);
+        }
+    }
+
+    /// What the failed actions of the round just played cost: a step in a sequential
+    /// episode; in a parallel one, the joint step they lost, if they lost it: the
+    /// makespan from after the round against the makespan from before it, one fewer
+    /// (failed actions off the critical path lose nothing), at most one (the same joint
+    /// step again would make it up), one when either is not known.
+    async fn failure_cost(
+        &self,
+        env: &(dyn Environment + Send + Sync),
+        world: &Arc<Task>,
+    ) -> io::Result<u32> {
+        let Some(pre) = &self.pre else {
+            return Ok(1);
+        };
+        let before = self.prove(world, pre).await?.makespan;
+        let after = self.prove(world, env.state()).await?.makespan;
+        Ok(match (before, after) {
+            (Some(b), Some(a)) => (a + 1).saturating_sub(b).min(1),
+            _ => 1,
+        })
     }
 
     /// Why the goal cannot be reached anymore, when the last change made it so for good

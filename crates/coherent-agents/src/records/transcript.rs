@@ -406,8 +406,9 @@ pub struct Proof {
 
 /// What an episode with events is measured against (docs/dynamic.md): an oracle that
 /// knows nothing of events to come and replans at each one. Its steps are the steps
-/// taken until the last event plus the optimum from there, plus one for each action
-/// that failed after it (a failure costs anyone a step).
+/// taken until the last event plus the optimum from there, plus what the actions that
+/// failed after it cost: a step each in a sequential episode; in a parallel one, the
+/// joint steps they lost (a joint step whose failed actions were on the critical path).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Reference {
     /// The kinds of the task's events, in its order.

@@ -16,20 +16,24 @@ use super::{
 const UNKNOWN_SIZE: [f32; 3] = [0.12; 3];
 
 impl World {
-    /// A free spot for `h` on surface `s` or in container `c`, nearest to the robot's
-    /// shoulder and within its reach; returns the bottom centre for `h`.
-    fn put_spot(
+    /// The size the layout gives `h` (a small thing's when it gives none).
+    pub(super) fn item_size(&self, h: Idx) -> [f32; 3] {
+        self.layout
+            .item(self.task.id(h))
+            .map(|it| it.size)
+            .unwrap_or(UNKNOWN_SIZE)
+    }
+
+    /// The spots where `h` could rest on surface `holder` (in container `holder`,
+    /// `inside`), as bottom centres in world coordinates on a grid over the top or the
+    /// inside, in the order they are tried; an error when `h` does not fit at all.
+    pub(super) fn spot_grid(
         &self,
-        robot: Idx,
         h: Idx,
         holder: Idx,
         inside: bool,
-    ) -> Result<Vector, PhysicsError> {
-        let size = self
-            .layout
-            .item(self.task.id(h))
-            .map(|it| it.size)
-            .unwrap_or(UNKNOWN_SIZE);
+    ) -> Result<Vec<Vector>, PhysicsError> {
+        let size = self.item_size(h);
         let (body, centre, half) = if inside {
             let Some(v) = self.volume[holder.get()] else {
                 return fail(
@@ -48,23 +52,7 @@ impl World {
             };
             t
         };
-        let Some(ai) = self.arm_index(robot) else {
-            return fail(
-                FailureKind::Reach,
-                format!("{} has no arm", self.label(robot)),
-            );
-        };
         let t = &self.tol;
-        let shoulder = self.shoulder(&self.arms[ai]);
-        let reach = self.arms[ai].reach;
-        let min_reach = self.arms[ai].min_reach + t.put_min_reach_margin;
-        let pose = *self.pw.bodies[body].position();
-        let shape = Cuboid::new(Vector::new(
-            size[0] / 2.0 - t.put_probe_shrink,
-            size[1] / 2.0 - t.put_probe_shrink,
-            size[2] / 2.0 - t.put_probe_shrink,
-        ));
-        let hb = self.body[h.get()];
         let hx = half[0] - size[0] / 2.0 - t.put_edge_margin;
         let hz = half[1] - size[2] / 2.0 - t.put_edge_margin;
         if hx < -t.put_fit_tolerance || hz < -t.put_fit_tolerance {
@@ -79,46 +67,94 @@ impl World {
                 ),
             );
         }
+        let pose = *self.pw.bodies[body].position();
         let step = t.put_grid;
         let (nx, nz) = (
             (hx.max(0.0) / step).floor() as i32,
             (hz.max(0.0) / step).floor() as i32,
         );
+        let mut spots = Vec::new();
+        for i in -nx..=nx {
+            for k in -nz..=nz {
+                let local = centre + Vector::new(i as f32 * step, t.put_lift, k as f32 * step);
+                spots.push(pose.transform_point(local));
+            }
+        }
+        Ok(spots)
+    }
+
+    /// What fills spot `p` (a bottom centre from [`World::spot_grid`]) for `h` on or in
+    /// `holder`, leaving out the bodies `moving` (they go with `h`): `None` when it is
+    /// free, else the named thing in the way (`Some(None)`: an unnamed body, a robot).
+    pub(super) fn spot_blocker(
+        &self,
+        h: Idx,
+        p: Vector,
+        holder: Idx,
+        inside: bool,
+        moving: &[RigidBodyHandle],
+    ) -> Option<Option<Idx>> {
+        let size = self.item_size(h);
+        let t = &self.tol;
+        let shape = Cuboid::new(Vector::new(
+            size[0] / 2.0 - t.put_probe_shrink,
+            size[1] / 2.0 - t.put_probe_shrink,
+            size[2] / 2.0 - t.put_probe_shrink,
+        ));
+        let lift = size[1] / 2.0 + t.put_probe_lift;
+        let probe = Pose::from_translation(p + Vector::new(0.0, lift, 0.0));
+        let not_moving =
+            |_: ColliderHandle, c: &Collider| c.parent().is_none_or(|b| !moving.contains(&b));
+        let filter = solid().predicate(&not_moving);
+        let qp = self.pw.query_pipeline_with_filter(filter);
+        qp.intersect_shape(probe, &shape).find_map(|(ch, col)| {
+            let owner = self.owner.get(&ch).copied();
+            (col.collision_groups().memberships != Group::NONE
+                && (inside || owner != Some(holder))
+                && self.task.node(owner.unwrap_or(holder)).kind != NodeKind::Door)
+                .then_some(owner)
+        })
+    }
+
+    /// A free spot for `h` on surface `holder` or in container `holder`, nearest to the
+    /// robot's shoulder and within its reach; returns the bottom centre for `h`.
+    fn put_spot(
+        &self,
+        robot: Idx,
+        h: Idx,
+        holder: Idx,
+        inside: bool,
+    ) -> Result<Vector, PhysicsError> {
+        let spots = self.spot_grid(h, holder, inside)?;
+        let Some(ai) = self.arm_index(robot) else {
+            return fail(
+                FailureKind::Reach,
+                format!("{} has no arm", self.label(robot)),
+            );
+        };
+        let t = &self.tol;
+        let size = self.item_size(h);
+        let shoulder = self.shoulder(&self.arms[ai]);
+        let reach = self.arms[ai].reach;
+        let min_reach = self.arms[ai].min_reach + t.put_min_reach_margin;
+        let moving: Vec<RigidBodyHandle> = self.body[h.get()].into_iter().collect();
         let mut best: Option<(f32, Vector)> = None;
         let mut nearest_any = f32::INFINITY;
         // What filled the last spot tried within reach (None: an unnamed body).
         let mut in_the_way: Option<Option<Idx>> = None;
-        for i in -nx..=nx {
-            for k in -nz..=nz {
-                let local = centre + Vector::new(i as f32 * step, t.put_lift, k as f32 * step);
-                let p = pose.transform_point(local);
-                let grip = p + Vector::new(0.0, size[1], 0.0);
-                let d = (grip - shoulder).length();
-                nearest_any = nearest_any.min(d);
-                if d > reach - t.put_reach_margin || d < min_reach {
-                    continue;
-                }
-                let lift = size[1] / 2.0 + t.put_probe_lift;
-                let probe = Pose::from_translation(p + Vector::new(0.0, lift, 0.0));
-                let mut filter = solid();
-                if let Some(b) = hb {
-                    filter = filter.exclude_rigid_body(b);
-                }
-                let qp = self.pw.query_pipeline_with_filter(filter);
-                let blocker = qp.intersect_shape(probe, &shape).find_map(|(ch, col)| {
-                    let owner = self.owner.get(&ch).copied();
-                    (col.collision_groups().memberships != Group::NONE
-                        && (inside || owner != Some(holder))
-                        && self.task.node(owner.unwrap_or(holder)).kind != NodeKind::Door)
-                        .then_some(owner)
-                });
-                if let Some(owner) = blocker {
-                    in_the_way = Some(owner);
-                    continue;
-                }
-                if best.is_none_or(|(d0, _)| d < d0) {
-                    best = Some((d, p));
-                }
+        for p in spots {
+            let grip = p + Vector::new(0.0, size[1], 0.0);
+            let d = (grip - shoulder).length();
+            nearest_any = nearest_any.min(d);
+            if d > reach - t.put_reach_margin || d < min_reach {
+                continue;
+            }
+            if let Some(owner) = self.spot_blocker(h, p, holder, inside, &moving) {
+                in_the_way = Some(owner);
+                continue;
+            }
+            if best.is_none_or(|(d0, _)| d < d0) {
+                best = Some((d, p));
             }
         }
         match best {
@@ -160,11 +196,7 @@ impl World {
                 format!("{} has no body", self.label(x)),
             );
         };
-        let size = self
-            .layout
-            .item(self.task.id(x))
-            .map(|it| it.size)
-            .unwrap_or(UNKNOWN_SIZE);
+        let size = self.item_size(x);
         // The middle of its top as it lies now (it may have tipped over).
         let top = match self.node_aabb(x) {
             Some(a) => Vector::new(a.center().x, a.maxs.y, a.center().z),
@@ -179,13 +211,9 @@ impl World {
         Ok(stages)
     }
 
-    /// The hand of `robot` holds `x`: fixed joints to the hand hold it and what rides on
-    /// or in it (fastened: no sloshing in transport), none of them colliding meanwhile.
-    pub(super) fn fasten(&mut self, robot: Idx, x: Idx) {
-        let (Some(ai), Some(xb)) = (self.arm_index(robot), self.body[x.get()]) else {
-            return;
-        };
-        let hand = self.arms[ai].hand;
+    /// The body `xb` of `x` and the bodies of the loose things that rest on or in it,
+    /// and on or in those, ...: what goes where `x` goes.
+    pub(super) fn riders(&self, x: Idx, xb: RigidBodyHandle) -> Vec<RigidBodyHandle> {
         let mut carried = vec![xb];
         let mut riders = vec![x];
         let mut i = 0;
@@ -210,6 +238,17 @@ impl World {
             }
             i += 1;
         }
+        carried
+    }
+
+    /// The hand of `robot` holds `x`: fixed joints to the hand hold it and what rides on
+    /// or in it (fastened: no sloshing in transport), none of them colliding meanwhile.
+    pub(super) fn fasten(&mut self, robot: Idx, x: Idx) {
+        let (Some(ai), Some(xb)) = (self.arm_index(robot), self.body[x.get()]) else {
+            return;
+        };
+        let hand = self.arms[ai].hand;
+        let carried = self.riders(x, xb);
         let hand_pose = *self.pw.bodies[hand].position();
         let mut joints = Vec::new();
         for &b in &carried {
@@ -230,7 +269,7 @@ impl World {
         });
     }
 
-    fn set_body_groups(&mut self, b: RigidBodyHandle, g: InteractionGroups) {
+    pub(super) fn set_body_groups(&mut self, b: RigidBodyHandle, g: InteractionGroups) {
         let cs: Vec<ColliderHandle> = self.pw.bodies[b].colliders().to_vec();
         for c in cs {
             if let Some(col) = self.pw.colliders.get_mut(c) {
@@ -259,11 +298,7 @@ impl World {
             self.check_open(holder)?;
         }
         let spot = self.put_spot(robot, h, holder, inside)?;
-        let size = self
-            .layout
-            .item(self.task.id(h))
-            .map(|it| it.size)
-            .unwrap_or(UNKNOWN_SIZE);
+        let size = self.item_size(h);
         let Some(ai) = self.arm_index(robot) else {
             return Ok(Vec::new());
         };

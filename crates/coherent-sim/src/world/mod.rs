@@ -17,6 +17,8 @@
 //! - `contact.rs`: robots acting at once that touch each other or what another handles;
 //! - `execute.rs`: one action, or a joint step's actions at once, dispatched to the
 //!   jobs above.
+//! - `events.rs`: what an event mid-task does to the bodies (a thing moved by someone
+//!   outside the team), with the free spots and the riders of `manipulation.rs`.
 //!
 //! Every step, tolerance, margin, speed and limit they work to is a field of the
 //! world's [`Tolerances`] (`tolerances.rs`, which uses nothing of the others).
@@ -24,6 +26,7 @@
 mod arm;
 mod build;
 mod contact;
+mod events;
 mod execute;
 mod legged;
 mod manipulation;

@@ -126,7 +126,8 @@ function detail(ep) {
   function show(k) {
     if (k === 0) {
       box.replaceChildren(el('h2', {}, 'Start'), el('p', { class: 'muted' },
-        'The scene before the first step. ' + ep.steps.length + ' steps follow.'));
+        'The scene before the first step. ' + ep.steps.length + ' steps follow.'),
+      ep.reference ? facts([['optimum', optimum(ep.reference.start), 'start-optimum']]) : null);
       return;
     }
     if (k > ep.steps.length) {
@@ -135,16 +136,18 @@ function detail(ep) {
       return;
     }
     const st = ep.steps[k - 1];
-    const parts = [
-      el('h2', {}, 'Step ' + st.step + ' ', badge(st.status)),
-      el('pre', { class: 'line' }, st.line),
-    ];
+    const parts = [el('h2', {}, 'Step ' + st.step + ' ', badge(st.status))];
+    for (const e of st.events || []) parts.push(happened(e, 'Before this step'));
+    parts.push(el('pre', { class: 'line' }, st.line));
     for (const e of st.robots) parts.push(entry(e));
     if (st.calls.length) {
       parts.push(el('h3', {}, 'Model calls (' + st.calls.length + ')'));
       st.calls.forEach((c) => parts.push(call(c)));
     }
     parts.push(el('p', { class: 'muted' }, 'round wall time ' + number(st.wall_ms, 0) + ' ms'));
+    if (k === ep.steps.length && ep.reference) {
+      for (const e of ep.reference.closing) parts.push(happened(e, 'After this step'));
+    }
     box.replaceChildren(...parts);
   }
   return { element: box, show };
@@ -171,6 +174,75 @@ function entry(e) {
     e.actions.length ? folded('action list (' + e.actions.length + ')', e.actions.join('\n')) : null);
 }
 
+// An optimum as proven: steps (and joint steps), or why there is none.
+function optimum(p) {
+  if (p.unreachable !== null) return 'unreachable: ' + p.unreachable;
+  if (p.steps !== null) {
+    return p.steps + (p.steps === 1 ? ' step' : ' steps') +
+      (p.makespan !== null ? ', ' + p.makespan + ' joint' : '');
+  }
+  return p.unknown !== null ? 'unknown: ' + p.unknown : 'unknown';
+}
+
+// The mark of an event, or of the end of its span.
+function eventBadge(e) {
+  return e.ended ? badge(e.kind + ' ends', 'ended') : badge(e.kind, 'event');
+}
+
+// An event that happened (or the end of its span), in full.
+function happened(e, when) {
+  return el('div', { class: 'happened' + (e.ended ? ' ended' : ''), 'data-event': e.event, 'data-kind': e.kind },
+    el('h3', {}, when + ': ', eventBadge(e), ' events[' + e.event + ']'),
+    facts([
+      ['what', e.what, 'what'],
+      ['told', e.told || 'nothing (failing actions are noticed as they fail)', 'told'],
+      ['void', e.void, 'void'],
+      ['optimum after it', optimum(e.optimum), 'optimum'],
+    ]));
+}
+
+// An event's row in the step list: its mark, what it did, what the team was told, and
+// the optimum from there; a link to the step it came before.
+function eventRow(e, before, to) {
+  return el('li', { class: 'event' + (e.ended ? ' ended' : ''), 'data-event': e.event, 'data-kind': e.kind, 'data-before': before },
+    el('a', { href: '#step=' + to },
+      eventBadge(e), ' ', e.what,
+      e.told ? el('span', { class: 'told' }, 'told: ' + e.told) : null,
+      e.void ? el('span', { class: 'void' }, 'changed nothing: ' + e.void) : null,
+      el('span', { class: 'optimum', 'data-steps': e.optimum.steps === null ? null : e.optimum.steps }, 'optimum after it: ' + optimum(e.optimum))));
+}
+
+// What an episode with events is measured against, and how the team recovered.
+function referenceCard(ep) {
+  const ref = ep.reference;
+  if (!ref) return el('section', { class: 'card reference' }, el('p', { class: 'muted' }, 'No events in this episode.'));
+  const taken = ep.result.steps + ' taken';
+  const steps = ref.steps !== null
+    ? el('span', { 'data-reference': ref.steps, 'data-taken': ep.result.steps }, taken + ' against the reference\'s ' + ref.steps)
+    : el('span', { 'data-taken': ep.result.steps }, taken + '; no reference' + (ref.unreachable === null ? ' (the optimum is unknown)' : ''));
+  const rows = ref.recoveries.map((c) => el('tr', { 'data-event': c.event, class: c.ended ? 'ended' : null },
+    el('td', {}, eventBadge(c), ' events[' + c.event + ']'), el('td', {}, String(c.step)),
+    el('td', { 'data-key': 'rounds' }, c.rounds === null ? 'none' : String(c.rounds)),
+    el('td', { 'data-key': 'wasted' }, String(c.wasted)), el('td', { 'data-key': 'calls' }, String(c.calls))));
+  const table = rows.length
+    ? el('table', { class: 'report recoveries' },
+      el('thead', {}, el('tr', {}, ...['event', 'before step', 'rounds to recover', 'wasted actions', 'model calls'].map((h) => el('th', {}, h)))),
+      el('tbody', {}, ...rows))
+    : el('p', { class: 'muted' }, 'No event changed the world.');
+  return el('section', { class: 'card reference' },
+    el('h2', {}, 'Events and the reference'),
+    el('div', { class: 'header-facts' },
+      facts([
+        ['steps', steps, 'reference'],
+        ['out of reach', ref.unreachable === null ? null : 'for good: ' + ref.unreachable, 'unreachable'],
+        ['at the start', 'optimum ' + optimum(ref.start), 'start'],
+        ['events', ref.kinds.join(', '), 'kinds'],
+      ]),
+      el('div', {}, table)),
+    el('p', { class: 'muted' }, 'The reference replans at each event, knowing nothing of those to come. ' +
+      'A recovery lasts until an action first brings the goal nearer (none: not before the next event).'));
+}
+
 function call(c) {
   const parts = [el('summary', {}, c.role + (c.usage ? ' · ' + c.usage : '') + (c.error ? ' · failed' : ''))];
   for (const [role, content] of c.messages) {
@@ -185,8 +257,11 @@ function call(c) {
 function stepList(ep) {
   const items = [el('li', { 'data-step': 0 }, el('a', { href: '#step=0' }, 'start'))];
   for (const st of ep.steps) {
+    for (const e of st.events || []) items.push(eventRow(e, st.step, st.step));
     items.push(el('li', { class: st.status, 'data-step': st.step }, el('a', { href: '#step=' + st.step }, st.line)));
   }
+  const closing = ep.reference ? ep.reference.closing : [];
+  for (const e of closing) items.push(eventRow(e, ep.steps.length + 1, ep.steps.length));
   const ol = el('ol', {}, ...items);
   const box = el('section', { class: 'card steps' }, ol);
   function show(k) {
@@ -205,9 +280,12 @@ function lineTable(a, b, first) {
   const n = Math.max(a.steps.length, b.steps.length);
   const line = (ep, k) => (k === 0 ? 'start' : k <= ep.steps.length ? ep.steps[k - 1].line : '');
   for (let k = 0; k <= n; k++) {
+    const events = (ep) => (k >= 1 && k <= ep.steps.length && ep.steps[k - 1].events) || [];
+    const cell = (ep, cls) => el('td', { class: cls + (events(ep).length ? ' after-event' : ''), 'data-events': events(ep).length || null },
+      events(ep).flatMap((e) => [eventBadge(e), ' ']), line(ep, k));
     const tr = el('tr', { 'data-step': k, class: k === first ? 'differs' : null },
       el('td', { class: 'n' }, el('a', { href: '#step=' + k }, String(k))),
-      el('td', { class: 'a' }, line(a, k)), el('td', { class: 'b' }, line(b, k)));
+      cell(a, 'a'), cell(b, 'b'));
     tr.addEventListener('click', () => go(k));
     rows.push(tr);
   }
@@ -274,8 +352,10 @@ function episodePage(data) {
       ? el('p', { class: 'difference', id: 'first-difference' }, 'The two decide alike in every round.')
       : el('p', { class: 'difference', id: 'first-difference', 'data-step': first },
         'The decisions first differ in round ' + first + ': ', el('a', { href: '#step=' + first }, 'go there'));
-    app.append(el('div', { class: 'two' }, header(a, true), header(b, true)), jump, help(), lines.element,
-      el('div', { class: 'two' }, sa.element, sb.element), el('div', { class: 'two' }, da.element, db.element));
+    append(app, [el('div', { class: 'two' }, header(a, true), header(b, true)),
+      a.reference || b.reference ? el('div', { class: 'two' }, referenceCard(a), referenceCard(b)) : null,
+      jump, help(), lines.element,
+      el('div', { class: 'two' }, sa.element, sb.element), el('div', { class: 'two' }, da.element, db.element)]);
     shows.push(lines.show, sa.show, sb.show, da.show, db.show);
     last = Math.max(a.steps.length, b.steps.length);
   } else {
@@ -283,8 +363,8 @@ function episodePage(data) {
     const sc = scene(ep, 'a-');
     const list = stepList(ep);
     const de = detail(ep);
-    app.append(header(ep, false), help(),
-      el('div', { class: 'layout' }, sc.element, el('div', {}, list.element, de.element)));
+    append(app, [header(ep, false), ep.reference ? referenceCard(ep) : null, help(),
+      el('div', { class: 'layout' }, sc.element, el('div', {}, list.element, de.element))]);
     shows.push(sc.show, list.show, de.show);
     last = ep.steps.length;
   }

@@ -111,7 +111,7 @@ function figures(report) {
 }
 
 // One episode's row, built directly: a results file may have thousands.
-function episodeRow(e, i) {
+function episodeRow(e, i, withReference) {
   const tr = document.createElement('tr');
   tr.dataset.line = i;
   tr.dataset.method = e.method;
@@ -135,6 +135,12 @@ function episodeRow(e, i) {
   if (e.error) result.title = e.error;
   cell(String(e.steps), 'num');
   cell(e.gt_steps === null ? '-' : String(e.gt_steps), 'num');
+  if (withReference) {
+    const ref = e.reference;
+    const td = cell(!ref ? '-' : ref.steps !== null ? String(ref.steps) : ref.unreachable !== null ? 'out of reach' : 'unknown', 'num reference');
+    if (ref && ref.unreachable !== null) td.title = ref.unreachable;
+    if (ref && ref.steps !== null) td.dataset.reference = ref.steps;
+  }
   cell(String(e.max_steps), 'num');
   cell(String(e.llm_calls), 'num');
   cell(thousands(e.tokens), 'num');
@@ -146,8 +152,11 @@ function episodeRow(e, i) {
 // The episodes' table; its rows go in a few hundred at a time after the first, so that
 // the tables above show at once.
 function episodeTable(episodes) {
-  const head = el('tr', {}, ...['method', 'scene', 'task', 'type', 'seed', 'result', 'steps', 'GT', 'budget', 'LLM calls', 'tokens', 'cost', 'page']
-    .map((h) => el('th', {}, h)));
+  // A column for the reference of episodes with events, only where some have one.
+  const withReference = episodes.some((e) => e.reference);
+  const names = ['method', 'scene', 'task', 'type', 'seed', 'result', 'steps', 'GT', 'budget', 'LLM calls', 'tokens', 'cost', 'page'];
+  if (withReference) names.splice(8, 0, 'reference');
+  const head = el('tr', {}, ...names.map((h) => el('th', { title: h === 'reference' ? 'the steps of an oracle that replans at each event (docs/dynamic.md)' : null }, h)));
   const body = el('tbody', {});
   const input = el('input', { type: 'search', placeholder: 'filter: method, scene, task, result', 'aria-label': 'filter the episodes' });
   const keep = (tr) => {
@@ -161,7 +170,7 @@ function episodeTable(episodes) {
     const end = Math.min(from + CHUNK, episodes.length);
     const part = document.createDocumentFragment();
     for (let i = from; i < end; i++) {
-      const tr = episodeRow(episodes[i], i);
+      const tr = episodeRow(episodes[i], i, withReference);
       if (input.value) keep(tr);
       part.append(tr);
     }
