@@ -237,9 +237,19 @@ class Env:
     :class:`CoherentError` naming those without one; a step fails when a robot stays
     silent for ``robot_timeout`` seconds, and every later step is refused.
 
+    The task's events (or those of ``events=``: a list, or a file, as for :func:`run`)
+    happen as in an episode (docs/dynamic.md): each call of ``step`` is one step, and
+    after it the events due before the next are carried out; ``news`` says what the team
+    was told, ``robots`` is the team now. An action that a failing-actions event draws
+    to fail does not run (``ok`` False, the episode's reason), the draws seeded by
+    ``seed``. Robots over ROS 2 do not take events: a task with events raises
+    :class:`ArgumentError` there; physics refuses a robot joining in a ``room`` with
+    :class:`TaskFormatError`.
+
     Every method takes a robot by its node id and raises :class:`UnknownRobotError`
-    for an id that is not one of the task's robots; an action str with a lone surrogate
-    raises :class:`ActionParseError`.
+    for an id that is not one of the team's robots now (the task's, without those that
+    went down or have not joined yet); an action str with a lone surrogate raises
+    :class:`ActionParseError`.
     """
 
     def __init__(
@@ -251,6 +261,8 @@ class Env:
         namespace: str | None = None,
         robot_timeout: float = 10.0,
         server_wait: float = 10.0,
+        events: Sequence[dict[str, Any]] | dict[str, Any] | _PathLike | None = None,
+        seed: int | None = 0,
     ) -> None: ...
     @property
     def task(self) -> Task: ...
@@ -260,7 +272,24 @@ class Env:
     def namespace(self) -> str | None:
         """The namespace of the robots' ROS 2 actions; None when they act in this process."""
     @property
-    def robots(self) -> list[int]: ...
+    def robots(self) -> list[int]:
+        """The team now: the task's robots without those that went down or have not
+        joined yet."""
+    @property
+    def news(self) -> list[str]:
+        """What the team was told before the coming step (empty when nothing happened)."""
+    @property
+    def steps(self) -> int:
+        """The steps taken since the start or the last ``reset``: calls of ``step``."""
+    @property
+    def seed(self) -> int:
+        """The seed of a failing-actions event's draws."""
+    @property
+    def goal(self) -> list[str]:
+        """The goal predicates now, as ``Task.goal`` writes them (an event may change them)."""
+    @property
+    def instruction(self) -> str:
+        """The instruction now (an event that changes the goal words it anew)."""
     def observe(self, robot: int) -> _Observation: ...
     def actions(self, robot: int) -> list[str]: ...
     def why_not(self, robot: int, action: str) -> str | None:
@@ -280,9 +309,12 @@ class Env:
         offered, two that interfere) carries out nothing; each reason says why."""
     def goal_satisfied(self) -> bool: ...
     def goal_holds(self) -> list[bool]:
-        """Whether each goal predicate holds now, in the order of ``Task.goal``."""
+        """Whether each goal predicate holds now, in the order of ``Env.goal`` (``Task.goal``
+        unless an event changed the goal)."""
     def graph(self) -> _Graph: ...
-    def reset(self) -> None: ...
+    def reset(self, seed: int | None = None) -> None:
+        """Back to the task's initial state, its events from the start; ``seed``, when
+        given, seeds the failing actions' draws from now on."""
 
 def load_tasks(path: _PathLike) -> list[Task]:
     """Every task at ``path``: an original env file, a native task file, or a folder."""

@@ -15,6 +15,15 @@ reaches the goal and 0 otherwise; an infeasible or unparsable action changes not
 and ``info["reason"]`` says why. The episode is truncated after ``max_steps`` steps
 (by default the budget every episode gets, ``coherent.budget``: twice the task's ground
 truth, the paper's, or twice the optimum when the task has none).
+
+The task's events (or those of ``events=``, docs/dynamic.md) happen as in an episode:
+each step is a step of the episode, and after it the events due before the next are
+carried out. ``info["news"]`` says what the team was told of them before the coming
+step, ``info["robots"]`` is the team now: a robot that went down, or has not joined yet,
+is offered no action (``info["actions"][robot]`` is empty), and an action given to it
+does nothing (``ok`` False, ``reason`` says why) but still takes the step. A
+failing-actions event makes an action fail (``ok`` False), its draws seeded by the
+``seed`` of :meth:`CoherentEnv.reset` (0 until one is given).
 """
 
 from __future__ import annotations
@@ -68,9 +77,12 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
 
     metadata: dict[str, Any] = {"render_modes": []}
 
-    def __init__(self, task: Task, *, physics: bool = False, max_steps: int | None = None) -> None:
-        self.env = Env(task, physics=physics)
-        self.robots = self.env.robots
+    def __init__(
+        self, task: Task, *, physics: bool = False, max_steps: int | None = None, events: Any = None
+    ) -> None:
+        self.env = Env(task, physics=physics, events=events)
+        # Every robot of the task, those that join later too: the team now is in the info.
+        self.robots = self.env.task.robots
         self.max_steps = budget(task, max_steps=max_steps)
         self.observation_space = spaces.Text(max_length=MAX_OBSERVATION, min_length=0, charset=CHARSET)
         self.action_space = spaces.Tuple(
@@ -82,31 +94,42 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
         return json.dumps(self.env.graph(), separators=(",", ":"))
 
     def _info(self, ok: bool | None = None, reason: str | None = None) -> dict[str, Any]:
+        team = self.env.robots
         return {
             "ok": ok,
             "reason": reason,
             "steps": self.steps,
-            "actions": {robot: self.env.actions(robot) for robot in self.robots},
+            "actions": {robot: self.env.actions(robot) if robot in team else [] for robot in self.robots},
+            "robots": team,
+            "news": self.env.news,
         }
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None) -> tuple[str, dict[str, Any]]:
-        """Back to the task's initial state; the world is deterministic, ``seed`` only
-        seeds the spaces' sampling."""
+        """Back to the task's initial state, its events from the start. The world is
+        deterministic but for a failing-actions event's draws: ``seed`` seeds those (as
+        ``coherent.Env.reset`` does, for this episode and the next ones) and the spaces'
+        sampling."""
         if seed is not None and operator.index(seed) < 0:
             raise ArgumentError(f"seed={seed!r}: expected an int from 0")
         super().reset(seed=seed)
         if seed is not None:
             self.action_space.seed(seed)
-        self.env.reset()
+        self.env.reset(seed=None if seed is None else operator.index(seed))
         self.steps = 0
         return self._observation(), self._info()
 
     def step(self, action: tuple[int, str]) -> tuple[str, float, bool, bool, dict[str, Any]]:
         """Tries ``(robot, action text)``; raises :class:`coherent.UnknownRobotError` for
-        a robot that is not one of the task's."""
+        a robot that is not one of the task's. A robot of the task out of the team now
+        does nothing, and the step is taken."""
         robot, text = action
         # An int or a numpy integer; a float is refused (TypeError), not rounded.
-        ok, reason, done = self.env.step(operator.index(robot), text)
+        robot = operator.index(robot)
+        if robot in self.robots and robot not in self.env.robots:
+            _, _, done = self.env.step([])
+            ok, reason = False, f"robot {robot} is not in the team now (it went down, or has not joined yet); nothing done"
+        else:
+            ok, reason, done = self.env.step(robot, text)
         self.steps += 1
         truncated = not done and self.steps >= self.max_steps
         return self._observation(), float(done and ok), done, truncated, self._info(ok, reason)

@@ -27,6 +27,17 @@ which leaves the optimal policies as they are. Every agent terminates when the g
 reached, and is truncated after ``max_steps`` joint steps, by default twice the task's
 makespan (the fewest joint steps), the budget of every parallel episode
 (``coherent.budget(task, execution="parallel")``).
+
+The task's events (or those of ``events=``, docs/dynamic.md) happen as in a parallel
+episode: each call of :meth:`CoherentParallelEnv.step` is a joint step, and after it the
+events due before the next are carried out; each agent's info has what the team was told
+of them (``infos[agent]["news"]``). An agent whose robot goes down terminates: its
+``terminations`` entry is True on the step after which it went down, and it leaves
+``env.agents``. A robot that joins later is one of ``possible_agents`` from the start,
+and enters ``env.agents`` (and the dicts that step returns) on the step after which it
+joined, as PettingZoo's parallel API allows. A failing-actions event makes an agent's
+action fail (its ``ok`` False, ``reason`` says so), the draws seeded by the ``seed`` of
+:meth:`CoherentParallelEnv.reset` (0 until one is given).
 """
 
 from __future__ import annotations
@@ -56,9 +67,15 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
     metadata: dict[str, Any] = {"name": "coherent_v0", "render_modes": [], "is_parallelizable": True}
 
     def __init__(
-        self, task: Task, *, physics: bool = False, max_steps: int | None = None, shaping: bool = False
+        self,
+        task: Task,
+        *,
+        physics: bool = False,
+        max_steps: int | None = None,
+        shaping: bool = False,
+        events: Any = None,
     ) -> None:
-        self.env = Env(task, physics=physics)
+        self.env = Env(task, physics=physics, events=events)
         self.shaping = bool(shaping)
         steps = None if max_steps is None else _count("max_steps", max_steps)
         self.max_steps = budget(task, execution="parallel", max_steps=steps)
@@ -74,6 +91,8 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
         self.steps = 0
         # What each agent's indices mean: its actions as of the last observation.
         self._offered: dict[str, list[str]] = {}
+        # Each agent's last observation: what an agent whose robot went down is left with.
+        self._seen: dict[str, str] = {}
 
     def observation_space(self, agent: str) -> spaces.Space[str]:
         return self._observation_spaces[agent]
@@ -88,15 +107,18 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
     def reset(
         self, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, str], dict[str, dict[str, Any]]]:
-        """Back to the task's initial state. The world is deterministic: ``seed`` only
-        seeds the action spaces' sampling; ``options`` is accepted and unused."""
+        """Back to the task's initial state, its events from the start. The world is
+        deterministic but for a failing-actions event's draws: ``seed`` seeds those (as
+        ``coherent.Env.reset`` does, for this episode and the next ones) and the action
+        spaces' sampling; ``options`` is accepted and unused."""
         if seed is not None:
             seed = _count("seed", seed)
             for i, agent in enumerate(self.possible_agents):
                 self._action_spaces[agent].seed(seed + i)
-        self.env.reset()
+        self.env.reset(seed=seed)
         self.steps = 0
-        self.agents = list(self.possible_agents)
+        self._seen = {}
+        self.agents = self._team()
         observations = self._observe()
         return observations, {agent: self._info(agent) for agent in self.agents}
 
@@ -126,33 +148,45 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
                 said[agent] = (False, f"action {index} is none of the {len(offered)} actions offered; nothing done")
                 continue
             chosen.append((agent, offered[index - 1]))
-        done = self.env.goal_satisfied()
-        if chosen:
-            oks, reasons, done = self.env.step([(self.robot[agent], text) for agent, text in chosen])
-            for (agent, _), ok, reason in zip(chosen, oks, reasons, strict=True):
-                said[agent] = (ok, reason)
+        # Every call is a joint step of the episode, one in which nobody acts included.
+        oks, reasons, done = self.env.step([(self.robot[agent], text) for agent, text in chosen])
+        for (agent, _), ok, reason in zip(chosen, oks, reasons, strict=True):
+            said[agent] = (ok, reason)
         self.steps += 1
         reward = float(done)
         if self.shaping:
             reward += self._progress() - before
         truncated = not done and self.steps >= self.max_steps
-        acting = self.agents
+        # The agents that acted, and those whose robots joined the team after the step.
+        team = self._team()
+        acting = [agent for agent in self.possible_agents if agent in self.agents or agent in team]
+        self.agents = acting
         observations = self._observe()
         rewards = dict.fromkeys(acting, reward)
-        terminations = dict.fromkeys(acting, done)
+        terminations = {agent: done or agent not in team for agent in acting}
         truncations = dict.fromkeys(acting, truncated)
-        infos = {agent: self._info(agent, *said[agent]) for agent in acting}
-        if done or truncated:
-            self.agents = []
+        infos = {agent: self._info(agent, *said.get(agent, (None, None))) for agent in acting}
+        self.agents = [] if done or truncated else [agent for agent in acting if agent in team]
         return observations, rewards, terminations, truncations, infos
 
+    def _team(self) -> list[str]:
+        """The agents whose robots are in the team now, in the order of ``possible_agents``."""
+        team = set(self.env.robots)
+        return [agent for agent in self.possible_agents if self.robot[agent] in team]
+
     def _observe(self) -> dict[str, str]:
-        """Each acting agent's view as JSON text; remembers the actions offered now."""
+        """Each acting agent's view as JSON text; remembers the actions offered now. An
+        agent whose robot went down is offered none, and keeps its last view."""
         observations = {}
+        team = set(self.env.robots)
         for agent in self.agents:
             robot = self.robot[agent]
-            self._offered[agent] = self.env.actions(robot)
-            observations[agent] = json.dumps(self.env.observe(robot), separators=(",", ":"))
+            if robot in team:
+                self._offered[agent] = self.env.actions(robot)
+                self._seen[agent] = json.dumps(self.env.observe(robot), separators=(",", ":"))
+            else:
+                self._offered[agent] = []
+            observations[agent] = self._seen.get(agent, "{}")
         return observations
 
     def _info(self, agent: str, ok: bool | None = None, reason: str | None = None) -> dict[str, Any]:
@@ -161,7 +195,14 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
         offered = self._offered[agent]
         mask = np.zeros(self._action_spaces[agent].n, dtype=np.int8)
         mask[: 1 + len(offered)] = 1
-        return {"ok": ok, "reason": reason, "steps": self.steps, "actions": offered, "action_mask": mask}
+        return {
+            "ok": ok,
+            "reason": reason,
+            "steps": self.steps,
+            "actions": offered,
+            "action_mask": mask,
+            "news": self.env.news,
+        }
 
     def _progress(self) -> float:
         """The fraction of goal predicates that hold: the shaping's potential."""

@@ -2,6 +2,10 @@
 the episode against its reference, a method written in Python told what happened in its
 view's `news`, bad events raised as `TaskFormatError` naming `events=`, the JSON path
 and the value, before anything runs, a real small model told of an event end to end;
+`coherent.Env` stepped by hand meeting each kind as the episode does (the optimal
+method's actions carried out in it: the same news, outcomes and end, in sequential and
+joint steps, by the rules and in physics), the team as it is now, failing actions drawn
+by the seed, and refused where they cannot be carried out;
 and the reference in `coherent.analysis`: the results frame's columns, and the events
 table worked out in pandas equal to the Rust report's, number for number."""
 
@@ -17,10 +21,11 @@ import pytest
 
 import coherent
 from coherent import analysis
-from conftest import DEMO
+from conftest import DEMO, REPO
 
 MOVED = [{"step": 3, "kind": "object_moved", "thing": 9, "relation": "ON", "target": 14}]
 TOLD = "Someone outside the team moved <apple>(9) onto <sofa>(14)."
+DEMO_EVENTS = REPO / "examples" / "events" / "demo.json"
 
 
 @pytest.fixture(scope="module")
@@ -104,16 +109,187 @@ def test_a_small_model_hears_of_an_event_end_to_end(
         assert "What just happened, that the team did not do:\n- " + happened["told"] in user
 
 
-def test_stepping_by_hand_refuses_a_task_with_events(tmp_path: Path) -> None:
-    """`Env` (and Gymnasium and PettingZoo on it) would never make the events happen:
-    a task with events is refused, not run without them."""
+#: One event of each kind on the demo task, as crates/coherent-agents/tests/events.rs has
+#: them, and the demo's own list.
+KINDS: dict[str, list[dict[str, Any]]] = {
+    "robot_down": [
+        {"when": {"relation": "INSIDE", "subject": 7, "target": 12}, "kind": "robot_down", "robot": 6}
+    ],
+    "robot_up": [{"step": 6, "kind": "robot_up", "robot": 13, "room": 0}],
+    "object_moved": [{"when": {"held": 7}, "kind": "object_moved", "thing": 9, "relation": "ON", "target": 14}],
+    "goal_changed": [
+        {
+            "step": 5,
+            "kind": "goal_changed",
+            "remove": [{"relation": "ON", "subject": 9, "target": 10}],
+            "add": [{"relation": "ON", "subject": 9, "target": 14}],
+            "instruction": "The mug to the coffee table, the apple to the sofa.",
+        }
+    ],
+    "blocked": [{"step": 2, "kind": "blocked", "door": 4, "steps": 3}],
+    "action_fails": [{"step": 2, "kind": "action_fails", "probability": 0.5}],
+    "demo": json.loads(DEMO_EVENTS.read_text())["events"],
+}
+
+
+def _told(round_: dict[str, Any]) -> list[str]:
+    """What the team was told before a round of a transcript."""
+    return [e["told"] for e in round_.get("events") or [] if e["told"]]
+
+
+def _acted(decision: dict[str, Any] | None) -> tuple[int, str] | None:
+    """The robot and action a decision carries out, if any."""
+    if decision and decision.get("can_do") and decision.get("action") and decision.get("robot") is not None:
+        return decision["robot"], decision["action"]
+    return None
+
+
+def _play_in_env(env: coherent.Env, episode: coherent.Episode, parallel: bool) -> None:
+    """Carries out an episode's actions in `env`, round by round: before each, `env` was
+    told what the round was, and each action comes out as it did in the episode (ran, or
+    the same reason: a failing action's draw included)."""
+    for round_ in episode.transcript:
+        assert env.steps == round_["step"] - 1
+        assert env.news == _told(round_), f"step {round_['step']}"
+        if parallel:
+            parts = [(p, _acted(p.get("decision"))) for p in round_.get("parts") or []]
+            acting = [(p, act) for p, act in parts if act]
+            oks, reasons, done = env.step([act for _, act in acting])
+            for (part, _), ok, reason in zip(acting, oks, reasons, strict=True):
+                assert ok == (part["outcome"]["kind"] == "executed")
+                assert reason == part["outcome"].get("message")
+        elif act := _acted(round_.get("decision")):
+            ok, reason, done = env.step(*act)
+            assert ok == (round_["outcome"]["kind"] == "executed")
+            assert reason == round_["outcome"].get("message")
+        else:
+            _, _, done = env.step([])
+        assert done == round_["done"]
+    assert env.steps == episode.steps
+
+
+@pytest.mark.parametrize("kind", list(KINDS))
+@pytest.mark.parametrize("execution", ["sequential", "parallel"])
+def test_env_meets_the_events_as_an_episode_does(
+    demo: coherent.Task, tmp_path: Path, kind: str, execution: str
+) -> None:
+    """The optimal method's episode with the events, its actions carried out in `Env`
+    stepped by hand with the same events and seed: the same news before the same steps,
+    the same outcomes (the failing actions' draws, the robots out of the team), the goal
+    reached at the same step."""
+    events = KINDS[kind]
+    episode = coherent.run(demo, "optimal", events=events, seed=3, execution=execution, max_steps=80, out=tmp_path)
+    assert episode.summary["status"] == "success"
+    env = coherent.Env(demo, events=events, seed=3)
+    _play_in_env(env, episode, execution == "parallel")
+    assert env.goal_satisfied()
+    # reset: the events from the start again, and the same episode.
+    env.reset()
+    _play_in_env(env, episode, execution == "parallel")
+
+
+def test_a_robot_down_leaves_the_team_and_one_that_joins_enters_it(demo: coherent.Task) -> None:
+    """Along the demo's optimal plan, the arm goes down once the mug is in the basket: it
+    leaves `Env.robots` before the next step, and an action given to it raises."""
+    env = coherent.Env(demo, events=KINDS["robot_down"])
+    assert env.robots == [6, 11, 13]
+    for step in coherent.plan(demo)["plan"]:
+        assert env.step(step["robot"], step["action"])[0]
+        if env.news:
+            break
+    assert env.robots == [11, 13]
+    assert env.news == ["<robot arm>(6) broke down: it stays where it is for good, and can do nothing more."]
+    assert env.task.robots == [6, 11, 13], "the task's robots are all there"
+    with pytest.raises(coherent.UnknownRobotError, match="its robots are 11 .*, 13 "):
+        env.step(6, "[grab] <apple>(9)")
+    with pytest.raises(coherent.UnknownRobotError):
+        env.actions(6)
+    taken = env.steps
+    with pytest.raises(coherent.UnknownRobotError):
+        env.step([(11, "[land_on] <kitchen counter>(5)"), (6, "[grab] <apple>(9)")])
+    assert env.steps == taken, "a step refused before it is taken takes none"
+    assert env.news, "and the news stay those of the coming step"
+    # A robot that joins later is out of the team until then.
+    env = coherent.Env(demo, events=KINDS["robot_up"])
+    assert env.robots == [6, 11]
+    for _ in range(5):
+        assert env.step([]) == ([], [], False)
+    assert env.steps == 5
+    assert env.robots == [6, 11, 13]
+    assert env.news == ["<robot dog>(13) joined the team in <kitchen>(0)."]
+    assert "[movetowards] <door>(4)" in env.actions(13)
+
+
+def test_a_failing_action_says_so_and_the_draws_follow_the_seed(demo: coherent.Task) -> None:
+    """Each step, robot 13 opens or closes the door: which tries fail is the seed's, the
+    same for the same seed; a failed one changes nothing."""
+    events = [{"step": 1, "kind": "action_fails", "probability": 0.5, "robot": 13}]
+
+    def tries(env: coherent.Env) -> list[bool]:
+        env.step(13, "[movetowards] <door>(4)")
+        oks = []
+        while len(oks) < 12:
+            action = "[open] <door>(4)" if env.why_not(13, "[open] <door>(4)") is None else "[close] <door>(4)"
+            ok, reason, _ = env.step(13, action)
+            if not ok:
+                assert reason == (
+                    "the action failed (events[0]: each action fails with probability 0.5); nothing changed"
+                )
+                assert env.why_not(13, action) is None, "nothing changed"
+            oks.append(ok)
+        return oks
+
+    first = tries(coherent.Env(demo, events=events, seed=7))
+    assert first == tries(coherent.Env(demo, events=events, seed=7))
+    assert not all(first) and any(first)
+    other = coherent.Env(demo, events=events, seed=7)
+    other.reset(seed=8)
+    assert other.seed == 8
+    assert tries(other) != first
+    # The others' actions never fail.
+    env = coherent.Env(demo, events=events, seed=7)
+    assert all(env.step(6, env.actions(6)[0])[0] for _ in range(12))
+
+
+def test_a_goal_changed_is_the_envs_goal_and_instruction(demo: coherent.Task) -> None:
+    env = coherent.Env(demo, events=KINDS["goal_changed"])
+    before = env.goal
+    for _ in range(4):
+        env.step([])
+    assert env.goal != before
+    assert "on_<apple>(9)_<sofa>(14)" in env.goal
+    assert env.instruction == "The mug to the coffee table, the apple to the sofa."
+    assert env.news == ["The task has changed. The new task: The mug to the coffee table, the apple to the sofa."]
+    assert env.task.instruction == demo.instruction, "the task as given"
+
+
+def test_an_env_with_events_refuses_what_cannot_carry_them_out(demo: coherent.Task, tmp_path: Path) -> None:
+    """ROS 2 robots do not take events yet, physics does but for a robot joining in a room
+    of the event's; the task's own events run too."""
+    with pytest.raises(coherent.ArgumentError, match="robots over ROS 2 do not carry events out yet"):
+        coherent.Env(demo, robots="ros2", events=MOVED, server_wait=0.1)
+    with pytest.raises(coherent.TaskFormatError, match="physics does not carry a robot anywhere") as raised:
+        coherent.Env(demo, physics=True, events=KINDS["robot_up"])
+    assert raised.value.json_path == "$[0].room"
     data = json.loads(DEMO.read_text())
     data["events"] = MOVED
     path = tmp_path / "demo-moved.json"
     path.write_text(json.dumps(data))
     (task,) = coherent.load_tasks(path)
-    with pytest.raises(coherent.ArgumentError, match="Env does not run events yet"):
-        coherent.Env(task)
+    env = coherent.Env(task)
+    env.step([])
+    env.step([])
+    assert env.news == [TOLD]
+
+
+def test_physics_carries_the_events_out(demo: coherent.Task, tmp_path: Path) -> None:
+    """The demo's events in Rapier: the optimal episode's actions carried out step by step,
+    physics agreeing with the rules after each event."""
+    events = KINDS["demo"]
+    episode = coherent.run(demo, "optimal", events=events, seed=3, out=tmp_path)
+    env = coherent.Env(demo, physics=True, events=events, seed=3)
+    _play_in_env(env, episode, False)
+    assert env.goal_satisfied()
 
 
 def test_the_results_frame_spreads_the_reference(events_results: Path, demo: coherent.Task, tmp_path: Path) -> None:

@@ -1,10 +1,13 @@
 """`coherent.marl`: the robots as the agents of a PettingZoo `ParallelEnv`, every step a
-joint step. PettingZoo's own API test on the demo and on released tasks; the makespan
-plan played through it; budget, shaping, masks and bad actions."""
+joint step. PettingZoo's own API test on the demo and on released tasks, and on the demo
+with events; the makespan plan played through it; budget, shaping, masks and bad
+actions; an agent that goes down terminated, one that joins entering, the news in the
+infos."""
 
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -138,3 +141,77 @@ def test_unknown_agents_and_bad_arguments_raise(demo: coherent.Task) -> None:
             env.reset(seed=bad)
     with pytest.raises(TypeError):
         env.step({env.agents[0]: 1.5})
+
+
+#: The quadrotor down before step 3, the dog joining before step 4, and failing actions.
+EVENTS = [
+    {"step": 3, "kind": "robot_down", "robot": 11},
+    {"step": 4, "kind": "robot_up", "robot": 13},
+    {"step": 2, "kind": "action_fails", "probability": 0.3},
+]
+
+
+def test_a_task_with_events_passes_pettingzoos_parallel_api_test(demo: coherent.Task) -> None:
+    """Agents that leave and one that enters, as PettingZoo's test expects them to: the
+    dicts of every step hold the agents acting and those that joined, none revived."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        parallel_api_test(CoherentParallelEnv(demo, events=EVENTS), num_cycles=200)
+    said = [str(w.message) for w in caught]
+    assert not [w for w in said if "given" in w or "revived" in w], said
+
+
+def test_an_agent_down_terminates_and_one_that_joins_enters(demo: coherent.Task) -> None:
+    names = demo.robot_names
+    arm, drone, dog = names[6], names[11], names[13]
+    env = CoherentParallelEnv(demo, events=EVENTS[:2])
+    assert env.possible_agents == [arm, drone, dog]
+    observations, infos = env.reset(seed=0)
+    assert env.agents == [arm, drone] and set(observations) == set(infos) == {arm, drone}
+    assert infos[arm]["news"] == []
+    # Step 1, then step 2: after it, the quadrotor goes down.
+    env.step({})
+    observations, rewards, terminations, truncations, infos = env.step({drone: 1})
+    assert set(observations) == set(rewards) == set(terminations) == set(truncations) == {arm, drone}
+    assert terminations == {arm: False, drone: True}
+    told = ["<quadrotor>(11) broke down: it stays where it is for good, and can do nothing more."]
+    assert infos[arm]["news"] == infos[drone]["news"] == told
+    assert infos[drone]["actions"] == [] and infos[drone]["action_mask"].tolist()[:2] == [1, 0]
+    assert env.agents == [arm]
+    with pytest.raises(coherent.ArgumentError, match="are not acting now"):
+        env.step({drone: NOOP})
+    # Step 3: after it, the dog joins, in the dicts of that step and in the agents.
+    observations, rewards, terminations, truncations, infos = env.step({arm: NOOP})
+    assert set(observations) == set(terminations) == {arm, dog}
+    assert terminations == {arm: False, dog: False}
+    assert infos[dog]["news"] == ["<robot dog>(13) joined the team in <kitchen>(0)."]
+    assert infos[dog]["actions"] == coherent.Env(demo).actions(13)
+    assert json.loads(observations[dog])["nodes"]
+    assert env.agents == [arm, dog] and env.steps == 3 == env.env.steps
+    # reset: the events from the start again.
+    env.reset()
+    assert env.agents == [arm, drone] and env.env.robots == [6, 11]
+
+
+def test_failing_actions_follow_the_seed_of_reset(demo: coherent.Task) -> None:
+    """Failing actions in joint steps: an agent's action that fails says so, and the same
+    seed gives the same failures."""
+    events = [{"step": 1, "kind": "action_fails", "probability": 0.5}]
+
+    def outcomes(seed: int) -> list[tuple[bool | None, str | None]]:
+        env = CoherentParallelEnv(demo, events=events)
+        _, infos = env.reset(seed=seed)
+        seen = []
+        for _ in range(10):
+            _, _, _, _, infos = env.step(dict.fromkeys(env.agents, 1))
+            seen += [(infos[a]["ok"], infos[a]["reason"]) for a in env.possible_agents]
+        return seen
+
+    first = outcomes(4)
+    assert first == outcomes(4)
+    failed = [reason for ok, reason in first if ok is False]
+    assert failed and set(failed) == {
+        "the action failed (events[0]: each action fails with probability 0.5); nothing changed"
+    }
+    assert any(ok for ok, _ in first)
+    assert outcomes(5) != first

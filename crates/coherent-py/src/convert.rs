@@ -7,6 +7,7 @@ use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::Duration;
 
 use coherent::session::engine::Execution;
+use coherent::session::events::EventsSource;
 use pyo3::IntoPyObjectExt;
 use pyo3::exceptions::{PyOverflowError, PyRuntimeError, PyTypeError, PyUnicodeEncodeError};
 use pyo3::prelude::*;
@@ -286,4 +287,20 @@ pub(crate) fn execution(obj: &Bound<'_, PyAny>, name: &str) -> PyResult<Executio
     given
         .parse()
         .map_err(|_| errors::argument(name, obj, "expected \"sequential\" or \"parallel\""))
+}
+
+/// `events=`: a list of events (or a dict with an `events` list), or the path of a JSON
+/// file of them (docs/dynamic.md).
+pub(crate) fn events_source(obj: &Bound<'_, PyAny>) -> PyResult<EventsSource> {
+    if obj.is_instance_of::<PyList>()
+        || obj.is_instance_of::<PyTuple>()
+        || obj.is_instance_of::<PyDict>()
+    {
+        Ok(EventsSource::Given {
+            name: "events=".to_owned(),
+            value: json_at(obj, "events")?,
+        })
+    } else {
+        Ok(EventsSource::File(path(obj, "events")?))
+    }
 }

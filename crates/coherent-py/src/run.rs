@@ -12,13 +12,12 @@ use coherent::session::engine::{
     Summary, Transcript, executed_actions,
 };
 use coherent::session::episode::{self, Prepared, Ran, ReplayRequest, RunRequest};
-use coherent::session::events::EventsSource;
 use coherent::session::tasks::TaskSource;
 use coherent::session::view::{Given, Source, ViewRequest, page};
 use coherent::session::{self, Error};
 use pyo3::exceptions::PyTypeError;
 use pyo3::prelude::*;
-use pyo3::types::{PyDict, PyList, PyString, PyTuple};
+use pyo3::types::{PyDict, PyList, PyString};
 
 use crate::args;
 use crate::convert::{self, finite, interruptible, py_repr, text, to_py};
@@ -363,7 +362,7 @@ pub(crate) fn run(
     #[pyo3(from_py_with = args::step_timeout)] step_timeout: Option<Duration>,
     events: Option<&Bound<'_, PyAny>>,
 ) -> PyResult<Py<PyEpisode>> {
-    let events = events.map(events_source).transpose()?;
+    let events = events.map(convert::events_source).transpose()?;
     let prompts = prompt_source(prompts)?;
     let prices = price_source(prices)?;
     let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
@@ -394,22 +393,6 @@ pub(crate) fn run(
     methods.close(py)?;
     let cause = methods.methods.first().and_then(|m| m.take_error());
     finished(py, ran?, task.clone().unbind(), cause)
-}
-
-/// `events=`: a list of events (or a dict with an `events` list), or the path of a JSON
-/// file of them (docs/dynamic.md).
-fn events_source(obj: &Bound<'_, PyAny>) -> PyResult<EventsSource> {
-    if obj.is_instance_of::<PyList>()
-        || obj.is_instance_of::<PyTuple>()
-        || obj.is_instance_of::<PyDict>()
-    {
-        Ok(EventsSource::Given {
-            name: "events=".to_owned(),
-            value: convert::json_at(obj, "events")?,
-        })
-    } else {
-        Ok(EventsSource::File(convert::path(obj, "events")?))
-    }
 }
 
 /// Re-runs the episode of a transcript, answering from it (no network) with the prompt

@@ -9,12 +9,15 @@ use coherent::session::engine::{
     most_actions, native, original, predicate_holds, robot_names,
 };
 use coherent::session::episode::environment;
+use coherent::session::events::{self, Stepping};
 use coherent::session::robots::Robots;
 use pyo3::exceptions::{PyOverflowError, PyTypeError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 
-use crate::convert::{action_text, interruptible, json_to_py, py_repr, to_py};
+use crate::convert::{
+    action_text, events_source, interruptible, json_to_py, optional, py_repr, to_py, unsigned,
+};
 
 use crate::errors::{self, PyCoherentResult, core_err, short_repr};
 
@@ -182,6 +185,12 @@ pub(crate) fn robot_ids(task: &Task) -> Vec<i64> {
     task.robots.iter().map(|r| task.id(r.node).0).collect()
 }
 
+/// `seed` of `Env` and `Env.reset`, as `crate::args` reads `run`'s (which this module
+/// cannot name: `args` names the methods, which name `Task`).
+fn seed_arg(obj: &Bound<'_, PyAny>) -> PyResult<Option<u64>> {
+    optional(obj, |o| unsigned(o, "seed"))
+}
+
 /// A robot argument: a node id, or the repr of an int beyond the 64 bits of node ids, which
 /// is no robot either.
 type RobotArg = Result<NodeId, String>;
@@ -238,14 +247,19 @@ fn put_graph(dict: &Bound<'_, PyDict>, graph: &RawGraph) -> PyResult<()> {
 
 /// A task's environment: robots observe and act, one action at a time or several robots
 /// at once in a joint step, by the rules, and with `physics=True` also in Rapier; with
-/// `robots="ros2"` robots behind ROS 2 action servers carry the actions out.
+/// `robots="ros2"` robots behind ROS 2 action servers carry the actions out. The task's
+/// events (or those of `events=`) happen as in an episode (docs/dynamic.md): each call
+/// of `step` is one step, and the events due before the next are carried out after it.
 #[pyclass(name = "Env", module = "coherent._coherent")]
 pub(crate) struct PyEnv {
     env: Box<dyn Environment + Send + Sync>,
+    /// The task with its events (those of `events=` in place of its own).
     task: Py<PyTask>,
     physics: bool,
     /// The namespace of the robots' actions over ROS 2; None when local.
     namespace: Option<String>,
+    /// The events along the steps taken since the start, and the steps' count.
+    events: Stepping,
 }
 
 #[pymethods]
@@ -253,8 +267,9 @@ impl PyEnv {
     #[new]
     #[pyo3(signature = (
         task, physics = false, *, robots = "local", namespace = None, robot_timeout = 10.0,
-        server_wait = 10.0
+        server_wait = 10.0, events = None, seed = 0
     ))]
+    #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
         task: Bound<'_, PyTask>,
@@ -263,29 +278,33 @@ impl PyEnv {
         namespace: Option<&str>,
         robot_timeout: f64,
         server_wait: f64,
+        events: Option<&Bound<'_, PyAny>>,
+        #[pyo3(from_py_with = seed_arg)] seed: Option<u64>,
     ) -> PyCoherentResult<PyEnv> {
-        let t = Arc::clone(&task.get().task);
-        if !t.events.is_empty() {
-            // Stepped by hand, nothing would make them happen: refused, not ignored.
-            return Err(coherent::session::Error::Invalid(format!(
-                "the task has {} events (docs/dynamic.md), and Env does not run events yet: \
-                 coherent.run(task, ...) does",
-                t.events.len()
-            ))
-            .into());
-        }
         let robots = robots_arg(py, robots, namespace, robot_timeout, server_wait)?;
+        let source = events.map(events_source).transpose()?;
+        let given = source.is_some();
+        let (t, origin) = events::attach(Arc::clone(&task.get().task), source, "the task given")?;
+        // No step budget here: an event past any the caller keeps never happens.
+        events::check(&t, &origin, u32::MAX, physics, &robots)?;
         let namespace = match &robots {
             Robots::Ros2(options) => Some(options.namespace.clone()),
             Robots::Local => None,
         };
         let built = py.detach(|| environment(&t, physics, &robots, &Cancel::default()));
-        let env = built?;
+        let mut env = built?;
+        let stepping = Stepping::start(&t, seed.unwrap_or(0), &mut *env)?;
+        let task = if given {
+            Py::new(py, PyTask::shared(t))?
+        } else {
+            task.unbind()
+        };
         Ok(PyEnv {
             env,
-            task: task.unbind(),
+            task,
             physics,
             namespace,
+            events: stepping,
         })
     }
 
@@ -307,10 +326,43 @@ impl PyEnv {
         self.task.clone_ref(py)
     }
 
-    /// Node ids of the robots.
+    /// Node ids of the robots in the team now: without those that went down or have
+    /// not joined yet (docs/dynamic.md).
     #[getter]
     fn robots(&self) -> Vec<i64> {
         robot_ids(self.env.task())
+    }
+
+    /// What the team was told before the coming step, that it did not do: a sentence
+    /// per event that happened then (empty when none did).
+    #[getter]
+    fn news(&self) -> Vec<String> {
+        self.events.news().to_vec()
+    }
+
+    /// The steps taken since the start (or the last `reset`): calls of `step`.
+    #[getter]
+    fn steps(&self) -> u32 {
+        self.events.steps()
+    }
+
+    /// The seed of a failing-actions event's draws.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.events.seed()
+    }
+
+    /// The goal predicates now, as `Task.goal` writes them (an event may change them).
+    #[getter]
+    fn goal(&self) -> Vec<String> {
+        let task = self.env.task();
+        task.goal.iter().map(|p| task.predicate_label(p)).collect()
+    }
+
+    /// The instruction now (an event that changes the goal words it anew).
+    #[getter]
+    fn instruction(&self) -> String {
+        self.env.task().meta.instruction.clone()
     }
 
     /// What `robot` sees: `{"room": id | None, "nodes": [...], "edges": [...]}`, nodes and
@@ -359,7 +411,10 @@ impl PyEnv {
 
     /// Tries `action` for `robot`: `(ok, reason, done)`. An infeasible or unparsable
     /// action is not an error: `ok` is False and `reason` says why. A str that is not text
-    /// (a lone surrogate) cannot be tried and raises `ActionParseError`.
+    /// (a lone surrogate) cannot be tried and raises `ActionParseError`; a robot out of the
+    /// team now (down, or not joined yet) raises `UnknownRobotError` and takes no step.
+    /// An action that a failing-actions event draws to fail does not run: `ok` is False,
+    /// `reason` says so. After the step, the events due before the next are carried out.
     ///
     /// `step(actions)` tries one joint step, several robots acting at once
     /// (docs/semantics.md, "Parallel steps"): `actions` is a dict `{robot: action}` or a
@@ -379,18 +434,26 @@ impl PyEnv {
         };
         let robot = node_id(py, self.env.task(), named(py, "robot", robot_arg(robot))?)?;
         let action = named(py, "action", action_text(action))?;
-        let outcome = if self.acts_elsewhere() {
-            let env = &mut self.env;
-            py.detach(|| env.step(robot, &action))
-        } else {
-            self.env.step(robot, &action)
-        }?;
-        let executed = outcome.executed();
-        let reason = outcome.infeasible.map(|i| i.message);
-        Ok((executed, reason, outcome.done).into_pyobject(py)?)
+        // A robot out of the team is refused before the step is taken.
+        self.env.task().robot_by_id(robot)?;
+        let (executed, reason) = match self.events.fails(&*self.env, robot) {
+            Some(why) => (false, Some(why)),
+            None => {
+                let outcome = if self.acts_elsewhere() {
+                    let env = &mut self.env;
+                    py.detach(|| env.step(robot, &action))
+                } else {
+                    self.env.step(robot, &action)
+                }?;
+                (outcome.executed(), outcome.infeasible.map(|i| i.message))
+            }
+        };
+        let done = self.next_step()?;
+        Ok((executed, reason, done).into_pyobject(py)?)
     }
 
-    /// Whether each goal predicate holds now, in the order of `Task.goal`.
+    /// Whether each goal predicate holds now, in the order of `Env.goal` (`Task.goal`
+    /// unless an event changed the goal).
     fn goal_holds(&self) -> Vec<bool> {
         let state = self.env.state();
         let goal = &self.env.task().goal;
@@ -408,9 +471,17 @@ impl PyEnv {
         Ok(dict)
     }
 
-    /// Back to the task's initial state.
-    fn reset(&mut self) {
+    /// Back to the task's initial state, its events from the start again; `seed`, when
+    /// given, seeds the failing actions' draws from now on.
+    #[pyo3(signature = (seed = None))]
+    fn reset(
+        &mut self,
+        #[pyo3(from_py_with = seed_arg)] seed: Option<u64>,
+    ) -> PyCoherentResult<()> {
         self.env.reset();
+        let task = Arc::clone(self.events.task());
+        self.events = Stepping::start(&task, seed.unwrap_or(self.events.seed()), &mut *self.env)?;
+        Ok(())
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {
@@ -456,20 +527,55 @@ impl PyEnv {
             let robot = node_id(py, self.env.task(), named(py, "actions", robot_arg(robot))?)?;
             step.push((robot, named(py, "actions", action_text(action))?));
         }
-        let step: Vec<(NodeId, &str)> = step.iter().map(|(r, a)| (*r, a.as_str())).collect();
-        let outcome = if self.acts_elsewhere() {
-            let env = &mut self.env;
-            py.detach(|| env.step_joint(&step))
-        } else {
-            self.env.step_joint(&step)
-        }?;
-        let oks: Vec<bool> = outcome.parts.iter().map(|p| p.executed()).collect();
-        let reasons: Vec<Option<String>> = outcome
-            .parts
-            .into_iter()
-            .map(|p| p.infeasible.map(|i| i.message))
+        // A robot out of the team is refused before the step is taken.
+        for (robot, _) in &step {
+            self.env.task().robot_by_id(*robot)?;
+        }
+        // The actions a failing-actions event makes fail do not run; the others' step
+        // runs without them (an empty step still runs: the rules take it as it is).
+        let failed: Vec<Option<String>> = step
+            .iter()
+            .map(|(robot, _)| self.events.fails(&*self.env, *robot))
             .collect();
-        Ok((oks, reasons, outcome.done).into_pyobject(py)?)
+        let acting: Vec<(NodeId, &str)> = step
+            .iter()
+            .zip(&failed)
+            .filter(|(_, f)| f.is_none())
+            .map(|((r, a), _)| (*r, a.as_str()))
+            .collect();
+        let outcome = if !acting.is_empty() || step.is_empty() {
+            Some(if self.acts_elsewhere() {
+                let env = &mut self.env;
+                py.detach(|| env.step_joint(&acting))
+            } else {
+                self.env.step_joint(&acting)
+            }?)
+        } else {
+            None
+        };
+        let mut parts = outcome.into_iter().flat_map(|o| o.parts);
+        let mut oks = Vec::with_capacity(step.len());
+        let mut reasons = Vec::with_capacity(step.len());
+        for why in failed {
+            let (ok, reason) = match why {
+                Some(why) => (false, Some(why)),
+                None => match parts.next() {
+                    Some(p) => (p.executed(), p.infeasible.map(|i| i.message)),
+                    None => (false, None),
+                },
+            };
+            oks.push(ok);
+            reasons.push(reason);
+        }
+        let done = self.next_step()?;
+        Ok((oks, reasons, done).into_pyobject(py)?)
+    }
+
+    /// After a step: the events due before the next one, carried out. Whether the goal
+    /// holds then.
+    fn next_step(&mut self) -> PyCoherentResult<bool> {
+        self.events.taken(&mut *self.env)?;
+        Ok(self.env.goal_satisfied())
     }
 }
 

@@ -126,23 +126,14 @@ impl Dynamics {
     }
 
     /// Why `robot`'s action at `step` fails, when a failing-actions event draws so
-    /// (seeded by the episode's seed, the step and the robot: the same draws whatever
-    /// the method does).
+    /// ([`action_failure`]).
     pub(crate) fn fails(
         &self,
         task: &Task,
         step: u32,
         robot: coherent_core::NodeId,
     ) -> Option<String> {
-        let r = task.idx(robot)?;
-        let (p, event) = self.schedule.failure_chance(r)?;
-        let stream = u64::from(step) << 32 | (robot.0 as u64 & 0xFFFF_FFFF);
-        let draw = Rng::new(seed_of(self.seed, stream)).unit();
-        (draw < p).then(|| {
-            format!(
-                "the action failed (events[{event}]: each action fails with probability {p}); nothing changed"
-            )
-        })
+        action_failure(&self.schedule, task, self.seed, step, robot)
     }
 
     /// After a round: counts what its failed actions cost, and measures the open
@@ -265,6 +256,29 @@ impl Dynamics {
         .await
         .map_err(io::Error::other)
     }
+}
+
+/// Why `robot`'s action at `step` fails, when a failing-actions event of `schedule`
+/// draws so; `None` when it does not, or when no failure runs. The draw is seeded by the
+/// episode's `seed`, the step and the robot: the same draws whatever the method does,
+/// and whoever steps the world (the loop, and Python's `Env` stepped by hand). `task` is
+/// the task as the events have left it.
+pub fn action_failure(
+    schedule: &Schedule,
+    task: &Task,
+    seed: u64,
+    step: u32,
+    robot: coherent_core::NodeId,
+) -> Option<String> {
+    let r = task.idx(robot)?;
+    let (p, event) = schedule.failure_chance(r)?;
+    let stream = u64::from(step) << 32 | (robot.0 as u64 & 0xFFFF_FFFF);
+    let draw = Rng::new(seed_of(seed, stream)).unit();
+    (draw < p).then(|| {
+        format!(
+            "the action failed (events[{event}]: each action fails with probability {p}); nothing changed"
+        )
+    })
 }
 
 /// What the team is told of `happened`: a sentence each, of those that tell something.

@@ -31,7 +31,7 @@ pub mod prefix;
 
 pub use budget::{Budget, NoPlan, PlannedMakespan};
 pub use cancel::Cancel;
-pub use events::prove;
+pub use events::{action_failure, prove};
 pub use method::{Closing, Decided, Deciding, Method, Turn};
 pub use play::{Course, Episode, HISTORY_WINDOW, History, play};
 pub use policy::{Act, Choice, MakePolicy, MethodFailure, PastStep, Policy, RobotView, StepView};
