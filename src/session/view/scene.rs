@@ -5,11 +5,12 @@
 //!
 //! The rules go first, through every round (and the task's events before the rounds
 //! they came before): they give each round's state, and so what the page says of rooms,
-//! holds and doors. Positions come from carrying the executed actions out in Rapier, as
-//! `coherent render --transcript` does, but a round is carried out only once: a round
-//! that does again what an earlier one did (the same actions from the same state, as an
-//! episode going round in circles does) is drawn as physics drew it the first time, so
-//! that a long episode costs the rounds that are new, not all of them. When physics
+//! holds and doors. Positions come from carrying the executed actions (and the events)
+//! out in Rapier, as `coherent render --transcript` does, but a round is carried out only
+//! once: a round that does again what an earlier one did (the same actions from the same
+//! state, as an episode going round in circles does) is drawn as physics drew it the
+//! first time, so that a long episode costs the rounds that are new, not all of them
+//! (since the last event: the world is another after it). When physics
 //! cannot follow the episode (a layout that cannot be built, an action that fails
 //! physically), the robots stay drawn where physics left them and the page says why;
 //! the rules still say where they are.
@@ -100,6 +101,9 @@ struct ByRules<'t> {
     /// The start's state, then each round's: indices into `states`.
     at: Vec<usize>,
     rounds: Vec<(Actions<'t>, bool)>,
+    /// For each round, when events changed the world before it: the task as they left
+    /// it and the number of the state they left.
+    events: Vec<Option<(Arc<Task>, usize)>>,
 }
 
 impl<'t> ByRules<'t> {
@@ -110,6 +114,7 @@ impl<'t> ByRules<'t> {
             states: Vec::new(),
             at: Vec::with_capacity(t.rounds.len() + 1),
             rounds: Vec::with_capacity(t.rounds.len()),
+            events: Vec::with_capacity(t.rounds.len()),
         };
         // The task's events, carried out before the rounds they came before, as the
         // episode did: a thing moved, a robot joined in a room, is where the rules say.
@@ -119,12 +124,16 @@ impl<'t> ByRules<'t> {
         }
         by.note(&mut numbers, rules.state());
         for round in &t.rounds {
+            let mut changed = None;
             if let Some(schedule) = schedule.as_mut() {
                 let mut state = rules.state().clone();
                 if !schedule.before_step(round.step, &mut state).is_empty() {
-                    let _ = rules.befall(schedule.world(), state);
+                    let world = schedule.world();
+                    let _ = rules.befall(Arc::clone(&world), state);
+                    changed = Some((world, by.number(&mut numbers, rules.state())));
                 }
             }
+            by.events.push(changed);
             let actions = round.carried_out();
             for &(robot, action) in &actions {
                 let _ = rules.step(robot, action);
@@ -136,12 +145,18 @@ impl<'t> ByRules<'t> {
     }
 
     fn note(&mut self, numbers: &mut HashMap<State, usize>, state: &State) {
+        let k = self.number(numbers, state);
+        self.at.push(k);
+    }
+
+    /// The number of `state`, a new one when it is new.
+    fn number(&mut self, numbers: &mut HashMap<State, usize>, state: &State) -> usize {
         let next = self.states.len();
         let k = *numbers.entry(state.clone()).or_insert(next);
         if k == next {
             self.states.push(state.clone());
         }
-        self.at.push(k);
+        k
     }
 }
 
@@ -194,7 +209,11 @@ pub fn follow(
     )];
     let total = by.rounds.len();
     for (k, ((actions, joint), round)) in by.rounds.iter().zip(&t.rounds).enumerate() {
-        let (from, to) = (by.at[k], by.at[k + 1]);
+        let (mut from, to) = (by.at[k], by.at[k + 1]);
+        if let Some((world, after)) = &by.events[k] {
+            physics.befall(&by, from, world, *after, round.step);
+            from = *after;
+        }
         let sim_seconds = physics.round(&by, from, to, actions, *joint, round.step);
         let state = &by.states[to];
         let picture = pictures.of(&stage, state, ids);
@@ -326,6 +345,33 @@ impl<'s> Physics<'s> {
                 self.stop(step, &why);
                 None
             }
+        }
+    }
+
+    /// Carries out in the world the events that came before round `step`: brought first
+    /// to state `at`, where the episode was, then put where they left it, state `after`
+    /// of the task as they left it (`world`). The rounds done before are not ways through
+    /// the world from then on.
+    fn befall(&mut self, by: &ByRules<'_>, at: usize, world: &Arc<Task>, after: usize, step: u32) {
+        if self.env.is_none() {
+            return;
+        }
+        if self.world_at != at
+            && let Err(why) = self.bring_to(by, at)
+        {
+            self.stop(step, &why);
+            return;
+        }
+        let Some(env) = self.env.as_mut() else {
+            return;
+        };
+        match env.befall(Arc::clone(world), by.states[after].clone()) {
+            Ok(()) => {
+                self.world_at = after;
+                self.done.clear();
+                self.ways.clear();
+            }
+            Err(e) => self.stop(step, &Unfollowed(e.to_string())),
         }
     }
 
