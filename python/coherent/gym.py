@@ -72,6 +72,13 @@ class RobotSpace(spaces.Space[int]):
         return hash(self.robots)
 
 
+def draws_seed(seed: int) -> int:
+    """The seed of :class:`coherent.Env`'s failure draws for a Gymnasium or PettingZoo
+    ``seed`` from 0: the same below 2**64, taken modulo 2**64 above (Gymnasium takes any
+    int; the draws are seeded by 64 bits)."""
+    return operator.index(seed) % 2**64
+
+
 class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
     """A task's world as a Gymnasium environment; see the module's documentation."""
 
@@ -114,7 +121,7 @@ class CoherentEnv(gymnasium.Env[str, tuple[int, str]]):
         super().reset(seed=seed)
         if seed is not None:
             self.action_space.seed(seed)
-        self.env.reset(seed=None if seed is None else operator.index(seed))
+        self.env.reset(seed=None if seed is None else draws_seed(seed))
         self.steps = 0
         return self._observation(), self._info()
 

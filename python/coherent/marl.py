@@ -55,7 +55,7 @@ with needs("coherent.marl", "marl"):
     from pettingzoo import ParallelEnv
 
 # The observations' characters and length, as the Gymnasium environment's.
-from .gym import CHARSET, MAX_OBSERVATION
+from .gym import CHARSET, MAX_OBSERVATION, draws_seed
 
 #: The action index that does nothing.
 NOOP = 0
@@ -115,7 +115,7 @@ class CoherentParallelEnv(ParallelEnv[str, str, int]):
             seed = _count("seed", seed)
             for i, agent in enumerate(self.possible_agents):
                 self._action_spaces[agent].seed(seed + i)
-        self.env.reset(seed=seed)
+        self.env.reset(seed=None if seed is None else draws_seed(seed))
         self.steps = 0
         self._seen = {}
         self.agents = self._team()

@@ -125,6 +125,7 @@ def test_gym_reset_seed(env: coherent.Env) -> None:
     with pytest.raises(TypeError):
         genv.reset(seed=1.5)  # type: ignore[arg-type]
     genv.reset(seed=2**70)
+    assert genv.env.seed == 2**70 % 2**64
 
 
 def test_gym_step_arguments(env: coherent.Env) -> None:
