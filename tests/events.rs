@@ -15,44 +15,9 @@ use coherent_generate::variants::variants;
 
 mod common;
 
-use common::{coherent, json_lines, scratch, show, utf8};
+use common::{DEMO_KINDS, coherent, json_lines, scratch, show, utf8};
 
 const DEMO: &str = "examples/tasks/demo.json";
-
-/// One event of each kind on the demo task (an arm on the kitchen counter, a quadrotor in
-/// the living room, a legged robot in the kitchen; the mug and the apple to the coffee
-/// table): the robot that joins where the task placed it, a thing moved from a table and
-/// one taken out of a hand, a door locked for a span.
-const DEMO_KINDS: [(&str, &str); 7] = [
-    (
-        "robot_down",
-        r#"[{"when": {"relation": "INSIDE", "subject": 7, "target": 12}, "kind": "robot_down", "robot": 6}]"#,
-    ),
-    (
-        "robot_up",
-        r#"[{"step": 4, "kind": "robot_up", "robot": 13}]"#,
-    ),
-    (
-        "object_moved",
-        r#"[{"when": {"held": 7}, "kind": "object_moved", "thing": 9, "relation": "ON", "target": 14}]"#,
-    ),
-    (
-        "object_moved",
-        r#"[{"when": {"held": 7}, "kind": "object_moved", "thing": 7, "relation": "ON", "target": 14}]"#,
-    ),
-    (
-        "goal_changed",
-        r#"[{"step": 5, "kind": "goal_changed", "remove": [{"relation": "ON", "subject": 9, "target": 10}], "add": [{"relation": "ON", "subject": 9, "target": 14}], "instruction": "The mug to the coffee table, the apple to the sofa."}]"#,
-    ),
-    (
-        "blocked",
-        r#"[{"step": 2, "kind": "blocked", "door": 4, "steps": 3}]"#,
-    ),
-    (
-        "action_fails",
-        r#"[{"step": 2, "kind": "action_fails", "probability": 0.3}]"#,
-    ),
-];
 
 fn events_file(dir: &Path, text: &str) -> String {
     let path = dir.join("events.json");

@@ -264,10 +264,11 @@ def test_a_goal_changed_is_the_envs_goal_and_instruction(demo: coherent.Task) ->
 
 
 def test_an_env_with_events_refuses_what_cannot_carry_them_out(demo: coherent.Task, tmp_path: Path) -> None:
-    """ROS 2 robots do not take events yet, physics does but for a robot joining in a room
-    of the event's; the task's own events run too."""
-    with pytest.raises(coherent.ArgumentError, match="robots over ROS 2 do not carry events out yet"):
-        coherent.Env(demo, robots="ros2", events=MOVED, server_wait=0.1)
+    """Neither physics nor robots over ROS 2 carry a robot joining in a room of the
+    event's; the task's own events run too."""
+    with pytest.raises(coherent.TaskFormatError, match="robots over ROS 2 are not carried anywhere") as raised:
+        coherent.Env(demo, robots="ros2", events=KINDS["robot_up"], server_wait=0.1)
+    assert raised.value.json_path == "$[0].room"
     with pytest.raises(coherent.TaskFormatError, match="physics does not carry a robot anywhere") as raised:
         coherent.Env(demo, physics=True, events=KINDS["robot_up"])
     assert raised.value.json_path == "$[0].room"

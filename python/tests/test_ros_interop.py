@@ -269,6 +269,46 @@ def test_env_over_ros2_steps_the_demo_through_the_robots_servers(netns: Netns, c
     assert served.count("-> accepted") == 22, "the refused step never reached a robot"
 
 
+STEP_EVENTS = """
+import json, sys
+import coherent
+task = coherent.load_tasks(sys.argv[1])[0]
+events = json.load(open(sys.argv[3]))["events"]
+episode = coherent.run(task, "optimal", events=events, seed=3, out=sys.argv[4])
+env = coherent.Env(task, robots="ros2", namespace=sys.argv[2], events=events, seed=3, robot_timeout=30, server_wait=30)
+same = []
+for r in episode.transcript:
+    d = r.get("decision") or {}
+    if d.get("can_do") and d.get("action") and d.get("robot") is not None:
+        ok, reason, done = env.step(d["robot"], d["action"])
+        same.append(ok == (r["outcome"]["kind"] == "executed"))
+    else:
+        _, _, done = env.step([])
+print(json.dumps({"same": same, "goal": env.goal_satisfied(), "steps": [env.steps, episode.steps]}))
+"""
+
+
+def test_env_over_ros2_carries_the_events_out_through_the_worlds_service(
+    netns: Netns, coherent_exe: str, tmp_path: Path
+) -> None:
+    """`coherent.Env(robots="ros2", events=...)` steps the optimal episode of the demo's
+    events (a robot down, a door locked for two steps): each action as it went in the
+    episode, the goal reached; the servers' world was told of each event."""
+    events = DEMO.parent.parent / "events" / "demo.json"
+    server = serve(netns, coherent_exe, "--namespace", "/py_events")
+    args = [sys.executable, "-c", STEP_EVENTS, str(DEMO), "/py_events", str(events), str(tmp_path)]
+    run = netns.popen(args, stdout=subprocess.PIPE)
+    out, _ = run.communicate(timeout=LONG)
+    assert run.returncode == 0, out
+    result = json.loads(out.splitlines()[-1])
+    assert result["same"] and all(result["same"]), result
+    assert result["goal"] is True and result["steps"][0] == result["steps"][1], result
+    server.kill()
+    served, _ = server.communicate(timeout=LONG)
+    assert "-> done: the team: quadrotor_11, robot_dog_13; doors locked: none;" in served, served
+    assert "doors locked: <door>(4);" in served, served
+
+
 NO_SERVER = """
 import sys
 import coherent

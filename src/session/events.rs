@@ -96,15 +96,8 @@ pub fn check(
             ),
         }));
     }
-    if let Robots::Ros2(_) = robots {
-        return Err(Error::Invalid(format!(
-            "{}: the task has {} events, and robots over ROS 2 do not carry events out yet \
-             (the rules and physics do: leave out --robots ros2)",
-            origin.file,
-            task.events.len()
-        )));
-    }
-    if physics
+    let ros2 = matches!(robots, Robots::Ros2(_));
+    if (physics || ros2)
         && let Some(i) = task
             .events
             .iter()
@@ -113,9 +106,14 @@ pub fn check(
         return Err(Error::Task(coherent_core::Error::Malformed {
             file: origin.file.clone(),
             path: origin.path.index(i).key("room"),
-            message: "physics does not carry a robot anywhere at an event: in physics a robot \
-                      joins where the task placed it (leave out `room`, or --physics)"
-                .into(),
+            message: if ros2 {
+                "robots over ROS 2 are not carried anywhere at an event: a robot joins where \
+                 the task placed it (leave out `room`, or --robots ros2)"
+            } else {
+                "physics does not carry a robot anywhere at an event: in physics a robot \
+                 joins where the task placed it (leave out `room`, or --physics)"
+            }
+            .into(),
         }));
     }
     Ok(())

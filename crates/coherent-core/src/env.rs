@@ -138,9 +138,8 @@ pub trait Environment {
 
     /// Puts the world where an event left it (docs/dynamic.md): `task` is the task as
     /// the event left it (its team, goal and doors), `state` the state. The rules take
-    /// any, physics what it can carry out; a world that cannot follow (robots over ROS
-    /// 2, for now) says why, and an episode with events is refused there before it
-    /// starts.
+    /// any, physics what it can carry out, robots over ROS 2 what their world's service
+    /// carries out; a world that cannot follow says why.
     fn befall(&mut self, task: Arc<Task>, state: State) -> Result<()> {
         let _ = (task, state);
         Err(crate::Error::Unsupported(

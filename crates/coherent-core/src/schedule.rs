@@ -304,8 +304,9 @@ fn join_in(task: &Task, s: &mut State, robot: Idx, room: Idx) {
 
 /// Puts `thing` on or into `target`, taken from wherever it is (a robot's hand
 /// included); robots next to it are no longer, robot dogs next to the target now are.
-/// An error, changing nothing, when the target stands on or in the thing.
-fn move_thing(
+/// An error, changing nothing, when the target stands on or in the thing. The one way
+/// an event moves a thing, whichever world carries it out.
+pub fn move_thing(
     task: &Task,
     s: &mut State,
     thing: Idx,

@@ -488,8 +488,9 @@ impl Task {
 
     /// The task as events have left it (docs/dynamic.md): `team` acts (the other robots
     /// stay where they are, as things), `goal` is the goal with `instruction` its wording,
-    /// and the doors `locked` join nothing.
-    pub(crate) fn vary(
+    /// and the doors `locked` join nothing. A world that carries events out elsewhere
+    /// (robots over ROS 2) makes the same variant of its own task with it.
+    pub fn vary(
         &self,
         team: Vec<Robot>,
         goal: Vec<GoalPredicate>,

@@ -16,8 +16,9 @@ use coherent_core::{
 };
 use ros2_client::action::GoalStatusEnum;
 
+use crate::befall;
 use crate::error::Error;
-use crate::link::Exchange;
+use crate::link::{Befell, Exchange};
 use crate::link_process::{LinkCommand, LinkProcess};
 use crate::relations;
 use crate::wire::{self, ExecuteResult, Goal};
@@ -39,8 +40,14 @@ pub struct BridgeOptions {
 /// An environment whose actions robots carry out, one ROS 2 action server per robot.
 #[derive(Debug)]
 pub struct Ros2Env {
+    /// The task as connected: its robots are the servers', in [`Ros2Env::names`]' order.
+    base: Arc<Task>,
+    /// The task as events have left it (its team, its doors): the rules' world.
     task: Arc<Task>,
     state: State,
+    /// The team and the locked doors the world's service was last told of; `None` until
+    /// it is told (a world served before may hold anything).
+    told: Option<(Vec<String>, Vec<String>)>,
     options: BridgeOptions,
     /// The robots' ROS names, in the task's order.
     names: Vec<String>,
@@ -67,13 +74,15 @@ impl Ros2Env {
         let link = LinkProcess::connect(
             &options.link,
             &options.namespace,
-            &names,
+            (&names, !task.events.is_empty()),
             options.server_wait,
             options.robot_timeout,
         )?;
         Ok(Ros2Env {
             state: task.init.clone(),
+            base: Arc::clone(&task),
             task,
+            told: None,
             options,
             names,
             link,
@@ -127,7 +136,7 @@ impl Ros2Env {
             .zip(first..)
             .map(|(&(robot, action), count)| {
                 let n = self
-                    .task
+                    .base
                     .robots
                     .iter()
                     .position(|x| x.node == robot.node)
@@ -336,9 +345,66 @@ impl Environment for Ros2Env {
     /// The rules' state only: the robots' world is theirs to put back (restart
     /// `coherent robots serve`).
     fn reset(&mut self) {
+        self.task = Arc::clone(&self.base);
         self.state = self.task.init.clone();
+        self.told = None;
         self.steps = 0;
         self.stopped = None;
+    }
+
+    /// What the events changed in the robots' world goes to the world's service
+    /// (`crate::befall`): the team, the locked doors, each thing moved and where. The
+    /// world must accept it and then observe each thing where the rules have it; a world
+    /// that refuses, disagrees or falls silent stops the bridge as a robot would, and
+    /// the episode ends with the next round, saying why. A change of the task's words
+    /// alone (its goal) is the planner's: nothing is sent.
+    fn befall(&mut self, task: Arc<Task>, state: State) -> coherent_core::Result<()> {
+        let next = self.steps.saturating_add(1);
+        let asked = befall::asked(
+            &self.base,
+            &self.names,
+            self.told.as_ref(),
+            &task,
+            (&self.state, &state),
+            next,
+        );
+        if let (Some(request), None) = (asked, &self.stopped) {
+            let now = (request.team.clone(), request.locked.clone());
+            let service = wire::service_name(&self.options.namespace);
+            match self.link.befall(request, self.options.robot_timeout) {
+                Befell::Answered(answer) if answer.accepted => {
+                    let diffs = relations::disagreements(&task, &[&state], &answer.relations);
+                    if diffs.is_empty() {
+                        self.told = Some(now);
+                    } else {
+                        let why = format!(
+                            "the world ({service}) carried the events out, but what it observes \
+                             disagrees with the rules: {}",
+                            diffs.join("; ")
+                        );
+                        self.stop(Reason::Disagreement, &why);
+                    }
+                }
+                Befell::Answered(answer) => {
+                    let why = format!(
+                        "the world ({service}) refused the events: {}",
+                        coherent_core::text::shown(&answer.message)
+                    );
+                    self.stop(Reason::Robot, &why);
+                }
+                Befell::Silent => {
+                    let why = format!(
+                        "the world ({service}) did not answer the events within {:.1} s",
+                        self.options.robot_timeout.as_secs_f64()
+                    );
+                    self.stop(Reason::Timeout, &why);
+                }
+                Befell::Failed(why) => self.stop(Reason::Robot, &format!("{service}: {why}")),
+            }
+        }
+        self.task = task;
+        self.state = state;
+        Ok(())
     }
 
     fn stopped(&self) -> Option<String> {

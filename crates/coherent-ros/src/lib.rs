@@ -8,10 +8,13 @@
 //! `coherent-core`: the rules check each action before it is sent, the robot carries it
 //! out and reports, and the symbolic state follows the robot's success. [`serve`] runs
 //! the reference robot servers, which act in the project's own engine (the rules, or
-//! Rapier) and inject faults on demand ([`Faults`]). The bridge's DDS side runs in a
-//! child process with a memory limit ([`link_process`]), so that what a DDS participant
-//! sends can end that process, never the run.
+//! Rapier), carry a dynamic task's events out in it when the bridge asks their world's
+//! service, `/<namespace>/befall` (`coherent_msgs/srv/Befall`), and inject faults on
+//! demand ([`Faults`]). The bridge's DDS side runs in a child process with a memory limit
+//! ([`link_process`]), so that what a DDS participant sends can end that process, never
+//! the run.
 
+mod befall;
 pub mod bridge;
 mod error;
 pub mod faults;
@@ -20,9 +23,11 @@ pub mod link_process;
 pub mod relations;
 pub mod server;
 pub mod wire;
+mod world;
 
 pub use bridge::{BridgeOptions, Ros2Env};
 pub use error::Error;
 pub use faults::Faults;
 pub use link_process::{LINK_MEMORY_LIMIT, LinkCommand};
-pub use server::{SERVE_MEMORY_LIMIT, ServeOptions, World, serve};
+pub use server::{SERVE_MEMORY_LIMIT, ServeOptions, serve};
+pub use world::World;

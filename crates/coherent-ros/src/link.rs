@@ -39,7 +39,9 @@ use tokio::runtime::Handle;
 use tokio::time::{Instant, sleep, sleep_until, timeout};
 
 use crate::error::Error;
-use crate::wire::{self, CancelRequest, ExecuteResult, Feedback, Goal};
+use crate::wire::{
+    self, BefallRequest, BefallResponse, CancelRequest, ExecuteResult, Feedback, Goal,
+};
 
 /// How often the wait for the robots' servers looks again.
 const RECHECK: Duration = Duration::from_millis(100);
@@ -84,6 +86,25 @@ impl Exchange {
         matches!(self, Exchange::Result { status, result }
             if *status == GoalStatusEnum::Succeeded && result.success)
     }
+}
+
+/// How a request to the world's service ended, seen from the bridge (and sent from the
+/// link process to it).
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub(crate) enum Befell {
+    /// The world's answer.
+    Answered(BefallResponse),
+    /// No answer within the silence allowed.
+    Silent,
+    /// DDS could not send or receive, or the answer is larger than one can be.
+    Failed(String),
+}
+
+/// The bridge's ends of the world's service, made only for a task with events.
+struct WorldEnds {
+    request: Writer<BefallRequest>,
+    replies: Reader<BefallResponse>,
 }
 
 /// One robot's ends of its action.
@@ -135,9 +156,11 @@ impl Matches {
     }
 }
 
-/// The bridge's DDS ends, robot by robot, and the runtime to wait on them.
+/// The bridge's DDS ends, robot by robot (and the world's, for events), and the runtime
+/// to wait on them.
 pub(crate) struct Link {
     robots: Vec<Ends>,
+    world: Option<WorldEnds>,
     /// The participant, which lives as long as a handle to it does.
     _participant: DomainParticipant,
     runtime: Handle,
@@ -287,13 +310,15 @@ fn prefix_of(guid: GUID) -> [u8; 12] {
 }
 
 impl Link {
-    /// Joins DDS, makes the ends of each of `robots`' actions under `namespace`, waits up
-    /// to `wait` for every robot's server to appear, then a moment more for a second
-    /// one: a robot with two servers is an error that names them. Goals are followed on
+    /// Joins DDS, makes the ends of each of `robots`' actions under `namespace` (and of
+    /// the world's service when the task has `events`), waits up to `wait` for every
+    /// robot's server (and the world's) to appear, then a moment more for a second one: a
+    /// robot with two servers is an error that names them. Goals are followed on
     /// `runtime`.
     pub(crate) fn connect(
         namespace: &str,
         robots: &[String],
+        events: bool,
         wait: Duration,
         runtime: Handle,
     ) -> Result<Link, Error> {
@@ -310,26 +335,45 @@ impl Link {
             .iter()
             .map(|r| Ends::make(&participant, &publisher, &subscriber, namespace, r))
             .collect::<Result<Vec<_>, _>>()?;
+        let world = if events {
+            Some(WorldEnds::make(
+                &participant,
+                &publisher,
+                &subscriber,
+                namespace,
+            )?)
+        } else {
+            None
+        };
         let link = Link {
             robots: ends,
+            world,
             _participant: participant.clone(),
             runtime,
         };
+        let world_served = |m: &Matches| link.world.as_ref().is_none_or(|w| w.served(m));
         let mut matches = Matches::default();
         let start = std::time::Instant::now();
         loop {
             matches.update(&participant);
-            if link.robots.iter().all(|e| e.served(&matches)) || start.elapsed() >= wait {
+            let all = link.robots.iter().all(|e| e.served(&matches)) && world_served(&matches);
+            if all || start.elapsed() >= wait {
                 break;
             }
             std::thread::sleep(RECHECK);
         }
-        let missing: Vec<String> = robots
+        let mut missing: Vec<String> = robots
             .iter()
             .zip(&link.robots)
             .filter(|(_, e)| !e.served(&matches))
             .map(|(r, _)| r.clone())
             .collect();
+        if !world_served(&matches) {
+            missing.push(format!(
+                "{} (the service that carries the task's events out)",
+                wire::service_name(namespace)
+            ));
+        }
         if !missing.is_empty() {
             return Err(Error::Missing {
                 robots: missing,
@@ -368,6 +412,14 @@ impl Link {
         self.block(futures::future::join_all(each))
     }
 
+    /// Sends `request` to the world's service and waits up to `silence` for its answer.
+    pub(crate) fn befall(&self, request: BefallRequest, silence: Duration) -> Befell {
+        let Some(world) = &self.world else {
+            return Befell::Failed("the link was made for a task without events".into());
+        };
+        self.block(ask_world(world, request, silence))
+    }
+
     /// Runs `future` to its end on the link's runtime, from a thread of its own, so that
     /// the caller may be inside a runtime (an episode's) or in none.
     fn block<T: Send>(&self, future: impl Future<Output = T> + Send) -> T {
@@ -378,6 +430,67 @@ impl Link {
                 .unwrap_or_else(|panic| std::panic::resume_unwind(panic))
         })
     }
+}
+
+impl WorldEnds {
+    /// The ends of the world's service under `namespace`.
+    fn make(
+        participant: &DomainParticipant,
+        publisher: &Publisher,
+        subscriber: &Subscriber,
+        namespace: &str,
+    ) -> Result<WorldEnds, Error> {
+        let [(request, request_type), (reply, reply_type)] =
+            wire::service_dds_names(namespace).map_err(Error::Dds)?;
+        let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
+            participant
+                .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
+                .map_err(dds(name))
+        };
+        let t = topic(&request, &request_type, &request_qos())?;
+        let writer = publisher
+            .create_datawriter_no_key(&t, Some(request_qos()))
+            .map_err(dds(&request))?;
+        let t = topic(&reply, &reply_type, &reader_qos())?;
+        let replies = subscriber
+            .create_simple_datareader_no_key(&t, Some(reader_qos()))
+            .map_err(dds(&reply))?;
+        Ok(WorldEnds {
+            request: writer,
+            replies,
+        })
+    }
+
+    /// Whether a server reads the requests and writes the replies.
+    fn served(&self, matches: &Matches) -> bool {
+        matches.any(self.request.guid()) && matches.any(self.replies.guid())
+    }
+}
+
+/// Sends `request` to the world's service and takes the answer to it, within `silence`.
+async fn ask_world(world: &WorldEnds, request: BefallRequest, silence: Duration) -> Befell {
+    let asked = match send(&world.request, request) {
+        Ok(id) => id,
+        Err(why) => return Befell::Failed(why),
+    };
+    let replies = world.replies.as_async_stream();
+    tokio::pin!(replies);
+    let answer = async {
+        loop {
+            match replies.next().await {
+                Some(Ok(r)) if r.related_sample_identity() == Some(asked) => {
+                    return match wire::befall_checked(r.sample) {
+                        Ok(response) => Befell::Answered(response),
+                        Err(why) => Befell::Failed(why),
+                    };
+                }
+                Some(Ok(_)) => {}
+                Some(Err(e)) => return Befell::Failed(format!("cannot read the answer: {e:?}")),
+                None => return Befell::Failed("the answers ended".into()),
+            }
+        }
+    };
+    timeout(silence, answer).await.unwrap_or(Befell::Silent)
 }
 
 /// Resolves once `flag` is raised; never without one.

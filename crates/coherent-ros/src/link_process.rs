@@ -36,8 +36,8 @@ use serde::{Deserialize, Serialize};
 use tokio::runtime::Handle;
 
 use crate::error::Error;
-use crate::link::{CANCEL_WAIT, Exchange, Link};
-use crate::wire::Goal;
+use crate::link::{Befell, CANCEL_WAIT, Exchange, Link};
+use crate::wire::{BefallRequest, Goal};
 
 /// The data segment (heap and private writable mappings, `RLIMIT_DATA`) the link process
 /// may take. Normally it holds about 60 MiB on a 16-core machine (the runtime's threads'
@@ -94,12 +94,18 @@ pub struct LinkCommand {
 struct Config {
     namespace: String,
     robots: Vec<String>,
+    /// Whether the task has events: the world's service is then needed too.
+    events: bool,
     server_wait: Duration,
     memory_limit: u64,
 }
 
-/// One exchange asked for: the goals, robot by robot number, and the silence allowed.
-type Asked = (Vec<(usize, Goal)>, Duration);
+/// What the parent asks for, once read: one exchange (the goals, robot by robot number,
+/// and the silence allowed), or events carried out by the world's service.
+enum Asked {
+    Goals(Vec<(usize, Goal)>, Duration),
+    World(BefallRequest, Duration),
+}
 
 /// The parent's later lines.
 #[derive(Debug, Serialize, Deserialize)]
@@ -112,6 +118,11 @@ enum Request {
     },
     /// Cancel every goal in flight, and any sent later (the episode is over).
     Cancel,
+    /// Ask the world's service to carry these events out, and answer how it ended.
+    Befall {
+        request: BefallRequest,
+        silence: Duration,
+    },
 }
 
 /// The child's lines: one for the connection, then one per goal of each exchange; that
@@ -122,6 +133,7 @@ enum Answer {
     Connected,
     Refused(Refusal),
     Exchanged(Exchange),
+    Befell(Befell),
     Alive,
     Ends(String),
 }
@@ -319,6 +331,7 @@ fn work(
     let link = match Link::connect(
         &config.namespace,
         &config.robots,
+        config.events,
         config.server_wait,
         runtime,
     ) {
@@ -337,7 +350,11 @@ fn work(
     let mut came = None;
     loop {
         let (goals, silence) = match came.take().map_or_else(|| requests.recv(), Ok) {
-            Ok(Ok(asked)) => asked,
+            Ok(Ok(Asked::Goals(goals, silence))) => (goals, silence),
+            Ok(Ok(Asked::World(request, silence))) => {
+                say(output, &Answer::Befell(link.befall(request, silence)))?;
+                continue;
+            }
             Ok(Err(why)) => return ends(why),
             // The input ended: the parent is gone.
             Err(_) => return Ok(()),
@@ -415,7 +432,12 @@ fn read_requests(
         loop {
             match read_json::<Request>(&mut input) {
                 Ok(Some(Request::Exchange { goals, silence })) => {
-                    if sender.send(Ok((goals, silence))).is_err() {
+                    if sender.send(Ok(Asked::Goals(goals, silence))).is_err() {
+                        break;
+                    }
+                }
+                Ok(Some(Request::Befall { request, silence })) => {
+                    if sender.send(Ok(Asked::World(request, silence))).is_err() {
                         break;
                     }
                 }
@@ -485,7 +507,7 @@ impl LinkProcess {
     pub(crate) fn connect(
         command: &LinkCommand,
         namespace: &str,
-        robots: &[String],
+        (robots, events): (&[String], bool),
         server_wait: Duration,
         quiet: Duration,
     ) -> Result<LinkProcess, Error> {
@@ -531,6 +553,7 @@ impl LinkProcess {
         let config = Config {
             namespace: namespace.to_owned(),
             robots: robots.to_vec(),
+            events,
             server_wait,
             memory_limit: command.memory_limit,
         };
@@ -580,6 +603,20 @@ impl LinkProcess {
             }
         });
         out
+    }
+
+    /// [`Link::befall`] in the link process: the world's answer, or how it failed (the
+    /// process ended, failed or fell silent; a cancel waits for the answer all the same,
+    /// which comes within `silence`).
+    pub(crate) fn befall(&mut self, request: BefallRequest, silence: Duration) -> Befell {
+        self.send(&Request::Befall { request, silence });
+        match self.answer(None) {
+            Ok(Answer::Befell(befell)) => befell,
+            Ok(_) => Befell::Failed(self.failed(Gone::Misbehaved(
+                "answered a request for events out of turn",
+            ))),
+            Err(why) => Befell::Failed(why),
+        }
     }
 
     /// Hands `value` to the thread that writes the child's stdin; a child that no
@@ -886,7 +923,7 @@ mod tests {
                 .to_vec(),
             memory_limit: LINK_MEMORY_LIMIT,
         };
-        let error = LinkProcess::connect(&command, "/lab", &[], Duration::ZERO, MIN_QUIET)
+        let error = LinkProcess::connect(&command, "/lab", (&[], false), Duration::ZERO, MIN_QUIET)
             .expect_err("not a link process");
         let Error::Link(why) = error else {
             panic!("{error:?}");

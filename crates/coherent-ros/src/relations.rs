@@ -111,7 +111,7 @@ fn disagreement(task: &Task, s: &State, r: &wire::Relation) -> Option<String> {
 
 /// The node a label such as `<apple>(9)` names: the id in parentheses, whose node must
 /// have the class name in angle brackets.
-fn node(task: &Task, label: &str) -> Option<Idx> {
+pub(crate) fn node(task: &Task, label: &str) -> Option<Idx> {
     let inner = label.trim().strip_prefix('<')?;
     let (name, rest) = inner.split_once(">(")?;
     let id: i64 = rest.strip_suffix(')')?.parse().ok()?;

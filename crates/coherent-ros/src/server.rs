@@ -11,18 +11,20 @@ use std::time::Duration;
 
 use coherent_core::feasibility::{Infeasible, Reason};
 use coherent_core::text::{cut, shown};
-use coherent_core::{Environment, Idx, NodeId, State, SymbolicEnv, Task};
-use coherent_sim::PhysicalEnv;
+use coherent_core::{Idx, NodeId, Task};
 use ros2_client::action::{AsyncActionServer, ExecutingGoalHandle, GoalEndStatus};
 use ros2_client::{NodeName, NodeOptions, ServiceMapping};
 use tokio::time::{Instant, interval, sleep_until, timeout};
 
+use crate::befall;
 use crate::error::Error;
 use crate::faults::Faults;
 use crate::relations;
-use crate::wire::{self, ExecuteResult, Feedback, Goal};
+use crate::wire::{self, BefallRequest, BefallResponse, ExecuteResult, Feedback, Goal};
+use crate::world::World;
 
 type Server = AsyncActionServer<Goal, ExecuteResult, Feedback>;
+type Service = ros2_client::Server<BefallRequest, BefallResponse>;
 type Executing = ExecutingGoalHandle<Goal>;
 
 /// How often a robot at work sends feedback.
@@ -45,64 +47,6 @@ pub struct ServeOptions {
     /// Carry the actions out in Rapier, not by the rules alone.
     pub physics: bool,
     pub faults: Faults,
-}
-
-/// The world the robots act in: the rules, or Rapier checked against them.
-#[derive(Debug)]
-pub enum World {
-    Rules(SymbolicEnv),
-    Physics(Box<PhysicalEnv>),
-}
-
-impl World {
-    pub fn new(task: &Arc<Task>, physics: bool) -> Result<World, Error> {
-        Ok(if physics {
-            let env = PhysicalEnv::new(Arc::clone(task)).map_err(Error::Physics)?;
-            World::Physics(Box::new(env))
-        } else {
-            World::Rules(SymbolicEnv::new(Arc::clone(task)))
-        })
-    }
-
-    pub fn state(&self) -> &State {
-        match self {
-            World::Rules(env) => env.state(),
-            World::Physics(env) => env.state(),
-        }
-    }
-
-    /// Carries `action` out for `robot`: what happened in words, or why it could not.
-    pub fn act(&mut self, robot: NodeId, action: &str) -> Result<String, Infeasible> {
-        let task = match self {
-            World::Rules(env) => env.task(),
-            World::Physics(env) => env.task(),
-        };
-        let me = task
-            .idx(robot)
-            .map(|n| task.node(n).label())
-            .unwrap_or_default();
-        let wrong = |e: coherent_core::Error| Infeasible {
-            reason: Reason::NoSuchNode,
-            message: e.to_string(),
-        };
-        match self {
-            World::Rules(env) => match env.step(robot, action).map_err(wrong)?.infeasible {
-                None => Ok(format!("{me} did {action}")),
-                Some(why) => Err(why),
-            },
-            World::Physics(env) => match env.step_physical(robot, action) {
-                Ok(Ok(done)) => Ok(format!(
-                    "{me} did {} in {:.2} s of simulated time",
-                    done.action, done.sim_seconds
-                )),
-                Ok(Err(why)) => Err(why),
-                Err(e) => Err(Infeasible {
-                    reason: Reason::Physics,
-                    message: format!("physics: {}", e.message),
-                }),
-            },
-        }
-    }
 }
 
 /// One robot as its server knows it.
@@ -152,17 +96,28 @@ pub async fn serve(
         };
         servers.push((AsyncActionServer::new(server), me));
     }
+    let service_name = wire::ros_service_name(&options.namespace).map_err(Error::Dds)?;
+    let service: Service = node
+        .create_server(
+            ServiceMapping::Enhanced,
+            &service_name,
+            &wire::service_type(),
+            wire::services(),
+            wire::services(),
+        )
+        .map_err(|e| Error::Dds(format!("the world's service: {e:?}")))?;
     let actions: Vec<String> = servers
         .iter()
         .map(|(_, me)| wire::action_name(&options.namespace, &me.name))
         .collect();
     log(&format!(
-        "serving {} robots of {} task {} ({}): {}",
+        "serving {} robots of {} task {} ({}): {}; events at {}",
         actions.len(),
         task.meta.scene,
         task.meta.task_id,
         if options.physics { "physics" } else { "rules" },
-        actions.join(" ")
+        actions.join(" "),
+        wire::service_name(&options.namespace)
     ));
     let robots = futures::future::join_all(servers.iter().map(|(server, me)| {
         let at = Robot {
@@ -175,13 +130,77 @@ pub async fn serve(
         };
         at.serve()
     }));
+    let events = serve_events(&service, &task, &names, &world, log);
     tokio::select! {
         _ = robots => {}
+        () = events => {}
         () = stop => {}
     }
+    drop(service);
     drop(servers);
     drop(node);
     Ok(())
+}
+
+/// The world's service: each request carries events out in `world` ([`befall::carry_out`])
+/// and is answered, forever. A request larger than any the bridge sends is refused
+/// unread; what is logged of one is shown escaped.
+async fn serve_events(
+    service: &Service,
+    task: &Arc<Task>,
+    names: &[String],
+    world: &Arc<Mutex<World>>,
+    log: &(dyn Fn(&str) + Sync),
+) {
+    loop {
+        let (id, request) = match service.async_receive_request().await {
+            Ok(received) => received,
+            Err(e) => {
+                log(&format!("events: cannot read a request: {e:?}"));
+                continue;
+            }
+        };
+        let said = format!("events before step {}", request.step);
+        let words = request.team.iter().chain(&request.locked);
+        let carried = if request.team.len() > names.len() || request.locked.len() > task.nodes.len()
+        {
+            Err("a request larger than the task".to_owned())
+        } else if let Some(w) = words.clone().find(|w| w.len() > wire::MAX_WORD_BYTES) {
+            Err(format!("a name of {} bytes", w.len()))
+        } else if let Err(why) = wire::relations_checked("the request", &request.moved) {
+            Err(why)
+        } else {
+            let (task, names, world) = (Arc::clone(task), names.to_vec(), Arc::clone(world));
+            tokio::task::spawn_blocking(move || {
+                let mut world = world.lock().unwrap_or_else(PoisonError::into_inner);
+                befall::carry_out(&task, &names, &mut world, &request)
+            })
+            .await
+            .unwrap_or_else(|e| Err(format!("the world failed: {e}")))
+        };
+        let response = match carried {
+            Ok((message, relations)) => {
+                log(&format!("{said} -> done: {}", shown(&message)));
+                BefallResponse {
+                    accepted: true,
+                    message,
+                    relations,
+                }
+            }
+            Err(why) => {
+                let why = shown(&cut(&why, wire::MAX_MESSAGE_BYTES)).into_owned();
+                log(&format!("{said} -> refused: {why}"));
+                BefallResponse {
+                    accepted: false,
+                    message: why,
+                    relations: Vec::new(),
+                }
+            }
+        };
+        if service.async_send_response(id, response).await.is_err() {
+            log(&format!("{said} -> the answer could not be delivered"));
+        }
+    }
 }
 
 /// One robot's server at work.
@@ -225,6 +244,14 @@ impl Robot<'_> {
                 ));
                 continue;
             }
+            if !self.in_team() {
+                let _ = self.server.reject_goal(handle).await;
+                (self.log)(&format!(
+                    "{said} -> refused: {} is out of the team (an event)",
+                    self.me.label
+                ));
+                continue;
+            }
             if self.faults.refuses(name) {
                 let _ = self.server.reject_goal(handle).await;
                 (self.log)(&format!("{said} -> refused (--refuse)"));
@@ -263,6 +290,13 @@ impl Robot<'_> {
                 (self.log)(&format!("{said} -> the result could not be delivered"));
             }
         }
+    }
+
+    /// Whether the robot is in the team as events have left it (down, or not joined
+    /// yet: it refuses goals).
+    fn in_team(&self) -> bool {
+        let world = self.world.lock().unwrap_or_else(PoisonError::into_inner);
+        world.task().robots.iter().any(|r| r.node == self.me.node)
     }
 
     async fn feedback(&self, goal: &Executing, stage: &str, progress: f32) {

@@ -9,7 +9,9 @@
 
 use ros2_client::action::ActionServerQosPolicies;
 use ros2_client::qos::{Durability, History};
-use ros2_client::{ActionTypeName, Context, ContextOptions, Message, Name, QosProfile};
+use ros2_client::{
+    ActionTypeName, Context, ContextOptions, Message, Name, QosProfile, ServiceTypeName,
+};
 use serde::{Deserialize, Serialize};
 
 use coherent_core::{Idx, Task};
@@ -22,6 +24,10 @@ pub const PACKAGE: &str = "coherent_msgs";
 pub const ACTION_TYPE: &str = "Execute";
 /// The last token of every robot's action name.
 pub const ACTION_BASE: &str = "execute";
+/// The world's service type, `coherent_msgs/srv/Befall`.
+pub const SERVICE_TYPE: &str = "Befall";
+/// The last token of the world's service name, `/<namespace>/befall`.
+pub const SERVICE_BASE: &str = "befall";
 /// Where the robots' actions live unless a namespace is given.
 pub const DEFAULT_NAMESPACE: &str = "/coherent";
 
@@ -82,7 +88,29 @@ pub(crate) struct CancelRequest {
     pub goal_info: ros2_client::action::GoalInfo,
 }
 
+/// `Befall.srv`'s request: what events changed in the robots' world before the action
+/// numbered `step`. The team as it now is (robots' ROS names), the doors now locked (as
+/// the task names them), and each thing moved with where it now is (`ON` or `INSIDE`).
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BefallRequest {
+    pub step: u32,
+    pub team: Vec<String>,
+    pub locked: Vec<String>,
+    pub moved: Vec<Relation>,
+}
+
+/// `Befall.srv`'s response: whether the world now is as asked, what was done or why not,
+/// and where each thing moved now is as the world observes it.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BefallResponse {
+    pub accepted: bool,
+    pub message: String,
+    pub relations: Vec<Relation>,
+}
+
 impl Message for Goal {}
+impl Message for BefallRequest {}
+impl Message for BefallResponse {}
 impl Message for Feedback {}
 impl Message for ExecuteResult {}
 impl Message for Relation {}
@@ -90,6 +118,33 @@ impl Message for Relation {}
 /// `coherent_msgs/action/Execute`.
 pub(crate) fn action_type() -> ActionTypeName {
     ActionTypeName::new(PACKAGE, ACTION_TYPE)
+}
+
+/// `coherent_msgs/srv/Befall`.
+pub(crate) fn service_type() -> ServiceTypeName {
+    ServiceTypeName::new(PACKAGE, SERVICE_TYPE)
+}
+
+/// The world's service under `namespace` (absolute), `/<namespace>/befall`.
+pub fn service_name(namespace: &str) -> String {
+    format!("{namespace}/{SERVICE_BASE}")
+}
+
+/// [`service_name`] as ros2-client takes it.
+pub(crate) fn ros_service_name(namespace: &str) -> Result<Name, String> {
+    Name::new(namespace, SERVICE_BASE).map_err(|e| format!("{}: {e:?}", service_name(namespace)))
+}
+
+/// The DDS topics of the world's service under `namespace` (absolute) and their types,
+/// as ROS 2 names a service's: `rq/<service>Request` and `rr/<service>Reply`.
+pub(crate) fn service_dds_names(namespace: &str) -> Result<[(String, String); 2], String> {
+    ros_service_name(namespace)?;
+    let base = service_name(namespace);
+    let types = format!("{PACKAGE}::srv::dds_::{SERVICE_TYPE}");
+    Ok([
+        (format!("rq{base}Request"), format!("{types}_Request_")),
+        (format!("rr{base}Reply"), format!("{types}_Response_")),
+    ])
 }
 
 /// The ROS name of robot `robot`: its class name in lower case, anything but letters
@@ -169,7 +224,7 @@ pub(crate) fn context() -> Result<Context, String> {
 /// ROS 2's profiles for actions: the services (goal, result, cancel) reliable and
 /// volatile with a depth of 10, feedback likewise, the status topic transient-local
 /// with a depth of 1, so that late joiners see the goals' states.
-fn services() -> QosProfile {
+pub(crate) fn services() -> QosProfile {
     QosProfile::publisher_default()
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 10 })
@@ -249,30 +304,44 @@ pub const MAX_RELATIONS: usize = 4096;
 /// when it is larger than a robot's result can be (a reason or a relation's word of more
 /// than [`MAX_WORD_BYTES`], more than [`MAX_RELATIONS`] relations).
 pub(crate) fn checked(mut result: ExecuteResult) -> Result<ExecuteResult, String> {
-    let too_long = |what: &str, text: &str| {
-        format!(
-            "the robot's result is malformed: its {what} has {} bytes (at most {MAX_WORD_BYTES})",
-            text.len()
-        )
-    };
     if result.reason.len() > MAX_WORD_BYTES {
-        return Err(too_long("reason", &result.reason));
-    }
-    if result.relations.len() > MAX_RELATIONS {
         return Err(format!(
-            "the robot's result is malformed: it lists {} relations (at most {MAX_RELATIONS})",
-            result.relations.len()
+            "the robot's result is malformed: its reason has {} bytes (at most {MAX_WORD_BYTES})",
+            result.reason.len()
         ));
     }
-    for r in &result.relations {
+    relations_checked("the robot's result", &result.relations)?;
+    result.message = coherent_core::text::cut(&result.message, MAX_MESSAGE_BYTES).into_owned();
+    Ok(result)
+}
+
+/// `response` as the bridge keeps it, like a robot's result ([`checked`]).
+pub(crate) fn befall_checked(mut response: BefallResponse) -> Result<BefallResponse, String> {
+    relations_checked("the world's answer", &response.relations)?;
+    response.message = coherent_core::text::cut(&response.message, MAX_MESSAGE_BYTES).into_owned();
+    Ok(response)
+}
+
+/// An error naming `whose` when `relations` are more than [`MAX_RELATIONS`] or hold a
+/// word longer than [`MAX_WORD_BYTES`].
+pub(crate) fn relations_checked(whose: &str, relations: &[Relation]) -> Result<(), String> {
+    if relations.len() > MAX_RELATIONS {
+        return Err(format!(
+            "{whose} is malformed: it lists {} relations (at most {MAX_RELATIONS})",
+            relations.len()
+        ));
+    }
+    for r in relations {
         for word in [&r.subject, &r.relation, &r.object] {
             if word.len() > MAX_WORD_BYTES {
-                return Err(too_long("relation", word));
+                return Err(format!(
+                    "{whose} is malformed: its relation has {} bytes (at most {MAX_WORD_BYTES})",
+                    word.len()
+                ));
             }
         }
     }
-    result.message = coherent_core::text::cut(&result.message, MAX_MESSAGE_BYTES).into_owned();
-    Ok(result)
+    Ok(())
 }
 
 /// What a feedback sample says, as the bridge reports it last heard, or `None` for one

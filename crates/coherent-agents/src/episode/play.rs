@@ -84,14 +84,12 @@ pub async fn play(
         }
         let began = Instant::now();
         let mut round = Round::new(rounds.len() as u32 + 1);
-        if let Some(d) = &mut dynamics {
-            round.events = d.before(round.step, env, &mut world).await?;
-            if env.goal_satisfied() {
-                // The events themselves left the goal holding: nothing is left to do.
-                closing = std::mem::take(&mut round.events);
-                status = Status::Success;
-                break;
-            }
+        if let Some(d) = &mut dynamics
+            && let Some(ended) = meet_events(d, env, &mut round, &mut world).await?
+        {
+            (status, error) = ended;
+            closing = std::mem::take(&mut round.events);
+            break;
         }
         let news = events::news(&round.events);
         let recalled = history.entries();
@@ -199,6 +197,26 @@ pub async fn play(
         reference,
     };
     Ok(Episode { rounds, summary })
+}
+
+/// Carries out the events due before `round` on `env` (the task as they leave it in
+/// `world`), kept in the round; how the episode ends there, if it does: interrupted when
+/// the world could not carry them out (robots over ROS 2: nobody is asked anything
+/// more), a success when they themselves left the goal holding (nothing is left to do).
+async fn meet_events(
+    dynamics: &mut Dynamics,
+    env: &mut (dyn Environment + Send + Sync),
+    round: &mut Round,
+    world: &mut Arc<Task>,
+) -> io::Result<Option<(Status, Option<String>)>> {
+    round.events = dynamics.before(round.step, env, world).await?;
+    Ok(if let Some(why) = env.stopped() {
+        Some((Status::Interrupted, Some(why)))
+    } else if env.goal_satisfied() {
+        Some((Status::Success, None))
+    } else {
+        None
+    })
 }
 
 /// Carries out what a round decided: a sequential round's decision (its robot's action,
