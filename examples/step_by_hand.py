@@ -66,3 +66,28 @@ for step in plan["plan"]:
     observation, reward, terminated, truncated, info = gym_env.step((step["robot"], step["action"]))
     total += reward
 print(f"return {total}, terminated {terminated}, truncated {truncated}, after {info['steps']} steps")
+
+# %% [markdown]
+# ## When the world changes mid-task (`docs/dynamic.md`)
+#
+# The demo's events: the robot arm breaks down once the mug is in the basket, and a door
+# is locked for two steps. The optimal method replans at each event; stepping its actions
+# by hand, `env.news` is what the team was told before the coming step, and
+# `env.robots` the team as it now is.
+
+# %%
+import tempfile  # noqa: E402
+
+EVENTS = DEMO.parent.parent / "events" / "demo.json"
+with tempfile.TemporaryDirectory() as runs:
+    episode = coherent.run(task, "optimal", events=str(EVENTS), out=runs)
+env = coherent.Env(task, events=str(EVENTS))
+for round_ in episode.transcript:
+    for news in env.news:
+        print(f"before step {env.steps + 1}: {news}")
+    decision = round_.get("decision") or {}
+    if decision.get("can_do") and decision.get("robot") is not None:
+        ok, reason, done = env.step(decision["robot"], decision["action"])
+    else:
+        ok, reason, done = env.step([])
+print(f"{env.steps} steps, as the episode took {episode.steps}; team {sorted(env.robots)}; goal satisfied: {done}")

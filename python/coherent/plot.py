@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING, Any, Literal, Union
 from . import _coherent
 from ._coherent import METHODS, ArgumentError, Episode, Task
 from ._extras import needs
-from .analysis import Report, Results, _frame, _lines, events_table, report
+from .analysis import _FINAL, Report, Results, _frame, _lines, events_table, report
 
 with needs("coherent.plot", "analysis"):
     import matplotlib.pyplot as plt
@@ -244,22 +244,28 @@ def tokens(episode: Episode, ax: Axes | None = None) -> Axes:
 
 
 def _cost_points(results: Results) -> tuple[pd.DataFrame, list[str]]:
-    """One row per (method, model) of the final results lines: ``episodes``,
-    ``success_rate``, ``cost_per_task`` (mean ``cost_usd``); and the labels of the groups
-    left out because a line of theirs has no cost (its model has no price)."""
+    """One row per method, model and execution of the final results lines: ``label``,
+    ``episodes``, ``success_rate``, ``cost_per_task`` (mean ``cost_usd``); and the labels
+    of the groups left out because a line of theirs has no cost (its model has no
+    price). The execution is in a label only when the results hold more than one."""
+    columns = ["method", "model", "execution", "label", "episodes", "success_rate", "cost_per_task"]
     frame = _frame(pd, _lines(results))
     if frame.empty:
-        return pd.DataFrame(columns=["method", "model", "episodes", "success_rate", "cost_per_task"]), []
+        return pd.DataFrame(columns=columns), []
     # A method that asks no model has no model to tell apart.
     model = frame["backend_model"].where(frame["uses_model"].astype(bool), "")
-    frame = frame.assign(model=model.fillna(""))
-    # As the report counts them: the last final line of each episode, an episode being
-    # one per model too (results of several models may sit in one frame).
-    final = frame[frame["status"].isin(["success", "failure"])]
-    final = final.drop_duplicates(["method", "model", "scene", "task_id", "seed"], keep="last")
+    execution = frame["execution"].fillna("sequential") if "execution" in frame else "sequential"
+    frame = frame.assign(model=model.fillna(""), execution=execution)
+    # As the report counts them: the last final line of each episode (conceding a goal
+    # put out of reach counts as right), an episode being one per model and execution
+    # too (results of several may sit in one frame).
+    final = frame[frame["status"].isin(_FINAL)]
+    final = final.drop_duplicates(["method", "model", "execution", "scene", "task_id", "seed"], keep="last")
+    several = final["execution"].nunique() > 1
     rows, unpriced = [], []
-    for (method, model), group in final.groupby(["method", "model"], sort=False):
-        label = f"{method} ({model})" if model else method
+    for (method, model, execution), group in final.groupby(["method", "model", "execution"], sort=False):
+        words = [w for w in (model, execution if several else "") if w]
+        label = f"{method} ({', '.join(words)})" if words else method
         costs = pd.to_numeric(group["cost_usd"], errors="coerce")
         if costs.isna().any():
             unpriced.append(label)
@@ -268,12 +274,14 @@ def _cost_points(results: Results) -> tuple[pd.DataFrame, list[str]]:
             {
                 "method": method,
                 "model": model,
+                "execution": execution,
+                "label": label,
                 "episodes": len(group),
                 "success_rate": float(group["success"].astype(bool).mean()),
                 "cost_per_task": float(costs.mean()),
             }
         )
-    return pd.DataFrame(rows, columns=["method", "model", "episodes", "success_rate", "cost_per_task"]), unpriced
+    return pd.DataFrame(rows, columns=columns), unpriced
 
 
 def pareto(results: Results, ax: Axes | None = None) -> Axes:
@@ -291,9 +299,8 @@ def pareto(results: Results, ax: Axes | None = None) -> Axes:
     if ax is None:
         _, ax = plt.subplots(figsize=(7.0, 4.8), layout="constrained")
     for row in points.itertuples():
-        label = f"{row.method} ({row.model})" if row.model else row.method
         ax.scatter(row.cost_per_task, row.success_rate, s=50, color=_method_color(row.method), zorder=3)
-        ax.annotate(label, (row.cost_per_task, row.success_rate), xytext=(5, 4), textcoords="offset points", fontsize=8)
+        ax.annotate(row.label, (row.cost_per_task, row.success_rate), xytext=(5, 4), textcoords="offset points", fontsize=8)
     # The front: cheapest first, each point that succeeds more than every cheaper one.
     front, best = [], -1.0
     for row in points.sort_values(["cost_per_task", "success_rate"], ascending=[True, False]).itertuples():

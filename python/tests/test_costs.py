@@ -342,6 +342,21 @@ def test_pareto_draws_a_point_per_method_and_model_and_the_front(tmp_path: Path)
         plot.pareto([_line(method="pefa", model="unpriced", task_id=0, success=True, cost=None)])
 
 
+def test_pareto_counts_a_conceded_episode_as_right_and_keeps_executions_apart() -> None:
+    """An episode that conceded a goal put out of reach is right, as the report counts it;
+    results of both executions are two points, each labelled with its execution."""
+    lines = []
+    for execution in ("sequential", "parallel"):
+        conceded = {**_line(method="pefa", model="m", task_id=0, success=True, cost=0.1), "status": "conceded"}
+        failed = _line(method="pefa", model="m", task_id=1, success=execution == "parallel", cost=0.1)
+        lines += [{**line, "execution": execution} for line in (conceded, failed)]
+    ax = plot.pareto(lines)
+    labels = sorted(t.get_text() for t in ax.texts)
+    assert labels == ["pefa (m, parallel)", "pefa (m, sequential)"]
+    points = sorted((float(x), float(y)) for c in ax.collections for x, y in c.get_offsets())
+    assert points == [(pytest.approx(0.1), 0.5), (pytest.approx(0.1), 1.0)]
+
+
 ASKS_THE_STUB = (
     "import os\n"
     "import coherent\n\n"

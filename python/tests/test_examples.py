@@ -47,6 +47,8 @@ def test_step_by_hand_runs(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     assert "goal satisfied: True" in out
     assert "return 1.0, terminated True, truncated False, after 22 steps" in out
+    assert "before step 18: <robot arm>(6) broke down" in out
+    assert "24 steps, as the episode took 24; team [11, 13]; goal satisfied: True" in out
 
 
 def test_benchmark_tasks_and_its_40_subset() -> None:
