@@ -17,6 +17,12 @@ llama.cpp's own converter makes the GGUF of any architecture). `--tiny` starts i
 from a randomly initialised model of a few layers with the base's tokenizer: the
 recipe's own test, minutes on a CPU.
 
+`--adapter DIR` trains nothing: it merges an adapter trained elsewhere (on a GPU machine,
+say, whose `adapter/` folder is all that comes back) into the base and writes the same
+files, so that the GGUF is made where the base file is. `--write-base` trains nothing
+either: it writes the base itself to `model.gguf` with the same writer (float16), the fair
+"before" of a before/after comparison.
+
 Needs the `training` extra: torch, transformers, trl, peft, datasets, accelerate, gguf.
 """
 
@@ -33,7 +39,7 @@ from pathlib import Path
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--data", type=Path, required=True, help="the folder `coherent export sft` wrote")
+    p.add_argument("--data", type=Path, help="the folder `coherent export sft` wrote (not with --adapter)")
     p.add_argument("--base", required=True, help="a GGUF file, or a Hugging Face model folder or name")
     p.add_argument("--out", type=Path, required=True, help="folder for the adapter, the merged model and model.gguf")
     p.add_argument("--tiny", action="store_true", help="a randomly initialised 2-layer model with the base's tokenizer")
@@ -48,6 +54,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     p.add_argument("--lora-alpha", type=int, default=32)
     p.add_argument("--max-length", type=int, default=4096, help="longest example in tokens; longer ones are cut")
     p.add_argument("--threads", type=int, default=0, help="CPU threads for torch (0: torch's default)")
+    p.add_argument("--bf16", action="store_true", help="bfloat16 mixed precision (a GPU that has it)")
+    p.add_argument("--adapter", type=Path, help="merge this trained adapter folder instead of training")
+    p.add_argument("--write-base", action="store_true", help="write the base as model.gguf, untrained")
     p.add_argument("--seed", type=int, default=0)
     return p.parse_args(argv)
 
@@ -132,6 +141,7 @@ def train(args: argparse.Namespace) -> dict:
         max_length=args.max_length,
         completion_only_loss=True,
         seed=args.seed,
+        bf16=args.bf16,
         use_cpu=not torch.cuda.is_available(),
         dataloader_num_workers=0,
     )
@@ -153,24 +163,54 @@ def train(args: argparse.Namespace) -> dict:
     trainer.train()
     losses = [e["loss"] for e in trainer.state.log_history if "loss" in e]
     trainer.model.save_pretrained(str(args.out / "adapter"))
-    merged = trainer.model.merge_and_unload()
-    merged.save_pretrained(str(args.out / "merged"))
-    tokenizer.save_pretrained(str(args.out / "merged"))
-    written = None
-    if Path(args.base).suffix == ".gguf":
-        written = str(write_gguf(merged, Path(args.base), args.out / "model.gguf"))
     report = {
-        "base": str(args.base),
-        "tiny": args.tiny,
         "examples": len(data["train"]),
         "steps": trainer.state.global_step,
         "examples_seen": trainer.state.global_step * args.batch_size * args.grad_accum,
         "first_loss": losses[0] if losses else None,
         "last_loss": losses[-1] if losses else None,
         "losses": losses,
-        "seconds": round(time.time() - start, 1),
+        "device": torch.cuda.get_device_name() if torch.cuda.is_available() else "cpu",
+    }
+    return finish(args, trainer.model, tokenizer, report, start)
+
+
+def merge(args: argparse.Namespace) -> dict:
+    """Merges the trained adapter `args.adapter` into the base and writes the files that
+    training writes; the report of the training, where the adapter has one, is kept."""
+    import torch
+    from peft import PeftModel
+
+    if args.threads:
+        torch.set_num_threads(args.threads)
+    start = time.time()
+    model, tokenizer = load_base(args)
+    tuned = PeftModel.from_pretrained(model, str(args.adapter))
+    trained = args.adapter.parent / "train_report.json"
+    report = json.loads(trained.read_text()) if trained.is_file() else {}
+    report["merged_from"] = str(args.adapter)
+    if args.adapter.resolve() != (args.out / "adapter").resolve():
+        tuned.save_pretrained(str(args.out / "adapter"))
+    return finish(args, tuned, tokenizer, report, start)
+
+
+def finish(args: argparse.Namespace, tuned, tokenizer, report: dict, start: float) -> dict:
+    """The adapter of `tuned` merged into its model; the merged model written as safetensors
+    and, from a GGUF base, as `model.gguf`; `train_report.json` written."""
+    merged = tuned.merge_and_unload()
+    merged.save_pretrained(str(args.out / "merged"))
+    tokenizer.save_pretrained(str(args.out / "merged"))
+    written = None
+    if Path(args.base).suffix == ".gguf":
+        written = str(write_gguf(merged, Path(args.base), args.out / "model.gguf"))
+    # The seconds of the training, or of the merge where the adapter was trained elsewhere.
+    report["merge_seconds" if "merged_from" in report else "seconds"] = round(time.time() - start, 1)
+    report = {
+        "base": str(args.base),
+        "tiny": args.tiny,
+        **report,
         "gguf": written,
-        "settings": {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
+        "settings": report.get("settings") or {k: (str(v) if isinstance(v, Path) else v) for k, v in vars(args).items()},
     }
     (args.out / "train_report.json").write_text(json.dumps(report, indent=2) + "\n")
     return report
@@ -285,6 +325,25 @@ def write_gguf(model, tokenizer_gguf: Path, path: Path) -> Path:
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.write_base:
+        if Path(args.base).suffix != ".gguf":
+            print(f"error: --write-base needs a GGUF --base (its tokenizer is copied), not {args.base}", file=sys.stderr)
+            return 2
+        model, _ = load_base(args)
+        print(f"wrote {write_gguf(model, Path(args.base), args.out / 'model.gguf')}")
+        return 0
+    if args.adapter:
+        if not (args.adapter / "adapter_config.json").is_file():
+            print(f"error: --adapter {args.adapter}: no adapter_config.json in it", file=sys.stderr)
+            return 2
+        report = merge(args)
+        print(f"merged {args.adapter} into {args.base}")
+        if report["gguf"]:
+            print(f"wrote {report['gguf']}")
+        return 0
+    if args.data is None:
+        print("error: --data is needed (the folder `coherent export sft` wrote), or --adapter", file=sys.stderr)
+        return 2
     examples = args.data / "train.jsonl"
     if not examples.is_file() or examples.stat().st_size == 0:
         print(f"error: {examples} is missing or empty: `coherent export sft` writes it", file=sys.stderr)

@@ -106,6 +106,19 @@ def test_the_recipe_fine_tunes_a_tiny_model_into_a_gguf_that_llama_cpp_serves(tm
     assert gguf.is_file() and report["gguf"] == str(gguf)
     assert (out / "merged" / "config.json").is_file() and (out / "adapter").is_dir()
 
+    # The adapter alone, merged again into the same base (as after training on another
+    # machine): the same GGUF, byte for byte, and the training's report kept.
+    again = tmp_path / "merged-again"
+    merged = subprocess.run(
+        [sys.executable, str(REPO / "examples" / "finetune.py"), "--adapter", str(out / "adapter"), "--base",
+         str(smollm2_gguf()), "--out", str(again), "--tiny", "--threads", "1"],
+        capture_output=True, text=True, timeout=900, env={**os.environ, "OMP_NUM_THREADS": "1"},
+    )  # fmt: skip
+    assert merged.returncode == 0, merged.stderr[-3000:]
+    assert (again / "model.gguf").read_bytes() == gguf.read_bytes()
+    remerged = json.loads((again / "train_report.json").read_text())
+    assert remerged["merged_from"] == str(out / "adapter") and remerged["steps"] == 5
+
     # Served by examples/serve_gguf.py, as docs/training.md serves a tuned model.
     server = subprocess.Popen(
         [sys.executable, str(REPO / "examples" / "serve_gguf.py"), str(gguf), "--port", "0", "--threads", "1",
