@@ -62,10 +62,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 
 def load_base(args: argparse.Namespace):
-    """The model and tokenizer to start from."""
+    """The model and tokenizer to start from, torch's threads set first (`--threads`)."""
     import torch
     from transformers import AutoModelForCausalLM, AutoTokenizer, LlamaConfig, LlamaForCausalLM
 
+    if args.threads:
+        torch.set_num_threads(args.threads)
     base = Path(args.base)
     gguf = base.suffix == ".gguf"
     where = dict(pretrained_model_name_or_path=str(base.parent), gguf_file=base.name) if gguf else dict(
@@ -120,8 +122,6 @@ def train(args: argparse.Namespace) -> dict:
     from peft import LoraConfig
     from trl import SFTConfig, SFTTrainer
 
-    if args.threads:
-        torch.set_num_threads(args.threads)
     start = time.time()
     model, tokenizer = load_base(args)
     data = load_data(args)
@@ -178,11 +178,8 @@ def train(args: argparse.Namespace) -> dict:
 def merge(args: argparse.Namespace) -> dict:
     """Merges the trained adapter `args.adapter` into the base and writes the files that
     training writes; the report of the training, where the adapter has one, is kept."""
-    import torch
     from peft import PeftModel
 
-    if args.threads:
-        torch.set_num_threads(args.threads)
     start = time.time()
     model, tokenizer = load_base(args)
     tuned = PeftModel.from_pretrained(model, str(args.adapter))

@@ -8,7 +8,7 @@ mod common;
 
 use std::process::Command;
 
-use common::netns::{LONG, Netns, Transcript, transcript};
+use common::netns::{LONG, Netns, Proc, Transcript, transcript};
 use common::{DEMO_KINDS, show};
 use serde_json::Value;
 
@@ -20,6 +20,31 @@ fn course(t: &Transcript) -> Vec<(Value, Value)> {
         .iter()
         .map(|r| (r["proposal"].clone(), r["decision"].clone()))
         .collect()
+}
+
+/// `coherent run TASK --events EVENTS --robots ros2 --namespace NAMESPACE --out OUT` in
+/// the namespace, started as `name`.
+fn run_over_ros2(
+    ns: &Netns,
+    name: &str,
+    task: &str,
+    events: &str,
+    namespace: &str,
+    out: &str,
+) -> Proc {
+    let args = [
+        "run",
+        task,
+        "--events",
+        events,
+        "--robots",
+        "ros2",
+        "--namespace",
+        namespace,
+        "--out",
+        out,
+    ];
+    ns.spawn(name, &args)
 }
 
 /// Each kind of event on the demo ([`DEMO_KINDS`]), the servers acting by the rules and
@@ -49,19 +74,8 @@ fn every_kind_of_event_runs_over_ros2_as_it_runs_without_the_bridge() {
             }
             let mut server = ns.spawn(&format!("serve-{i}-{world}"), &serve_args);
             let runs = ns.path(&format!("runs-{i}-{world}"));
-            let args = [
-                "run",
-                &demo,
-                "--events",
-                &events,
-                "--robots",
-                "ros2",
-                "--namespace",
-                &namespace,
-                "--out",
-                &runs,
-            ];
-            let mut run = ns.spawn(&format!("run-{i}-{world}"), &args);
+            let name = format!("run-{i}-{world}");
+            let mut run = run_over_ros2(&ns, &name, &demo, &events, &namespace, &runs);
             assert_eq!(
                 run.wait(LONG),
                 0,
@@ -153,19 +167,7 @@ fn a_world_that_refuses_an_event_stops_the_run_saying_why() {
     );
     let runs = ns.path("runs");
     let demo = demo.display().to_string();
-    let args = [
-        "run",
-        &demo,
-        "--events",
-        &events,
-        "--robots",
-        "ros2",
-        "--namespace",
-        "/lab",
-        "--out",
-        &runs,
-    ];
-    let mut run = ns.spawn("run", &args);
+    let mut run = run_over_ros2(&ns, "run", &demo, &events, "/lab", &runs);
     assert_eq!(run.wait(LONG), 5, "{}\n{}", run.show(), server.show());
     let t = transcript(&runs);
     assert_eq!(t.summary["status"], "interrupted", "{:?}", t.summary);

@@ -26,6 +26,8 @@ fn locked_doors(base: &Task, world: &Task) -> Vec<Idx> {
         .map(|&(d, _)| d)
         .filter(|d| !world.doors().iter().any(|(open, _)| open == d))
         .collect();
+    // A door leads to two rooms: it stands in two pairs, not always side by side.
+    locked.sort_unstable();
     locked.dedup();
     locked
 }
@@ -77,8 +79,11 @@ pub(crate) fn asked(
         .collect();
     let moved: Vec<wire::Relation> = base
         .indices()
-        .filter(|&n| !is_robot(base, n) && place(from, n) != place(to, n))
-        .filter_map(|n| Some(placed(base, n, place(to, n)?)))
+        .filter(|&n| !is_robot(base, n))
+        .filter_map(|n| {
+            let now = place(to, n)?;
+            (place(from, n) != Some(now)).then(|| placed(base, n, now))
+        })
         .collect();
     let unchanged = told.is_some_and(|(t, l)| *t == team && *l == locked) && moved.is_empty();
     (!unchanged).then_some(BefallRequest {

@@ -359,16 +359,21 @@ impl Environment for Ros2Env {
     /// the episode ends with the next round, saying why. A change of the task's words
     /// alone (its goal) is the planner's: nothing is sent.
     fn befall(&mut self, task: Arc<Task>, state: State) -> coherent_core::Result<()> {
-        let next = self.steps.saturating_add(1);
-        let asked = befall::asked(
-            &self.base,
-            &self.names,
-            self.told.as_ref(),
-            &task,
-            (&self.state, &state),
-            next,
-        );
-        if let (Some(request), None) = (asked, &self.stopped) {
+        let asked = || {
+            let next = self.steps.saturating_add(1);
+            let states = (&self.state, &state);
+            befall::asked(
+                &self.base,
+                &self.names,
+                self.told.as_ref(),
+                &task,
+                states,
+                next,
+            )
+        };
+        if self.stopped.is_none()
+            && let Some(request) = asked()
+        {
             let now = (request.team.clone(), request.locked.clone());
             let service = wire::service_name(&self.options.namespace);
             match self.link.befall(request, self.options.robot_timeout) {

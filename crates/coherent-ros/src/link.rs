@@ -31,7 +31,7 @@ use ros2_client::dds::rustdds::policy::{Durability, History, Reliability, Resour
 use ros2_client::dds::rustdds::{
     CDRDeserializerAdapter, CDRSerializerAdapter, DomainParticipant,
     DomainParticipantStatusEvent as Event, GUID, Publisher, QosPolicies, QosPolicyBuilder,
-    RTPSEntity, SampleIdentity, StatusEvented, Subscriber, Timestamp, TopicKind,
+    RTPSEntity, SampleIdentity, StatusEvented, Subscriber, Timestamp, Topic, TopicKind,
     WriteOptionsBuilder,
 };
 use ros2_client::unique_identifier_msgs::UUID;
@@ -201,65 +201,55 @@ fn dds<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> Error + '_ {
     move |e| Error::Dds(format!("{what}: {e:?}"))
 }
 
+/// Where the bridge's ends are made: its participant, publisher and subscriber.
+struct Maker<'a> {
+    participant: &'a DomainParticipant,
+    publisher: &'a Publisher,
+    subscriber: &'a Subscriber,
+}
+
+impl Maker<'_> {
+    /// A topic of the participant. A topic's QoS sets how many samples the participant's
+    /// cache keeps of it (64 without resource limits), whatever its readers ask for.
+    fn topic(&self, name: &str, type_name: &str, qos: &QosPolicies) -> Result<Topic, Error> {
+        self.participant
+            .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
+            .map_err(dds(name))
+    }
+
+    /// The writer of the requests of topic `name`, of DDS type `type_name`.
+    fn writer<T: serde::Serialize>(&self, name: &str, type_name: &str) -> Result<Writer<T>, Error> {
+        let topic = self.topic(name, type_name, &request_qos())?;
+        self.publisher
+            .create_datawriter_no_key(&topic, Some(request_qos()))
+            .map_err(dds(name))
+    }
+
+    /// The reader of the replies (or feedback) of topic `name`, of DDS type `type_name`.
+    fn reader<T: serde::de::DeserializeOwned + 'static>(
+        &self,
+        name: &str,
+        type_name: &str,
+    ) -> Result<Reader<T>, Error> {
+        let topic = self.topic(name, type_name, &reader_qos())?;
+        self.subscriber
+            .create_simple_datareader_no_key(&topic, Some(reader_qos()))
+            .map_err(dds(name))
+    }
+}
+
 impl Ends {
     /// The ends of `robot`'s action under `namespace`.
-    fn make(
-        participant: &DomainParticipant,
-        publisher: &Publisher,
-        subscriber: &Subscriber,
-        namespace: &str,
-        robot: &str,
-    ) -> Result<Ends, Error> {
+    fn make(maker: &Maker<'_>, namespace: &str, robot: &str) -> Result<Ends, Error> {
         let names = wire::dds_names(namespace, robot).map_err(Error::Dds)?;
-        // A topic's QoS sets how many samples the participant's cache keeps of it (64
-        // without resource limits), whatever its readers ask for.
-        let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
-            participant
-                .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
-                .map_err(dds(name))
-        };
-        let writer = |name: &str, type_name: &str| -> Result<_, Error> {
-            Ok((topic(name, type_name, &request_qos())?, Some(request_qos())))
-        };
-        let (goal_topic, q) = writer(&names.goal_request, &names.goal_request_type)?;
-        let goal = publisher
-            .create_datawriter_no_key(&goal_topic, q)
-            .map_err(dds(&names.goal_request))?;
-        let (result_topic, q) = writer(&names.result_request, &names.result_request_type)?;
-        let result = publisher
-            .create_datawriter_no_key(&result_topic, q)
-            .map_err(dds(&names.result_request))?;
-        let (cancel_topic, q) = writer(&names.cancel_request, &names.cancel_request_type)?;
-        let cancel = publisher
-            .create_datawriter_no_key(&cancel_topic, q)
-            .map_err(dds(&names.cancel_request))?;
-        let reader = |name: &str, type_name: &str| -> Result<_, Error> {
-            Ok((topic(name, type_name, &reader_qos())?, Some(reader_qos())))
-        };
-        let (t, q) = reader(&names.goal_reply, &names.goal_reply_type)?;
-        let goal_replies = subscriber
-            .create_simple_datareader_no_key(&t, q)
-            .map_err(dds(&names.goal_reply))?;
-        let (t, q) = reader(&names.result_reply, &names.result_reply_type)?;
-        let result_replies = subscriber
-            .create_simple_datareader_no_key(&t, q)
-            .map_err(dds(&names.result_reply))?;
-        let (t, q) = reader(&names.cancel_reply, &names.cancel_reply_type)?;
-        let cancel_replies = subscriber
-            .create_simple_datareader_no_key(&t, q)
-            .map_err(dds(&names.cancel_reply))?;
-        let (t, q) = reader(&names.feedback, &names.feedback_type)?;
-        let feedback = subscriber
-            .create_simple_datareader_no_key(&t, q)
-            .map_err(dds(&names.feedback))?;
         Ok(Ends {
-            goal,
-            goal_replies,
-            result,
-            result_replies,
-            cancel,
-            cancel_replies,
-            feedback,
+            goal: maker.writer(&names.goal_request, &names.goal_request_type)?,
+            goal_replies: maker.reader(&names.goal_reply, &names.goal_reply_type)?,
+            result: maker.writer(&names.result_request, &names.result_request_type)?,
+            result_replies: maker.reader(&names.result_reply, &names.result_reply_type)?,
+            cancel: maker.writer(&names.cancel_request, &names.cancel_request_type)?,
+            cancel_replies: maker.reader(&names.cancel_reply, &names.cancel_reply_type)?,
+            feedback: maker.reader(&names.feedback, &names.feedback_type)?,
         })
     }
 
@@ -331,17 +321,17 @@ impl Link {
         let subscriber = participant
             .create_subscriber(&qos)
             .map_err(dds("a subscriber"))?;
+        let maker = Maker {
+            participant: &participant,
+            publisher: &publisher,
+            subscriber: &subscriber,
+        };
         let ends = robots
             .iter()
-            .map(|r| Ends::make(&participant, &publisher, &subscriber, namespace, r))
+            .map(|r| Ends::make(&maker, namespace, r))
             .collect::<Result<Vec<_>, _>>()?;
         let world = if events {
-            Some(WorldEnds::make(
-                &participant,
-                &publisher,
-                &subscriber,
-                namespace,
-            )?)
+            Some(WorldEnds::make(&maker, namespace)?)
         } else {
             None
         };
@@ -434,30 +424,12 @@ impl Link {
 
 impl WorldEnds {
     /// The ends of the world's service under `namespace`.
-    fn make(
-        participant: &DomainParticipant,
-        publisher: &Publisher,
-        subscriber: &Subscriber,
-        namespace: &str,
-    ) -> Result<WorldEnds, Error> {
+    fn make(maker: &Maker<'_>, namespace: &str) -> Result<WorldEnds, Error> {
         let [(request, request_type), (reply, reply_type)] =
             wire::service_dds_names(namespace).map_err(Error::Dds)?;
-        let topic = |name: &str, type_name: &str, qos: &QosPolicies| {
-            participant
-                .create_topic(name.to_owned(), type_name.to_owned(), qos, TopicKind::NoKey)
-                .map_err(dds(name))
-        };
-        let t = topic(&request, &request_type, &request_qos())?;
-        let writer = publisher
-            .create_datawriter_no_key(&t, Some(request_qos()))
-            .map_err(dds(&request))?;
-        let t = topic(&reply, &reply_type, &reader_qos())?;
-        let replies = subscriber
-            .create_simple_datareader_no_key(&t, Some(reader_qos()))
-            .map_err(dds(&reply))?;
         Ok(WorldEnds {
-            request: writer,
-            replies,
+            request: maker.writer(&request, &request_type)?,
+            replies: maker.reader(&reply, &reply_type)?,
         })
     }
 

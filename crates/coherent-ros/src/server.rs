@@ -161,11 +161,11 @@ async fn serve_events(
             }
         };
         let said = format!("events before step {}", request.step);
-        let words = request.team.iter().chain(&request.locked);
+        let mut words = request.team.iter().chain(&request.locked);
         let carried = if request.team.len() > names.len() || request.locked.len() > task.nodes.len()
         {
             Err("a request larger than the task".to_owned())
-        } else if let Some(w) = words.clone().find(|w| w.len() > wire::MAX_WORD_BYTES) {
+        } else if let Some(w) = words.find(|w| w.len() > wire::MAX_WORD_BYTES) {
             Err(format!("a name of {} bytes", w.len()))
         } else if let Err(why) = wire::relations_checked("the request", &request.moved) {
             Err(why)
